@@ -1,0 +1,107 @@
+//! Residual chi-square test (METHODS §2): `λ = rᵀA⁻¹r ~ χ²(m)` under no fault; alarm when
+//! `λ ≥ T_D = F⁻¹_{χ²(m)}(1 − Pf)`.
+
+use super::{check_residual, Decision};
+use crate::error::{Error, Result};
+use crate::stats::chi2_threshold;
+use crate::validate::check_probability;
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Residual chi-square detector with false-alarm probability `pf` per epoch.
+///
+/// The threshold follows the number of available residual components (NaN components are
+/// skipped); thresholds are computed once per degree of freedom and cached.
+#[derive(Debug, Clone)]
+pub struct ResidualChi2 {
+    pf: f64,
+    thresholds: Vec<f64>,
+    alarm: bool,
+}
+
+impl ResidualChi2 {
+    /// New detector; `pf` in (0, 1).
+    pub fn new(pf: f64) -> Result<Self> {
+        check_probability("pf", pf)?;
+        Ok(ResidualChi2 { pf, thresholds: Vec::new(), alarm: false })
+    }
+
+    /// False-alarm probability per epoch.
+    pub fn pf(&self) -> f64 {
+        self.pf
+    }
+
+    /// Threshold `T_D` for `dof` components.
+    pub fn threshold(&mut self, dof: usize) -> Result<f64> {
+        if dof == 0 {
+            return Ok(f64::NAN);
+        }
+        while self.thresholds.len() < dof {
+            let d = self.thresholds.len() + 1;
+            self.thresholds.push(chi2_threshold(self.pf, d)?);
+        }
+        Ok(self.thresholds[dof - 1])
+    }
+
+    /// Last alarm state.
+    pub fn alarm(&self) -> bool {
+        self.alarm
+    }
+
+    /// Test one epoch: residual `r` (m, NaN = unavailable) and covariance `A` (m × m, positive
+    /// definite on the available components).
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        let idx = check_residual(r, a)?;
+        let dof = idx.len();
+        if dof == 0 {
+            return Ok(Decision { statistic: f64::NAN, threshold: f64::NAN, alarm: self.alarm, dof });
+        }
+        let statistic = if dof == r.len() {
+            whitened_norm2(r, a)?
+        } else {
+            whitened_norm2(&r.select_rows(&idx), &a.select_rows(&idx).select_columns(&idx))?
+        };
+        let threshold = self.threshold(dof)?;
+        let alarm = statistic >= threshold;
+        self.alarm = alarm;
+        Ok(Decision { statistic, threshold, alarm, dof })
+    }
+
+    /// Forget the last alarm state.
+    pub fn reset(&mut self) {
+        self.alarm = false;
+    }
+}
+
+/// `rᵀA⁻¹r` as ‖L⁻¹r‖² with `A = LLᵀ`.
+pub(crate) fn whitened_norm2(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<f64> {
+    let chol = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+        name: "covariance".into(),
+        detail: "Cholesky factorisation of the residual covariance failed".into(),
+    })?;
+    let w = chol.l_dirty().solve_lower_triangular(r).ok_or_else(|| Error::Numerical {
+        context: "chi-square statistic".into(),
+        detail: "triangular solve failed".into(),
+    })?;
+    Ok(w.norm_squared())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn decides_against_threshold() {
+        let mut d = ResidualChi2::new(0.1).unwrap();
+        let a = DMatrix::identity(3, 3);
+        let quiet = d.test(&DVector::from_vec(vec![0.1, 0.2, 0.3]), &a).unwrap();
+        assert!(!quiet.alarm);
+        assert!((quiet.statistic - 0.14).abs() < 1e-12);
+        let loud = d.test(&DVector::from_vec(vec![2.0, 2.0, 1.0]), &a).unwrap();
+        assert!(loud.alarm);
+        assert!((loud.threshold - 6.251388631170325).abs() < 1e-9);
+        // Missing component: threshold for 2 dof.
+        let part = d.test(&DVector::from_vec(vec![f64::NAN, 1.0, 1.0]), &a).unwrap();
+        assert_eq!(part.dof, 2);
+        assert!((part.threshold - chi2_threshold(0.1, 2).unwrap()).abs() < 1e-12);
+    }
+}

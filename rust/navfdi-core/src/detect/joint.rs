@@ -1,0 +1,99 @@
+//! Joint chi-square / improved-SPRT detector of paper 000 (METHODS §4).
+//!
+//! Both tests run on the same residuals. The alarm is the SPRT's (sensitive to small ramps);
+//! when the chi-square test declares the fault over (its alarm falls from fault to no-fault),
+//! the SPRT accumulators are reset before the SPRT processes the current epoch, so that the
+//! SPRT clears and a later fault is detected as a new one.
+
+use super::{Decision, ImprovedSprt, ResidualChi2, SprtVariance};
+use crate::error::Result;
+use nalgebra::{DMatrix, DVector};
+
+/// The joint detector's decision with both component tests.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointDecision {
+    /// The joint decision (the SPRT's statistic, threshold and alarm).
+    pub decision: Decision,
+    /// The chi-square test's decision this epoch.
+    pub chi2: Decision,
+    /// True when the chi-square test's end-of-fault reset the SPRT this epoch.
+    pub reset: bool,
+}
+
+/// Joint chi-square / SPRT detector with reset.
+#[derive(Debug, Clone)]
+pub struct JointChi2Sprt {
+    chi2: ResidualChi2,
+    sprt: ImprovedSprt,
+    chi2_alarm: bool,
+}
+
+impl JointChi2Sprt {
+    /// New detector; `pf`, `pm` in (0, 1), `pf + pm < 1`. Both tests use the same `pf`; the SPRT
+    /// also uses `pm`.
+    pub fn new(pf: f64, pm: f64, variance: SprtVariance) -> Result<Self> {
+        Ok(JointChi2Sprt {
+            chi2: ResidualChi2::new(pf)?,
+            sprt: ImprovedSprt::new(pf, pm, variance)?,
+            chi2_alarm: false,
+        })
+    }
+
+    /// The chi-square part.
+    pub fn chi2(&self) -> &ResidualChi2 {
+        &self.chi2
+    }
+
+    /// The SPRT part.
+    pub fn sprt(&self) -> &ImprovedSprt {
+        &self.sprt
+    }
+
+    /// Test one epoch.
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<JointDecision> {
+        // Validate for both parts before changing either: run on clones, commit on success.
+        let mut chi2 = self.chi2.clone();
+        let mut sprt = self.sprt.clone();
+        let c = chi2.test(r, a)?;
+        let fell = c.dof > 0 && self.chi2_alarm && !c.alarm;
+        if fell {
+            sprt.reset();
+        }
+        let s = sprt.test(r, a)?;
+        self.chi2 = chi2;
+        self.sprt = sprt;
+        if c.dof > 0 {
+            self.chi2_alarm = c.alarm;
+        }
+        Ok(JointDecision { decision: s, chi2: c, reset: fell })
+    }
+
+    /// Reset both tests.
+    pub fn reset(&mut self) {
+        self.chi2.reset();
+        self.sprt.reset();
+        self.chi2_alarm = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chi2_end_of_fault_resets_sprt() {
+        let mut j = JointChi2Sprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
+        let a = DMatrix::identity(1, 1);
+        // Large residuals: both alarm.
+        for _ in 0..5 {
+            let d = j.test(&DVector::from_vec(vec![5.0]), &a).unwrap();
+            assert!(d.decision.alarm && d.chi2.alarm);
+        }
+        // Back to zero: chi-square falls, SPRT is reset and clears.
+        let d = j.test(&DVector::from_vec(vec![0.0]), &a).unwrap();
+        assert!(d.reset);
+        assert!(!d.chi2.alarm);
+        assert!(!d.decision.alarm);
+        assert_eq!(j.sprt().component_counts(), vec![1]);
+    }
+}

@@ -1,0 +1,113 @@
+//! Fault detectors (METHODS §2–§4). Each steps once per epoch on a residual `r` (m) and its
+//! covariance `A` (m × m) and reports a [`Decision`]: statistic, threshold, alarm.
+//!
+//! NaN components of `r` mark measurements that were not used this epoch (see
+//! [`crate::kalman::Innovation`]); a detector skips them. With no component at all a detector
+//! leaves its state unchanged and repeats its previous alarm, with a NaN statistic.
+
+pub mod chi2;
+pub mod joint;
+pub mod sprt;
+
+pub use chi2::ResidualChi2;
+pub use joint::{JointChi2Sprt, JointDecision};
+pub use sprt::{ImprovedSprt, SprtVariance};
+
+use crate::error::{Error, Result};
+use crate::validate::shape_str;
+use nalgebra::{DMatrix, DVector};
+
+/// One epoch's decision of a detector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decision {
+    /// Test statistic (chi-square: `λ = rᵀA⁻¹r`; SPRT: the largest per-component `λ_j`).
+    /// NaN when no component was available.
+    pub statistic: f64,
+    /// Threshold the statistic is compared with (NaN when no component was available to the
+    /// chi-square test, whose threshold depends on the number of components).
+    pub threshold: f64,
+    /// Fault declared this epoch.
+    pub alarm: bool,
+    /// Number of residual components used.
+    pub dof: usize,
+}
+
+impl Decision {
+    /// Statistic over threshold (PX4's "test ratio"): ≥ 1 means alarm.
+    pub fn ratio(&self) -> f64 {
+        self.statistic / self.threshold
+    }
+}
+
+/// Check a residual / covariance pair: `r` length m (NaN allowed, no infinity), `A` m × m,
+/// finite on the rows and columns of the available components.
+pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Vec<usize>> {
+    let m = r.len();
+    if m == 0 {
+        return Err(Error::Shape {
+            name: "residual".into(),
+            expected: "a non-empty vector".into(),
+            got: "(0,)".into(),
+        });
+    }
+    if a.nrows() != m || a.ncols() != m {
+        return Err(Error::Shape {
+            name: "covariance".into(),
+            expected: shape_str(&[m, m]),
+            got: shape_str(&[a.nrows(), a.ncols()]),
+        });
+    }
+    let mut idx = Vec::with_capacity(m);
+    for (i, v) in r.iter().enumerate() {
+        if v.is_infinite() {
+            return Err(Error::NonFinite { name: "residual".into(), index: format!("[{i}]"), value: *v });
+        }
+        if !v.is_nan() {
+            idx.push(i);
+        }
+    }
+    for &i in &idx {
+        for &j in &idx {
+            let v = a[(i, j)];
+            if !v.is_finite() {
+                return Err(Error::NonFinite {
+                    name: "covariance".into(),
+                    index: format!("[{i}, {j}]"),
+                    value: v,
+                });
+            }
+        }
+    }
+    Ok(idx)
+}
+
+/// Any of the detectors, for code that configures detectors at run time.
+#[derive(Debug, Clone)]
+pub enum Detector {
+    /// Residual chi-square test.
+    Chi2(ResidualChi2),
+    /// Improved SPRT per residual component.
+    Sprt(ImprovedSprt),
+    /// Joint chi-square / SPRT detector with reset.
+    Joint(JointChi2Sprt),
+}
+
+impl Detector {
+    /// Test one epoch.
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        match self {
+            Detector::Chi2(d) => d.test(r, a),
+            Detector::Sprt(d) => d.test(r, a),
+            Detector::Joint(d) => d.test(r, a).map(|j| j.decision),
+        }
+    }
+
+    /// Clear all accumulated state.
+    pub fn reset(&mut self) {
+        match self {
+            Detector::Chi2(d) => d.reset(),
+            Detector::Sprt(d) => d.reset(),
+            Detector::Joint(d) => d.reset(),
+        }
+    }
+}

@@ -1,0 +1,193 @@
+//! Improved SPRT (METHODS §3), per scalar residual component.
+//!
+//! `λ_j(k) = k·x̄_k² / (2σ²)` with the running mean `x̄_k` of component j since the last reset
+//! (no-fault mean 0). With [`SprtVariance::Known`] each component is normalised by
+//! `sqrt(A_jj)` so `σ = 1`; with [`SprtVariance::Sample`] `σ²` is the running sample variance
+//! from Welford's recursion `M2_k = M2_{k−1} + ((k−1)/k)(x_k − x̄_{k−1})²`, `σ_k² = M2_k / k`
+//! (the paper's recursion (14) is a typo; see METHODS §3). The alarm is raised when any
+//! component reaches `T(H1) = ln((1 − Pm)/Pf)`.
+
+use super::{check_residual, Decision};
+use crate::error::{Error, Result};
+use crate::stats::sprt_threshold;
+use nalgebra::{DMatrix, DVector};
+
+/// Which variance normalises the SPRT statistic.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SprtVariance {
+    /// Use the residual covariance diagonal `A_jj` (σ = 1 after normalisation).
+    Known,
+    /// Use the running sample variance of the raw residual component (Welford).
+    Sample,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Accumulator {
+    count: u64,
+    mean: f64,
+    m2: f64,
+    lambda: f64,
+}
+
+/// Improved SPRT detector over the components of a residual vector.
+#[derive(Debug, Clone)]
+pub struct ImprovedSprt {
+    pf: f64,
+    pm: f64,
+    threshold: f64,
+    variance: SprtVariance,
+    acc: Vec<Accumulator>,
+    alarm: bool,
+}
+
+impl ImprovedSprt {
+    /// New detector. `pf`, `pm` in (0, 1) with `pf + pm < 1`.
+    pub fn new(pf: f64, pm: f64, variance: SprtVariance) -> Result<Self> {
+        let threshold = sprt_threshold(pf, pm)?;
+        Ok(ImprovedSprt { pf, pm, threshold, variance, acc: Vec::new(), alarm: false })
+    }
+
+    /// False-alarm probability parameter.
+    pub fn pf(&self) -> f64 {
+        self.pf
+    }
+
+    /// Missed-detection probability parameter.
+    pub fn pm(&self) -> f64 {
+        self.pm
+    }
+
+    /// Threshold `T(H1)`.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// Variance mode.
+    pub fn variance(&self) -> SprtVariance {
+        self.variance
+    }
+
+    /// Per-component statistics `λ_j` after the last test (empty before the first).
+    pub fn component_statistics(&self) -> Vec<f64> {
+        self.acc.iter().map(|a| a.lambda).collect()
+    }
+
+    /// Per-component sample counts since the last reset.
+    pub fn component_counts(&self) -> Vec<u64> {
+        self.acc.iter().map(|a| a.count).collect()
+    }
+
+    /// Last alarm state.
+    pub fn alarm(&self) -> bool {
+        self.alarm
+    }
+
+    /// Test one epoch. The residual dimension is fixed by the first call.
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        let idx = check_residual(r, a)?;
+        let m = r.len();
+        if !self.acc.is_empty() && self.acc.len() != m {
+            return Err(Error::Shape {
+                name: "residual".into(),
+                expected: format!("({},) as in earlier epochs (call reset_dimension to change)", self.acc.len()),
+                got: format!("({m},)"),
+            });
+        }
+        // Validate before touching the accumulators.
+        let mut xs = Vec::with_capacity(idx.len());
+        for &j in &idx {
+            let x = match self.variance {
+                SprtVariance::Known => {
+                    let s2 = a[(j, j)];
+                    if !(s2 > 0.0) {
+                        return Err(Error::NotPositiveDefinite {
+                            name: "covariance".into(),
+                            detail: format!("diagonal element [{j}, {j}] = {s2} must be positive"),
+                        });
+                    }
+                    r[j] / s2.sqrt()
+                }
+                SprtVariance::Sample => r[j],
+            };
+            xs.push((j, x));
+        }
+        if self.acc.is_empty() {
+            self.acc = vec![Accumulator::default(); m];
+        }
+        if idx.is_empty() {
+            return Ok(Decision { statistic: f64::NAN, threshold: self.threshold, alarm: self.alarm, dof: 0 });
+        }
+        for (j, x) in xs {
+            let acc = &mut self.acc[j];
+            acc.count += 1;
+            let k = acc.count as f64;
+            let d = x - acc.mean;
+            acc.m2 += (k - 1.0) / k * d * d;
+            acc.mean += d / k;
+            let s2 = match self.variance {
+                SprtVariance::Known => 1.0,
+                SprtVariance::Sample => acc.m2 / k,
+            };
+            acc.lambda = if s2 > 0.0 { k * acc.mean * acc.mean / (2.0 * s2) } else { 0.0 };
+        }
+        let statistic = self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max);
+        self.alarm = statistic >= self.threshold;
+        Ok(Decision { statistic, threshold: self.threshold, alarm: self.alarm, dof: idx.len() })
+    }
+
+    /// Reset every accumulator to zero (keeps the residual dimension).
+    pub fn reset(&mut self) {
+        for a in &mut self.acc {
+            *a = Accumulator::default();
+        }
+        self.alarm = false;
+    }
+
+    /// Reset and forget the residual dimension, so the next test may use another length.
+    pub fn reset_dimension(&mut self) {
+        self.acc.clear();
+        self.alarm = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn known_variance_statistic() {
+        let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
+        let a = DMatrix::from_diagonal(&DVector::from_vec(vec![4.0]));
+        // x = r/2: 1, 1, 1 → mean 1 → λ = k/2.
+        for k in 1..=3 {
+            let d = s.test(&DVector::from_vec(vec![2.0]), &a).unwrap();
+            assert!((d.statistic - k as f64 / 2.0).abs() < 1e-12);
+            assert_eq!(d.alarm, k as f64 / 2.0 >= 2.1972245773362196);
+        }
+        s.reset();
+        assert_eq!(s.component_counts(), vec![0]);
+    }
+
+    #[test]
+    fn welford_sample_variance() {
+        let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Sample).unwrap();
+        let a = DMatrix::identity(1, 1);
+        let data = [1.0, 3.0, 2.0, 6.0];
+        let mut d = None;
+        for x in data {
+            d = Some(s.test(&DVector::from_vec(vec![x]), &a).unwrap());
+        }
+        let mean = 3.0;
+        let var = data.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / 4.0;
+        let expected = 4.0 * mean * mean / (2.0 * var);
+        assert!((d.unwrap().statistic - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn dimension_is_fixed() {
+        let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
+        s.test(&DVector::zeros(2), &DMatrix::identity(2, 2)).unwrap();
+        assert!(s.test(&DVector::zeros(3), &DMatrix::identity(3, 3)).is_err());
+        assert_eq!(s.component_counts(), vec![1, 1]);
+    }
+}

@@ -1,0 +1,360 @@
+//! Linear Kalman filter (METHODS §1).
+//!
+//! * Predict: `x⁻ = Φx`, `P⁻ = S·ΦPΦᵀ + Q` with `Q = ΓQΓᵀ` already mapped and a fading factor
+//!   `S ≥ 1` (paper 002; `S = 1` is the ordinary filter).
+//! * Update: residual `r = z − Hx⁻`, its covariance `A = HP⁻Hᵀ + R`, gain `K = P⁻HᵀA⁻¹` from a
+//!   Cholesky factor of `A` (no explicit inverse), `x = x⁻ + Kr`, Joseph form
+//!   `P = (I − KH)P⁻(I − KH)ᵀ + KRKᵀ`, made exactly symmetric. The statistic `λ = rᵀA⁻¹r` is the
+//!   squared norm of the whitened residual `L⁻¹r`.
+//! * Missing data: a NaN component of `z` is skipped and the update runs on the remaining rows
+//!   (reduced-dimension update). [`Innovation::used`] says which components were used; the
+//!   residual and covariance of unused components are NaN.
+//!
+//! Every public method validates its inputs before touching the state, and commits the new
+//! state only when it is finite, so a failed call leaves the filter exactly as it was.
+
+use crate::error::{Error, Result};
+use crate::validate::{
+    check_covariance, check_finite_matrix, check_finite_vector, check_len, check_no_inf,
+    check_shape, symmetrize,
+};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+
+/// Result of one measurement update.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Innovation {
+    /// Residual (innovation) `r = z − Hx⁻`, length m; NaN where the component was not used.
+    pub residual: DVector<f64>,
+    /// Residual covariance `A = HP⁻Hᵀ + R`, m × m; NaN rows/columns for unused components.
+    pub covariance: DMatrix<f64>,
+    /// `λ = rᵀA⁻¹r` over the used components (χ²(dof) under no fault); NaN when none was used.
+    pub statistic: f64,
+    /// Which components of `z` were used (not NaN).
+    pub used: Vec<bool>,
+}
+
+impl Innovation {
+    /// Number of components used (the degrees of freedom of [`Innovation::statistic`]).
+    pub fn dof(&self) -> usize {
+        self.used.iter().filter(|u| **u).count()
+    }
+
+    fn empty(m: usize) -> Self {
+        Innovation {
+            residual: DVector::from_element(m, f64::NAN),
+            covariance: DMatrix::from_element(m, m, f64::NAN),
+            statistic: f64::NAN,
+            used: vec![false; m],
+        }
+    }
+}
+
+/// Scratch buffers reused across steps so the hot loop does not allocate for fixed sizes.
+#[derive(Debug, Clone)]
+struct Workspace {
+    nn_a: DMatrix<f64>,
+    nn_b: DMatrix<f64>,
+    nn_c: DMatrix<f64>,
+    x: DVector<f64>,
+}
+
+impl Workspace {
+    fn new(n: usize) -> Self {
+        Workspace {
+            nn_a: DMatrix::zeros(n, n),
+            nn_b: DMatrix::zeros(n, n),
+            nn_c: DMatrix::zeros(n, n),
+            x: DVector::zeros(n),
+        }
+    }
+}
+
+/// A linear Kalman filter with state `x` (n) and covariance `P` (n × n).
+#[derive(Debug, Clone)]
+pub struct KalmanFilter {
+    x: DVector<f64>,
+    p: DMatrix<f64>,
+    ws: Workspace,
+}
+
+impl KalmanFilter {
+    /// Create a filter from an initial state `x0` (n) and covariance `P0` (n × n, symmetric
+    /// positive semi-definite, finite).
+    pub fn new(x0: DVector<f64>, p0: DMatrix<f64>) -> Result<Self> {
+        let n = x0.len();
+        if n == 0 {
+            return Err(Error::Shape {
+                name: "x0".into(),
+                expected: "a non-empty state vector".into(),
+                got: "(0,)".into(),
+            });
+        }
+        check_finite_vector("x0", &x0)?;
+        check_shape("P0", &p0, n, n)?;
+        check_covariance("P0", &p0)?;
+        let mut p = p0;
+        symmetrize(&mut p);
+        Ok(KalmanFilter { x: x0, p, ws: Workspace::new(n) })
+    }
+
+    /// State dimension n.
+    pub fn dim(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Current state estimate.
+    pub fn x(&self) -> &DVector<f64> {
+        &self.x
+    }
+
+    /// Current covariance.
+    pub fn p(&self) -> &DMatrix<f64> {
+        &self.p
+    }
+
+    /// Replace state and covariance (e.g. a federated reset), validated like [`KalmanFilter::new`].
+    pub fn set_state(&mut self, x: DVector<f64>, p: DMatrix<f64>) -> Result<()> {
+        let n = self.dim();
+        check_len("x", &x, n)?;
+        check_finite_vector("x", &x)?;
+        check_shape("P", &p, n, n)?;
+        check_covariance("P", &p)?;
+        self.x = x;
+        self.p = p;
+        symmetrize(&mut self.p);
+        Ok(())
+    }
+
+    /// Validate the arguments of [`KalmanFilter::predict`] without changing anything.
+    pub fn check_predict(&self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+        let n = self.dim();
+        check_shape("Phi", phi, n, n)?;
+        check_finite_matrix("Phi", phi)?;
+        check_shape("Q", q, n, n)?;
+        check_covariance("Q", q)?;
+        check_fading(fading)
+    }
+
+    /// Time update `x⁻ = Φx`, `P⁻ = S·ΦPΦᵀ + Q`.
+    ///
+    /// `phi`: n × n transition matrix; `q`: n × n process-noise covariance already mapped to the
+    /// state (ΓQΓᵀ), symmetric PSD; `fading`: factor `S ≥ 1` (1 for the ordinary filter).
+    pub fn predict(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+        self.check_predict(phi, q, fading)?;
+        self.predict_trusted(phi, q, fading)
+    }
+
+    /// [`KalmanFilter::predict`] without input validation, for loops whose inputs were validated
+    /// once up front. Still refuses to commit a non-finite result.
+    pub fn predict_trusted(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+        let ws = &mut self.ws;
+        // x⁻ = Φx
+        ws.x.gemv(1.0, phi, &self.x, 0.0);
+        // P⁻ = S·(ΦP)Φᵀ + Q
+        ws.nn_a.gemm(1.0, phi, &self.p, 0.0);
+        phi.transpose_to(&mut ws.nn_b);
+        ws.nn_c.copy_from(q);
+        ws.nn_c.gemm(fading, &ws.nn_a, &ws.nn_b, 1.0);
+        symmetrize(&mut ws.nn_c);
+        if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
+            return Err(Error::Numerical {
+                context: "predict".into(),
+                detail: "the predicted state or covariance is not finite (overflow)".into(),
+            });
+        }
+        std::mem::swap(&mut self.x, &mut ws.x);
+        std::mem::swap(&mut self.p, &mut ws.nn_c);
+        Ok(())
+    }
+
+    /// Validate the arguments of [`KalmanFilter::update`] without changing anything.
+    pub fn check_update(&self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<()> {
+        let n = self.dim();
+        let m = z.len();
+        if m == 0 {
+            return Err(Error::Shape {
+                name: "z".into(),
+                expected: "a non-empty measurement vector".into(),
+                got: "(0,)".into(),
+            });
+        }
+        check_no_inf("z", z)?;
+        check_shape("H", h, m, n)?;
+        check_finite_matrix("H", h)?;
+        check_shape("R", r, m, m)?;
+        check_covariance("R", r)
+    }
+
+    /// Measurement update with `z` (m; NaN marks a missing component), `H` (m × n) and `R`
+    /// (m × m, symmetric PSD). Returns the residual, its covariance and `λ = rᵀA⁻¹r`.
+    ///
+    /// Fails with [`Error::NotPositiveDefinite`] when the innovation covariance of the used
+    /// components cannot be factored; the filter is then unchanged.
+    pub fn update(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
+        self.check_update(z, h, r)?;
+        self.update_trusted(z, h, r)
+    }
+
+    /// [`KalmanFilter::update`] without input validation (shapes must already be right).
+    pub fn update_trusted(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
+        let m = z.len();
+        let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
+        let k = used.iter().filter(|u| **u).count();
+        if k == 0 {
+            return Ok(Innovation::empty(m));
+        }
+        if k == m {
+            let (res, a, stat) = self.update_core(z, h, r)?;
+            return Ok(Innovation { residual: res, covariance: a, statistic: stat, used });
+        }
+        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
+        let zr = z.select_rows(&idx);
+        let hr = h.select_rows(&idx);
+        let rr = r.select_rows(&idx).select_columns(&idx);
+        let (res_r, a_r, stat) = self.update_core(&zr, &hr, &rr)?;
+        let mut residual = DVector::from_element(m, f64::NAN);
+        let mut covariance = DMatrix::from_element(m, m, f64::NAN);
+        for (a, &i) in idx.iter().enumerate() {
+            residual[i] = res_r[a];
+            for (b, &j) in idx.iter().enumerate() {
+                covariance[(i, j)] = a_r[(a, b)];
+            }
+        }
+        Ok(Innovation { residual, covariance, statistic: stat, used })
+    }
+
+    /// The update on fully used (reduced) inputs; returns `(r, A, λ)`.
+    fn update_core(
+        &mut self,
+        z: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>, f64)> {
+        let n = self.dim();
+        let k = z.len();
+        // PHᵀ (n × k) = (HP)ᵀ since P is symmetric.
+        let mut hp = DMatrix::<f64>::zeros(k, n);
+        hp.gemm(1.0, h, &self.p, 0.0);
+        // A = H P Hᵀ + R  (k × k) = (HP) Hᵀ + R
+        let ht = h.transpose();
+        let mut a = r.clone();
+        a.gemm(1.0, &hp, &ht, 1.0);
+        symmetrize(&mut a);
+        // residual
+        let mut res = z.clone();
+        res.gemv(-1.0, h, &self.x, 1.0);
+        let chol: Cholesky<f64, Dyn> = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance A = H P Hᵀ + R".into(),
+            detail: "Cholesky factorisation failed; check R and P".into(),
+        })?;
+        // Kᵀ = A⁻¹ (HP)  (k × n)
+        let mut kt = hp;
+        chol.solve_mut(&mut kt);
+        // Whitened residual w = L⁻¹ r, λ = ‖w‖².
+        let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
+            context: "update".into(),
+            detail: "triangular solve of the innovation covariance failed".into(),
+        })?;
+        let stat = w.norm_squared();
+        let ws = &mut self.ws;
+        // x = x⁻ + K r = x⁻ + Kᵀᵀ r
+        ws.x.copy_from(&self.x);
+        ws.x.gemv_tr(1.0, &kt, &res, 1.0);
+        // I − KH  (n × n) = I − Kᵀᵀ H
+        ws.nn_a.fill_with_identity();
+        ws.nn_a.gemm_tr(-1.0, &kt, h, 1.0);
+        // T = (I − KH) P
+        ws.nn_b.gemm(1.0, &ws.nn_a, &self.p, 0.0);
+        // P = T (I − KH)ᵀ + K R Kᵀ
+        ws.nn_a.transpose_mut();
+        ws.nn_c.gemm(1.0, &ws.nn_b, &ws.nn_a, 0.0);
+        let mut rkt = DMatrix::<f64>::zeros(k, n);
+        rkt.gemm(1.0, r, &kt, 0.0);
+        ws.nn_c.gemm_tr(1.0, &kt, &rkt, 1.0);
+        symmetrize(&mut ws.nn_c);
+        if !stat.is_finite() || !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
+            return Err(Error::Numerical {
+                context: "update".into(),
+                detail: "the updated state or covariance is not finite".into(),
+            });
+        }
+        std::mem::swap(&mut self.x, &mut ws.x);
+        std::mem::swap(&mut self.p, &mut ws.nn_c);
+        Ok((res, a, stat))
+    }
+}
+
+/// Check a fading factor: finite and `≥ 1`.
+pub fn check_fading(fading: f64) -> Result<()> {
+    if !(fading >= 1.0) || !fading.is_finite() {
+        return Err(Error::InvalidParameter {
+            name: "fading".into(),
+            value: fading,
+            requirement: "fading factor S must be finite and >= 1".into(),
+        });
+    }
+    Ok(())
+}
+
+fn all_finite(s: &[f64]) -> bool {
+    s.iter().all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn scalar_closed_form() {
+        // x0 = 0, P0 = 4, Φ = 1, Q = 1 → P⁻ = 5; z = 2, H = 1, R = 5 → K = 0.5, x = 1, P = 2.5.
+        let mut kf = KalmanFilter::new(DVector::from_element(1, 0.0), DMatrix::from_element(1, 1, 4.0)).unwrap();
+        kf.predict(&DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 1.0), 1.0).unwrap();
+        let inn = kf
+            .update(&DVector::from_element(1, 2.0), &DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 5.0))
+            .unwrap();
+        assert_relative_eq!(kf.x()[0], 1.0, max_relative = 1e-14);
+        assert_relative_eq!(kf.p()[(0, 0)], 2.5, max_relative = 1e-14);
+        assert_relative_eq!(inn.statistic, 4.0 / 10.0, max_relative = 1e-14);
+        assert_relative_eq!(inn.covariance[(0, 0)], 10.0, max_relative = 1e-14);
+    }
+
+    #[test]
+    fn fading_scales_propagated_covariance() {
+        let mut kf = KalmanFilter::new(DVector::from_element(1, 0.0), DMatrix::from_element(1, 1, 4.0)).unwrap();
+        kf.predict(&DMatrix::from_element(1, 1, 2.0), &DMatrix::from_element(1, 1, 1.0), 1.5).unwrap();
+        assert_relative_eq!(kf.p()[(0, 0)], 1.5 * 16.0 + 1.0, max_relative = 1e-14);
+        assert!(kf.predict(&DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 1.0), 0.5).is_err());
+    }
+
+    #[test]
+    fn failed_update_leaves_state() {
+        let mut kf = KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::zeros(2, 2)).unwrap();
+        let before = (kf.x().clone(), kf.p().clone());
+        // P = 0 and R = 0 → A = 0, not positive definite.
+        let err = kf.update(&DVector::from_element(1, 0.0), &DMatrix::from_element(1, 2, 1.0), &DMatrix::zeros(1, 1));
+        assert!(matches!(err, Err(Error::NotPositiveDefinite { .. })));
+        assert_eq!((kf.x().clone(), kf.p().clone()), before);
+        // Wrong shapes and non-finite values are refused too.
+        assert!(matches!(
+            kf.update(&DVector::from_element(2, 0.0), &DMatrix::from_element(1, 2, 1.0), &DMatrix::identity(1, 1)),
+            Err(Error::Shape { .. })
+        ));
+        assert!(matches!(
+            kf.update(&DVector::from_element(1, f64::INFINITY), &DMatrix::from_element(1, 2, 1.0), &DMatrix::identity(1, 1)),
+            Err(Error::NonFinite { .. })
+        ));
+        assert_eq!((kf.x().clone(), kf.p().clone()), before);
+    }
+
+    #[test]
+    fn all_missing_is_a_no_op() {
+        let mut kf = KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::identity(2, 2)).unwrap();
+        let inn = kf
+            .update(&DVector::from_element(2, f64::NAN), &DMatrix::identity(2, 2), &DMatrix::identity(2, 2))
+            .unwrap();
+        assert_eq!(inn.dof(), 0);
+        assert!(inn.statistic.is_nan());
+        assert_eq!(kf.x(), &DVector::from_element(2, 1.0));
+    }
+}

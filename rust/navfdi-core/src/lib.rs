@@ -1,0 +1,24 @@
+//! # navfdi-core
+//!
+//! Pure-Rust core of navfdi: Kalman filtering and fault-detection statistics for multi-sensor
+//! integrated navigation. No Python here; the `navfdi-py` crate binds it.
+//!
+//! * [`kalman`]: predict / update (Cholesky, Joseph form), reduced-dimension update for
+//!   missing components, fading factor.
+//! * [`detect`]: residual chi-square, improved SPRT, joint chi-square/SPRT detector.
+//! * [`stats`]: thresholds, non-central chi-square, minimal detectable bias.
+//! * [`run`]: a whole filter run over a sequence in one call.
+//!
+//! Equations and the resolutions of the papers' ambiguities: `docs/METHODS.md`.
+
+#![warn(missing_docs)]
+
+pub mod detect;
+pub mod error;
+pub mod kalman;
+pub mod run;
+pub mod stats;
+pub mod validate;
+
+pub use error::{Error, Result};
+pub use kalman::{Innovation, KalmanFilter};
