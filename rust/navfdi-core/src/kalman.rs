@@ -75,6 +75,7 @@ pub struct KalmanFilter {
     x: DVector<f64>,
     p: DMatrix<f64>,
     ws: Workspace,
+    mws: Option<MWork>,
 }
 
 impl KalmanFilter {
@@ -94,7 +95,7 @@ impl KalmanFilter {
         check_covariance("P0", &p0)?;
         let mut p = p0;
         symmetrize(&mut p);
-        Ok(KalmanFilter { x: x0, p, ws: Workspace::new(n) })
+        Ok(KalmanFilter { x: x0, p, ws: Workspace::new(n), mws: None })
     }
 
     /// State dimension n.
@@ -224,6 +225,11 @@ impl KalmanFilter {
     }
 
     /// The update on fully used (reduced) inputs; returns `(r, A, λ)`.
+    ///
+    /// The Joseph form `P = (I − KH)P⁻(I − KH)ᵀ + KRKᵀ` is evaluated without forming the n × n
+    /// matrix `I − KH`: `T = (I − KH)P⁻ = P⁻ − K(HP⁻)`, then `T(I − KH)ᵀ = T − (THᵀ)Kᵀ`, so
+    /// `P = T − (THᵀ − KR)Kᵀ`. The identity factors are applied exactly; every product has an
+    /// inner dimension of m, which keeps the update O(n²m).
     fn update_core(
         &mut self,
         z: &DVector<f64>,
@@ -232,55 +238,123 @@ impl KalmanFilter {
     ) -> Result<(DVector<f64>, DMatrix<f64>, f64)> {
         let n = self.dim();
         let k = z.len();
-        // PHᵀ (n × k) = (HP)ᵀ since P is symmetric.
-        let mut hp = DMatrix::<f64>::zeros(k, n);
-        hp.gemm(1.0, h, &self.p, 0.0);
-        // A = H P Hᵀ + R  (k × k) = (HP) Hᵀ + R
-        let ht = h.transpose();
+        let mw = self.mws.get_or_insert_with(|| MWork::new(n, k));
+        if mw.hp.nrows() != k {
+            *mw = MWork::new(n, k);
+        }
+        // HP⁻ (k × n); PHᵀ = (HP)ᵀ since P is symmetric.
+        mw.hp.gemm(1.0, h, &self.p, 0.0);
+        h.transpose_to(&mut mw.ht);
+        // A = (HP)Hᵀ + R  (k × k)
         let mut a = r.clone();
-        a.gemm(1.0, &hp, &ht, 1.0);
+        a.gemm(1.0, &mw.hp, &mw.ht, 1.0);
         symmetrize(&mut a);
-        // residual
+        // residual r = z − Hx⁻
         let mut res = z.clone();
         res.gemv(-1.0, h, &self.x, 1.0);
         let chol: Cholesky<f64, Dyn> = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
             name: "innovation covariance A = H P Hᵀ + R".into(),
             detail: "Cholesky factorisation failed; check R and P".into(),
         })?;
-        // Kᵀ = A⁻¹ (HP)  (k × n)
-        let mut kt = hp;
-        chol.solve_mut(&mut kt);
-        // Whitened residual w = L⁻¹ r, λ = ‖w‖².
+        // K = PHᵀA⁻¹ (n × k) by substitution with the Cholesky factor, then Kᵀ.
+        mw.hp.transpose_to(&mut mw.k);
+        gain_from_cholesky(chol.l_dirty(), &mut mw.k, &mut mw.inv_diag);
+        mw.k.transpose_to(&mut mw.kt);
+        // Whitened residual w = L⁻¹r, λ = ‖w‖².
         let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
             context: "update".into(),
             detail: "triangular solve of the innovation covariance failed".into(),
         })?;
         let stat = w.norm_squared();
         let ws = &mut self.ws;
-        // x = x⁻ + K r = x⁻ + Kᵀᵀ r
+        // x = x⁻ + K r
         ws.x.copy_from(&self.x);
-        ws.x.gemv_tr(1.0, &kt, &res, 1.0);
-        // I − KH  (n × n) = I − Kᵀᵀ H
-        ws.nn_a.fill_with_identity();
-        ws.nn_a.gemm_tr(-1.0, &kt, h, 1.0);
-        // T = (I − KH) P
-        ws.nn_b.gemm(1.0, &ws.nn_a, &self.p, 0.0);
-        // P = T (I − KH)ᵀ + K R Kᵀ
-        ws.nn_a.transpose_mut();
-        ws.nn_c.gemm(1.0, &ws.nn_b, &ws.nn_a, 0.0);
-        let mut rkt = DMatrix::<f64>::zeros(k, n);
-        rkt.gemm(1.0, r, &kt, 0.0);
-        ws.nn_c.gemm_tr(1.0, &kt, &rkt, 1.0);
-        symmetrize(&mut ws.nn_c);
-        if !stat.is_finite() || !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
+        ws.x.gemv(1.0, &mw.k, &res, 1.0);
+        // T = P⁻ − K(HP⁻)
+        ws.nn_a.copy_from(&self.p);
+        ws.nn_a.gemm(-1.0, &mw.k, &mw.hp, 1.0);
+        // U = THᵀ − KR  (n × k)
+        mw.u.gemm(1.0, &ws.nn_a, &mw.ht, 0.0);
+        mw.u.gemm(-1.0, &mw.k, r, 1.0);
+        // P = T − U Kᵀ
+        ws.nn_a.gemm(-1.0, &mw.u, &mw.kt, 1.0);
+        symmetrize(&mut ws.nn_a);
+        if !stat.is_finite() || !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_a.as_slice()) {
             return Err(Error::Numerical {
                 context: "update".into(),
                 detail: "the updated state or covariance is not finite".into(),
             });
         }
         std::mem::swap(&mut self.x, &mut ws.x);
-        std::mem::swap(&mut self.p, &mut ws.nn_c);
+        std::mem::swap(&mut self.p, &mut ws.nn_a);
         Ok((res, a, stat))
+    }
+}
+
+/// Scratch buffers of the update for one measurement dimension k.
+#[derive(Debug, Clone)]
+struct MWork {
+    hp: DMatrix<f64>,
+    ht: DMatrix<f64>,
+    kt: DMatrix<f64>,
+    k: DMatrix<f64>,
+    u: DMatrix<f64>,
+    inv_diag: Vec<f64>,
+}
+
+impl MWork {
+    fn new(n: usize, k: usize) -> Self {
+        MWork {
+            hp: DMatrix::zeros(k, n),
+            ht: DMatrix::zeros(n, k),
+            kt: DMatrix::zeros(k, n),
+            k: DMatrix::zeros(n, k),
+            u: DMatrix::zeros(n, k),
+            inv_diag: vec![0.0; k],
+        }
+    }
+}
+
+/// Overwrite `y = PHᵀ` (n × k) with `K = y A⁻¹`, where `A = LLᵀ` and `l` holds `L` in its lower
+/// triangle (the upper triangle is ignored).
+///
+/// Two substitutions on the columns of `y`, which are contiguous in nalgebra's column-major
+/// storage: `Z Lᵀ = Y` forward, then `K L = Z` backward. Each pivot is divided once (its
+/// reciprocal is kept), so the inner loops are vectorisable multiply-adds.
+fn gain_from_cholesky(l: &DMatrix<f64>, y: &mut DMatrix<f64>, inv_diag: &mut [f64]) {
+    let n = y.nrows();
+    let k = y.ncols();
+    for i in 0..k {
+        inv_diag[i] = 1.0 / l[(i, i)];
+    }
+    let data = y.as_mut_slice();
+    // Forward: Z[:, i] = (Y[:, i] − Σ_{j<i} L[i, j] Z[:, j]) / L[i, i]
+    for i in 0..k {
+        let (done, rest) = data.split_at_mut(i * n);
+        let col = &mut rest[..n];
+        for j in 0..i {
+            let c = l[(i, j)];
+            let zj = &done[j * n..(j + 1) * n];
+            for (a, b) in col.iter_mut().zip(zj) {
+                *a -= c * b;
+            }
+        }
+        let d = inv_diag[i];
+        col.iter_mut().for_each(|a| *a *= d);
+    }
+    // Backward: K[:, i] = (Z[:, i] − Σ_{j>i} L[j, i] K[:, j]) / L[i, i]
+    for i in (0..k).rev() {
+        let (head, done) = data.split_at_mut((i + 1) * n);
+        let col = &mut head[i * n..];
+        for j in (i + 1)..k {
+            let c = l[(j, i)];
+            let kj = &done[(j - i - 1) * n..(j - i) * n];
+            for (a, b) in col.iter_mut().zip(kj) {
+                *a -= c * b;
+            }
+        }
+        let d = inv_diag[i];
+        col.iter_mut().for_each(|a| *a *= d);
     }
 }
 
