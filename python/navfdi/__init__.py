@@ -1,0 +1,58 @@
+"""navfdi: fault detection and isolation for multi-sensor integrated navigation.
+
+The numerical core (Kalman filters, detection statistics) is Rust (``navfdi._core``); this
+package wires it together. Public names:
+
+Filtering
+    :class:`KalmanFilter` (per-epoch step API), :func:`run_filter` (a whole sequence in Rust),
+    :class:`Innovation`, :class:`FilterRun`.
+Detectors
+    :class:`ResidualChi2`, :class:`ImprovedSprt`, :class:`JointChi2Sprt` with per-epoch
+    :class:`Decision` and whole-sequence :class:`DetectionRun`; :func:`alarm_intervals`.
+Statistics
+    :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
+    :func:`mdb`.
+Errors
+    ``ValueError`` for bad input; :class:`LinAlgError` (a ``ValueError``) for numerical
+    failures such as a covariance that is not positive definite.
+"""
+
+from navfdi._core import (
+    Decision,
+    DetectionRun,
+    ImprovedSprt,
+    Innovation,
+    JointChi2Sprt,
+    KalmanFilter,
+    LinAlgError,
+    ResidualChi2,
+    __version__,
+    chi2_threshold,
+    mdb,
+    ncx2_cdf,
+    noncentrality,
+    sprt_threshold,
+)
+from navfdi._filter import FilterRun, run_filter
+from navfdi._intervals import AlarmInterval, alarm_intervals
+
+__all__ = [
+    "AlarmInterval",
+    "Decision",
+    "DetectionRun",
+    "FilterRun",
+    "ImprovedSprt",
+    "Innovation",
+    "JointChi2Sprt",
+    "KalmanFilter",
+    "LinAlgError",
+    "ResidualChi2",
+    "__version__",
+    "alarm_intervals",
+    "chi2_threshold",
+    "mdb",
+    "ncx2_cdf",
+    "noncentrality",
+    "run_filter",
+    "sprt_threshold",
+]

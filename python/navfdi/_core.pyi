@@ -1,0 +1,318 @@
+"""Rust core of navfdi (PyO3 bindings). Re-exported from :mod:`navfdi`.
+
+Array arguments accept anything numpy converts to float64; the fast path is a C-contiguous
+float64 array. Returned arrays are new numpy arrays (copies of the Rust state).
+"""
+
+from typing import final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__version__: str
+
+class LinAlgError(ValueError):
+    """Numerical linear-algebra failure (a matrix that must be positive definite is not, or a
+    result is not finite). A subclass of ``ValueError``."""
+
+@final
+class Innovation:
+    """Result of one measurement update (m measurement components)."""
+
+    @property
+    def residual(self) -> NDArray[np.float64]:
+        """Innovation ``r = z - H x⁻``, shape (m,), measurement units; NaN where unused."""
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Innovation covariance ``A = H P⁻ Hᵀ + R``, shape (m, m); NaN rows/columns unused."""
+    @property
+    def statistic(self) -> float:
+        """``λ = rᵀ A⁻¹ r`` over the used components (dimensionless); NaN when none used."""
+    @property
+    def used(self) -> NDArray[np.bool_]:
+        """Components of ``z`` used in the update, shape (m,)."""
+    @property
+    def dof(self) -> int:
+        """Number of components used (degrees of freedom of ``statistic``)."""
+
+@final
+class KalmanFilter:
+    """Linear Kalman filter with state ``x`` (n,) and covariance ``P`` (n, n).
+
+    Per-epoch step API: call :meth:`predict` then :meth:`update`. Every call validates its
+    inputs before changing anything; a rejected call leaves the filter exactly as it was.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state (finite).
+    P0 : array_like, shape (n, n)
+        Initial covariance, symmetric positive semi-definite.
+
+    Raises
+    ------
+    ValueError
+        Wrong shapes, NaN/inf, ``P0`` not symmetric PSD.
+    """
+
+    def __init__(self, x0: ArrayLike, P0: ArrayLike) -> None: ...
+    def predict(self, Phi: ArrayLike, Q: ArrayLike, fading: float = 1.0) -> None:
+        """Time update ``x⁻ = Φ x``, ``P⁻ = S Φ P Φᵀ + Q``.
+
+        Parameters
+        ----------
+        Phi : array_like, shape (n, n)
+            State transition matrix over the step.
+        Q : array_like, shape (n, n)
+            Process-noise covariance mapped to the state (ΓQΓᵀ), symmetric PSD.
+        fading : float, default 1.0
+            Fading-memory factor ``S >= 1``.
+
+        Raises
+        ------
+        ValueError
+            Wrong shapes, NaN/inf, ``Q`` not symmetric PSD, ``fading < 1``.
+        """
+    def update(self, z: ArrayLike, H: ArrayLike, R: ArrayLike) -> Innovation:
+        """Measurement update (Cholesky gain, Joseph-form covariance).
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement; NaN marks a missing component, which is skipped (reduced update).
+        H : array_like, shape (m, n)
+            Measurement matrix (finite).
+        R : array_like, shape (m, m)
+            Measurement-noise covariance, symmetric PSD.
+
+        Returns
+        -------
+        Innovation
+            Residual, its covariance, ``λ`` and the used-component mask.
+
+        Raises
+        ------
+        ValueError
+            Wrong shapes, inf in ``z``, NaN/inf in ``H`` or ``R``, ``R`` not symmetric PSD.
+        LinAlgError
+            ``A = H P⁻ Hᵀ + R`` of the used components is not positive definite.
+        """
+    def set_state(self, x: ArrayLike, P: ArrayLike) -> None:
+        """Replace the state (n,) and covariance (n, n), validated like the constructor."""
+    @property
+    def x(self) -> NDArray[np.float64]:
+        """State estimate, shape (n,) (a copy)."""
+    @property
+    def P(self) -> NDArray[np.float64]:
+        """State covariance, shape (n, n) (a copy)."""
+    @property
+    def dim(self) -> int:
+        """State dimension n."""
+
+def run_filter(
+    x0: ArrayLike,
+    P0: ArrayLike,
+    Phi: ArrayLike,
+    Q: ArrayLike,
+    zs: ArrayLike,
+    H: ArrayLike,
+    R: ArrayLike,
+    fading: float = 1.0,
+) -> tuple[
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.bool_],
+]:
+    """Whole-sequence filter; returns ``(x (T,n), P (T,n,n), residual (T,m),
+    covariance (T,m,m), statistic (T,), used (T,m))``. Use :func:`navfdi.run_filter`, which
+    wraps the tuple in a :class:`navfdi.FilterRun`."""
+
+@final
+class Decision:
+    """One epoch's decision of a detector."""
+
+    @property
+    def statistic(self) -> float:
+        """Test statistic (chi-square: ``rᵀA⁻¹r``; SPRT: largest per-component ``λ_j``);
+        NaN when no residual component was available."""
+    @property
+    def threshold(self) -> float:
+        """Threshold compared with ``statistic``."""
+    @property
+    def alarm(self) -> bool:
+        """Fault declared this epoch."""
+    @property
+    def dof(self) -> int:
+        """Number of residual components used."""
+    @property
+    def ratio(self) -> float:
+        """``statistic / threshold`` (test ratio); ``>= 1`` means alarm."""
+    @property
+    def components(self) -> NDArray[np.float64] | None:
+        """SPRT per-component statistics ``λ_j``, shape (m,); None for the chi-square test."""
+    @property
+    def chi2(self) -> Decision | None:
+        """Joint detector only: the chi-square test's decision this epoch."""
+    @property
+    def reset(self) -> bool:
+        """Joint detector only: True when the chi-square end-of-fault reset the SPRT."""
+
+@final
+class DetectionRun:
+    """Per-epoch decisions of :meth:`ResidualChi2.test_sequence` and friends (T epochs)."""
+
+    @property
+    def statistic(self) -> NDArray[np.float64]:
+        """Statistic per epoch, shape (T,)."""
+    @property
+    def threshold(self) -> NDArray[np.float64]:
+        """Threshold per epoch, shape (T,)."""
+    @property
+    def alarm(self) -> NDArray[np.bool_]:
+        """Alarm per epoch, shape (T,)."""
+    @property
+    def dof(self) -> NDArray[np.int64]:
+        """Residual components used per epoch, shape (T,)."""
+    @property
+    def components(self) -> NDArray[np.float64] | None:
+        """SPRT per-component statistics, shape (T, m); None for the chi-square test."""
+    @property
+    def chi2_statistic(self) -> NDArray[np.float64] | None:
+        """Joint detector: chi-square statistic, shape (T,); None otherwise."""
+    @property
+    def chi2_threshold(self) -> NDArray[np.float64] | None:
+        """Joint detector: chi-square threshold, shape (T,); None otherwise."""
+    @property
+    def chi2_alarm(self) -> NDArray[np.bool_] | None:
+        """Joint detector: chi-square alarm, shape (T,); None otherwise."""
+    @property
+    def reset(self) -> NDArray[np.bool_] | None:
+        """Joint detector: epochs at which the SPRT was reset, shape (T,); None otherwise."""
+    def __len__(self) -> int: ...
+
+@final
+class ResidualChi2:
+    """Residual chi-square test: alarm when ``rᵀA⁻¹r >= F⁻¹_{χ²(m)}(1 - pf)``.
+
+    NaN residual components are skipped and the threshold follows the number used.
+
+    Parameters
+    ----------
+    pf : float
+        False-alarm probability per epoch, in (0, 1).
+    """
+
+    def __init__(self, pf: float) -> None: ...
+    def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
+        """Test one epoch: ``residual`` shape (m,), ``covariance`` shape (m, m), positive
+        definite on the available components. Raises ``ValueError`` for bad shapes or values
+        and :class:`LinAlgError` when the covariance cannot be factored; the detector is then
+        unchanged."""
+    def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
+        """Test every epoch of ``residuals`` (T, m) with ``covariances`` (T, m, m) in Rust, with
+        the GIL released; the detector continues from its current state and keeps the final
+        one. On an error (naming the epoch) the detector is unchanged."""
+    def reset(self) -> None:
+        """Forget the last alarm state."""
+    def threshold(self, dof: int) -> float:
+        """Threshold ``T_D`` for ``dof >= 1`` components."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability per epoch."""
+    @property
+    def alarm(self) -> bool:
+        """Last alarm state."""
+
+@final
+class ImprovedSprt:
+    """Improved SPRT per residual component: ``λ_j(k) = k x̄_k² / (2σ²)``, alarm when any
+    ``λ_j >= ln((1 - pm)/pf)``.
+
+    Parameters
+    ----------
+    pf, pm : float
+        False-alarm and missed-detection probabilities in (0, 1), ``pf + pm < 1``.
+    variance : {"known", "sample"}, default "known"
+        ``"known"``: normalise component j by ``sqrt(A_jj)`` (σ = 1). ``"sample"``: running
+        sample variance of the raw component (Welford).
+    """
+
+    def __init__(self, pf: float, pm: float, variance: str = "known") -> None: ...
+    def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
+        """Test one epoch (``residual`` (m,), ``covariance`` (m, m)); the dimension m is fixed
+        by the first call. NaN components are skipped."""
+    def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
+        """Test a whole sequence ((T, m) and (T, m, m)) in Rust; see
+        :meth:`ResidualChi2.test_sequence`."""
+    def reset(self) -> None:
+        """Reset every accumulator to zero."""
+    @property
+    def threshold(self) -> float:
+        """``T(H1) = ln((1 - pm)/pf)``."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability parameter."""
+    @property
+    def pm(self) -> float:
+        """Missed-detection probability parameter."""
+    @property
+    def variance(self) -> str:
+        """``"known"`` or ``"sample"``."""
+    @property
+    def alarm(self) -> bool:
+        """Last alarm state."""
+
+@final
+class JointChi2Sprt:
+    """Joint chi-square / improved-SPRT detector of paper 000 (METHODS §4).
+
+    The alarm is the SPRT's; when the chi-square test's alarm falls (end of fault), the SPRT is
+    reset so a later fault is detected as a new one. Parameters as :class:`ImprovedSprt`; the
+    chi-square part uses the same ``pf``.
+    """
+
+    def __init__(self, pf: float, pm: float, variance: str = "known") -> None: ...
+    def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
+        """Test one epoch; the decision carries ``chi2`` and ``reset``."""
+    def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
+        """Test a whole sequence in Rust; the run carries ``chi2_*`` and ``reset`` arrays."""
+    def reset(self) -> None:
+        """Reset both tests."""
+    @property
+    def threshold(self) -> float:
+        """SPRT threshold ``T(H1)``."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability parameter."""
+    @property
+    def pm(self) -> float:
+        """Missed-detection probability parameter."""
+    @property
+    def variance(self) -> str:
+        """``"known"`` or ``"sample"``."""
+    @property
+    def alarm(self) -> bool:
+        """Last alarm state (the SPRT's)."""
+
+def chi2_threshold(pf: float, dof: int) -> float:
+    """Chi-square threshold ``T_D = F⁻¹_{χ²(dof)}(1 - pf)``; ``pf`` in (0, 1), ``dof >= 1``.
+    E.g. ``chi2_threshold(0.1, 3) = 6.2514``."""
+
+def sprt_threshold(pf: float, pm: float) -> float:
+    """SPRT threshold ``ln((1 - pm)/pf)``; requires ``pf + pm < 1``.
+    E.g. ``sprt_threshold(0.1, 0.1) = 2.1972``."""
+
+def noncentrality(pf: float, pm: float, dof: int) -> float:
+    """Non-centrality ``λ0`` with ``F_{χ²(dof, λ0)}(T_D) = pm`` (METHODS §6); requires
+    ``pf + pm < 1``. E.g. ``noncentrality(0.1, 0.05, 6) = 17.87``."""
+
+def ncx2_cdf(x: float, dof: int, noncentrality: float) -> float:
+    """CDF of the non-central chi-square distribution ``χ²(dof, noncentrality)`` at ``x``."""
+
+def mdb(A: ArrayLike, pf: float, pm: float) -> NDArray[np.float64]:
+    """Minimal detectable bias per component, shape (m,), in measurement units:
+    ``sqrt(λ0 / (A⁻¹)_ii)`` with ``A`` (m, m) the residual covariance (symmetric positive
+    definite) and ``λ0 = noncentrality(pf, pm, m)``."""

@@ -1,0 +1,55 @@
+"""Turning per-epoch alarm flags into alarm intervals."""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+
+class AlarmInterval(NamedTuple):
+    """One interval during which a detector was in alarm.
+
+    Attributes
+    ----------
+    start : float
+        Time (or epoch index) of the first epoch in alarm.
+    end : float or None
+        Time of the first epoch after the alarm cleared; None if it never cleared.
+    """
+
+    start: float
+    end: float | None
+
+
+def alarm_intervals(alarm: ArrayLike, t: ArrayLike | None = None) -> list[AlarmInterval]:
+    """Alarm intervals of a boolean alarm sequence.
+
+    Parameters
+    ----------
+    alarm : array_like of bool, shape (T,)
+        Alarm flag per epoch.
+    t : array_like, shape (T,), optional
+        Epoch times (s). Default: epoch indices.
+
+    Returns
+    -------
+    list of AlarmInterval
+        ``(start, end)`` per interval: ``start`` is the time the alarm was raised, ``end`` the
+        time of the first epoch without alarm afterwards, or None if the alarm was still raised
+        at the last epoch.
+    """
+    a = np.asarray(alarm, dtype=bool)
+    if a.ndim != 1:
+        raise ValueError(f"alarm: expected a 1-D array, got shape {a.shape}")
+    times = np.arange(a.size, dtype=float) if t is None else np.asarray(t, dtype=float)
+    if times.shape != a.shape:
+        raise ValueError(f"t: expected shape {a.shape} to match alarm, got {times.shape}")
+    edges = np.diff(a.astype(np.int8), prepend=0, append=0)
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1)
+    out = []
+    for s, e in zip(starts, ends):
+        out.append(AlarmInterval(float(times[s]), float(times[e]) if e < a.size else None))
+    return out

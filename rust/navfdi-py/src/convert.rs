@@ -1,0 +1,101 @@
+//! numpy ⇄ nalgebra conversions with argument-named errors.
+//!
+//! Inputs are accepted as anything numpy can turn into a float64 array (arrays of any float or
+//! integer dtype, nested lists); the fast path is a C-contiguous float64 array. numpy is
+//! row-major and nalgebra column-major, so matrices are built row by row.
+
+use nalgebra::{DMatrix, DVector};
+use navfdi_core::run::MatrixSeq;
+use numpy::{AllowTypeChange, IxDyn, PyArray, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// An n-dimensional float64 array read from Python: shape and row-major data.
+pub struct Array {
+    pub shape: Vec<usize>,
+    pub data: Vec<f64>,
+}
+
+fn shape_str(shape: &[usize]) -> String {
+    match shape.len() {
+        0 => "() (a scalar)".to_string(),
+        1 => format!("({},)", shape[0]),
+        _ => format!("({})", shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+/// Read any array-like as float64.
+pub fn read(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Array> {
+    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj.extract().map_err(|_| {
+        let tname = obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+        PyValueError::new_err(format!("{name}: expected an array of numbers, got an object of type {tname}"))
+    })?;
+    let shape = arr.shape().to_vec();
+    let data: Vec<f64> = match arr.as_slice() {
+        Ok(s) => s.to_vec(),
+        Err(_) => arr.as_array().iter().copied().collect(),
+    };
+    Ok(Array { shape, data })
+}
+
+/// Read a 1-D array of length `len` (any length when `None`).
+pub fn vector(name: &str, obj: &Bound<'_, PyAny>, len: Option<usize>) -> PyResult<DVector<f64>> {
+    let a = read(name, obj)?;
+    if a.shape.len() != 1 || len.is_some_and(|l| a.shape[0] != l) {
+        let expected = match len {
+            Some(l) => format!("({l},)"),
+            None => "(n,)".to_string(),
+        };
+        return Err(PyValueError::new_err(format!(
+            "{name}: expected shape {expected}, got {}",
+            shape_str(&a.shape)
+        )));
+    }
+    Ok(DVector::from_vec(a.data))
+}
+
+/// Read a 2-D array.
+pub fn matrix(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<DMatrix<f64>> {
+    let a = read(name, obj)?;
+    if a.shape.len() != 2 {
+        return Err(PyValueError::new_err(format!(
+            "{name}: expected a 2-D array, got shape {}",
+            shape_str(&a.shape)
+        )));
+    }
+    Ok(DMatrix::from_row_slice(a.shape[0], a.shape[1], &a.data))
+}
+
+/// Read either one matrix (2-D) or a stack with one matrix per epoch (3-D).
+pub fn matrix_seq(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<MatrixSeq> {
+    let a = read(name, obj)?;
+    match a.shape.len() {
+        2 => Ok(MatrixSeq::Const(DMatrix::from_row_slice(a.shape[0], a.shape[1], &a.data))),
+        3 => {
+            let (t, r, c) = (a.shape[0], a.shape[1], a.shape[2]);
+            let step = r * c;
+            Ok(MatrixSeq::PerEpoch(
+                (0..t).map(|k| DMatrix::from_row_slice(r, c, &a.data[k * step..(k + 1) * step])).collect(),
+            ))
+        }
+        _ => Err(PyValueError::new_err(format!(
+            "{name}: expected one matrix (2-D) or a stack with one matrix per epoch (3-D), got shape {}",
+            shape_str(&a.shape)
+        ))),
+    }
+}
+
+/// Move row-major data into a new numpy array of the given shape (no copy of the buffer).
+pub fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, data: Vec<T>, shape: &[usize]) -> PyResult<Bound<'py, PyArray<T, IxDyn>>> {
+    PyArray::from_vec(py, data).reshape(IxDyn(shape))
+}
+
+/// A column-major matrix as a row-major numpy array.
+pub fn matrix_to_numpy<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+    to_numpy(py, m.transpose().as_slice().to_vec(), &[m.nrows(), m.ncols()])
+}
+
+/// A vector as a 1-D numpy array.
+pub fn vector_to_numpy<'py>(py: Python<'py>, v: &DVector<f64>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+    to_numpy(py, v.as_slice().to_vec(), &[v.len()])
+}

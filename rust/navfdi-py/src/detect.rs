@@ -1,0 +1,447 @@
+//! Detector bindings: `ResidualChi2`, `ImprovedSprt`, `JointChi2Sprt`, their per-epoch
+//! `Decision` and the whole-sequence `DetectionRun`.
+
+use crate::convert::{matrix, read, to_numpy, vector};
+use crate::errors::IntoPyResult;
+use nalgebra::{DMatrix, DVector};
+use navfdi_core::detect::{Decision, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
+use navfdi_core::run::at_epoch;
+use numpy::{IxDyn, PyArray};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// What any detector reports for one epoch.
+#[derive(Clone)]
+struct Report {
+    decision: Decision,
+    components: Option<Vec<f64>>,
+    chi2: Option<Decision>,
+    reset: bool,
+}
+
+/// One epoch's decision of a detector.
+#[pyclass(name = "Decision", module = "navfdi._core", frozen)]
+pub struct PyDecision {
+    report: Report,
+}
+
+#[pymethods]
+impl PyDecision {
+    /// Test statistic (NaN when no residual component was available).
+    #[getter]
+    fn statistic(&self) -> f64 {
+        self.report.decision.statistic
+    }
+    /// Threshold compared with the statistic.
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.report.decision.threshold
+    }
+    /// Fault declared this epoch.
+    #[getter]
+    fn alarm(&self) -> bool {
+        self.report.decision.alarm
+    }
+    /// Number of residual components used.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.report.decision.dof
+    }
+    /// statistic / threshold; ≥ 1 means alarm.
+    #[getter]
+    fn ratio(&self) -> f64 {
+        self.report.decision.ratio()
+    }
+    /// SPRT per-component statistics λ_j, shape (m,); None for the chi-square test.
+    #[getter]
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+        match &self.report.components {
+            Some(c) => Ok(Some(to_numpy(py, c.clone(), &[c.len()])?)),
+            None => Ok(None),
+        }
+    }
+    /// The joint detector's chi-square decision; None for the other detectors.
+    #[getter]
+    fn chi2(&self) -> Option<PyDecision> {
+        self.report.chi2.clone().map(|d| PyDecision {
+            report: Report { decision: d, components: None, chi2: None, reset: false },
+        })
+    }
+    /// True when the joint detector's chi-square end-of-fault reset the SPRT this epoch.
+    #[getter]
+    fn reset(&self) -> bool {
+        self.report.reset
+    }
+    fn __repr__(&self) -> String {
+        let d = &self.report.decision;
+        format!(
+            "Decision(alarm={}, statistic={:.6}, threshold={:.6}, ratio={:.4}, dof={})",
+            if d.alarm { "True" } else { "False" },
+            d.statistic,
+            d.threshold,
+            d.ratio(),
+            d.dof
+        )
+    }
+}
+
+/// Per-epoch decisions of a whole sequence.
+#[pyclass(name = "DetectionRun", module = "navfdi._core", frozen)]
+pub struct PyDetectionRun {
+    reports: Vec<Report>,
+    m: usize,
+}
+
+impl PyDetectionRun {
+    fn col<T: numpy::Element, F: Fn(&Report) -> T>(&self, f: F) -> Vec<T> {
+        self.reports.iter().map(f).collect()
+    }
+}
+
+#[pymethods]
+impl PyDetectionRun {
+    /// Statistic per epoch, shape (T,).
+    #[getter]
+    fn statistic<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        to_numpy(py, self.col(|r| r.decision.statistic), &[self.reports.len()])
+    }
+    /// Threshold per epoch, shape (T,).
+    #[getter]
+    fn threshold<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        to_numpy(py, self.col(|r| r.decision.threshold), &[self.reports.len()])
+    }
+    /// Alarm per epoch, shape (T,).
+    #[getter]
+    fn alarm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<bool, IxDyn>>> {
+        to_numpy(py, self.col(|r| r.decision.alarm), &[self.reports.len()])
+    }
+    /// Components used per epoch, shape (T,).
+    #[getter]
+    fn dof<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<i64, IxDyn>>> {
+        to_numpy(py, self.col(|r| r.decision.dof as i64), &[self.reports.len()])
+    }
+    /// SPRT per-component statistics, shape (T, m); None for the chi-square test.
+    #[getter]
+    fn components<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+        if self.reports.first().is_none_or(|r| r.components.is_none()) {
+            return Ok(None);
+        }
+        let mut data = Vec::with_capacity(self.reports.len() * self.m);
+        for r in &self.reports {
+            match &r.components {
+                Some(c) if c.len() == self.m => data.extend_from_slice(c),
+                _ => data.extend(std::iter::repeat_n(f64::NAN, self.m)),
+            }
+        }
+        Ok(Some(to_numpy(py, data, &[self.reports.len(), self.m])?))
+    }
+    /// Joint detector: chi-square statistic per epoch, shape (T,); None otherwise.
+    #[getter]
+    fn chi2_statistic<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+        self.chi2_col(py, |d| d.statistic)
+    }
+    /// Joint detector: chi-square threshold per epoch, shape (T,); None otherwise.
+    #[getter]
+    fn chi2_threshold<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+        self.chi2_col(py, |d| d.threshold)
+    }
+    /// Joint detector: chi-square alarm per epoch, shape (T,); None otherwise.
+    #[getter]
+    fn chi2_alarm<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<bool, IxDyn>>>> {
+        self.chi2_col(py, |d| d.alarm)
+    }
+    /// Joint detector: epochs at which the SPRT was reset, shape (T,); None otherwise.
+    #[getter]
+    fn reset<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<bool, IxDyn>>>> {
+        if self.reports.first().is_none_or(|r| r.chi2.is_none()) {
+            return Ok(None);
+        }
+        Ok(Some(to_numpy(py, self.col(|r| r.reset), &[self.reports.len()])?))
+    }
+    fn __len__(&self) -> usize {
+        self.reports.len()
+    }
+}
+
+impl PyDetectionRun {
+    fn chi2_col<'py, T: numpy::Element, F: Fn(&Decision) -> T>(
+        &self,
+        py: Python<'py>,
+        f: F,
+    ) -> PyResult<Option<Bound<'py, PyArray<T, IxDyn>>>> {
+        if self.reports.first().is_none_or(|r| r.chi2.is_none()) {
+            return Ok(None);
+        }
+        let v: Vec<T> = self.reports.iter().filter_map(|r| r.chi2.as_ref().map(&f)).collect();
+        Ok(Some(to_numpy(py, v, &[self.reports.len()])?))
+    }
+}
+
+/// Read residuals (T, m) and covariances (T, m, m).
+fn read_sequence(residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<(Vec<DVector<f64>>, Vec<DMatrix<f64>>)> {
+    let r = read("residuals", residuals)?;
+    let a = read("covariances", covariances)?;
+    if r.shape.len() != 2 {
+        return Err(PyValueError::new_err(format!(
+            "residuals: expected a 2-D array (T, m), got {} dimension(s)",
+            r.shape.len()
+        )));
+    }
+    let (t, m) = (r.shape[0], r.shape[1]);
+    if a.shape != [t, m, m] {
+        return Err(PyValueError::new_err(format!(
+            "covariances: expected shape ({t}, {m}, {m}) to match residuals, got {:?}",
+            a.shape
+        )));
+    }
+    let rs = (0..t).map(|k| DVector::from_row_slice(&r.data[k * m..(k + 1) * m])).collect();
+    let as_ = (0..t).map(|k| DMatrix::from_row_slice(m, m, &a.data[k * m * m..(k + 1) * m * m])).collect();
+    Ok((rs, as_))
+}
+
+/// Run `step` over the sequence on a copy of the detector; commit the copy only on success.
+fn run_sequence<D: Clone + Send, F>(
+    py: Python<'_>,
+    det: &mut D,
+    residuals: &Bound<'_, PyAny>,
+    covariances: &Bound<'_, PyAny>,
+    step: F,
+) -> PyResult<PyDetectionRun>
+where
+    F: Fn(&mut D, &DVector<f64>, &DMatrix<f64>) -> navfdi_core::Result<Report> + Send + Sync,
+{
+    let (rs, as_) = read_sequence(residuals, covariances)?;
+    let m = rs.first().map_or(0, |r| r.len());
+    let mut work = det.clone();
+    let reports = py
+        .detach(|| {
+            rs.iter()
+                .zip(&as_)
+                .enumerate()
+                .map(|(k, (r, a))| step(&mut work, r, a).map_err(|e| at_epoch(k, e)))
+                .collect::<navfdi_core::Result<Vec<Report>>>()
+        })
+        .py()?;
+    *det = work;
+    Ok(PyDetectionRun { reports, m })
+}
+
+fn read_pair(residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<(DVector<f64>, DMatrix<f64>)> {
+    Ok((vector("residual", residual, None)?, matrix("covariance", covariance)?))
+}
+
+fn parse_variance(v: &str) -> PyResult<SprtVariance> {
+    match v {
+        "known" => Ok(SprtVariance::Known),
+        "sample" => Ok(SprtVariance::Sample),
+        other => Err(PyValueError::new_err(format!(
+            "variance = {other:?}: must be \"known\" (normalise by sqrt(A_jj)) or \"sample\" (running sample variance)"
+        ))),
+    }
+}
+
+fn variance_name(v: SprtVariance) -> &'static str {
+    match v {
+        SprtVariance::Known => "known",
+        SprtVariance::Sample => "sample",
+    }
+}
+
+fn chi2_step(d: &mut ResidualChi2, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+    Ok(Report { decision: d.test(r, a)?, components: None, chi2: None, reset: false })
+}
+
+fn sprt_step(d: &mut ImprovedSprt, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+    let decision = d.test(r, a)?;
+    Ok(Report { decision, components: Some(d.component_statistics()), chi2: None, reset: false })
+}
+
+fn joint_step(d: &mut JointChi2Sprt, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+    let j = d.test(r, a)?;
+    Ok(Report {
+        decision: j.decision,
+        components: Some(d.sprt().component_statistics()),
+        chi2: Some(j.chi2),
+        reset: j.reset,
+    })
+}
+
+/// Residual chi-square detector.
+#[pyclass(name = "ResidualChi2", module = "navfdi._core")]
+pub struct PyResidualChi2 {
+    inner: ResidualChi2,
+}
+
+#[pymethods]
+impl PyResidualChi2 {
+    #[new]
+    #[pyo3(signature = (pf))]
+    fn new(pf: f64) -> PyResult<Self> {
+        Ok(PyResidualChi2 { inner: ResidualChi2::new(pf).py()? })
+    }
+    /// Test one epoch.
+    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+        let (r, a) = read_pair(residual, covariance)?;
+        let mut work = self.inner.clone();
+        let report = chi2_step(&mut work, &r, &a).py()?;
+        self.inner = work;
+        Ok(PyDecision { report })
+    }
+    /// Test a whole sequence in Rust.
+    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+        run_sequence(py, &mut self.inner, residuals, covariances, chi2_step)
+    }
+    /// Forget the last alarm state.
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+    /// Threshold T_D for `dof` residual components.
+    fn threshold(&mut self, dof: i64) -> PyResult<f64> {
+        let dof = positive_dof(dof)?;
+        self.inner.threshold(dof).py()
+    }
+    /// False-alarm probability per epoch.
+    #[getter]
+    fn pf(&self) -> f64 {
+        self.inner.pf()
+    }
+    /// Last alarm state.
+    #[getter]
+    fn alarm(&self) -> bool {
+        self.inner.alarm()
+    }
+    fn __repr__(&self) -> String {
+        format!("ResidualChi2(pf={})", self.inner.pf())
+    }
+}
+
+/// Improved SPRT detector.
+#[pyclass(name = "ImprovedSprt", module = "navfdi._core")]
+pub struct PyImprovedSprt {
+    inner: ImprovedSprt,
+}
+
+#[pymethods]
+impl PyImprovedSprt {
+    #[new]
+    #[pyo3(signature = (pf, pm, variance = "known"))]
+    fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
+        Ok(PyImprovedSprt { inner: ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()? })
+    }
+    /// Test one epoch.
+    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+        let (r, a) = read_pair(residual, covariance)?;
+        let mut work = self.inner.clone();
+        let report = sprt_step(&mut work, &r, &a).py()?;
+        self.inner = work;
+        Ok(PyDecision { report })
+    }
+    /// Test a whole sequence in Rust.
+    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+        run_sequence(py, &mut self.inner, residuals, covariances, sprt_step)
+    }
+    /// Reset all accumulators to zero.
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+    /// Threshold T(H1) = ln((1 − pm)/pf).
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.inner.threshold()
+    }
+    /// False-alarm probability parameter.
+    #[getter]
+    fn pf(&self) -> f64 {
+        self.inner.pf()
+    }
+    /// Missed-detection probability parameter.
+    #[getter]
+    fn pm(&self) -> f64 {
+        self.inner.pm()
+    }
+    /// "known" or "sample".
+    #[getter]
+    fn variance(&self) -> &'static str {
+        variance_name(self.inner.variance())
+    }
+    /// Last alarm state.
+    #[getter]
+    fn alarm(&self) -> bool {
+        self.inner.alarm()
+    }
+    fn __repr__(&self) -> String {
+        format!("ImprovedSprt(pf={}, pm={}, variance={:?})", self.inner.pf(), self.inner.pm(), variance_name(self.inner.variance()))
+    }
+}
+
+/// Joint chi-square / SPRT detector.
+#[pyclass(name = "JointChi2Sprt", module = "navfdi._core")]
+pub struct PyJointChi2Sprt {
+    inner: JointChi2Sprt,
+}
+
+#[pymethods]
+impl PyJointChi2Sprt {
+    #[new]
+    #[pyo3(signature = (pf, pm, variance = "known"))]
+    fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
+        Ok(PyJointChi2Sprt { inner: JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()? })
+    }
+    /// Test one epoch.
+    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+        let (r, a) = read_pair(residual, covariance)?;
+        let mut work = self.inner.clone();
+        let report = joint_step(&mut work, &r, &a).py()?;
+        self.inner = work;
+        Ok(PyDecision { report })
+    }
+    /// Test a whole sequence in Rust.
+    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+        run_sequence(py, &mut self.inner, residuals, covariances, joint_step)
+    }
+    /// Reset both tests.
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+    /// SPRT threshold T(H1).
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.inner.sprt().threshold()
+    }
+    /// False-alarm probability parameter.
+    #[getter]
+    fn pf(&self) -> f64 {
+        self.inner.sprt().pf()
+    }
+    /// Missed-detection probability parameter.
+    #[getter]
+    fn pm(&self) -> f64 {
+        self.inner.sprt().pm()
+    }
+    /// "known" or "sample".
+    #[getter]
+    fn variance(&self) -> &'static str {
+        variance_name(self.inner.sprt().variance())
+    }
+    /// Last alarm state (the SPRT's).
+    #[getter]
+    fn alarm(&self) -> bool {
+        self.inner.sprt().alarm()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "JointChi2Sprt(pf={}, pm={}, variance={:?})",
+            self.inner.sprt().pf(),
+            self.inner.sprt().pm(),
+            variance_name(self.inner.sprt().variance())
+        )
+    }
+}
+
+/// Validate a Python integer as degrees of freedom.
+pub fn positive_dof(dof: i64) -> PyResult<usize> {
+    if dof < 1 {
+        return Err(PyValueError::new_err(format!("dof = {dof}: degrees of freedom must be at least 1")));
+    }
+    usize::try_from(dof).map_err(|_| PyValueError::new_err(format!("dof = {dof}: too large")))
+}
