@@ -5,7 +5,7 @@ use super::{check_residual, Decision};
 use crate::error::{Error, Result};
 use crate::stats::chi2_threshold;
 use crate::validate::check_probability;
-use nalgebra::{Cholesky, DMatrix, DVector};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// Residual chi-square detector with false-alarm probability `pf` per epoch.
 ///
@@ -50,16 +50,13 @@ impl ResidualChi2 {
     /// Test one epoch: residual `r` (m, NaN = unavailable) and covariance `A` (m × m, positive
     /// definite on the available components).
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
-        let idx = check_residual(r, a)?;
-        let dof = idx.len();
-        if dof == 0 {
+        let checked = check_residual(r, a)?;
+        let dof = checked.idx.len();
+        let Some(chol) = checked.chol else {
             return Ok(Decision { statistic: f64::NAN, threshold: f64::NAN, alarm: self.alarm, dof });
-        }
-        let statistic = if dof == r.len() {
-            whitened_norm2(r, a)?
-        } else {
-            whitened_norm2(&r.select_rows(&idx), &a.select_rows(&idx).select_columns(&idx))?
         };
+        let rr = if dof == r.len() { r.clone() } else { r.select_rows(&checked.idx) };
+        let statistic = whitened_norm2(&chol, &rr)?;
         let threshold = self.threshold(dof)?;
         let alarm = statistic >= threshold;
         self.alarm = alarm;
@@ -73,11 +70,7 @@ impl ResidualChi2 {
 }
 
 /// `rᵀA⁻¹r` as ‖L⁻¹r‖² with `A = LLᵀ`.
-pub(crate) fn whitened_norm2(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<f64> {
-    let chol = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
-        name: "covariance".into(),
-        detail: "Cholesky factorisation of the residual covariance failed".into(),
-    })?;
+pub(crate) fn whitened_norm2(chol: &Cholesky<f64, Dyn>, r: &DVector<f64>) -> Result<f64> {
     let w = chol.l_dirty().solve_lower_triangular(r).ok_or_else(|| Error::Numerical {
         context: "chi-square statistic".into(),
         detail: "triangular solve failed".into(),

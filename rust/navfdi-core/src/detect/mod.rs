@@ -14,8 +14,8 @@ pub use joint::{JointChi2Sprt, JointDecision};
 pub use sprt::{ImprovedSprt, SprtVariance};
 
 use crate::error::{Error, Result};
-use crate::validate::shape_str;
-use nalgebra::{DMatrix, DVector};
+use crate::validate::{check_symmetric, shape_str};
+use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// One epoch's decision of a detector.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,9 +39,16 @@ impl Decision {
     }
 }
 
+/// A validated residual: the indices of the available components and the Cholesky factor of
+/// the covariance restricted to them (None when no component is available).
+pub(crate) struct CheckedResidual {
+    pub idx: Vec<usize>,
+    pub chol: Option<Cholesky<f64, Dyn>>,
+}
+
 /// Check a residual / covariance pair: `r` length m (NaN allowed, no infinity), `A` m × m,
-/// finite on the rows and columns of the available components.
-pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Vec<usize>> {
+/// finite, symmetric and positive definite on the rows and columns of the available components.
+pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<CheckedResidual> {
     let m = r.len();
     if m == 0 {
         return Err(Error::Shape {
@@ -78,7 +85,16 @@ pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Vec<u
             }
         }
     }
-    Ok(idx)
+    if idx.is_empty() {
+        return Ok(CheckedResidual { idx, chol: None });
+    }
+    let sub = if idx.len() == m { a.clone() } else { a.select_rows(&idx).select_columns(&idx) };
+    check_symmetric("covariance", &sub)?;
+    let chol = Cholesky::new(sub).ok_or_else(|| Error::NotPositiveDefinite {
+        name: "covariance".into(),
+        detail: "Cholesky factorisation of the residual covariance (available components) failed".into(),
+    })?;
+    Ok(CheckedResidual { idx, chol: Some(chol) })
 }
 
 /// Any of the detectors, for code that configures detectors at run time.

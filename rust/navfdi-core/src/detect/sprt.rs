@@ -84,7 +84,7 @@ impl ImprovedSprt {
 
     /// Test one epoch. The residual dimension is fixed by the first call.
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
-        let idx = check_residual(r, a)?;
+        let idx = check_residual(r, a)?.idx;
         let m = r.len();
         if !self.acc.is_empty() && self.acc.len() != m {
             return Err(Error::Shape {
