@@ -9,6 +9,24 @@ from typing import final
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+__all__ = [
+    "__version__",
+    "LinAlgError",
+    "KalmanFilter",
+    "Innovation",
+    "run_filter",
+    "Decision",
+    "DetectionRun",
+    "ResidualChi2",
+    "ImprovedSprt",
+    "JointChi2Sprt",
+    "chi2_threshold",
+    "sprt_threshold",
+    "noncentrality",
+    "ncx2_cdf",
+    "mdb",
+]
+
 __version__: str
 
 class LinAlgError(ValueError):
@@ -55,7 +73,7 @@ class KalmanFilter:
         Wrong shapes, NaN/inf, ``P0`` not symmetric PSD.
     """
 
-    def __init__(self, x0: ArrayLike, P0: ArrayLike) -> None: ...
+    def __new__(cls, x0: ArrayLike, P0: ArrayLike) -> KalmanFilter: ...
     def predict(self, Phi: ArrayLike, Q: ArrayLike, fading: float = 1.0) -> None:
         """Time update ``x⁻ = Φ x``, ``P⁻ = S Φ P Φᵀ + Q``.
 
@@ -205,7 +223,7 @@ class ResidualChi2:
         False-alarm probability per epoch, in (0, 1).
     """
 
-    def __init__(self, pf: float) -> None: ...
+    def __new__(cls, pf: float) -> ResidualChi2: ...
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch: ``residual`` shape (m,), ``covariance`` shape (m, m), positive
         definite on the available components. Raises ``ValueError`` for bad shapes or values
@@ -240,7 +258,7 @@ class ImprovedSprt:
         sample variance of the raw component (Welford).
     """
 
-    def __init__(self, pf: float, pm: float, variance: str = "known") -> None: ...
+    def __new__(cls, pf: float, pm: float, variance: str = "known") -> ImprovedSprt: ...
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch (``residual`` (m,), ``covariance`` (m, m)); the dimension m is fixed
         by the first call. NaN components are skipped."""
@@ -274,7 +292,7 @@ class JointChi2Sprt:
     chi-square part uses the same ``pf``.
     """
 
-    def __init__(self, pf: float, pm: float, variance: str = "known") -> None: ...
+    def __new__(cls, pf: float, pm: float, variance: str = "known") -> JointChi2Sprt: ...
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch; the decision carries ``chi2`` and ``reset``."""
     def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:

@@ -119,7 +119,7 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
         False-alarm and missed-detection probabilities of the detectors.
     """
     t, _, run = simulate(seed)
-    detectors = {
+    detectors: dict[str, _core.ResidualChi2 | _core.ImprovedSprt | _core.JointChi2Sprt] = {
         "chi2": _core.ResidualChi2(pf),
         "sprt": _core.ImprovedSprt(pf, pm),
         "joint": _core.JointChi2Sprt(pf, pm),

@@ -1,0 +1,60 @@
+"""Package-level checks: stubs match the extension, the package type-checks, the CLI works."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+import navfdi
+
+
+def run(*args, **kw):
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, timeout=300, **kw)
+
+
+def test_stubtest_passes():
+    out = run("-m", "mypy.stubtest", "navfdi._core")
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_package_type_checks():
+    out = run("-m", "mypy", "-p", "navfdi")
+    assert out.returncode == 0, out.stdout + out.stderr
+
+
+def test_public_names_are_documented():
+    for name in navfdi.__all__:
+        obj = getattr(navfdi, name)
+        if name == "__version__":
+            assert isinstance(obj, str)
+            continue
+        assert obj.__doc__ or name in ("Decision", "DetectionRun", "Innovation"), name
+
+
+def test_demo_reports_both_faults_for_every_detector():
+    out = run("-m", "navfdi", "demo", "--seed", "0")
+    assert out.returncode == 0, out.stderr
+    rows = [line.split() for line in out.stdout.splitlines()]
+    by = {(r[0], r[1]): r for r in rows if r and r[0] in ("chi2", "sprt", "joint") and r[1] in ("ramp", "step")}
+    # SPRT misses the step (still in alarm from the ramp); chi-square and joint find both.
+    assert "missed" in by[("sprt", "step")]
+    assert "never" in by[("sprt", "ramp")]
+    for det in ("chi2", "joint"):
+        assert "missed" not in by[(det, "ramp")] and "missed" not in by[(det, "step")]
+    # The joint detector raises on the ramp no later than chi-square (it is the SPRT's alarm).
+    raised = lambda r: float(r[5])  # noqa: E731  (detector, fault name (3 words), window, raised)
+    assert raised(by[("joint", "ramp")]) <= raised(by[("chi2", "ramp")])
+
+
+def test_cli_reports_bad_parameters_cleanly():
+    out = run("-m", "navfdi", "demo", "--pf", "1.5")
+    assert out.returncode == 2
+    assert "pf" in out.stderr and "Traceback" not in out.stderr
+
+
+@pytest.mark.parametrize("flag", ["--version", "--help"])
+def test_cli_flags(flag):
+    out = run("-m", "navfdi", flag)
+    assert out.returncode == 0 and "navfdi" in out.stdout
