@@ -58,3 +58,23 @@ def test_cli_reports_bad_parameters_cleanly():
 def test_cli_flags(flag):
     out = run("-m", "navfdi", flag)
     assert out.returncode == 0 and "navfdi" in out.stdout
+
+
+def test_readme_example_runs(tmp_path):
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    blocks, inside, cur = [], False, []
+    for line in text.splitlines():
+        if line.startswith("```python"):
+            inside, cur = True, []
+        elif line.startswith("```") and inside:
+            inside = False
+            blocks.append("\n".join(cur))
+        elif inside:
+            cur.append(line)
+    assert blocks, "README has no python example"
+    script = tmp_path / "example.py"
+    script.write_text("\n\n".join(blocks), encoding="utf-8")
+    out = run(str(script))
+    assert out.returncode == 0, out.stderr
