@@ -15,6 +15,7 @@
 
 pub mod detect;
 pub mod error;
+pub mod ins;
 pub mod kalman;
 pub mod run;
 pub mod stats;
@@ -22,3 +23,4 @@ pub mod validate;
 
 pub use error::{Error, Result};
 pub use kalman::{Innovation, KalmanFilter};
+pub mod sim;

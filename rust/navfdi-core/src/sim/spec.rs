@@ -1,0 +1,481 @@
+//! The scenario schema in SI units (radians, metres, seconds). The Python layer reads the
+//! user's TOML (with explicit units), converts to this structure and passes it as JSON.
+//! [`ScenarioSpec::validate`] checks the semantics and names the offending field path in the
+//! same spelling as the TOML (`faults[1].sensor`, `federated.subfilters[0].share`, ...).
+
+use crate::error::{Error, Result};
+use crate::ins::InsErrorParams;
+use serde::{Deserialize, Serialize};
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioSpec {
+    /// Scenario name.
+    pub name: String,
+    /// Length of the run (s).
+    pub duration: f64,
+    /// Filter period (s).
+    pub dt: f64,
+    /// Truth trajectory.
+    pub trajectory: TrajectorySpec,
+    /// IMU error model and initial errors.
+    pub ins: InsErrorParams,
+    /// Auxiliary sensors.
+    pub sensors: Vec<SensorSpec>,
+    /// Injected faults.
+    #[serde(default)]
+    pub faults: Vec<FaultSpec>,
+    /// Federated filter configuration.
+    pub federated: FederatedSpec,
+}
+
+/// Start state and flight segments.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrajectorySpec {
+    /// Start latitude (rad).
+    pub latitude: f64,
+    /// Start longitude (rad).
+    pub longitude: f64,
+    /// Start height (m).
+    pub height: f64,
+    /// Start heading, clockwise from north (rad).
+    pub heading: f64,
+    /// Start ground speed (m/s).
+    #[serde(default)]
+    pub speed: f64,
+    /// Segments flown in order; the last one is held until the end of the run.
+    pub segments: Vec<SegmentSpec>,
+}
+
+/// One flight segment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SegmentSpec {
+    /// At rest (speed must be zero).
+    Stationary {
+        /// Duration (s).
+        duration: f64,
+    },
+    /// Level along-track acceleration (take-off run).
+    Accelerate {
+        /// Duration (s).
+        duration: f64,
+        /// Along-track acceleration (m/s²).
+        acceleration: f64,
+    },
+    /// Constant-speed climb.
+    Climb {
+        /// Duration (s).
+        duration: f64,
+        /// Climb rate (m/s), positive.
+        rate: f64,
+    },
+    /// Constant-speed level flight.
+    Level {
+        /// Duration (s).
+        duration: f64,
+    },
+    /// Coordinated level turn.
+    Turn {
+        /// Duration (s).
+        duration: f64,
+        /// Turn rate (rad/s), positive to the right (clockwise heading change).
+        rate: f64,
+    },
+    /// Constant-speed descent.
+    Descent {
+        /// Duration (s).
+        duration: f64,
+        /// Descent rate (m/s), positive.
+        rate: f64,
+    },
+}
+
+impl SegmentSpec {
+    /// Segment duration (s).
+    pub fn duration(&self) -> f64 {
+        match self {
+            SegmentSpec::Stationary { duration }
+            | SegmentSpec::Accelerate { duration, .. }
+            | SegmentSpec::Climb { duration, .. }
+            | SegmentSpec::Level { duration }
+            | SegmentSpec::Turn { duration, .. }
+            | SegmentSpec::Descent { duration, .. } => *duration,
+        }
+    }
+}
+
+/// What an auxiliary sensor measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SensorKind {
+    /// Celestial attitude: misalignment east, north, up (rad); 3 components.
+    Cns,
+    /// GNSS position (east, north, up, m) and velocity (east, north, up, m/s); 6 components.
+    Gnss,
+    /// GNSS position east, north, up (m); 3 components.
+    GnssPosition,
+    /// GNSS velocity east, north, up (m/s); 3 components.
+    GnssVelocity,
+    /// Barometric height (m); 1 component.
+    Baro,
+    /// Vision / SLAM position east, north, up (m); 3 components.
+    Vision,
+}
+
+impl SensorKind {
+    /// Number of measurement components.
+    pub fn dim(self) -> usize {
+        match self {
+            SensorKind::Gnss => 6,
+            SensorKind::Baro => 1,
+            _ => 3,
+        }
+    }
+
+    /// Component names, in order.
+    pub fn components(self) -> &'static [&'static str] {
+        match self {
+            SensorKind::Cns => &["phi_e", "phi_n", "phi_u"],
+            SensorKind::Gnss => &["pos_e", "pos_n", "pos_u", "vel_e", "vel_n", "vel_u"],
+            SensorKind::GnssPosition | SensorKind::Vision => &["pos_e", "pos_n", "pos_u"],
+            SensorKind::GnssVelocity => &["vel_e", "vel_n", "vel_u"],
+            SensorKind::Baro => &["h"],
+        }
+    }
+}
+
+/// An auxiliary sensor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorSpec {
+    /// Unique name, referenced by faults and sub-filters.
+    pub name: String,
+    /// Measurement type.
+    pub kind: SensorKind,
+    /// Noise σ per component (SI units of the component), length = kind dimension.
+    pub noise: Vec<f64>,
+    /// Measurement rate (Hz); at most the filter rate.
+    pub rate: f64,
+    /// Windows `[start, end)` (s) without measurements.
+    #[serde(default)]
+    pub outages: Vec<[f64; 2]>,
+}
+
+/// Fault shape over its window `[start, end)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FaultKind {
+    /// `magnitude`.
+    Step,
+    /// `magnitude · (t − start)`.
+    Ramp,
+    /// `magnitude · (t − start)²`.
+    Quadratic,
+}
+
+/// A fault added to chosen components of a sensor's measurement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultSpec {
+    /// Unique identifier.
+    pub id: String,
+    /// Sensor name.
+    pub sensor: String,
+    /// Component indices affected.
+    pub components: Vec<usize>,
+    /// Shape.
+    pub kind: FaultKind,
+    /// Size (SI unit of the component; per s for ramps, per s² for quadratics).
+    pub magnitude: f64,
+    /// Window start (s).
+    pub start: f64,
+    /// Window end (s), exclusive.
+    pub end: f64,
+}
+
+impl FaultSpec {
+    /// Fault value at time `t` (s).
+    pub fn value(&self, t: f64) -> f64 {
+        if t < self.start || t >= self.end {
+            return 0.0;
+        }
+        let d = t - self.start;
+        match self.kind {
+            FaultKind::Step => self.magnitude,
+            FaultKind::Ramp => self.magnitude * d,
+            FaultKind::Quadratic => self.magnitude * d * d,
+        }
+    }
+}
+
+/// Federated fusion mode (METHODS §5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FusionMode {
+    /// After fusion each healthy sub-filter is reset to `x_g`, `P_g/β_i` (Carlson).
+    Reset,
+    /// Sub-filters run independently; the master only fuses.
+    NoReset,
+}
+
+/// Detector type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DetectorKind {
+    /// Residual chi-square.
+    Chi2,
+    /// Improved SPRT.
+    Sprt,
+    /// Joint chi-square / SPRT.
+    Joint,
+}
+
+/// A detector attached to a sub-filter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DetectorSpec {
+    /// Name, unique within the sub-filter (e.g. `chi2`, `sprt`, `joint`).
+    pub name: String,
+    /// Type.
+    pub kind: DetectorKind,
+    /// False-alarm probability.
+    pub pf: f64,
+    /// Missed-detection probability (SPRT and joint).
+    #[serde(default)]
+    pub pm: Option<f64>,
+    /// SPRT variance: "known" (default) or "sample".
+    #[serde(default)]
+    pub variance: Option<String>,
+}
+
+/// One sub-filter: INS error state + one sensor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SubfilterSpec {
+    /// Sensor name.
+    pub sensor: String,
+    /// Information-sharing factor β_i.
+    pub share: f64,
+    /// Detectors run on this sub-filter's residuals.
+    #[serde(default)]
+    pub detectors: Vec<DetectorSpec>,
+    /// Name of the detector whose alarm isolates the sub-filter (None: never isolated).
+    #[serde(default)]
+    pub isolation: Option<String>,
+}
+
+/// Federated filter configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FederatedSpec {
+    /// Reset or no-reset mode.
+    pub mode: FusionMode,
+    /// Master's information share β_m (≥ 0); `Σβ_i + β_m = 1`.
+    #[serde(default)]
+    pub master_share: f64,
+    /// Sub-filters.
+    pub subfilters: Vec<SubfilterSpec>,
+}
+
+fn bad(path: impl Into<String>, msg: impl std::fmt::Display) -> Error {
+    Error::Invalid(format!("{}: {msg}", path.into()))
+}
+
+fn positive(path: &str, v: f64) -> Result<()> {
+    if !(v > 0.0 && v.is_finite()) {
+        return Err(bad(path, format!("{v} must be a positive finite number")));
+    }
+    Ok(())
+}
+
+fn non_negative(path: &str, v: f64) -> Result<()> {
+    if !(v >= 0.0 && v.is_finite()) {
+        return Err(bad(path, format!("{v} must be a finite number >= 0")));
+    }
+    Ok(())
+}
+
+impl ScenarioSpec {
+    /// Parse from JSON (the form the Python layer produces) and validate.
+    pub fn from_json(s: &str) -> Result<Self> {
+        let spec: ScenarioSpec = serde_json::from_str(s).map_err(|e| Error::Invalid(format!("scenario: {e}")))?;
+        spec.validate()?;
+        Ok(spec)
+    }
+
+    /// To JSON.
+    pub fn to_json(&self) -> String {
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// Number of filter epochs: `floor(duration / dt)`.
+    pub fn epochs(&self) -> usize {
+        (self.duration / self.dt + 1e-9).floor() as usize
+    }
+
+    /// Index of a sensor by name.
+    pub fn sensor_index(&self, name: &str) -> Option<usize> {
+        self.sensors.iter().position(|s| s.name == name)
+    }
+
+    /// Check the semantics; errors name the field path.
+    pub fn validate(&self) -> Result<()> {
+        positive("duration", self.duration)?;
+        positive("dt", self.dt)?;
+        if self.epochs() < 1 {
+            return Err(bad("duration", format!("{} s is shorter than one filter period dt = {} s", self.duration, self.dt)));
+        }
+        let tr = &self.trajectory;
+        if !(tr.latitude.abs() < 89.0f64.to_radians()) {
+            return Err(bad("trajectory.latitude", format!("{} rad: must be within ±89° (the ENU model is singular at the poles)", tr.latitude)));
+        }
+        for (p, v) in [("trajectory.longitude", tr.longitude), ("trajectory.height", tr.height), ("trajectory.heading", tr.heading)] {
+            if !v.is_finite() {
+                return Err(bad(p, format!("{v} must be finite")));
+            }
+        }
+        non_negative("trajectory.speed", tr.speed)?;
+        if tr.segments.is_empty() {
+            return Err(bad("trajectory.segments", "at least one segment is required"));
+        }
+        for (i, s) in tr.segments.iter().enumerate() {
+            let p = format!("trajectory.segments[{i}]");
+            positive(&format!("{p}.duration"), s.duration())?;
+            match s {
+                SegmentSpec::Accelerate { acceleration, .. } if !acceleration.is_finite() => {
+                    return Err(bad(format!("{p}.acceleration"), "must be finite"));
+                }
+                SegmentSpec::Climb { rate, .. } | SegmentSpec::Descent { rate, .. } => positive(&format!("{p}.rate"), *rate)?,
+                SegmentSpec::Turn { rate, .. } if !rate.is_finite() => return Err(bad(format!("{p}.rate"), "must be finite")),
+                _ => {}
+            }
+        }
+        let ins = &self.ins;
+        for (p, v) in [
+            ("ins.gyro_bias", ins.gyro_bias),
+            ("ins.gyro_white", ins.gyro_white),
+            ("ins.gyro_markov", ins.gyro_markov),
+            ("ins.accel_markov", ins.accel_markov),
+            ("ins.init_level", ins.init_level),
+            ("ins.init_heading", ins.init_heading),
+            ("ins.init_velocity", ins.init_velocity),
+            ("ins.init_position", ins.init_position),
+        ] {
+            non_negative(p, v)?;
+        }
+        positive("ins.gyro_tau", ins.gyro_tau)?;
+        positive("ins.accel_tau", ins.accel_tau)?;
+        for p in [ins.init_level, ins.init_heading, ins.init_velocity, ins.init_position] {
+            if p == 0.0 {
+                return Err(bad("ins", "initial-error standard deviations must be positive (P0 must be positive definite)"));
+            }
+        }
+
+        if self.sensors.is_empty() {
+            return Err(bad("sensors", "at least one auxiliary sensor is required"));
+        }
+        for (i, s) in self.sensors.iter().enumerate() {
+            let p = format!("sensors[{i}]");
+            if s.name.is_empty() {
+                return Err(bad(format!("{p}.name"), "must not be empty"));
+            }
+            if self.sensors[..i].iter().any(|o| o.name == s.name) {
+                return Err(bad(format!("{p}.name"), format!("{:?} is used by an earlier sensor", s.name)));
+            }
+            if s.noise.len() != s.kind.dim() {
+                return Err(bad(
+                    format!("{p}.noise"),
+                    format!("{} values given; a {:?} sensor has {} components ({})", s.noise.len(), s.kind, s.kind.dim(), s.kind.components().join(", ")),
+                ));
+            }
+            for (j, n) in s.noise.iter().enumerate() {
+                positive(&format!("{p}.noise[{j}]"), *n)?;
+            }
+            positive(&format!("{p}.rate"), s.rate)?;
+            if s.rate * self.dt > 1.0 + 1e-9 {
+                return Err(bad(format!("{p}.rate"), format!("{} Hz exceeds the filter rate 1/dt = {} Hz", s.rate, 1.0 / self.dt)));
+            }
+            for (j, w) in s.outages.iter().enumerate() {
+                if !(w[0].is_finite() && w[1].is_finite() && w[0] < w[1]) {
+                    return Err(bad(format!("{p}.outages[{j}]"), format!("[{}, {}] must be a finite window with start < end", w[0], w[1])));
+                }
+            }
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            let p = format!("faults[{i}]");
+            if self.faults[..i].iter().any(|o| o.id == f.id) {
+                return Err(bad(format!("{p}.id"), format!("{:?} is used by an earlier fault", f.id)));
+            }
+            let Some(si) = self.sensor_index(&f.sensor) else {
+                return Err(bad(format!("{p}.sensor"), format!("{:?} is not a sensor (known: {})", f.sensor, self.sensor_names())));
+            };
+            let dim = self.sensors[si].kind.dim();
+            if f.components.is_empty() {
+                return Err(bad(format!("{p}.components"), "at least one component is required"));
+            }
+            for (j, c) in f.components.iter().enumerate() {
+                if *c >= dim {
+                    return Err(bad(format!("{p}.components[{j}]"), format!("index {c} out of range for sensor {:?} with {dim} components", f.sensor)));
+                }
+            }
+            if !f.magnitude.is_finite() {
+                return Err(bad(format!("{p}.magnitude"), "must be finite"));
+            }
+            if !(f.start.is_finite() && f.end.is_finite() && f.start < f.end) {
+                return Err(bad(format!("{p}"), format!("window start = {}, end = {} must be finite with start < end", f.start, f.end)));
+            }
+        }
+        let fed = &self.federated;
+        non_negative("federated.master_share", fed.master_share)?;
+        if fed.subfilters.is_empty() {
+            return Err(bad("federated.subfilters", "at least one sub-filter is required"));
+        }
+        let mut total = fed.master_share;
+        for (i, sf) in fed.subfilters.iter().enumerate() {
+            let p = format!("federated.subfilters[{i}]");
+            if self.sensor_index(&sf.sensor).is_none() {
+                return Err(bad(format!("{p}.sensor"), format!("{:?} is not a sensor (known: {})", sf.sensor, self.sensor_names())));
+            }
+            if fed.subfilters[..i].iter().any(|o| o.sensor == sf.sensor) {
+                return Err(bad(format!("{p}.sensor"), format!("sensor {:?} already has a sub-filter", sf.sensor)));
+            }
+            positive(&format!("{p}.share"), sf.share)?;
+            total += sf.share;
+            for (j, d) in sf.detectors.iter().enumerate() {
+                let dp = format!("{p}.detectors[{j}]");
+                if d.name.is_empty() || sf.detectors[..j].iter().any(|o| o.name == d.name) {
+                    return Err(bad(format!("{dp}.name"), format!("{:?} must be non-empty and unique in the sub-filter", d.name)));
+                }
+                crate::validate::check_probability(&format!("{dp}.pf"), d.pf).map_err(|e| Error::Invalid(e.to_string()))?;
+                match (d.kind, d.pm) {
+                    (DetectorKind::Chi2, _) => {}
+                    (_, None) => return Err(bad(format!("{dp}.pm"), "required for sprt and joint detectors")),
+                    (_, Some(pm)) => {
+                        crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(format!("{dp}"), e))?;
+                    }
+                }
+                if let Some(v) = &d.variance {
+                    if v != "known" && v != "sample" {
+                        return Err(bad(format!("{dp}.variance"), format!("{v:?} must be \"known\" or \"sample\"")));
+                    }
+                }
+            }
+            if let Some(iso) = &sf.isolation {
+                if !sf.detectors.iter().any(|d| &d.name == iso) {
+                    return Err(bad(format!("{p}.isolation"), format!("{iso:?} is not one of this sub-filter's detectors")));
+                }
+            }
+        }
+        if (total - 1.0).abs() > 1e-6 {
+            return Err(bad("federated", format!("shares must sum to 1 (Σβ_i + master_share = {total})")));
+        }
+        Ok(())
+    }
+
+    fn sensor_names(&self) -> String {
+        self.sensors.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
+    }
+}
