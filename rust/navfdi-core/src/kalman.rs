@@ -126,6 +126,13 @@ impl KalmanFilter {
         Ok(())
     }
 
+    /// Replace state and covariance without validation (the caller guarantees a finite `x` of
+    /// length n and a symmetric PSD `P`, e.g. a fused covariance divided by a share).
+    pub fn set_state_trusted(&mut self, x: DVector<f64>, p: DMatrix<f64>) {
+        self.x = x;
+        self.p = p;
+    }
+
     /// Validate the arguments of [`KalmanFilter::predict`] without changing anything.
     pub fn check_predict(&self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
         let n = self.dim();
@@ -166,6 +173,43 @@ impl KalmanFilter {
         std::mem::swap(&mut self.x, &mut ws.x);
         std::mem::swap(&mut self.p, &mut ws.nn_c);
         Ok(())
+    }
+
+    /// The innovation of a measurement without updating: residual `r = z − Hx⁻`, its covariance
+    /// `A`, and `λ`, on the non-NaN components (inputs must already be valid, as for
+    /// [`KalmanFilter::update_trusted`]). Used to test a measurement before accepting it.
+    pub fn innovation_trusted(&self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
+        let m = z.len();
+        let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
+        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
+        if idx.is_empty() {
+            return Ok(Innovation::empty(m));
+        }
+        let (zr, hr, rr) = if idx.len() == m {
+            (z.clone(), h.clone(), r.clone())
+        } else {
+            (z.select_rows(&idx), h.select_rows(&idx), r.select_rows(&idx).select_columns(&idx))
+        };
+        let mut a = &hr * &self.p * hr.transpose() + rr;
+        symmetrize(&mut a);
+        let res = zr - &hr * &self.x;
+        let chol = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance A = H P Hᵀ + R".into(),
+            detail: "Cholesky factorisation failed; check R and P".into(),
+        })?;
+        let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
+            context: "innovation".into(),
+            detail: "triangular solve of the innovation covariance failed".into(),
+        })?;
+        let mut residual = DVector::from_element(m, f64::NAN);
+        let mut covariance = DMatrix::from_element(m, m, f64::NAN);
+        for (ai, &i) in idx.iter().enumerate() {
+            residual[i] = res[ai];
+            for (bi, &j) in idx.iter().enumerate() {
+                covariance[(i, j)] = a[(ai, bi)];
+            }
+        }
+        Ok(Innovation { residual, covariance, statistic: w.norm_squared(), used })
     }
 
     /// Validate the arguments of [`KalmanFilter::update`] without changing anything.

@@ -15,6 +15,7 @@
 
 pub mod detect;
 pub mod error;
+pub mod fusion;
 pub mod ins;
 pub mod kalman;
 pub mod run;
