@@ -7,6 +7,7 @@ mod convert;
 mod detect;
 mod errors;
 mod filter;
+mod scenario;
 
 use crate::errors::IntoPyResult;
 use convert::{matrix, to_numpy};
@@ -65,5 +66,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(noncentrality, m)?)?;
     m.add_function(wrap_pyfunction!(ncx2_cdf, m)?)?;
     m.add_function(wrap_pyfunction!(mdb, m)?)?;
+    m.add_function(wrap_pyfunction!(scenario::validate_scenario, m)?)?;
+    m.add_function(wrap_pyfunction!(scenario::scenario_trajectory, m)?)?;
+    m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;
     Ok(())
 }

@@ -8,5 +8,8 @@
 
 
 
+pub mod noise;
+pub mod prepare;
+pub mod run;
 pub mod spec;
 pub mod trajectory;

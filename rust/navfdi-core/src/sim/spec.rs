@@ -278,6 +278,10 @@ pub struct FederatedSpec {
     pub master_share: f64,
     /// Sub-filters.
     pub subfilters: Vec<SubfilterSpec>,
+    /// Whether an isolated sub-filter keeps updating with its own sensor (default false: it
+    /// only predicts while isolated, so its residuals show the fault's end).
+    #[serde(default)]
+    pub isolated_update: bool,
 }
 
 fn bad(path: impl Into<String>, msg: impl std::fmt::Display) -> Error {

@@ -1,0 +1,391 @@
+"""Scenarios: one schema, read from TOML (or the same structure from Python), validated.
+
+Dimensional values carry explicit units (``"0.0017 deg"``, ``"0.01 deg/h"``, ``"20 sigma"``;
+see :mod:`navfdi.units`). :func:`load_scenario` converts the user's structure to the SI form the
+Rust core runs (``Scenario.core``); structural and unit problems raise :class:`ScenarioError`
+naming the field path and value (``faults[1].magnitude = '20 furlongs': unknown unit ...``),
+and the core then checks the semantics (sensor references, shares summing to one, ...) with
+the same path spelling.
+
+Fault magnitudes use the unit of the faulted component (angle for ``cns``, length for
+positions, velocity for velocities), per second for ramps and per second squared for
+quadratics, or multiples of the sensor's noise σ of that component: ``"20 sigma"``,
+``"0.1 sigma/s"``, ``"0.001 sigma/s2"``.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from navfdi import _core
+from navfdi.units import UNITS, UnitError, parse, split
+
+#: Component names and dimensions per sensor kind (order = measurement order).
+SENSOR_COMPONENTS: dict[str, list[tuple[str, str]]] = {
+    "cns": [("phi_e", "angle"), ("phi_n", "angle"), ("phi_u", "angle")],
+    "gnss": [("pos_e", "length"), ("pos_n", "length"), ("pos_u", "length"), ("vel_e", "velocity"), ("vel_n", "velocity"), ("vel_u", "velocity")],
+    "gnss_position": [("pos_e", "length"), ("pos_n", "length"), ("pos_u", "length")],
+    "gnss_velocity": [("vel_e", "velocity"), ("vel_n", "velocity"), ("vel_u", "velocity")],
+    "baro": [("h", "length")],
+    "vision": [("pos_e", "length"), ("pos_n", "length"), ("pos_u", "length")],
+}
+
+_SEGMENTS: dict[str, dict[str, str]] = {
+    "stationary": {"duration": "time"},
+    "accelerate": {"duration": "time", "acceleration": "acceleration"},
+    "climb": {"duration": "time", "rate": "velocity"},
+    "level": {"duration": "time"},
+    "turn": {"duration": "time", "rate": "angular_rate"},
+    "descent": {"duration": "time", "rate": "velocity"},
+}
+
+_INS = {
+    "gyro_bias": "angular_rate",
+    "gyro_white": "angular_rate",
+    "gyro_markov": "angular_rate",
+    "gyro_tau": "time",
+    "accel_markov": "acceleration",
+    "accel_tau": "time",
+    "init_level": "angle",
+    "init_heading": "angle",
+    "init_velocity": "velocity",
+    "init_position": "length",
+}
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot be run; the message names the field path and the value."""
+
+
+def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
+    if not isinstance(d, Mapping):
+        raise ScenarioError(f"{path}: expected a table, got {type(d).__name__}")
+    if key not in d:
+        raise ScenarioError(f"{path + '.' if path else ''}{key}: missing")
+    return d[key]
+
+
+def _check_keys(d: Mapping[str, Any], allowed: set[str], path: str) -> None:
+    extra = sorted(set(d) - allowed)
+    if extra:
+        where = path or "scenario"
+        raise ScenarioError(f"{where}: unknown field(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
+
+
+def _list(v: Any, path: str) -> list[Any]:
+    if not isinstance(v, list):
+        raise ScenarioError(f"{path}: expected a list, got {type(v).__name__}")
+    return v
+
+
+def _str(v: Any, path: str) -> str:
+    if not isinstance(v, str):
+        raise ScenarioError(f"{path} = {v!r}: expected a string")
+    return v
+
+
+def _number(v: Any, path: str) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+        raise ScenarioError(f"{path} = {v!r}: expected a finite number")
+    return float(v)
+
+
+def _unit(v: Any, dim: str, path: str) -> float:
+    try:
+        return parse(v, dim, path)
+    except UnitError as e:
+        raise ScenarioError(str(e)) from None
+
+
+def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
+    """User structure (with units) → core structure (SI)."""
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "federated"}, "")
+    core: dict[str, Any] = {
+        "name": _str(_need(raw, "name", ""), "name"),
+        "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
+        "dt": _unit(_need(raw, "dt", ""), "time", "dt"),
+    }
+    tr = _need(raw, "trajectory", "")
+    _check_keys(tr, {"latitude", "longitude", "height", "heading", "speed", "segments"}, "trajectory")
+    segs = []
+    for i, s in enumerate(_list(_need(tr, "segments", "trajectory"), "trajectory.segments")):
+        p = f"trajectory.segments[{i}]"
+        kind = _str(_need(s, "kind", p), f"{p}.kind")
+        if kind not in _SEGMENTS:
+            raise ScenarioError(f"{p}.kind = {kind!r}: unknown segment (use one of: {', '.join(_SEGMENTS)})")
+        _check_keys(s, {"kind", *_SEGMENTS[kind]}, p)
+        seg = {"kind": kind}
+        for key, dim in _SEGMENTS[kind].items():
+            seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
+        segs.append(seg)
+    core["trajectory"] = {
+        "latitude": _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude"),
+        "longitude": _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude"),
+        "height": _unit(_need(tr, "height", "trajectory"), "length", "trajectory.height"),
+        "heading": _unit(tr.get("heading", "0 deg"), "angle", "trajectory.heading"),
+        "speed": _unit(tr.get("speed", "0 m/s"), "velocity", "trajectory.speed"),
+        "segments": segs,
+    }
+    ins = _need(raw, "ins", "")
+    _check_keys(ins, set(_INS), "ins")
+    core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}
+
+    sensors = []
+    noise_si: dict[str, list[float]] = {}
+    kinds: dict[str, str] = {}
+    for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
+        p = f"sensors[{i}]"
+        _check_keys(s, {"name", "kind", "noise", "rate", "outages"}, p)
+        name = _str(_need(s, "name", p), f"{p}.name")
+        kind = _str(_need(s, "kind", p), f"{p}.kind")
+        if kind not in SENSOR_COMPONENTS:
+            raise ScenarioError(f"{p}.kind = {kind!r}: unknown sensor (use one of: {', '.join(SENSOR_COMPONENTS)})")
+        comps = SENSOR_COMPONENTS[kind]
+        noise = _need(s, "noise", p)
+        values = noise if isinstance(noise, list) else [noise] * len(comps)
+        if len(values) != len(comps):
+            raise ScenarioError(
+                f"{p}.noise: {len(values)} values for a {kind} sensor with {len(comps)} components ({', '.join(c for c, _ in comps)}); give one value or one per component"
+            )
+        ns = [_unit(v, dim, f"{p}.noise[{j}]" if isinstance(noise, list) else f"{p}.noise") for j, (v, (_, dim)) in enumerate(zip(values, comps))]
+        outages = []
+        for j, w in enumerate(_list(s.get("outages", []), f"{p}.outages")):
+            w = _list(w, f"{p}.outages[{j}]")
+            if len(w) != 2:
+                raise ScenarioError(f"{p}.outages[{j}]: expected [start, end], got {w!r}")
+            outages.append([_unit(w[0], "time", f"{p}.outages[{j}][0]"), _unit(w[1], "time", f"{p}.outages[{j}][1]")])
+        sensors.append({"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages})
+        noise_si[name] = ns
+        kinds[name] = kind
+    core["sensors"] = sensors
+
+    faults = []
+    for i, f in enumerate(_list(raw.get("faults", []), "faults")):
+        p = f"faults[{i}]"
+        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end"}, p)
+        sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
+        if sensor not in kinds:
+            raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(kinds)})")
+        comps = SENSOR_COMPONENTS[kinds[sensor]]
+        names = [c for c, _ in comps]
+        want = _need(f, "components", p)
+        if want == "all":
+            idx = list(range(len(comps)))
+        else:
+            idx = []
+            for j, c in enumerate(_list(want, f"{p}.components")):
+                if c not in names:
+                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: not a component of {sensor} ({', '.join(names)})")
+                idx.append(names.index(c))
+        kind = _str(_need(f, "kind", p), f"{p}.kind")
+        per = {"step": "", "ramp": "/s", "quadratic": "/s2"}
+        if kind not in per:
+            raise ScenarioError(f"{p}.kind = {kind!r}: use step, ramp or quadratic")
+        mag_raw = _need(f, "magnitude", p)
+        try:
+            number, unit = split(mag_raw, f"{p}.magnitude")
+        except UnitError as e:
+            raise ScenarioError(str(e)) from None
+        suffix = per[kind]
+        if not unit.endswith(suffix) or (suffix == "/s" and unit.endswith("/s2")):
+            raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: a {kind} needs a unit ending in {suffix!r}" if suffix else f"{p}.magnitude = {mag_raw!r}: a step takes a plain unit (no /s)")
+        base = unit[: len(unit) - len(suffix)] if suffix else unit
+        dims = {d for _, d in (comps[j] for j in idx)}
+        if base == "sigma":
+            sig = [noise_si[sensor][j] for j in idx]
+            if max(sig) - min(sig) > 1e-12 * max(sig):
+                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: components with different noise cannot share a sigma magnitude; split the fault")
+            magnitude = number * sig[0]
+        else:
+            if len(dims) != 1:
+                raise ScenarioError(f"{p}.components: mixes {', '.join(sorted(dims))}; split the fault or use a sigma magnitude")
+            dim = dims.pop()
+            if base not in UNITS[dim]:
+                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {dim} (use one of: {', '.join(UNITS[dim])}, or sigma)")
+            magnitude = number * UNITS[dim][base]
+        faults.append(
+            {
+                "id": _str(_need(f, "id", p), f"{p}.id"),
+                "sensor": sensor,
+                "components": idx,
+                "kind": kind,
+                "magnitude": magnitude,
+                "start": _unit(_need(f, "start", p), "time", f"{p}.start"),
+                "end": _unit(_need(f, "end", p), "time", f"{p}.end"),
+            }
+        )
+    core["faults"] = faults
+
+    fed = _need(raw, "federated", "")
+    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated_update"}, "federated")
+    mode = _str(_need(fed, "mode", "federated"), "federated.mode")
+    if mode not in ("reset", "no_reset"):
+        raise ScenarioError(f"federated.mode = {mode!r}: use reset or no_reset")
+    subs = []
+    for i, sf in enumerate(_list(_need(fed, "subfilters", "federated"), "federated.subfilters")):
+        p = f"federated.subfilters[{i}]"
+        _check_keys(sf, {"sensor", "share", "detectors", "isolation"}, p)
+        dets = []
+        for j, d in enumerate(_list(sf.get("detectors", []), f"{p}.detectors")):
+            dp = f"{p}.detectors[{j}]"
+            _check_keys(d, {"name", "kind", "pf", "pm", "variance"}, dp)
+            kind = _str(_need(d, "kind", dp), f"{dp}.kind")
+            if kind not in ("chi2", "sprt", "joint"):
+                raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt or joint")
+            dets.append(
+                {
+                    "name": _str(d.get("name", kind), f"{dp}.name"),
+                    "kind": kind,
+                    "pf": _number(_need(d, "pf", dp), f"{dp}.pf"),
+                    "pm": None if "pm" not in d else _number(d["pm"], f"{dp}.pm"),
+                    "variance": None if "variance" not in d else _str(d["variance"], f"{dp}.variance"),
+                }
+            )
+        iso = sf.get("isolation")
+        subs.append(
+            {
+                "sensor": _str(_need(sf, "sensor", p), f"{p}.sensor"),
+                "share": _number(_need(sf, "share", p), f"{p}.share"),
+                "detectors": dets,
+                "isolation": None if iso is None else _str(iso, f"{p}.isolation"),
+            }
+        )
+    iu = fed.get("isolated_update", False)
+    if not isinstance(iu, bool):
+        raise ScenarioError(f"federated.isolated_update = {iu!r}: expected true or false")
+    core["federated"] = {
+        "mode": mode,
+        "master_share": _number(fed.get("master_share", 0.0), "federated.master_share"),
+        "subfilters": subs,
+        "isolated_update": iu,
+    }
+    return core
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario.
+
+    Attributes
+    ----------
+    raw : dict
+        The user's structure, with units, exactly as given (used for sweeps and reports).
+    core : dict
+        The same in SI units and radians, as run by the Rust core.
+    source : str
+        Where it came from (bundled name, file path or ``"<python>"``).
+    """
+
+    raw: dict[str, Any]
+    core: dict[str, Any]
+    source: str = "<python>"
+    _json: str = field(default="", repr=False, compare=False)
+
+    @property
+    def name(self) -> str:
+        """Scenario name."""
+        return str(self.core["name"])
+
+    def to_json(self) -> str:
+        """The SI structure as JSON (what the Rust core receives)."""
+        return self._json or json.dumps(self.core)
+
+    def faults(self) -> list[dict[str, Any]]:
+        """Faults in SI: ``id, sensor, components, kind, magnitude, start (s), end (s)``."""
+        return [dict(f) for f in self.core["faults"]]
+
+    def with_value(self, path: str, value: Any) -> Scenario:
+        """A copy with the user-level field at ``path`` (e.g. ``"faults[0].magnitude"``)
+        replaced by ``value``, validated anew."""
+        raw = copy.deepcopy(self.raw)
+        target: Any = raw
+        parts = _parse_path(path)
+        for part in parts[:-1]:
+            try:
+                target = target[part]
+            except (KeyError, IndexError, TypeError):
+                raise ScenarioError(f"{path}: no such field in scenario {self.name!r}") from None
+        last = parts[-1]
+        try:
+            target[last]  # must exist
+        except (KeyError, IndexError, TypeError):
+            raise ScenarioError(f"{path}: no such field in scenario {self.name!r}") from None
+        target[last] = value
+        return from_dict(raw, source=self.source)
+
+
+def _parse_path(path: str) -> list[str | int]:
+    out: list[str | int] = []
+    for piece in path.split("."):
+        while "[" in piece:
+            head, _, rest = piece.partition("[")
+            if head:
+                out.append(head)
+            idx, _, piece = rest.partition("]")
+            try:
+                out.append(int(idx))
+            except ValueError:
+                raise ScenarioError(f"{path}: {idx!r} is not a list index") from None
+        if piece:
+            out.append(piece)
+    if not out:
+        raise ScenarioError(f"{path!r}: empty field path")
+    return out
+
+
+def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
+    """Validate a scenario given as a Python mapping with the TOML structure."""
+    if not isinstance(raw, Mapping):
+        raise ScenarioError(f"scenario: expected a table, got {type(raw).__name__}")
+    core = _convert(raw)
+    text = json.dumps(core)
+    try:
+        _core.validate_scenario(text)
+    except ValueError as e:
+        raise ScenarioError(str(e)) from None
+    return Scenario(raw=copy.deepcopy(dict(raw)), core=core, source=source, _json=text)
+
+
+def bundled_scenarios() -> list[str]:
+    """Names of the scenarios shipped with navfdi."""
+    root = resources.files("navfdi") / "scenarios"
+    return sorted(p.name[: -len(".toml")] for p in root.iterdir() if p.name.endswith(".toml"))
+
+
+def load_scenario(source: str | Path | Mapping[str, Any]) -> Scenario:
+    """Load a scenario: a bundled name (see :func:`bundled_scenarios`), a TOML file path, or a
+    mapping with the same structure.
+
+    Raises
+    ------
+    ScenarioError
+        Unknown name, missing file, malformed TOML, or an invalid field (named with its path).
+    """
+    if isinstance(source, Mapping):
+        return from_dict(source)
+    s = str(source)
+    path = Path(s)
+    if path.suffix == ".toml" or path.exists():
+        if not path.is_file():
+            raise ScenarioError(f"{s}: no such scenario file")
+        text = path.read_text(encoding="utf-8")
+        origin = str(path)
+    else:
+        names = bundled_scenarios()
+        if s not in names:
+            raise ScenarioError(f"{s!r}: neither a scenario file nor a bundled scenario (bundled: {', '.join(names)})")
+        text = (resources.files("navfdi") / "scenarios" / f"{s}.toml").read_text(encoding="utf-8")
+        origin = s
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ScenarioError(f"{origin}: malformed TOML: {e}") from None
+    return from_dict(raw, source=origin)

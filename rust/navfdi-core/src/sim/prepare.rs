@@ -1,0 +1,150 @@
+//! Everything about a scenario that does not depend on the random seed, computed once.
+
+use super::spec::{ScenarioSpec, SensorKind};
+use super::trajectory::{generate, TruthEpoch};
+use crate::error::{Error, Result};
+use crate::ins::{earth, ErrorModel, ATT, N_STATES, POS, VEL};
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// A prepared scenario.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    /// The scenario (validated).
+    pub spec: ScenarioSpec,
+    /// Epoch times `k·dt` (s).
+    pub t: Vec<f64>,
+    /// Truth trajectory per epoch.
+    pub truth: Vec<TruthEpoch>,
+    /// Transition into epoch k (`Φ_0 = I`).
+    pub phi: Vec<DMatrix<f64>>,
+    /// Process noise into epoch k (`Q_0 = 0`).
+    pub q: Vec<DMatrix<f64>>,
+    /// A factor `L_k` with `L_k L_kᵀ = Q_k`, for drawing the true process noise.
+    pub q_factor: Vec<DMatrix<f64>>,
+    /// Initial covariance P0 and a factor of it.
+    pub p0: DMatrix<f64>,
+    /// Factor of P0.
+    pub p0_factor: DMatrix<f64>,
+    /// Per sensor: measurement matrix per epoch (position sensors depend on latitude).
+    pub h: Vec<Vec<DMatrix<f64>>>,
+    /// Per sensor: `R` (diagonal of the noise variances).
+    pub r: Vec<DMatrix<f64>>,
+    /// Per sensor and epoch: a measurement is taken (rate and outages).
+    pub available: Vec<Vec<bool>>,
+    /// Per sensor and epoch: the fault added to each component (all zero without faults).
+    pub fault: Vec<Vec<DVector<f64>>>,
+}
+
+/// Measurement matrix of a sensor at a kinematic state.
+pub fn measurement_matrix(kind: SensorKind, lat: f64, h: f64) -> DMatrix<f64> {
+    let m = kind.dim();
+    let mut hm = DMatrix::zeros(m, N_STATES);
+    let rm = earth::r_meridian(lat) + h;
+    let rn = earth::r_normal(lat) + h;
+    let pos = |hm: &mut DMatrix<f64>, row: usize| {
+        hm[(row, POS + 1)] = rn * lat.cos(); // east (m) from δλ
+        hm[(row + 1, POS)] = rm; // north (m) from δL
+        hm[(row + 2, POS + 2)] = 1.0; // up (m)
+    };
+    match kind {
+        SensorKind::Cns => {
+            for i in 0..3 {
+                hm[(i, ATT + i)] = 1.0;
+            }
+        }
+        SensorKind::Gnss => {
+            pos(&mut hm, 0);
+            for i in 0..3 {
+                hm[(3 + i, VEL + i)] = 1.0;
+            }
+        }
+        SensorKind::GnssPosition | SensorKind::Vision => pos(&mut hm, 0),
+        SensorKind::GnssVelocity => {
+            for i in 0..3 {
+                hm[(i, VEL + i)] = 1.0;
+            }
+        }
+        SensorKind::Baro => hm[(0, POS + 2)] = 1.0,
+    }
+    hm
+}
+
+/// A factor `L` with `L Lᵀ = M` for a symmetric PSD `M` whose diagonal spans many orders of
+/// magnitude: Cholesky of the correlation matrix (with a 1e-12 jitter), rescaled.
+pub fn psd_factor(name: &str, m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
+    let n = m.nrows();
+    let s: Vec<f64> = (0..n).map(|i| m[(i, i)].max(0.0).sqrt()).collect();
+    let mut c = DMatrix::zeros(n, n);
+    for i in 0..n {
+        for j in 0..n {
+            c[(i, j)] = if s[i] > 0.0 && s[j] > 0.0 { m[(i, j)] / (s[i] * s[j]) } else { 0.0 };
+        }
+        c[(i, i)] = 1.0 + 1e-12;
+    }
+    let l = Cholesky::new(c)
+        .ok_or_else(|| Error::NotPositiveDefinite { name: name.to_string(), detail: "cannot factor to draw noise".into() })?
+        .unpack();
+    Ok(DMatrix::from_fn(n, n, |i, j| s[i] * l[(i, j)]))
+}
+
+impl Prepared {
+    /// Prepare a validated scenario.
+    pub fn new(spec: ScenarioSpec) -> Result<Self> {
+        spec.validate()?;
+        let epochs = spec.epochs();
+        let dt = spec.dt;
+        let truth = generate(&spec.trajectory, dt, epochs);
+        let model = ErrorModel { params: spec.ins };
+        let mut phi = Vec::with_capacity(epochs);
+        let mut q = Vec::with_capacity(epochs);
+        let mut q_factor = Vec::with_capacity(epochs);
+        phi.push(DMatrix::identity(N_STATES, N_STATES));
+        q.push(DMatrix::zeros(N_STATES, N_STATES));
+        q_factor.push(DMatrix::zeros(N_STATES, N_STATES));
+        for k in 1..epochs {
+            // Transition over [t_{k−1}, t_k], linearised at the start of the interval.
+            let (p, qd) = model.discretize(&truth[k - 1].kinematics(), dt);
+            q_factor.push(psd_factor(&format!("Q[{k}]"), &qd)?);
+            phi.push(p);
+            q.push(qd);
+        }
+        let p0 = model.initial_covariance(truth[0].lat, truth[0].h);
+        let p0_factor = psd_factor("P0", &p0)?;
+        let t: Vec<f64> = (0..epochs).map(|k| k as f64 * dt).collect();
+        let mut h = Vec::new();
+        let mut r = Vec::new();
+        let mut available = Vec::new();
+        let mut fault = Vec::new();
+        for (si, s) in spec.sensors.iter().enumerate() {
+            h.push(truth.iter().map(|e| measurement_matrix(s.kind, e.lat, e.h)).collect());
+            r.push(DMatrix::from_diagonal(&DVector::from_iterator(s.noise.len(), s.noise.iter().map(|n| n * n))));
+            let period = (1.0 / (s.rate * dt)).round().max(1.0) as usize;
+            available.push(
+                (0..epochs)
+                    .map(|k| k % period == 0 && !s.outages.iter().any(|w| t[k] >= w[0] && t[k] < w[1]))
+                    .collect(),
+            );
+            let m = s.kind.dim();
+            let faults: Vec<_> = spec.faults.iter().filter(|f| spec.sensor_index(&f.sensor) == Some(si)).collect();
+            fault.push(
+                t.iter()
+                    .map(|&tk| {
+                        let mut v = DVector::zeros(m);
+                        for f in &faults {
+                            for &c in &f.components {
+                                v[c] += f.value(tk);
+                            }
+                        }
+                        v
+                    })
+                    .collect(),
+            );
+        }
+        Ok(Prepared { spec, t, truth, phi, q, q_factor, p0, p0_factor, h, r, available, fault })
+    }
+
+    /// Number of epochs.
+    pub fn epochs(&self) -> usize {
+        self.t.len()
+    }
+}

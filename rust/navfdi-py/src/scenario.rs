@@ -1,0 +1,92 @@
+//! Scenario bindings: validation, truth trajectory and federated runs (JSON spec in SI units,
+//! produced by `navfdi.scenario`).
+
+use crate::convert::to_numpy;
+use crate::errors::IntoPyResult;
+use navfdi_core::sim::noise::simulate;
+use navfdi_core::sim::prepare::Prepared;
+use navfdi_core::sim::run::{run_federated, RunRecord, ERROR_COLUMNS};
+use navfdi_core::sim::spec::ScenarioSpec;
+use navfdi_core::sim::trajectory::generate;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+/// Validate a scenario given as JSON (SI units); raises ValueError naming the field.
+#[pyfunction]
+pub fn validate_scenario(spec_json: &str) -> PyResult<()> {
+    ScenarioSpec::from_json(spec_json).py().map(|_| ())
+}
+
+/// Truth trajectory of a scenario: dict of arrays (t, lat, lon, h, v (T,3), euler (T,3),
+/// f_b (T,3), w_b (T,3)).
+#[pyfunction]
+pub fn scenario_trajectory<'py>(py: Python<'py>, spec_json: &str) -> PyResult<Bound<'py, PyDict>> {
+    let spec = ScenarioSpec::from_json(spec_json).py()?;
+    let tr = py.detach(|| generate(&spec.trajectory, spec.dt, spec.epochs()));
+    let t = tr.len();
+    let d = PyDict::new(py);
+    d.set_item("t", to_numpy(py, tr.iter().map(|e| e.t).collect(), &[t])?)?;
+    d.set_item("lat", to_numpy(py, tr.iter().map(|e| e.lat).collect(), &[t])?)?;
+    d.set_item("lon", to_numpy(py, tr.iter().map(|e| e.lon).collect(), &[t])?)?;
+    d.set_item("h", to_numpy(py, tr.iter().map(|e| e.h).collect(), &[t])?)?;
+    let v3 = |f: &dyn Fn(&navfdi_core::sim::trajectory::TruthEpoch) -> [f64; 3]| -> Vec<f64> { tr.iter().flat_map(f).collect() };
+    d.set_item("v", to_numpy(py, v3(&|e| [e.v.x, e.v.y, e.v.z]), &[t, 3])?)?;
+    d.set_item("euler", to_numpy(py, v3(&|e| [e.euler.x, e.euler.y, e.euler.z]), &[t, 3])?)?;
+    d.set_item("f_b", to_numpy(py, v3(&|e| [e.f_b.x, e.f_b.y, e.f_b.z]), &[t, 3])?)?;
+    d.set_item("w_b", to_numpy(py, v3(&|e| [e.w_b.x, e.w_b.y, e.w_b.z]), &[t, 3])?)?;
+    Ok(d)
+}
+
+fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py, PyDict>> {
+    let t = rec.t.len();
+    let d = PyDict::new(py);
+    d.set_item("t", to_numpy(py, rec.t, &[t])?)?;
+    d.set_item("error", to_numpy(py, rec.error, &[t, 9])?)?;
+    d.set_item("sigma", to_numpy(py, rec.sigma, &[t, 9])?)?;
+    d.set_item("error_columns", ERROR_COLUMNS.to_vec())?;
+    d.set_item("sources", to_numpy(py, rec.sources, &[t])?)?;
+    let subs = PyList::empty(py);
+    for s in rec.subs {
+        let sd = PyDict::new(py);
+        sd.set_item("sensor", s.sensor)?;
+        sd.set_item("statistic", to_numpy(py, s.statistic, &[t])?)?;
+        sd.set_item("dof", to_numpy(py, s.dof, &[t])?)?;
+        sd.set_item("isolated", to_numpy(py, s.isolated, &[t])?)?;
+        sd.set_item("reinstated", to_numpy(py, s.reinstated, &[t])?)?;
+        sd.set_item("fused", to_numpy(py, s.fused, &[t])?)?;
+        let dets = PyList::empty(py);
+        for dr in s.detectors {
+            let dd = PyDict::new(py);
+            dd.set_item("name", dr.name)?;
+            dd.set_item("statistic", to_numpy(py, dr.statistic, &[t])?)?;
+            dd.set_item("threshold", to_numpy(py, dr.threshold, &[t])?)?;
+            dd.set_item("alarm", to_numpy(py, dr.alarm, &[t])?)?;
+            dets.append(dd)?;
+        }
+        sd.set_item("detectors", dets)?;
+        subs.append(sd)?;
+    }
+    d.set_item("subfilters", subs)?;
+    Ok(d)
+}
+
+/// Simulate one run of a scenario (noise from `(seed, stream)`) and filter it once per entry
+/// of `isolation` (True: isolation active; False: detectors only report). Returns one record
+/// dict per entry; all share the same truth and measurements. Runs with the GIL released.
+#[pyfunction]
+#[pyo3(signature = (spec_json, seed, stream = 0, isolation = vec![true]))]
+pub fn run_scenario<'py>(py: Python<'py>, spec_json: &str, seed: u64, stream: u64, isolation: Vec<bool>) -> PyResult<Bound<'py, PyList>> {
+    let spec = ScenarioSpec::from_json(spec_json).py()?;
+    let records = py
+        .detach(move || -> navfdi_core::Result<Vec<RunRecord>> {
+            let prep = Prepared::new(spec)?;
+            let sim = simulate(&prep, seed, stream);
+            isolation.iter().map(|&iso| run_federated(&prep, &sim, iso)).collect()
+        })
+        .py()?;
+    let out = PyList::empty(py);
+    for r in records {
+        out.append(record_to_py(py, r)?)?;
+    }
+    Ok(out)
+}
