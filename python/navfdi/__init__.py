@@ -12,6 +12,10 @@ Detectors
 Statistics
     :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
     :func:`mdb`.
+Federated filtering and scenarios
+    :class:`FederatedFilter` (per-epoch step API), :func:`load_scenario`, :class:`Scenario`,
+    :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust) returning a
+    :class:`ScenarioRun`; :class:`ScenarioError` names the offending field.
 Errors
     ``ValueError`` for bad input; :class:`LinAlgError` (a ``ValueError``) for numerical
     failures such as a covariance that is not positive definite.
@@ -20,6 +24,8 @@ Errors
 from navfdi._core import (
     Decision,
     DetectionRun,
+    FederatedFilter,
+    FederatedStep,
     ImprovedSprt,
     Innovation,
     JointChi2Sprt,
@@ -35,11 +41,16 @@ from navfdi._core import (
 )
 from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
+from navfdi.federated import FaultMatch, ScenarioRun, run_scenario
+from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_scenario
 
 __all__ = [
     "AlarmInterval",
     "Decision",
     "DetectionRun",
+    "FaultMatch",
+    "FederatedFilter",
+    "FederatedStep",
     "FilterRun",
     "ImprovedSprt",
     "Innovation",
@@ -47,12 +58,18 @@ __all__ = [
     "KalmanFilter",
     "LinAlgError",
     "ResidualChi2",
+    "Scenario",
+    "ScenarioError",
+    "ScenarioRun",
     "__version__",
     "alarm_intervals",
+    "bundled_scenarios",
     "chi2_threshold",
+    "load_scenario",
     "mdb",
     "ncx2_cdf",
     "noncentrality",
     "run_filter",
+    "run_scenario",
     "sprt_threshold",
 ]

@@ -4,7 +4,7 @@ Array arguments accept anything numpy converts to float64; the fast path is a C-
 float64 array. Returned arrays are new numpy arrays (copies of the Rust state).
 """
 
-from typing import final
+from typing import Any, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -25,6 +25,11 @@ __all__ = [
     "noncentrality",
     "ncx2_cdf",
     "mdb",
+    "validate_scenario",
+    "scenario_trajectory",
+    "run_scenario",
+    "FederatedFilter",
+    "FederatedStep",
 ]
 
 __version__: str
@@ -334,3 +339,106 @@ def mdb(A: ArrayLike, pf: float, pm: float) -> NDArray[np.float64]:
     """Minimal detectable bias per component, shape (m,), in measurement units:
     ``sqrt(λ0 / (A⁻¹)_ii)`` with ``A`` (m, m) the residual covariance (symmetric positive
     definite) and ``λ0 = noncentrality(pf, pm, m)``."""
+
+def validate_scenario(spec_json: str) -> None:
+    """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises
+    ``ValueError`` naming the field path (``faults[1].sensor: ...``)."""
+
+def scenario_trajectory(spec_json: str) -> dict[str, NDArray[np.float64]]:
+    """Truth trajectory of a scenario, T epochs: ``t`` (s), ``lat``, ``lon`` (rad), ``h`` (m),
+    ``v`` (T, 3) ENU m/s, ``euler`` (T, 3) roll/pitch/heading rad, ``f_b`` (T, 3) specific force
+    in body axes m/s², ``w_b`` (T, 3) body angular rate rad/s."""
+
+def run_scenario(spec_json: str, seed: int, stream: int = 0, isolation: list[bool] | None = None) -> list[dict[str, Any]]:
+    """Simulate one run (noise from ``(seed, stream)``) and filter it once per entry of
+    ``isolation`` (default ``[True]``); returns one record dict per entry (arrays over T epochs: ``t``, ``error``
+    (T, 9), ``sigma`` (T, 9), ``sources``, ``subfilters`` with per-detector arrays). Use
+    :func:`navfdi.run_scenario` for the typed result."""
+
+@final
+class FederatedStep:
+    """One epoch of :class:`FederatedFilter`."""
+
+    @property
+    def x(self) -> NDArray[np.float64]:
+        """Global estimate after fusion, shape (n,)."""
+    @property
+    def P(self) -> NDArray[np.float64]:
+        """Global covariance, shape (n, n)."""
+    @property
+    def sources(self) -> int:
+        """Sources fused this epoch (0: the global solution was propagated)."""
+    @property
+    def isolated(self) -> list[bool]:
+        """Isolation flag per sub-filter after this epoch's decision."""
+    @property
+    def reinstated(self) -> list[bool]:
+        """Sub-filters reinstated (reset from the global solution) this epoch."""
+    @property
+    def fused(self) -> list[bool]:
+        """Sub-filters that fed this epoch's fusion."""
+    @property
+    def statistic(self) -> list[float]:
+        """Innovation statistic ``λ`` per sub-filter (NaN without measurement)."""
+    @property
+    def decisions(self) -> dict[str, dict[str, Decision]]:
+        """``{sub-filter name: {detector name: Decision}}``."""
+
+@final
+class FederatedFilter:
+    """Federated Kalman filter with detection, isolation and reinstatement (METHODS §5).
+
+    Each epoch every sub-filter predicts and forms its innovation, its detectors test it, the
+    detector named in ``isolation`` isolates or reinstates the sub-filter, non-isolated
+    sub-filters update, and the master fuses the healthy ones in information form. In
+    ``"reset"`` mode each healthy sub-filter is then reset to ``x_g, P_g/β_i`` (shares
+    renormalised over the healthy sources; this mode equals the centralised filter for linear
+    systems); ``"no_reset"`` fuses independent sub-filters. A reinstated sub-filter is reset
+    from the global solution. An isolated sub-filter only predicts (its detectors keep testing
+    against that prediction) unless ``isolated_update=True``.
+
+    Parameters
+    ----------
+    x0 : array_like, shape (n,)
+        Initial state.
+    P0 : array_like, shape (n, n)
+        Initial covariance (symmetric PSD); sub-filters start from ``P0/β_i`` in reset mode.
+    subfilters : list of dict
+        Each ``{"name": str, "H": (m_i, n), "R": (m_i, m_i), "share": β_i > 0,
+        "detectors": [{"name", "kind": "chi2"|"sprt"|"joint", "pf", "pm", "variance"}],
+        "isolation": detector name or None}``.
+    mode : {"reset", "no_reset"}
+        Fusion mode.
+    master_share : float
+        Master's share ``β_m >= 0``; shares must sum to 1.
+    isolation : bool
+        Whether alarms isolate sub-filters (False: detectors only report).
+    isolated_update : bool
+        Whether an isolated sub-filter keeps updating with its own sensor.
+    """
+
+    def __new__(
+        cls,
+        x0: ArrayLike,
+        P0: ArrayLike,
+        subfilters: list[dict[str, Any]],
+        mode: str = "reset",
+        master_share: float = 0.0,
+        isolation: bool = True,
+        isolated_update: bool = False,
+    ) -> FederatedFilter: ...
+    def step(self, Phi: ArrayLike, Q: ArrayLike, measurements: list[ArrayLike]) -> FederatedStep:
+        """One epoch with ``Phi``, ``Q`` (n, n) and one measurement (m_i,) per sub-filter (NaN
+        components are missing). Validated first; on error the filter is unchanged."""
+    @property
+    def x(self) -> NDArray[np.float64]:
+        """Global estimate, shape (n,)."""
+    @property
+    def P(self) -> NDArray[np.float64]:
+        """Global covariance, shape (n, n)."""
+    @property
+    def names(self) -> list[str]:
+        """Sub-filter names."""
+    @property
+    def isolated(self) -> list[bool]:
+        """Current isolation flags."""

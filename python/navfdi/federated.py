@@ -172,6 +172,9 @@ class ScenarioRun:
                 for d in s["detectors"]:
                     ivs = [iv for iv in alarm_intervals(d["alarm"], self.t) if self._match(iv, faults) is f]
                     note = ""
+                    det: float | None
+                    clr: float | None
+                    delay: float | None
                     if ivs:
                         det, clr = ivs[0].start, ivs[-1].end
                         delay = max(det - f["start"], 0.0)

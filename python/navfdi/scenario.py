@@ -122,7 +122,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         if kind not in _SEGMENTS:
             raise ScenarioError(f"{p}.kind = {kind!r}: unknown segment (use one of: {', '.join(_SEGMENTS)})")
         _check_keys(s, {"kind", *_SEGMENTS[kind]}, p)
-        seg = {"kind": kind}
+        seg: dict[str, Any] = {"kind": kind}
         for key, dim in _SEGMENTS[kind].items():
             seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
         segs.append(seg)

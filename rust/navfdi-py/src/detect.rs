@@ -25,6 +25,13 @@ pub struct PyDecision {
     report: Report,
 }
 
+impl PyDecision {
+    /// A plain decision (no SPRT components, no chi-square part).
+    pub fn from_decision(d: Decision) -> Self {
+        PyDecision { report: Report { decision: d, components: None, chi2: None, reset: false } }
+    }
+}
+
 #[pymethods]
 impl PyDecision {
     /// Test statistic (NaN when no residual component was available).

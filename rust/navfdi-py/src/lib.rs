@@ -6,6 +6,7 @@
 mod convert;
 mod detect;
 mod errors;
+mod federated;
 mod filter;
 mod scenario;
 
@@ -69,5 +70,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scenario::validate_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::scenario_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;
+    m.add_class::<federated::PyFederatedFilter>()?;
+    m.add_class::<federated::PyFederatedStep>()?;
     Ok(())
 }

@@ -71,11 +71,12 @@ fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py, PyD
 }
 
 /// Simulate one run of a scenario (noise from `(seed, stream)`) and filter it once per entry
-/// of `isolation` (True: isolation active; False: detectors only report). Returns one record
+/// of `isolation` (default `[True]`) (True: isolation active; False: detectors only report). Returns one record
 /// dict per entry; all share the same truth and measurements. Runs with the GIL released.
 #[pyfunction]
-#[pyo3(signature = (spec_json, seed, stream = 0, isolation = vec![true]))]
-pub fn run_scenario<'py>(py: Python<'py>, spec_json: &str, seed: u64, stream: u64, isolation: Vec<bool>) -> PyResult<Bound<'py, PyList>> {
+#[pyo3(signature = (spec_json, seed, stream = 0, isolation = None))]
+pub fn run_scenario<'py>(py: Python<'py>, spec_json: &str, seed: u64, stream: u64, isolation: Option<Vec<bool>>) -> PyResult<Bound<'py, PyList>> {
+    let isolation = isolation.unwrap_or_else(|| vec![true]);
     let spec = ScenarioSpec::from_json(spec_json).py()?;
     let records = py
         .detach(move || -> navfdi_core::Result<Vec<RunRecord>> {

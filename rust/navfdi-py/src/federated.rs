@@ -1,0 +1,207 @@
+//! `FederatedFilter`: the per-epoch step API of the federated filter (online use).
+
+use crate::convert::{matrix, matrix_to_numpy, vector, vector_to_numpy};
+use crate::detect::PyDecision;
+use crate::errors::IntoPyResult;
+use navfdi_core::fusion::{FederatedFilter, StepReport, SubFilterConfig};
+use navfdi_core::sim::run::make_detector;
+use navfdi_core::sim::spec::{DetectorKind, FusionMode};
+use numpy::{IxDyn, PyArray};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+fn get<'py>(d: &Bound<'py, PyDict>, key: &str, path: &str) -> PyResult<Bound<'py, PyAny>> {
+    d.get_item(key)?.ok_or_else(|| PyValueError::new_err(format!("{path}.{key}: missing")))
+}
+
+fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
+    let path = format!("subfilters[{i}]");
+    let d = obj.cast::<PyDict>().map_err(|_| PyValueError::new_err(format!("{path}: expected a dict")))?;
+    let name: String = get(d, "name", &path)?.extract().map_err(|_| PyValueError::new_err(format!("{path}.name: expected a string")))?;
+    let h = matrix(&format!("{path}.H"), &get(d, "H", &path)?)?;
+    let r = matrix(&format!("{path}.R"), &get(d, "R", &path)?)?;
+    let share: f64 = get(d, "share", &path)?.extract().map_err(|_| PyValueError::new_err(format!("{path}.share: expected a number")))?;
+    let mut detectors = Vec::new();
+    if let Some(list) = d.get_item("detectors")? {
+        let list = list.cast::<PyList>().map_err(|_| PyValueError::new_err(format!("{path}.detectors: expected a list")))?;
+        for (j, item) in list.iter().enumerate() {
+            let dp = format!("{path}.detectors[{j}]");
+            let dd = item.cast::<PyDict>().map_err(|_| PyValueError::new_err(format!("{dp}: expected a dict")))?;
+            let kind: String = get(dd, "kind", &dp)?.extract()?;
+            let kind = match kind.as_str() {
+                "chi2" => DetectorKind::Chi2,
+                "sprt" => DetectorKind::Sprt,
+                "joint" => DetectorKind::Joint,
+                other => return Err(PyValueError::new_err(format!("{dp}.kind = {other:?}: use chi2, sprt or joint"))),
+            };
+            let dname: String = match dd.get_item("name")? {
+                Some(v) => v.extract()?,
+                None => format!("{kind:?}").to_lowercase(),
+            };
+            let pf: f64 = get(dd, "pf", &dp)?.extract()?;
+            let pm: Option<f64> = dd.get_item("pm")?.map(|v| v.extract()).transpose()?;
+            if kind != DetectorKind::Chi2 && pm.is_none() {
+                return Err(PyValueError::new_err(format!("{dp}.pm: required for sprt and joint detectors")));
+            }
+            let variance: Option<String> = dd.get_item("variance")?.map(|v| v.extract()).transpose()?;
+            if let Some(v) = &variance {
+                if v != "known" && v != "sample" {
+                    return Err(PyValueError::new_err(format!("{dp}.variance = {v:?}: must be \"known\" or \"sample\"")));
+                }
+            }
+            let det = make_detector(kind, pf, pm, variance.as_deref()).map_err(|e| PyValueError::new_err(format!("{dp}: {e}")))?;
+            detectors.push((dname, det));
+        }
+    }
+    let isolation = match d.get_item("isolation")? {
+        None => None,
+        Some(v) if v.is_none() => None,
+        Some(v) => {
+            let n: String = v.extract()?;
+            Some(
+                detectors
+                    .iter()
+                    .position(|(dn, _)| *dn == n)
+                    .ok_or_else(|| PyValueError::new_err(format!("{path}.isolation = {n:?}: not one of this sub-filter's detectors")))?,
+            )
+        }
+    };
+    Ok(SubFilterConfig { name, h, r, share, detectors, isolation })
+}
+
+/// One epoch of the federated filter.
+#[pyclass(name = "FederatedStep", module = "navfdi._core", frozen)]
+pub struct PyFederatedStep {
+    report: StepReport,
+    names: Vec<String>,
+    det_names: Vec<Vec<String>>,
+    x: nalgebra::DVector<f64>,
+    p: nalgebra::DMatrix<f64>,
+}
+
+#[pymethods]
+impl PyFederatedStep {
+    /// Global estimate after fusion, shape (n,).
+    #[getter]
+    fn x<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        vector_to_numpy(py, &self.x)
+    }
+    /// Global covariance, shape (n, n).
+    #[getter(P)]
+    fn p<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        matrix_to_numpy(py, &self.p)
+    }
+    /// Number of sources fused (0: the global solution was propagated).
+    #[getter]
+    fn sources(&self) -> usize {
+        self.report.sources
+    }
+    /// Isolation flag per sub-filter.
+    #[getter]
+    fn isolated(&self) -> Vec<bool> {
+        self.report.subs.iter().map(|s| s.isolated).collect()
+    }
+    /// Sub-filters reinstated (reset from the global solution) this epoch.
+    #[getter]
+    fn reinstated(&self) -> Vec<bool> {
+        self.report.subs.iter().map(|s| s.reinstated).collect()
+    }
+    /// Sub-filters that fed this epoch's fusion.
+    #[getter]
+    fn fused(&self) -> Vec<bool> {
+        self.report.subs.iter().map(|s| s.fused).collect()
+    }
+    /// Innovation statistic λ per sub-filter (NaN without measurement).
+    #[getter]
+    fn statistic(&self) -> Vec<f64> {
+        self.report.subs.iter().map(|s| s.statistic).collect()
+    }
+    /// Decisions: ``{sub-filter name: {detector name: Decision}}``.
+    #[getter]
+    fn decisions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let out = PyDict::new(py);
+        for (i, s) in self.report.subs.iter().enumerate() {
+            let d = PyDict::new(py);
+            for (j, dec) in s.decisions.iter().enumerate() {
+                d.set_item(&self.det_names[i][j], Py::new(py, PyDecision::from_decision(dec.clone()))?)?;
+            }
+            out.set_item(&self.names[i], d)?;
+        }
+        Ok(out)
+    }
+}
+
+/// Federated filter with per-sub-filter detectors, isolation and reinstatement.
+#[pyclass(name = "FederatedFilter", module = "navfdi._core")]
+pub struct PyFederatedFilter {
+    inner: FederatedFilter,
+}
+
+#[pymethods]
+impl PyFederatedFilter {
+    #[new]
+    #[pyo3(signature = (x0, P0, subfilters, mode = "reset", master_share = 0.0, isolation = true, isolated_update = false))]
+    #[allow(non_snake_case, clippy::too_many_arguments)]
+    fn new(
+        x0: &Bound<'_, PyAny>,
+        P0: &Bound<'_, PyAny>,
+        subfilters: &Bound<'_, PyAny>,
+        mode: &str,
+        master_share: f64,
+        isolation: bool,
+        isolated_update: bool,
+    ) -> PyResult<Self> {
+        let x0 = vector("x0", x0, None)?;
+        let p0 = matrix("P0", P0)?;
+        let mode = match mode {
+            "reset" => FusionMode::Reset,
+            "no_reset" => FusionMode::NoReset,
+            other => return Err(PyValueError::new_err(format!("mode = {other:?}: use \"reset\" or \"no_reset\""))),
+        };
+        let list = subfilters.cast::<PyList>().map_err(|_| PyValueError::new_err("subfilters: expected a list of dicts"))?;
+        let subs = list.iter().enumerate().map(|(i, o)| parse_sub(i, &o)).collect::<PyResult<Vec<_>>>()?;
+        let mut inner = FederatedFilter::new(x0, p0, subs, mode, master_share, isolation).py()?;
+        inner.set_isolated_update(isolated_update);
+        Ok(PyFederatedFilter { inner })
+    }
+
+    /// One epoch: predict with Phi, Q; one measurement per sub-filter (NaN = missing).
+    #[pyo3(signature = (Phi, Q, measurements))]
+    #[allow(non_snake_case)]
+    fn step(&mut self, Phi: &Bound<'_, PyAny>, Q: &Bound<'_, PyAny>, measurements: &Bound<'_, PyAny>) -> PyResult<PyFederatedStep> {
+        let phi = matrix("Phi", Phi)?;
+        let q = matrix("Q", Q)?;
+        let list = measurements.cast::<PyList>().map_err(|_| PyValueError::new_err("measurements: expected a list with one array per sub-filter"))?;
+        let names = self.inner.names();
+        let zs = list
+            .iter()
+            .enumerate()
+            .map(|(i, z)| vector(&format!("measurements[{}]", names.get(i).map_or("?", |s| s.as_str())), &z, None))
+            .collect::<PyResult<Vec<_>>>()?;
+        let report = self.inner.step(&phi, &q, &zs).py()?;
+        let det_names = (0..names.len()).map(|i| self.inner.detector_names(i)).collect();
+        Ok(PyFederatedStep { report, names, det_names, x: self.inner.x().clone(), p: self.inner.p().clone() })
+    }
+
+    /// Global estimate, shape (n,).
+    #[getter]
+    fn x<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        vector_to_numpy(py, self.inner.x())
+    }
+    /// Global covariance, shape (n, n).
+    #[getter(P)]
+    fn p<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+        matrix_to_numpy(py, self.inner.p())
+    }
+    /// Sub-filter names.
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        self.inner.names()
+    }
+    /// Current isolation flags.
+    #[getter]
+    fn isolated(&self) -> Vec<bool> {
+        self.inner.isolated()
+    }
+}
