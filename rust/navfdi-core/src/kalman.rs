@@ -175,43 +175,6 @@ impl KalmanFilter {
         Ok(())
     }
 
-    /// The innovation of a measurement without updating: residual `r = z − Hx⁻`, its covariance
-    /// `A`, and `λ`, on the non-NaN components (inputs must already be valid, as for
-    /// [`KalmanFilter::update_trusted`]). Used to test a measurement before accepting it.
-    pub fn innovation_trusted(&self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
-        let m = z.len();
-        let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
-        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
-        if idx.is_empty() {
-            return Ok(Innovation::empty(m));
-        }
-        let (zr, hr, rr) = if idx.len() == m {
-            (z.clone(), h.clone(), r.clone())
-        } else {
-            (z.select_rows(&idx), h.select_rows(&idx), r.select_rows(&idx).select_columns(&idx))
-        };
-        let mut a = &hr * &self.p * hr.transpose() + rr;
-        symmetrize(&mut a);
-        let res = zr - &hr * &self.x;
-        let chol = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
-            name: "innovation covariance A = H P Hᵀ + R".into(),
-            detail: "Cholesky factorisation failed; check R and P".into(),
-        })?;
-        let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
-            context: "innovation".into(),
-            detail: "triangular solve of the innovation covariance failed".into(),
-        })?;
-        let mut residual = DVector::from_element(m, f64::NAN);
-        let mut covariance = DMatrix::from_element(m, m, f64::NAN);
-        for (ai, &i) in idx.iter().enumerate() {
-            residual[i] = res[ai];
-            for (bi, &j) in idx.iter().enumerate() {
-                covariance[(i, j)] = a[(ai, bi)];
-            }
-        }
-        Ok(Innovation { residual, covariance, statistic: w.norm_squared(), used })
-    }
-
     /// Validate the arguments of [`KalmanFilter::update`] without changing anything.
     pub fn check_update(&self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<()> {
         let n = self.dim();
@@ -269,17 +232,25 @@ impl KalmanFilter {
     }
 
     /// The update on fully used (reduced) inputs; returns `(r, A, λ)`.
-    ///
-    /// The Joseph form `P = (I − KH)P⁻(I − KH)ᵀ + KRKᵀ` is evaluated without forming the n × n
-    /// matrix `I − KH`: `T = (I − KH)P⁻ = P⁻ − K(HP⁻)`, then `T(I − KH)ᵀ = T − (THᵀ)Kᵀ`, so
-    /// `P = T − (THᵀ − KR)Kᵀ`. The identity factors are applied exactly; every product has an
-    /// inner dimension of m, which keeps the update O(n²m).
     fn update_core(
         &mut self,
         z: &DVector<f64>,
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<(DVector<f64>, DMatrix<f64>, f64)> {
+        let (res, a, chol, stat) = self.innovate_core(z, h, r)?;
+        self.apply_core(h, r, &res, &chol)?;
+        Ok((res, a, stat))
+    }
+
+    /// Innovation on fully used inputs: `r = z − Hx⁻`, `A = HP⁻Hᵀ + R`, its Cholesky factor and
+    /// `λ`. Leaves `HP⁻` and `Hᵀ` in the workspace for [`KalmanFilter::apply_core`].
+    fn innovate_core(
+        &mut self,
+        z: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>, Cholesky<f64, Dyn>, f64)> {
         let n = self.dim();
         let k = z.len();
         let mw = self.mws.get_or_insert_with(|| MWork::new(n, k));
@@ -300,20 +271,38 @@ impl KalmanFilter {
             name: "innovation covariance A = H P Hᵀ + R".into(),
             detail: "Cholesky factorisation failed; check R and P".into(),
         })?;
-        // K = PHᵀA⁻¹ (n × k) by substitution with the Cholesky factor, then Kᵀ.
-        mw.hp.transpose_to(&mut mw.k);
-        gain_from_cholesky(chol.l_dirty(), &mut mw.k, &mut mw.inv_diag);
-        mw.k.transpose_to(&mut mw.kt);
         // Whitened residual w = L⁻¹r, λ = ‖w‖².
         let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
             context: "update".into(),
             detail: "triangular solve of the innovation covariance failed".into(),
         })?;
         let stat = w.norm_squared();
+        if !stat.is_finite() {
+            return Err(Error::Numerical { context: "update".into(), detail: "the innovation statistic is not finite".into() });
+        }
+        Ok((res, a, chol, stat))
+    }
+
+    /// Apply the update prepared by [`KalmanFilter::innovate_core`] (same `h`, `r`, and `P`
+    /// unchanged since).
+    ///
+    /// The Joseph form `P = (I − KH)P⁻(I − KH)ᵀ + KRKᵀ` is evaluated without forming the n × n
+    /// matrix `I − KH`: `T = (I − KH)P⁻ = P⁻ − K(HP⁻)`, then `T(I − KH)ᵀ = T − (THᵀ)Kᵀ`, so
+    /// `P = T − (THᵀ − KR)Kᵀ`. The identity factors are applied exactly; every product has an
+    /// inner dimension of m, which keeps the update O(n²m).
+    fn apply_core(&mut self, h: &DMatrix<f64>, r: &DMatrix<f64>, res: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> Result<()> {
+        let _ = h;
+        let Some(mw) = self.mws.as_mut() else {
+            return Err(Error::Numerical { context: "update".into(), detail: "no innovation prepared".into() });
+        };
+        // K = PHᵀA⁻¹ (n × k) by substitution with the Cholesky factor, then Kᵀ.
+        mw.hp.transpose_to(&mut mw.k);
+        gain_from_cholesky(chol.l_dirty(), &mut mw.k, &mut mw.inv_diag);
+        mw.k.transpose_to(&mut mw.kt);
         let ws = &mut self.ws;
         // x = x⁻ + K r
         ws.x.copy_from(&self.x);
-        ws.x.gemv(1.0, &mw.k, &res, 1.0);
+        ws.x.gemv(1.0, &mw.k, res, 1.0);
         // T = P⁻ − K(HP⁻)
         ws.nn_a.copy_from(&self.p);
         ws.nn_a.gemm(-1.0, &mw.k, &mw.hp, 1.0);
@@ -323,7 +312,7 @@ impl KalmanFilter {
         // P = T − U Kᵀ
         ws.nn_a.gemm(-1.0, &mw.u, &mw.kt, 1.0);
         symmetrize(&mut ws.nn_a);
-        if !stat.is_finite() || !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_a.as_slice()) {
+        if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_a.as_slice()) {
             return Err(Error::Numerical {
                 context: "update".into(),
                 detail: "the updated state or covariance is not finite".into(),
@@ -331,8 +320,58 @@ impl KalmanFilter {
         }
         std::mem::swap(&mut self.x, &mut ws.x);
         std::mem::swap(&mut self.p, &mut ws.nn_a);
-        Ok((res, a, stat))
+        Ok(())
     }
+
+    /// Test-before-update, step 1: the innovation of `z` (NaN components skipped) without
+    /// changing the state, plus what [`KalmanFilter::apply_pending`] needs to update with the
+    /// same measurement afterwards (None when no component is available). Inputs must be valid
+    /// as for [`KalmanFilter::update_trusted`].
+    pub fn innovation_pending(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(Innovation, Option<Pending>)> {
+        let m = z.len();
+        let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
+        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
+        if idx.is_empty() {
+            return Ok((Innovation::empty(m), None));
+        }
+        if idx.len() == m {
+            let (res, a, chol, stat) = self.innovate_core(z, h, r)?;
+            let inn = Innovation { residual: res.clone(), covariance: a, statistic: stat, used };
+            return Ok((inn, Some(Pending { idx: None, res, chol })));
+        }
+        let (zr, hr, rr) = (z.select_rows(&idx), h.select_rows(&idx), r.select_rows(&idx).select_columns(&idx));
+        let (res_r, a_r, chol, stat) = self.innovate_core(&zr, &hr, &rr)?;
+        let mut residual = DVector::from_element(m, f64::NAN);
+        let mut covariance = DMatrix::from_element(m, m, f64::NAN);
+        for (ai, &i) in idx.iter().enumerate() {
+            residual[i] = res_r[ai];
+            for (bi, &j) in idx.iter().enumerate() {
+                covariance[(i, j)] = a_r[(ai, bi)];
+            }
+        }
+        Ok((Innovation { residual, covariance, statistic: stat, used }, Some(Pending { idx: Some(idx), res: res_r, chol })))
+    }
+
+    /// Test-before-update, step 2: update with the measurement whose innovation
+    /// [`KalmanFilter::innovation_pending`] just computed (same `h`, `r`; no predict or update
+    /// in between).
+    pub fn apply_pending(&mut self, pending: Pending, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<()> {
+        match &pending.idx {
+            None => self.apply_core(h, r, &pending.res, &pending.chol),
+            Some(idx) => {
+                let (hr, rr) = (h.select_rows(idx), r.select_rows(idx).select_columns(idx));
+                self.apply_core(&hr, &rr, &pending.res, &pending.chol)
+            }
+        }
+    }
+}
+
+/// A prepared measurement update (see [`KalmanFilter::innovation_pending`]).
+#[derive(Debug, Clone)]
+pub struct Pending {
+    idx: Option<Vec<usize>>,
+    res: DVector<f64>,
+    chol: Cholesky<f64, Dyn>,
 }
 
 /// Scratch buffers of the update for one measurement dimension k.
@@ -365,7 +404,7 @@ impl MWork {
 /// Two substitutions on the columns of `y`, which are contiguous in nalgebra's column-major
 /// storage: `Z Lᵀ = Y` forward, then `K L = Z` backward. Each pivot is divided once (its
 /// reciprocal is kept), so the inner loops are vectorisable multiply-adds.
-fn gain_from_cholesky(l: &DMatrix<f64>, y: &mut DMatrix<f64>, inv_diag: &mut [f64]) {
+pub(crate) fn gain_from_cholesky(l: &DMatrix<f64>, y: &mut DMatrix<f64>, inv_diag: &mut [f64]) {
     let n = y.nrows();
     let k = y.ncols();
     for i in 0..k {

@@ -9,8 +9,10 @@
 //!    the sub-filter (when isolation is enabled), its clearing reinstates it; a sub-filter that
 //!    is not isolated then updates with the measurement. A measurement found faulty is thus
 //!    never absorbed.
-//! 3. the master fuses the healthy sub-filters (and, with `β_m > 0`, its own prediction) in
-//!    information form: `P_g = (Σ P_i⁻¹)⁻¹`, `x_g = P_g Σ P_i⁻¹ x_i`;
+//! 3. the master fuses the healthy sub-filters (and, with `β_m > 0`, its own prediction):
+//!    `P_g = (Σ P_i⁻¹)⁻¹`, `x_g = P_g Σ P_i⁻¹ x_i`, computed by sequential pairwise fusion
+//!    (`K = P(P + P_i)⁻¹`, `x ← x + K(x_i − x)`, `P ← P − KP`), which needs no inverse of
+//!    any `P_i`;
 //! 4. reset mode: every healthy sub-filter is reset to `x_g`, `P_g/β_i`, and the master to
 //!    `x_g`, `P_g/β_m`, with the shares renormalised over the healthy sources so that they sum
 //!    to one (isolation then loses no information share). A reinstated sub-filter is reset from
@@ -96,13 +98,6 @@ pub struct FederatedFilter {
     p: DMatrix<f64>,
     isolation_enabled: bool,
     isolated_update: bool,
-}
-
-fn inverse_spd(name: &str, m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
-    Cholesky::new(m.clone()).map(|c| c.inverse()).ok_or_else(|| Error::NotPositiveDefinite {
-        name: name.to_string(),
-        detail: "information fusion needs a positive definite covariance".into(),
-    })
 }
 
 impl FederatedFilter {
@@ -267,7 +262,7 @@ impl FederatedFilter {
                 qi /= sub.cfg.share;
             }
             sub.kf.predict_trusted(phi, if reset { &qi } else { q }, 1.0).map_err(|e| ctx(&sub.cfg.name, e))?;
-            let inn = sub.kf.innovation_trusted(z, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+            let (inn, pending) = sub.kf.innovation_pending(z, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
             // 2. detect
             let mut decisions = Vec::with_capacity(sub.cfg.detectors.len());
             for (_, det) in sub.cfg.detectors.iter_mut() {
@@ -280,7 +275,9 @@ impl FederatedFilter {
                 }
             }
             if !sub.isolated || self.isolated_update {
-                sub.kf.update_trusted(z, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+                if let Some(pending) = pending {
+                    sub.kf.apply_pending(pending, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+                }
             }
             reports.push(SubReport {
                 statistic: inn.statistic,
@@ -311,31 +308,36 @@ impl FederatedFilter {
             self.x = s.x().clone();
             self.p = s.p().clone();
         } else {
-            let n = self.x.len();
-            let mut info = DMatrix::<f64>::zeros(n, n);
-            let mut info_x = DVector::<f64>::zeros(n);
-            let mut add = |name: &str, x: &DVector<f64>, p: &DMatrix<f64>| -> Result<()> {
-                let y = inverse_spd(name, p)?;
-                info_x.gemv(1.0, &y, x, 1.0);
-                info += y;
-                Ok(())
-            };
-            for &i in &healthy {
-                let s = &self.subs[i];
-                add(&format!("covariance of sub-filter {}", s.cfg.name), s.kf.x(), s.kf.p())?;
+            // Sequential pairwise fusion, algebraically the information form
+            // P_g = (Σ P_i⁻¹)⁻¹, x_g = P_g Σ P_i⁻¹ x_i, without inverting any P_i:
+            // K = P (P + P_i)⁻¹, x ← x + K(x_i − x), P ← P − K P.
+            let mut sources_iter = healthy
+                .iter()
+                .map(|&i| (self.subs[i].cfg.name.as_str(), self.subs[i].kf.x(), self.subs[i].kf.p()))
+                .chain(self.master.as_ref().filter(|_| use_master).map(|m| ("master", m.x(), m.p())));
+            let (_, x0, p0) = sources_iter.next().ok_or_else(|| Error::Invalid("fusion: no source".into()))?;
+            let mut x = x0.clone();
+            let mut p = p0.clone();
+            let mut k = DMatrix::<f64>::zeros(x.len(), x.len());
+            let mut inv_diag = vec![0.0; x.len()];
+            for (name, xi, pi) in sources_iter {
+                let chol = Cholesky::new(&p + pi).ok_or_else(|| Error::NotPositiveDefinite {
+                    name: format!("sum of the fused covariance and that of {name}"),
+                    detail: "fusion needs P + P_i positive definite".into(),
+                })?;
+                k.copy_from(&p);
+                crate::kalman::gain_from_cholesky(chol.l_dirty(), &mut k, &mut inv_diag);
+                let dx = xi - &x;
+                x.gemv(1.0, &k, &dx, 1.0);
+                let kp = &k * &p;
+                p -= kp;
+                crate::validate::symmetrize(&mut p);
             }
-            if use_master {
-                if let Some(m) = &self.master {
-                    add("master covariance", m.x(), m.p())?;
-                }
+            if !x.iter().chain(p.iter()).all(|v| v.is_finite()) {
+                return Err(Error::Numerical { context: "fusion".into(), detail: "the fused estimate is not finite".into() });
             }
-            let chol = Cholesky::new(info).ok_or_else(|| Error::NotPositiveDefinite {
-                name: "fused information matrix".into(),
-                detail: "Σ P_i⁻¹ cannot be factored".into(),
-            })?;
-            self.p = chol.inverse();
-            crate::validate::symmetrize(&mut self.p);
-            self.x = chol.solve(&info_x);
+            self.x = x;
+            self.p = p;
         }
         for &i in &healthy {
             reports[i].fused = true;
