@@ -16,6 +16,9 @@ Federated filtering and scenarios
     :class:`FederatedFilter` (per-epoch step API), :func:`load_scenario`, :class:`Scenario`,
     :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust) returning a
     :class:`ScenarioRun`; :class:`ScenarioError` names the offending field.
+Monte-Carlo
+    :func:`montecarlo` (runs × sweep points in parallel in Rust, or on Dask) returning a
+    :class:`Campaign` with per-run metrics, summaries, plots.
 Errors
     ``ValueError`` for bad input; :class:`LinAlgError` (a ``ValueError``) for numerical
     failures such as a covariance that is not positive definite.
@@ -42,10 +45,12 @@ from navfdi._core import (
 from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.federated import FaultMatch, ScenarioRun, run_scenario
+from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_scenario
 
 __all__ = [
     "AlarmInterval",
+    "Campaign",
     "Decision",
     "DetectionRun",
     "FaultMatch",
@@ -67,6 +72,7 @@ __all__ = [
     "chi2_threshold",
     "load_scenario",
     "mdb",
+    "montecarlo",
     "ncx2_cdf",
     "noncentrality",
     "run_filter",

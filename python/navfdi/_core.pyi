@@ -30,6 +30,7 @@ __all__ = [
     "run_scenario",
     "FederatedFilter",
     "FederatedStep",
+    "PreparedScenario",
 ]
 
 __version__: str
@@ -442,3 +443,28 @@ class FederatedFilter:
     @property
     def isolated(self) -> list[bool]:
         """Current isolation flags."""
+
+@final
+class PreparedScenario:
+    """A scenario prepared once (truth trajectory, ``Φ_k``, ``Q_k``, measurement models) for
+    many Monte-Carlo runs. Used by :func:`navfdi.montecarlo`.
+
+    Parameters
+    ----------
+    spec_json : str
+        The scenario in its SI JSON form (``Scenario.to_json()``).
+    """
+
+    def __new__(cls, spec_json: str) -> PreparedScenario: ...
+    @property
+    def epochs(self) -> int:
+        """Epochs per run."""
+    @property
+    def cells(self) -> list[tuple[str, str, str, float]]:
+        """Metric cells ``(subfilter, detector, fault_id or "none", pf)`` in report order."""
+    def run_chunk(self, seed: int, start: int, count: int, threads: int = 0, keep: list[int] | None = None) -> dict[str, Any]:
+        """Runs ``start .. start+count`` (noise from ``(seed, run)``) on ``threads`` threads
+        (0: all cores), GIL released. Returns arrays ``run`` (count,); ``detected``, ``delay``
+        (s), ``clear_delay`` (s), ``false_alarm_epochs``, ``outside_epochs``,
+        ``wrong_isolations`` (count, cells); ``att_rms``, ``att_max`` (rad), ``pos_rms``,
+        ``pos_max`` (m) (count,); ``records`` ({run: record} for runs in ``keep``)."""

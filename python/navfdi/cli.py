@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from navfdi import _core
 
@@ -23,6 +24,17 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     sub.add_parser("scenarios", help="list the bundled scenarios")
+    mc = sub.add_parser("montecarlo", help="Monte-Carlo campaign: runs × sweep points, run in parallel in Rust")
+    mc.add_argument("scenario", help="bundled scenario name or a TOML file")
+    mc.add_argument("--runs", type=int, required=True, help="runs per sweep point")
+    mc.add_argument("--seed", type=int, default=0, help="campaign seed (default 0); run i uses (seed, i)")
+    mc.add_argument("--sweep", action="append", default=[], metavar="PATH=v1,v2,...", help='vary a scenario field, e.g. --sweep "faults[0].magnitude=0.05 sigma/s,0.1 sigma/s" (repeatable: cartesian product)')
+    where = mc.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, help="threads in this process (default: all cores)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster (pip install navfdi[dask])")
+    mc.add_argument("--out", default=None, help="directory for runs.parquet, summary.csv, campaign.json and plots")
+    mc.add_argument("--keep-series", default="", metavar="RUN,...", help="run indices whose time series to keep (written as series_pPOINT_rRUN.parquet)")
+    mc.add_argument("--chunk-size", type=int, default=None, help="runs per chunk (default 16)")
     args = parser.parse_args(argv)
     try:
         if args.command == "demo":
@@ -44,9 +56,49 @@ def main(argv: list[str] | None = None) -> int:
             if args.out:
                 paths = result.write(args.out, figures=not args.no_figures)
                 print(f"\nwrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
+        elif args.command == "montecarlo":
+            return _montecarlo(args)
     except ValueError as e:
         print(f"navfdi: error: {e}", file=sys.stderr)
         return 2
+    return 0
+
+
+def _montecarlo(args: argparse.Namespace) -> int:
+    from navfdi.montecarlo import montecarlo, parse_sweep
+
+    sweep = parse_sweep(args.sweep)
+    keep = [int(k) for k in args.keep_series.split(",") if k.strip()] if args.keep_series else []
+    client = None
+    if args.scheduler:
+        try:
+            from dask.distributed import Client
+        except ImportError:
+            print("navfdi: error: --scheduler needs Dask: pip install 'navfdi[dask]'", file=sys.stderr)
+            return 2
+        client = Client(args.scheduler)
+    camp = montecarlo(args.scenario, runs=args.runs, seed=args.seed, sweep=sweep, workers=args.workers, client=client, chunk_size=args.chunk_size, keep_series=keep)
+    print(camp.format_table(), end="")
+    if args.out:
+        paths = camp.write(args.out)
+        import pandas as pd
+
+        from navfdi.federated import ERROR_COLUMNS
+
+        for (p, r), rec in camp.series.items():
+            cols = {"t": rec["t"], **{f"error.{c}": rec["error"][:, i] for i, c in enumerate(ERROR_COLUMNS)}}
+            for s in rec["subfilters"]:
+                cols[f"{s['sensor']}.isolated"] = s["isolated"]
+                for d in s["detectors"]:
+                    for k in ("statistic", "threshold", "alarm"):
+                        cols[f"{s['sensor']}.{d['name']}.{k}"] = d[k]
+            path = Path(args.out) / f"series_p{p}_r{r}.parquet"
+            pd.DataFrame(cols).to_parquet(path, index=False)
+            paths.append(path)
+        print(f"\nwrote {len(paths)} files to {args.out}/" + (" (partial campaign)" if camp.partial else ""))
+    if camp.partial:
+        print("navfdi: interrupted; the finished runs are kept (marked partial)", file=sys.stderr)
+        return 130
     return 0
 
 

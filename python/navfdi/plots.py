@@ -73,3 +73,83 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def plot_campaign(campaign, out: Path) -> list[Path]:
+    """Write PNG plots of a Monte-Carlo campaign into ``out``:
+
+    * ``delay.png`` (when the scenario has faults): detection delay (median, bars to the 95th
+      percentile) per detector and fault against the sweep point;
+    * ``rates.png``: detection probability per detector and fault, and false-alarm rate per
+      epoch per detector, with their 95 % Wilson intervals, against the sweep point.
+
+    Returns the paths written.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    s = campaign.summary()
+    cols = campaign.sweep_columns
+    labels = [", ".join(f"{v}" for v in pt.values()) or "(no sweep)" for pt in campaign.points]
+    xlabel = " × ".join(cols) if cols else ""
+    x = np.arange(len(campaign.points))
+
+    def point_index(df):
+        if not cols:
+            return np.zeros(len(df), dtype=int)
+        keys = [tuple(pt[c] for c in cols) for pt in campaign.points]
+        return np.array([keys.index(tuple(r[c] for c in cols)) for _, r in df.iterrows()])
+
+    paths = []
+    faults = s[s["fault_id"] != "none"]
+    if faults.empty:
+        fig = None
+    else:
+        fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
+    if fig is not None:
+        for (sub, det, fid), g in faults.groupby(["subfilter", "detector", "fault_id"], sort=False):
+            xi = point_index(g)
+            med, p95 = g["delay_median"].to_numpy(), g["delay_p95"].to_numpy()
+            ax.errorbar(xi, med, yerr=[np.zeros_like(med), np.maximum(p95 - med, 0)], marker="o", capsize=3, label=f"{sub}/{det} · {fid}")
+        ax.set_xticks(x, labels, rotation=20)
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("detection delay [s] (median, bar to p95)")
+        ax.set_title(f"{campaign.scenario.name}: detection delay ({len(campaign.runs['run'].unique())} runs per point)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        p = out / "delay.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
+
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
+    for (sub, det, fid), g in faults.groupby(["subfilter", "detector", "fault_id"], sort=False):
+        xi = point_index(g)
+        pd_ = g["detection_probability"].to_numpy()
+        err = np.clip([pd_ - g["detection_ci_low"].to_numpy(), g["detection_ci_high"].to_numpy() - pd_], 0, None)
+        a1.errorbar(xi, pd_, yerr=err, marker="o", capsize=3, label=f"{sub}/{det} · {fid}")
+    a1.set_ylim(-0.02, 1.02)
+    a1.set_ylabel("detection probability (95 % Wilson)")
+    none = s[s["fault_id"] == "none"]
+    for (sub, det), g in none.groupby(["subfilter", "detector"], sort=False):
+        xi = point_index(g)
+        fa = g["false_alarm_rate"].to_numpy()
+        err = np.clip([fa - g["false_alarm_ci_low"].to_numpy(), g["false_alarm_ci_high"].to_numpy() - fa], 0, None)
+        a2.errorbar(xi, fa, yerr=err, marker="o", capsize=3, label=f"{sub}/{det} (pf {g['pf'].iloc[0]:g})")
+    a2.set_yscale("symlog", linthresh=1e-4)
+    a2.set_ylabel("false alarms per epoch outside faults")
+    if faults.empty:
+        a1.text(0.5, 0.5, "no faults in this scenario", ha="center", va="center", transform=a1.transAxes)
+    for a in (a1, a2):
+        a.set_xticks(x, labels, rotation=20)
+        a.set_xlabel(xlabel)
+        a.grid(alpha=0.3)
+        if a.get_legend_handles_labels()[0]:
+            a.legend(fontsize=7)
+    p = out / "rates.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    paths.append(p)
+    return paths

@@ -7,6 +7,7 @@ mod convert;
 mod detect;
 mod errors;
 mod federated;
+mod montecarlo;
 mod filter;
 mod scenario;
 
@@ -72,5 +73,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
+    m.add_class::<montecarlo::PyPreparedScenario>()?;
     Ok(())
 }

@@ -37,7 +37,7 @@ pub fn scenario_trajectory<'py>(py: Python<'py>, spec_json: &str) -> PyResult<Bo
     Ok(d)
 }
 
-fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py, PyDict>> {
+pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py, PyDict>> {
     let t = rec.t.len();
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, rec.t, &[t])?)?;

@@ -8,6 +8,7 @@
 
 
 
+pub mod montecarlo;
 pub mod noise;
 pub mod prepare;
 pub mod run;

@@ -1,0 +1,417 @@
+"""Monte-Carlo campaigns: N runs × sweep points, run and scored in Rust.
+
+Each run is simulated, filtered (isolation active) and reduced to metrics in Rust; the loop
+over runs uses rayon with the GIL released. Python only cuts the campaign into chunks (for
+the progress bar, Ctrl-C and Dask) and aggregates the streamed metrics; no time series is kept
+unless asked for (``keep_series``).
+
+Reproducibility: run ``i`` draws its noise from ``(seed, i)`` and every sweep point uses the
+same run indices (common random numbers), so results are bit-identical whatever the number
+of threads, the chunk size or the backend (in-process or Dask).
+
+Metric definitions: see :mod:`navfdi_core::sim::montecarlo` (Rust docs) and docs/montecarlo.md.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import json
+import math
+import platform
+import statistics
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navfdi import _core
+from navfdi.scenario import Scenario, ScenarioError, load_scenario
+
+Z95 = statistics.NormalDist().inv_cdf(0.975)
+
+RUN_COLUMNS = [
+    "point",
+    "run",
+    "subfilter",
+    "detector",
+    "fault_id",
+    "pf",
+    "detected",
+    "delay",
+    "clear_delay",
+    "false_alarm_epochs",
+    "outside_epochs",
+    "wrong_isolations",
+    "att_rms",
+    "att_max",
+    "pos_rms",
+    "pos_max",
+]
+
+
+def wilson(successes: np.ndarray, trials: np.ndarray, z: float = Z95) -> tuple[np.ndarray, np.ndarray]:
+    """Wilson score interval for binomial proportions (vectorised); NaN where trials == 0."""
+    k = np.asarray(successes, dtype=float)
+    n = np.asarray(trials, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        p = k / n
+        denom = 1 + z**2 / n
+        centre = (p + z**2 / (2 * n)) / denom
+        half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
+    return centre - half, centre + half
+
+
+def parse_sweep(items: Iterable[str]) -> dict[str, list[Any]]:
+    """Parse ``PATH=v1,v2,...`` strings (CLI form) into ``{path: [values]}``.
+
+    Values that read as numbers become floats (ints stay ints), ``true``/``false`` become
+    booleans, everything else stays a string (e.g. ``"0.2 sigma/s"``).
+    """
+    out: dict[str, list[Any]] = {}
+    for item in items:
+        path, sep, values = item.partition("=")
+        path = path.strip()
+        if not sep or not path or not values.strip():
+            raise ScenarioError(f"--sweep {item!r}: expected PATH=v1,v2,... (e.g. faults[0].magnitude=0.1 sigma/s,0.2 sigma/s)")
+        vals: list[Any] = []
+        for v in values.split(","):
+            v = v.strip()
+            if v.lower() in ("true", "false"):
+                vals.append(v.lower() == "true")
+                continue
+            try:
+                vals.append(int(v))
+                continue
+            except ValueError:
+                pass
+            try:
+                vals.append(float(v))
+            except ValueError:
+                vals.append(v)
+        if path in out:
+            raise ScenarioError(f"--sweep {path}: given twice")
+        out[path] = vals
+    return out
+
+
+@functools.lru_cache(maxsize=8)
+def _prepared(spec_json: str) -> _core.PreparedScenario:
+    return _core.PreparedScenario(spec_json)
+
+
+def _chunk(spec_json: str, seed: int, start: int, count: int, threads: int, keep: tuple[int, ...]) -> dict[str, Any]:
+    """Run one chunk (also the task executed on Dask workers)."""
+    return _prepared(spec_json).run_chunk(seed, start, count, threads, list(keep))
+
+
+@dataclass
+class Campaign:
+    """Result of :func:`montecarlo`.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The base scenario.
+    seed : int
+        Campaign seed.
+    runs_requested : int
+        Runs per sweep point asked for.
+    sweep : dict
+        ``{path: [values]}`` (user form, with units).
+    points : list of dict
+        One ``{path: value}`` per sweep point (``[{}]`` without a sweep).
+    runs : pandas.DataFrame
+        One row per run × sub-filter × detector × fault (``none`` for outside faults) × sweep
+        point; columns :data:`RUN_COLUMNS` plus one per swept field.
+    partial : bool
+        True when the campaign was interrupted; ``runs`` then holds the finished runs only.
+    backend : str
+        ``"local (K threads)"`` or ``"dask (ADDRESS)"``.
+    series : dict
+        ``{(point, run): record}`` for the runs in ``keep_series`` (record: as
+        :func:`navfdi._core.run_scenario` returns).
+    """
+
+    scenario: Scenario
+    seed: int
+    runs_requested: int
+    sweep: dict[str, list[Any]]
+    points: list[dict[str, Any]]
+    runs: Any
+    partial: bool
+    backend: str
+    series: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
+
+    @property
+    def sweep_columns(self) -> list[str]:
+        """Column names of the swept fields."""
+        return list(self.sweep)
+
+    def summary(self):
+        """One row per sweep point × sub-filter × detector × fault (pandas DataFrame).
+
+        Columns: swept fields, ``subfilter, detector, fault_id, pf, runs,
+        detection_probability, detection_ci_low, detection_ci_high`` (Wilson 95 %),
+        ``delay_mean, delay_median, delay_p95`` (s, over detected runs), ``clear_delay_mean``,
+        ``false_alarm_rate, false_alarm_ci_low, false_alarm_ci_high`` (per epoch outside the
+        faults; Wilson 95 % treating epochs as independent trials, which understates the
+        interval for detectors with memory such as the SPRT), ``wrong_isolations`` (per run),
+        ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
+        ``position_error_rms`` (m). Fault rows carry NaN false-alarm rates; ``none`` rows NaN
+        detection figures.
+        """
+        import pandas as pd
+
+        df = self.runs
+        keys = ["point", *self.sweep_columns, "subfilter", "detector", "fault_id", "pf"]
+        if df.empty:
+            return pd.DataFrame(columns=[k for k in keys if k != "point"])
+        rows = []
+        for key, g in df.groupby(keys, sort=False, dropna=False):
+            rec = dict(zip(keys, key))
+            n = len(g)
+            rec["runs"] = n
+            is_fault = rec["fault_id"] != "none"
+            if is_fault:
+                det = int(g["detected"].sum())
+                lo, hi = wilson(np.array([det]), np.array([n]))
+                d = g.loc[g["detected"], "delay"].to_numpy()
+                rec.update(
+                    detection_probability=det / n,
+                    detection_ci_low=float(lo[0]),
+                    detection_ci_high=float(hi[0]),
+                    delay_mean=float(d.mean()) if d.size else math.nan,
+                    delay_median=float(np.median(d)) if d.size else math.nan,
+                    delay_p95=float(np.percentile(d, 95)) if d.size else math.nan,
+                    clear_delay_mean=float(np.nanmean(g["clear_delay"])) if g["clear_delay"].notna().any() else math.nan,
+                    false_alarm_rate=math.nan,
+                    false_alarm_ci_low=math.nan,
+                    false_alarm_ci_high=math.nan,
+                    wrong_isolations=math.nan,
+                )
+            else:
+                fa, out = int(g["false_alarm_epochs"].sum()), int(g["outside_epochs"].sum())
+                lo, hi = wilson(np.array([fa]), np.array([out]))
+                rec.update(
+                    detection_probability=math.nan,
+                    detection_ci_low=math.nan,
+                    detection_ci_high=math.nan,
+                    delay_mean=math.nan,
+                    delay_median=math.nan,
+                    delay_p95=math.nan,
+                    clear_delay_mean=math.nan,
+                    false_alarm_rate=fa / out if out else math.nan,
+                    false_alarm_ci_low=float(lo[0]),
+                    false_alarm_ci_high=float(hi[0]),
+                    wrong_isolations=float(g["wrong_isolations"].mean()),
+                )
+            rec["error_rms"] = float(np.sqrt(np.mean(g["att_rms"].to_numpy() ** 2)))
+            rec["position_error_rms"] = float(np.sqrt(np.mean(g["pos_rms"].to_numpy() ** 2)))
+            rows.append(rec)
+        return pd.DataFrame(rows).drop(columns=["point"])
+
+    def format_table(self) -> str:
+        """The summary as printed by ``navfdi montecarlo``."""
+        s = self.summary()
+        head = f"{self.scenario.name}: {self.runs['run'].nunique() if len(self.runs) else 0} of {self.runs_requested} runs per point, seed {self.seed}, {self.backend}"
+        if self.partial:
+            head += "  [PARTIAL: interrupted]"
+        lines = [head, ""]
+        cols = [*self.sweep_columns, "subfilter", "detector", "fault_id", "pf", "runs"]
+        hdr = "".join(f"{c[-22:]:>24}" if c in self.sweep_columns else f"{c:>10}" for c in cols)
+        hdr += f"{'P(det) [95% CI]':>22}{'delay mean/med/p95 [s]':>26}{'false alarms/epoch [95% CI]':>34}{'att RMS [arcsec]':>18}"
+        lines.append(hdr)
+        arcsec = math.degrees(1) * 3600
+        for _, r in s.iterrows():
+            line = "".join(f"{str(r[c]):>24}" if c in self.sweep_columns else f"{str(r[c]):>10}" for c in cols)
+            if r["fault_id"] != "none":
+                line += f"{r['detection_probability']:>8.3f} [{r['detection_ci_low']:.3f},{r['detection_ci_high']:.3f}]"
+                line += f"{r['delay_mean']:>10.1f}/{r['delay_median']:.1f}/{r['delay_p95']:.1f}".rjust(26)
+                line += " " * 34
+            else:
+                line += " " * 22 + " " * 26
+                line += f"{r['false_alarm_rate']:>14.5f} [{r['false_alarm_ci_low']:.5f},{r['false_alarm_ci_high']:.5f}]"
+            line += f"{r['error_rms'] * arcsec:>18.2f}"
+            lines.append(line)
+        return "\n".join(lines) + "\n"
+
+    def campaign_info(self) -> dict[str, Any]:
+        """What ``campaign.json`` holds."""
+        done = self.runs.groupby("point")["run"].nunique().to_dict() if len(self.runs) else {}
+        return {
+            "scenario": self.scenario.raw,
+            "source": self.scenario.source,
+            "seed": self.seed,
+            "runs_requested": self.runs_requested,
+            "runs_completed": {str(k): int(v) for k, v in done.items()},
+            "sweep": self.sweep,
+            "points": self.points,
+            "partial": self.partial,
+            "backend": self.backend,
+            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
+        }
+
+    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
+        """Write ``runs.parquet``, ``summary.csv``, ``campaign.json`` and PNG plots to ``out``."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "runs.parquet", out / "summary.csv", out / "campaign.json"]
+        runs = self.runs.copy()
+        for c in self.sweep_columns:
+            runs[c] = runs[c].astype(str)
+        runs.to_parquet(paths[0], index=False)
+        self.summary().to_csv(paths[1], index=False)
+        paths[2].write_text(json.dumps(self.campaign_info(), indent=2, default=str), encoding="utf-8")
+        if figures and len(self.runs):
+            from navfdi.plots import plot_campaign
+
+            paths += plot_campaign(self, out)
+        return paths
+
+
+def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[str, str, str, float]]], points: list[dict[str, Any]]):
+    import pandas as pd
+
+    frames = []
+    for point, ch in chunks:
+        n = ch["run"].size
+        c = len(cells[point])
+        sub, det, fid, pf = (np.array([x[i] for x in cells[point]], dtype=object) for i in range(4))
+        cols: dict[str, Any] = {
+            "point": np.full(n * c, point),
+            "run": np.repeat(ch["run"], c),
+            "subfilter": np.tile(sub, n),
+            "detector": np.tile(det, n),
+            "fault_id": np.tile(fid, n),
+            "pf": np.tile(pf.astype(float), n),
+        }
+        for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations"):
+            cols[k] = ch[k].reshape(-1)
+        for k in ("att_rms", "att_max", "pos_rms", "pos_max"):
+            cols[k] = np.repeat(ch[k], c)
+        for path, value in points[point].items():
+            cols[path] = [value] * (n * c)
+        frames.append(pd.DataFrame(cols))
+    if not frames:
+        return pd.DataFrame(columns=RUN_COLUMNS + list(points[0]))
+    df = pd.concat(frames, ignore_index=True)
+    return df.sort_values(["point", "run"], kind="stable", ignore_index=True)
+
+
+def montecarlo(
+    scenario: Scenario | str | Path,
+    runs: int,
+    seed: int = 0,
+    sweep: Mapping[str, Sequence[Any]] | None = None,
+    workers: int | None = None,
+    client: Any = None,
+    chunk_size: int | None = None,
+    keep_series: Sequence[int] = (),
+    progress: bool | None = None,
+) -> Campaign:
+    """Run a Monte-Carlo campaign.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        Scenario or bundled name / TOML path.
+    runs : int
+        Runs per sweep point (≥ 1).
+    seed : int
+        Campaign seed; run ``i`` uses ``(seed, i)``.
+    sweep : mapping, optional
+        ``{path: [values]}`` of user-level fields (e.g. ``{"faults[0].magnitude": ["0.05
+        sigma/s", "0.1 sigma/s"]}``); the campaign runs the cartesian product of the values.
+        Every point is validated before anything runs.
+    workers : int, optional
+        Threads for the in-process backend (default: all cores).
+    client : dask.distributed.Client, optional
+        Run chunks on a Dask cluster instead (``pip install navfdi[dask]``).
+    chunk_size : int, optional
+        Runs per chunk (default 16, or enough for 4 chunks per Dask worker thread).
+    keep_series : sequence of int
+        Run indices whose full time series to keep (``Campaign.series``).
+    progress : bool, optional
+        Show a progress bar (default: when stderr is a terminal).
+
+    Returns
+    -------
+    Campaign
+        With ``partial=True`` if interrupted by Ctrl-C (the finished runs are kept).
+    """
+    if isinstance(runs, bool) or not isinstance(runs, (int, np.integer)) or runs < 1:
+        raise ValueError(f"runs = {runs!r}: must be a positive integer")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed = {seed!r}: must be a non-negative integer")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers = {workers!r}: must be a positive integer")
+    if workers is not None and client is not None:
+        raise ValueError("workers and client are exclusive: threads are set by the Dask workers")
+    base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    sweep_lists: dict[str, list[Any]] = {str(k): list(v) for k, v in (sweep or {}).items()}
+    for k, v in sweep_lists.items():
+        if not v:
+            raise ScenarioError(f"sweep {k}: no values")
+    points = [dict(zip(sweep_lists, combo)) for combo in itertools.product(*sweep_lists.values())] if sweep_lists else [{}]
+    scenarios = []
+    for pt in points:  # validate every point before running anything
+        sc = base
+        for path, value in pt.items():
+            try:
+                sc = sc.with_value(path, value)
+            except ScenarioError as e:
+                raise ScenarioError(f"sweep {path}={value!r}: {e}") from None
+        scenarios.append(sc)
+    keep = tuple(sorted({int(k) for k in keep_series}))
+    threads = workers or 0
+    if chunk_size is None:
+        chunk_size = 16
+    if chunk_size < 1:
+        raise ValueError(f"chunk_size = {chunk_size}: must be at least 1")
+    tasks = [(p, s, min(chunk_size, runs - s)) for p in range(len(points)) for s in range(0, runs, chunk_size)]
+    jsons = [sc.to_json() for sc in scenarios]
+    cells = [_prepared(j).cells for j in jsons] if client is None else [_core.PreparedScenario(j).cells for j in jsons]
+    show = sys.stderr.isatty() if progress is None else progress
+    bar = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=runs * len(points), unit="run", desc=base.name, file=sys.stderr)
+    done: list[tuple[int, dict[str, Any]]] = []
+    partial = False
+    backend = f"local ({threads or 'all'} threads)"
+    try:
+        if client is None:
+            for p, s, c in tasks:
+                ch = _chunk(jsons[p], int(seed), s, c, threads, tuple(k for k in keep if s <= k < s + c))
+                done.append((p, ch))
+                if bar is not None:
+                    bar.update(c)
+        else:
+            from dask.distributed import as_completed
+
+            info: dict[str, Any] = client.scheduler_info() if hasattr(client, "scheduler_info") else {}
+            backend = f"dask ({info.get('address', 'client')})"
+            futures = {client.submit(_chunk, jsons[p], int(seed), s, c, 1, tuple(k for k in keep if s <= k < s + c), pure=False): (p, s, c) for p, s, c in tasks}
+            try:
+                for fut in as_completed(futures):
+                    p, s, c = futures[fut]
+                    done.append((p, fut.result()))
+                    if bar is not None:
+                        bar.update(c)
+            except KeyboardInterrupt:
+                for fut in futures:
+                    fut.cancel()
+                raise
+    except KeyboardInterrupt:
+        partial = True
+    finally:
+        if bar is not None:
+            bar.close()
+    series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
+    runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points)
+    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series)

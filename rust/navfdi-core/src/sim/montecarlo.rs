@@ -1,0 +1,232 @@
+//! Monte-Carlo runs of a prepared scenario, reduced to per-run metrics (METHODS §12).
+//!
+//! Run `i` draws its noise from `(seed, stream = i)` ([`super::noise::simulate`]) and is
+//! filtered with isolation active, so its metrics depend on nothing but `(seed, i)`: the
+//! results are bit-identical whatever the number of threads, the chunking of runs or the
+//! machine that executes a chunk.
+//!
+//! Metrics per run and *cell* (sub-filter × detector × fault, plus one cell per sub-filter ×
+//! detector for the epochs outside every fault, fault id `none`):
+//!
+//! * fault cells: `detected` (an alarm interval overlapping the window, begun after the previous
+//!   fault on the same sensor ended), `delay` = its start − fault start (0 if a false alarm was
+//!   already raised at the start), `clear_delay` = end of the last such interval − fault end
+//!   (NaN if never cleared);
+//! * `none` cells: `false_alarm_epochs` and `outside_epochs`: epochs with an alarm, and all
+//!   epochs, outside every fault window of the sub-filter's sensor and outside the
+//!   [`SETTLE`] seconds after each fault ends (the clearing transient);
+//! * the isolating detector's cells: `wrong_isolations`, isolation intervals of the sub-filter
+//!   that overlap no fault window of its sensor (counted on the `none` cell);
+//! * per run: master attitude error RMS and maximum (rad, all axes) and position error RMS and
+//!   maximum (m, horizontal and vertical together).
+
+use super::noise::simulate;
+use super::prepare::Prepared;
+use super::run::{run_federated, RunRecord};
+use crate::error::{Error, Result};
+use rayon::prelude::*;
+
+/// Seconds after a fault's end excluded from false-alarm counting.
+pub const SETTLE: f64 = 10.0;
+
+/// One cell: which sub-filter, detector and fault (None: outside faults).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cell {
+    /// Sub-filter (sensor) index in the federated configuration.
+    pub subfilter: usize,
+    /// Detector index in that sub-filter.
+    pub detector: usize,
+    /// Fault index in the scenario, or None for the `none` cell.
+    pub fault: Option<usize>,
+}
+
+/// Metrics of one run and cell.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CellMetrics {
+    /// Fault detected (fault cells).
+    pub detected: bool,
+    /// Detection delay (s), NaN if missed or a `none` cell.
+    pub delay: f64,
+    /// Clear delay (s), NaN if not detected or never cleared.
+    pub clear_delay: f64,
+    /// Alarmed epochs outside faults (`none` cells).
+    pub false_alarm_epochs: u32,
+    /// Epochs outside faults (`none` cells).
+    pub outside_epochs: u32,
+    /// Isolation intervals overlapping no fault (`none` cell of the isolating detector).
+    pub wrong_isolations: u32,
+}
+
+/// Metrics of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunMetrics {
+    /// Run index.
+    pub run: u64,
+    /// Per cell, in [`cells`] order.
+    pub cells: Vec<CellMetrics>,
+    /// Master attitude error RMS (rad).
+    pub att_rms: f64,
+    /// Master attitude error maximum |φ| component (rad).
+    pub att_max: f64,
+    /// Master position error RMS (m).
+    pub pos_rms: f64,
+    /// Master position error maximum |component| (m).
+    pub pos_max: f64,
+    /// Optional full record of the run (kept for chosen runs).
+    pub record: Option<RunRecord>,
+}
+
+/// The cells of a scenario, in the order metrics are reported.
+pub fn cells(prep: &Prepared) -> Vec<Cell> {
+    let spec = &prep.spec;
+    let mut out = Vec::new();
+    for (si, sf) in spec.federated.subfilters.iter().enumerate() {
+        let faults: Vec<usize> = (0..spec.faults.len()).filter(|&f| spec.faults[f].sensor == sf.sensor).collect();
+        for di in 0..sf.detectors.len() {
+            for &f in &faults {
+                out.push(Cell { subfilter: si, detector: di, fault: Some(f) });
+            }
+            out.push(Cell { subfilter: si, detector: di, fault: None });
+        }
+    }
+    out
+}
+
+/// Alarm intervals `(start_index, end_index_exclusive_or_None)`.
+fn intervals(alarm: &[bool]) -> Vec<(usize, Option<usize>)> {
+    let mut out = Vec::new();
+    let mut start = None;
+    for (k, &a) in alarm.iter().enumerate() {
+        match (a, start) {
+            (true, None) => start = Some(k),
+            (false, Some(s)) => {
+                out.push((s, Some(k)));
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(s) = start {
+        out.push((s, None));
+    }
+    out
+}
+
+/// Reduce one run's record to metrics.
+pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> RunMetrics {
+    let spec = &prep.spec;
+    let t = &rec.t;
+    let mut out = Vec::with_capacity(cells.len());
+    for c in cells {
+        let sub = &rec.subs[c.subfilter];
+        let det = &sub.detectors[c.detector];
+        let sensor = &spec.federated.subfilters[c.subfilter].sensor;
+        let mut faults: Vec<&crate::sim::spec::FaultSpec> = spec.faults.iter().filter(|f| &f.sensor == sensor).collect();
+        faults.sort_by(|a, b| a.start.total_cmp(&b.start));
+        let ivs = intervals(&det.alarm);
+        let mut m = CellMetrics { detected: false, delay: f64::NAN, clear_delay: f64::NAN, false_alarm_epochs: 0, outside_epochs: 0, wrong_isolations: 0 };
+        match c.fault {
+            Some(fi) => {
+                let f = &spec.faults[fi];
+                // Previous fault end on the same sensor.
+                let prev_end = faults.iter().filter(|g| g.start < f.start).map(|g| g.end).fold(f64::NEG_INFINITY, f64::max);
+                let matched: Vec<&(usize, Option<usize>)> = ivs
+                    .iter()
+                    .filter(|(s, e)| {
+                        let ts = t[*s];
+                        let te = e.map_or(f64::INFINITY, |e| t[e]);
+                        ts <= f.end && te > f.start && ts >= prev_end
+                    })
+                    .collect();
+                if let (Some(first), Some(last)) = (matched.first(), matched.last()) {
+                    m.detected = true;
+                    m.delay = (t[first.0] - f.start).max(0.0);
+                    m.clear_delay = last.1.map_or(f64::NAN, |e| t[e] - f.end);
+                }
+            }
+            None => {
+                for (k, &tk) in t.iter().enumerate() {
+                    let inside = faults.iter().any(|f| tk >= f.start && tk < f.end + SETTLE);
+                    if !inside {
+                        m.outside_epochs += 1;
+                        if det.alarm[k] {
+                            m.false_alarm_epochs += 1;
+                        }
+                    }
+                }
+                let isolating = spec.federated.subfilters[c.subfilter].isolation.as_deref() == Some(det.name.as_str());
+                if isolating {
+                    for (s, e) in intervals(&sub.isolated) {
+                        let ts = t[s];
+                        let te = e.map_or(f64::INFINITY, |e| t[e]);
+                        if !faults.iter().any(|f| ts <= f.end && te > f.start) {
+                            m.wrong_isolations += 1;
+                        }
+                    }
+                }
+            }
+        }
+        out.push(m);
+    }
+    let epochs = t.len().max(1) as f64;
+    let (mut a2, mut amax, mut p2, mut pmax) = (0.0, 0.0f64, 0.0, 0.0f64);
+    for row in rec.error.chunks(9) {
+        for v in &row[0..3] {
+            a2 += v * v;
+            amax = amax.max(v.abs());
+        }
+        for v in &row[6..9] {
+            p2 += v * v;
+            pmax = pmax.max(v.abs());
+        }
+    }
+    RunMetrics {
+        run,
+        cells: out,
+        att_rms: (a2 / (3.0 * epochs)).sqrt(),
+        att_max: amax,
+        pos_rms: (p2 / (3.0 * epochs)).sqrt(),
+        pos_max: pmax,
+        record: None,
+    }
+}
+
+/// One run: simulate, filter with isolation, reduce.
+pub fn one_run(prep: &Prepared, seed: u64, run: u64, cells: &[Cell], keep: bool) -> Result<RunMetrics> {
+    let sim = simulate(prep, seed, run);
+    let rec = run_federated(prep, &sim, true).map_err(|e| Error::Invalid(format!("run {run}: {e}")))?;
+    let mut m = metrics(prep, run, &rec, cells);
+    if keep {
+        m.record = Some(rec);
+    }
+    Ok(m)
+}
+
+/// Runs `start..start + count` on `threads` threads (0: rayon's default), in run order. Runs
+/// whose index is in `keep` also return their full record.
+pub fn run_chunk(prep: &Prepared, seed: u64, start: u64, count: u64, threads: usize, keep: &[u64]) -> Result<Vec<RunMetrics>> {
+    let cells = cells(prep);
+    let work = || -> Result<Vec<RunMetrics>> {
+        (start..start + count).into_par_iter().map(|i| one_run(prep, seed, i, &cells, keep.contains(&i))).collect()
+    };
+    if threads == 0 {
+        return work();
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Invalid(format!("workers = {threads}: cannot start a thread pool: {e}")))?;
+    pool.install(work)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interval_extraction() {
+        let a = [false, true, true, false, true];
+        assert_eq!(intervals(&a), vec![(1, Some(3)), (4, None)]);
+        assert!(intervals(&[false, false]).is_empty());
+    }
+}

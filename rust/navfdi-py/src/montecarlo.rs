@@ -1,0 +1,90 @@
+//! Monte-Carlo bindings: a prepared scenario that runs chunks of runs in Rust (rayon, GIL
+//! released) and returns per-run metrics as arrays.
+
+use crate::convert::to_numpy;
+use crate::errors::IntoPyResult;
+use navfdi_core::sim::montecarlo::{cells, run_chunk, Cell};
+use navfdi_core::sim::prepare::Prepared;
+use navfdi_core::sim::spec::ScenarioSpec;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Arc;
+
+/// A scenario prepared once (truth, Φ_k, Q_k, measurement models) for many runs.
+#[pyclass(name = "PreparedScenario", module = "navfdi._core", frozen)]
+pub struct PyPreparedScenario {
+    prep: Arc<Prepared>,
+    cells: Vec<Cell>,
+}
+
+#[pymethods]
+impl PyPreparedScenario {
+    #[new]
+    fn new(py: Python<'_>, spec_json: &str) -> PyResult<Self> {
+        let spec = ScenarioSpec::from_json(spec_json).py()?;
+        let prep = py.detach(move || Prepared::new(spec)).py()?;
+        let cells = cells(&prep);
+        Ok(PyPreparedScenario { prep: Arc::new(prep), cells })
+    }
+
+    /// Number of epochs per run.
+    #[getter]
+    fn epochs(&self) -> usize {
+        self.prep.epochs()
+    }
+
+    /// The metric cells: list of ``(subfilter, detector, fault_id or "none", pf)``.
+    #[getter]
+    fn cells(&self) -> Vec<(String, String, String, f64)> {
+        let spec = &self.prep.spec;
+        self.cells
+            .iter()
+            .map(|c| {
+                let sf = &spec.federated.subfilters[c.subfilter];
+                let d = &sf.detectors[c.detector];
+                let f = c.fault.map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
+                (sf.sensor.clone(), d.name.clone(), f, d.pf)
+            })
+            .collect()
+    }
+
+    /// Runs ``start .. start + count`` (noise from ``(seed, run index)``) on ``threads`` threads
+    /// (0: all cores), with the GIL released. Returns a dict of arrays: ``run`` (count,),
+    /// ``detected``, ``delay``, ``clear_delay``, ``false_alarm_epochs``, ``outside_epochs``,
+    /// ``wrong_isolations`` (count, cells), ``att_rms``, ``att_max``, ``pos_rms``, ``pos_max``
+    /// (count,), and ``records`` ({run: record dict} for the runs listed in ``keep``).
+    #[pyo3(signature = (seed, start, count, threads = 0, keep = None))]
+    fn run_chunk<'py>(&self, py: Python<'py>, seed: u64, start: u64, count: u64, threads: usize, keep: Option<Vec<u64>>) -> PyResult<Bound<'py, PyDict>> {
+        if count == 0 {
+            return Err(PyValueError::new_err("count: must be at least 1"));
+        }
+        let keep = keep.unwrap_or_default();
+        let prep = Arc::clone(&self.prep);
+        let rows = py.detach(move || run_chunk(&prep, seed, start, count, threads, &keep)).py()?;
+        let n = rows.len();
+        let c = self.cells.len();
+        let d = PyDict::new(py);
+        d.set_item("run", to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?)?;
+        let grid = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> f64| -> Vec<f64> { rows.iter().flat_map(|r| r.cells.iter().map(f)).collect() };
+        let grid_i = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> i64| -> Vec<i64> { rows.iter().flat_map(|r| r.cells.iter().map(f)).collect() };
+        d.set_item("detected", to_numpy(py, rows.iter().flat_map(|r| r.cells.iter().map(|m| m.detected)).collect::<Vec<bool>>(), &[n, c])?)?;
+        d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
+        d.set_item("clear_delay", to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?)?;
+        d.set_item("false_alarm_epochs", to_numpy(py, grid_i(&|m| m.false_alarm_epochs as i64), &[n, c])?)?;
+        d.set_item("outside_epochs", to_numpy(py, grid_i(&|m| m.outside_epochs as i64), &[n, c])?)?;
+        d.set_item("wrong_isolations", to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?)?;
+        d.set_item("att_rms", to_numpy(py, rows.iter().map(|r| r.att_rms).collect(), &[n])?)?;
+        d.set_item("att_max", to_numpy(py, rows.iter().map(|r| r.att_max).collect(), &[n])?)?;
+        d.set_item("pos_rms", to_numpy(py, rows.iter().map(|r| r.pos_rms).collect(), &[n])?)?;
+        d.set_item("pos_max", to_numpy(py, rows.iter().map(|r| r.pos_max).collect(), &[n])?)?;
+        let recs = PyDict::new(py);
+        for r in rows {
+            if let Some(rec) = r.record {
+                recs.set_item(r.run, crate::scenario::record_to_py(py, rec)?)?;
+            }
+        }
+        d.set_item("records", recs)?;
+        Ok(d)
+    }
+}
