@@ -127,3 +127,12 @@ def test_trajectory_follows_segments():
     assert math.degrees(tr["lat"][0]) == pytest.approx(20.0) and math.degrees(tr["lon"][0]) == pytest.approx(110.0)
     # Specific force at rest is gravity along body up.
     assert tr["f_b"][5, 2] == pytest.approx(9.786, abs=0.01)
+
+
+def test_rust_fixture_matches_bundled_scenario():
+    """benches/yang2013.json (used by the Rust tests and benches) is the bundled TOML in SI."""
+    import json
+    from pathlib import Path
+
+    fixture = json.loads((Path(__file__).resolve().parents[1] / "benches" / "yang2013.json").read_text())
+    assert fixture == navfdi.load_scenario("yang2013").core
