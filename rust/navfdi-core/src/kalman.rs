@@ -205,42 +205,11 @@ impl KalmanFilter {
 
     /// [`KalmanFilter::update`] without input validation (shapes must already be right).
     pub fn update_trusted(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
-        let m = z.len();
-        let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
-        let k = used.iter().filter(|u| **u).count();
-        if k == 0 {
-            return Ok(Innovation::empty(m));
+        let (inn, pending) = self.innovation_pending(z, h, r)?;
+        if let Some(p) = pending {
+            self.apply_pending(p, h, r)?;
         }
-        if k == m {
-            let (res, a, stat) = self.update_core(z, h, r)?;
-            return Ok(Innovation { residual: res, covariance: a, statistic: stat, used });
-        }
-        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
-        let zr = z.select_rows(&idx);
-        let hr = h.select_rows(&idx);
-        let rr = r.select_rows(&idx).select_columns(&idx);
-        let (res_r, a_r, stat) = self.update_core(&zr, &hr, &rr)?;
-        let mut residual = DVector::from_element(m, f64::NAN);
-        let mut covariance = DMatrix::from_element(m, m, f64::NAN);
-        for (a, &i) in idx.iter().enumerate() {
-            residual[i] = res_r[a];
-            for (b, &j) in idx.iter().enumerate() {
-                covariance[(i, j)] = a_r[(a, b)];
-            }
-        }
-        Ok(Innovation { residual, covariance, statistic: stat, used })
-    }
-
-    /// The update on fully used (reduced) inputs; returns `(r, A, λ)`.
-    fn update_core(
-        &mut self,
-        z: &DVector<f64>,
-        h: &DMatrix<f64>,
-        r: &DMatrix<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>, f64)> {
-        let (res, a, chol, stat) = self.innovate_core(z, h, r)?;
-        self.apply_core(h, r, &res, &chol)?;
-        Ok((res, a, stat))
+        Ok(inn)
     }
 
     /// Innovation on fully used inputs: `r = z − Hx⁻`, `A = HP⁻Hᵀ + R`, its Cholesky factor and
