@@ -13,9 +13,12 @@ use std::hint::black_box;
 const N: usize = 15;
 const M: usize = 6;
 
+/// `x0, P0, Φ, Q, H, R`.
+type Problem = (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>);
+
 /// A deterministic INS-like error model at 1 Hz: attitude (0..3), velocity (3..6), position
 /// (6..9), gyro drift (9..12), accelerometer bias (12..15); position and velocity measured.
-fn problem() -> (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>) {
+fn problem() -> Problem {
     let dt = 1.0;
     let mut f = DMatrix::<f64>::zeros(N, N);
     // attitude ← gyro drift; velocity ← attitude × specific force (≈ g up) and accel bias;

@@ -2,9 +2,11 @@
 //!
 //! yang2013 (n = 15; CNS sub-filter m = 3 with three detectors, GNSS sub-filter m = 6 with
 //! one; T = 1000 epochs). Measured in the same criterion run:
+//!
 //! * `federated_run`: the federated loop of one simulated run (`run_federated`, isolation on);
 //! * `run_filter_m3` and `run_filter_m6`: plain `run_filter` over the same T with the same
 //!   n and the two sub-filters' measurement sizes.
+//!
 //! Target: federated ≤ 2 × (m3 + m6).
 
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -219,7 +219,7 @@ impl KalmanFilter {
         z: &DVector<f64>,
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>, Cholesky<f64, Dyn>, f64)> {
+    ) -> Result<Innovated> {
         let n = self.dim();
         let k = z.len();
         let mw = self.mws.get_or_insert_with(|| MWork::new(n, k));
@@ -334,6 +334,9 @@ impl KalmanFilter {
         }
     }
 }
+
+/// `(r, A, Cholesky factor of A, λ)` of a fully used measurement.
+type Innovated = (DVector<f64>, DMatrix<f64>, Cholesky<f64, Dyn>, f64);
 
 /// A prepared measurement update (see [`KalmanFilter::innovation_pending`]).
 #[derive(Debug, Clone)]

@@ -12,6 +12,8 @@
 //! Equations and the resolutions of the papers' ambiguities: `docs/METHODS.md`.
 
 #![warn(missing_docs)]
+// `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod detect;
 pub mod error;

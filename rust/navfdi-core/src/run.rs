@@ -111,7 +111,7 @@ pub fn run_filter(
 ) -> Result<RunOutput> {
     let mut kf = KalmanFilter::new(x0, p0)?;
     let n = kf.dim();
-    if epochs == 0 || zs.len() % epochs != 0 {
+    if epochs == 0 || !zs.len().is_multiple_of(epochs) {
         return Err(Error::Invalid(format!(
             "zs: {} values cannot form {epochs} epochs of equal length (need at least one epoch)",
             zs.len()

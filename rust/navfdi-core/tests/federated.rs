@@ -34,7 +34,9 @@ fn block_diag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
     out
 }
 
-fn setup(master_share: f64, shares: &[f64]) -> (FederatedFilter, KalmanFilter, Vec<DMatrix<f64>>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Lcg) {
+type Setup = (FederatedFilter, KalmanFilter, Vec<DMatrix<f64>>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Lcg);
+
+fn setup(master_share: f64, shares: &[f64]) -> Setup {
     let mut rng = Lcg(42);
     let n = 5;
     let dims = [2usize, 3, 1];

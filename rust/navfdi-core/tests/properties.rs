@@ -97,8 +97,8 @@ proptest! {
         let used: Vec<usize> = (0..s.m).filter(|i| mask[*i]).collect();
         prop_assume!(!used.is_empty());
         let mut z_nan = s.z.clone();
-        for i in 0..s.m {
-            if !mask[i] { z_nan[i] = f64::NAN; }
+        for (i, keep) in mask.iter().take(s.m).enumerate() {
+            if !keep { z_nan[i] = f64::NAN; }
         }
         let mut a = KalmanFilter::new(s.x0.clone(), s.p0.clone()).unwrap();
         let mut b = a.clone();
@@ -115,9 +115,9 @@ proptest! {
         for (ri, &i) in used.iter().enumerate() {
             prop_assert_eq!(ia.residual[i], ib.residual[ri]);
         }
-        for i in 0..s.m {
-            prop_assert_eq!(ia.used[i], mask[i]);
-            if !mask[i] { prop_assert!(ia.residual[i].is_nan()); }
+        for (i, &keep) in mask.iter().take(s.m).enumerate() {
+            prop_assert_eq!(ia.used[i], keep);
+            if !keep { prop_assert!(ia.residual[i].is_nan()); }
         }
     }
 

@@ -184,8 +184,11 @@ impl PyDetectionRun {
     }
 }
 
+/// Residuals and covariances, one per epoch.
+type Sequence = (Vec<DVector<f64>>, Vec<DMatrix<f64>>);
+
 /// Read residuals (T, m) and covariances (T, m, m).
-fn read_sequence(residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<(Vec<DVector<f64>>, Vec<DMatrix<f64>>)> {
+fn read_sequence(residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<Sequence> {
     let r = read("residuals", residuals)?;
     let a = read("covariances", covariances)?;
     if r.shape.len() != 2 {

@@ -205,6 +205,9 @@ pub fn one_run(prep: &Prepared, seed: u64, run: u64, cells: &[Cell], keep: bool)
 /// Runs `start..start + count` on `threads` threads (0: rayon's default), in run order. Runs
 /// whose index is in `keep` also return their full record.
 pub fn run_chunk(prep: &Prepared, seed: u64, start: u64, count: u64, threads: usize, keep: &[u64]) -> Result<Vec<RunMetrics>> {
+    if start.checked_add(count).is_none() {
+        return Err(Error::Invalid(format!("runs {start} + {count}: the run index would overflow")));
+    }
     let cells = cells(prep);
     let work = || -> Result<Vec<RunMetrics>> {
         (start..start + count).into_par_iter().map(|i| one_run(prep, seed, i, &cells, keep.contains(&i))).collect()

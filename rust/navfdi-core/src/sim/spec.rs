@@ -429,7 +429,7 @@ impl ScenarioSpec {
                 return Err(bad(format!("{p}.magnitude"), "must be finite"));
             }
             if !(f.start.is_finite() && f.end.is_finite() && f.start < f.end) {
-                return Err(bad(format!("{p}"), format!("window start = {}, end = {} must be finite with start < end", f.start, f.end)));
+                return Err(bad(p.clone(), format!("window start = {}, end = {} must be finite with start < end", f.start, f.end)));
             }
         }
         let fed = &self.federated;
@@ -458,7 +458,7 @@ impl ScenarioSpec {
                     (DetectorKind::Chi2, _) => {}
                     (_, None) => return Err(bad(format!("{dp}.pm"), "required for sprt and joint detectors")),
                     (_, Some(pm)) => {
-                        crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(format!("{dp}"), e))?;
+                        crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(dp.clone(), e))?;
                     }
                 }
                 if let Some(v) = &d.variance {
