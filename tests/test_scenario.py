@@ -136,3 +136,61 @@ def test_rust_fixture_matches_bundled_scenario():
 
     fixture = json.loads((Path(__file__).resolve().parents[1] / "benches" / "yang2013.json").read_text())
     assert fixture == navfdi.load_scenario("yang2013").core
+
+
+def all_kinds_scenario():
+    """Every sensor kind, every fault shape, outages, no-reset mode with isolation."""
+    raw = copy.deepcopy(load_scenario("yang2013").raw)
+    raw["duration"] = "400 s"
+    raw["sensors"] = [
+        {"name": "cns", "kind": "cns", "noise": "6 arcsec", "rate": "1 Hz"},
+        {"name": "gpos", "kind": "gnss_position", "noise": ["3 m", "3 m", "5 m"], "rate": "1 Hz", "outages": [["100 s", "150 s"]]},
+        {"name": "gvel", "kind": "gnss_velocity", "noise": "0.05 m/s", "rate": "0.5 Hz"},
+        {"name": "baro", "kind": "baro", "noise": "2 m", "rate": "1 Hz"},
+        {"name": "slam", "kind": "vision", "noise": "1 m", "rate": "1 Hz"},
+    ]
+    raw["faults"] = [
+        {"id": "baro-quad", "sensor": "baro", "components": ["h"], "kind": "quadratic", "magnitude": "0.01 m/s2", "start": "200 s", "end": "300 s"},
+        {"id": "slam-step", "sensor": "slam", "components": ["pos_e", "pos_n"], "kind": "step", "magnitude": "30 m", "start": "250 s", "end": "270 s"},
+        {"id": "gvel-ramp", "sensor": "gvel", "components": "all", "kind": "ramp", "magnitude": "0.02 m/s/s", "start": "320 s", "end": "380 s"},
+    ]
+    chi2 = [{"name": "chi2", "kind": "chi2", "pf": 1e-4}]
+    raw["federated"] = {
+        "mode": "no_reset",
+        "subfilters": [
+            {"sensor": s["name"], "share": 0.2, "detectors": chi2, "isolation": "chi2"} for s in raw["sensors"]
+        ],
+    }
+    return raw
+
+
+def test_every_sensor_kind_fault_shape_and_outage_runs():
+    raw = all_kinds_scenario()
+    # A velocity ramp is in velocity per second; "0.02 m/s" reads as length per second.
+    bad = copy.deepcopy(raw)
+    bad["faults"][2]["magnitude"] = "0.02 m/s"
+    with pytest.raises(navfdi.ScenarioError, match=r"faults\[2\]\.magnitude = '0\.02 m/s': unknown unit 'm' for velocity"):
+        navfdi.load_scenario(bad)
+    sc = navfdi.load_scenario(raw)
+    assert sc.faults()[0]["magnitude"] == pytest.approx(0.01)
+    assert sc.faults()[2]["magnitude"] == pytest.approx(0.02)
+    r = navfdi.run_scenario(sc, seed=4)
+    t = r.t
+    subs = {s["sensor"]: s for s in r.record["subfilters"]}
+    # Outage: no GNSS position between 100 and 150 s (no statistic, no components).
+    out = (t >= 100) & (t < 150)
+    assert np.isnan(subs["gpos"]["statistic"][out]).all() and (subs["gpos"]["dof"][out] == 0).all()
+    assert np.isfinite(subs["gpos"]["statistic"][~out]).all()
+    # 0.5 Hz velocity: a measurement every other epoch.
+    assert np.isnan(subs["gvel"]["statistic"][1::2]).all() and np.isfinite(subs["gvel"]["statistic"][0::2]).all()
+    rows = {(m.fault_id, m.detector): m for m in r.fault_table()}
+    # A 30 m step on a 1 m vision sensor is found at once; the quadratic barometer fault within
+    # its window; the velocity ramp within its window.
+    assert rows[("slam-step", "chi2")].delay == 0
+    assert rows[("baro-quad", "chi2")].detected_at is not None
+    assert rows[("gvel-ramp", "chi2")].detected_at is not None
+    # Isolation of the faulty sub-filters during their faults.
+    iso = r.isolated("slam")
+    assert iso[(t >= 251) & (t < 270)].all()
+    # No-reset fusion keeps a solution; the horizontal error stays far below the vision fault.
+    assert np.abs(r.error()[260, 6:8]).max() < 10.0
