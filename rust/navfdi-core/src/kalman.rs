@@ -207,7 +207,7 @@ impl KalmanFilter {
     pub fn update_trusted(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
         let (inn, pending) = self.innovation_pending(z, h, r)?;
         if let Some(p) = pending {
-            self.apply_pending(p, h, r)?;
+            self.apply_pending(p, r)?;
         }
         Ok(inn)
     }
@@ -259,8 +259,7 @@ impl KalmanFilter {
     /// matrix `I − KH`: `T = (I − KH)P⁻ = P⁻ − K(HP⁻)`, then `T(I − KH)ᵀ = T − (THᵀ)Kᵀ`, so
     /// `P = T − (THᵀ − KR)Kᵀ`. The identity factors are applied exactly; every product has an
     /// inner dimension of m, which keeps the update O(n²m).
-    fn apply_core(&mut self, h: &DMatrix<f64>, r: &DMatrix<f64>, res: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> Result<()> {
-        let _ = h;
+    fn apply_core(&mut self, r: &DMatrix<f64>, res: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> Result<()> {
         let Some(mw) = self.mws.as_mut() else {
             return Err(Error::Numerical { context: "update".into(), detail: "no innovation prepared".into() });
         };
@@ -322,14 +321,14 @@ impl KalmanFilter {
     }
 
     /// Test-before-update, step 2: update with the measurement whose innovation
-    /// [`KalmanFilter::innovation_pending`] just computed (same `h`, `r`; no predict or update
-    /// in between).
-    pub fn apply_pending(&mut self, pending: Pending, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<()> {
+    /// [`KalmanFilter::innovation_pending`] just computed (same `R`; no predict or update in
+    /// between; `H` and `HP⁻` were kept from step 1).
+    pub fn apply_pending(&mut self, pending: Pending, r: &DMatrix<f64>) -> Result<()> {
         match &pending.idx {
-            None => self.apply_core(h, r, &pending.res, &pending.chol),
+            None => self.apply_core(r, &pending.res, &pending.chol),
             Some(idx) => {
-                let (hr, rr) = (h.select_rows(idx), r.select_rows(idx).select_columns(idx));
-                self.apply_core(&hr, &rr, &pending.res, &pending.chol)
+                let rr = r.select_rows(idx).select_columns(idx);
+                self.apply_core(&rr, &pending.res, &pending.chol)
             }
         }
     }

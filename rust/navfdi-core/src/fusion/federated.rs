@@ -276,7 +276,7 @@ impl FederatedFilter {
             }
             if !sub.isolated || self.isolated_update {
                 if let Some(pending) = pending {
-                    sub.kf.apply_pending(pending, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+                    sub.kf.apply_pending(pending, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
                 }
             }
             reports.push(SubReport {

@@ -180,9 +180,6 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
             sig[i] = p[(i, i)].max(0.0).sqrt();
         }
         to_nav(&sig, tr.lat, tr.h, &mut rec.sigma);
-        for v in rec.sigma.iter_mut().rev().take(9) {
-            *v = v.abs();
-        }
     }
     Ok(rec)
 }
