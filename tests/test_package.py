@@ -88,3 +88,12 @@ def test_readme_example_runs(tmp_path):
     script.write_text("\n\n".join(blocks), encoding="utf-8")
     out = run(str(script))
     assert out.returncode == 0, out.stderr
+
+
+def test_cli_unwritable_output_is_a_clear_error(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    out = run("-m", "navfdi", "run", "yang2013", "--out", str(blocker / "sub"))
+    assert out.returncode == 2
+    assert "cannot write the outputs" in out.stderr and "Traceback" not in out.stderr
+    assert blocker.read_text() == "not a directory"

@@ -194,3 +194,44 @@ def test_every_sensor_kind_fault_shape_and_outage_runs():
     assert iso[(t >= 251) & (t < 270)].all()
     # No-reset fusion keeps a solution; the horizontal error stays far below the vision fault.
     assert np.abs(r.error()[260, 6:8]).max() < 10.0
+
+
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+_junk = st.one_of(st.none(), st.booleans(), st.integers(-5, 5), st.floats(allow_nan=True), st.text(max_size=8), st.lists(st.integers(), max_size=2), st.dictionaries(st.text(max_size=3), st.integers(), max_size=2))
+
+
+def _paths(obj, prefix=()):
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            yield (*prefix, k)
+            yield from _paths(v, (*prefix, k))
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            yield (*prefix, i)
+            yield from _paths(v, (*prefix, i))
+
+
+_PATHS = list(_paths(load_scenario("yang2013").raw))
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(path=st.sampled_from(_PATHS), junk=_junk, drop=st.booleans())
+def test_malformed_scenarios_raise_scenario_error_only(path, junk, drop):
+    """Any field replaced by junk (or removed) gives a ScenarioError or a valid scenario,
+    never another exception."""
+    raw = copy.deepcopy(load_scenario("yang2013").raw)
+    d = raw
+    for p in path[:-1]:
+        d = d[p]
+    if drop and isinstance(d, dict):
+        del d[path[-1]]
+    else:
+        d[path[-1]] = junk
+    try:
+        sc = navfdi.load_scenario(raw)
+    except navfdi.ScenarioError as e:
+        assert str(e)
+    else:
+        assert sc.to_json()

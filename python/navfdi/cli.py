@@ -61,6 +61,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:
         print(f"navfdi: error: {e}", file=sys.stderr)
         return 2
+    except OSError as e:
+        print(f"navfdi: error: cannot write the outputs: {e}", file=sys.stderr)
+        return 2
     return 0
 
 

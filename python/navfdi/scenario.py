@@ -74,7 +74,9 @@ def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
 
 
 def _check_keys(d: Mapping[str, Any], allowed: set[str], path: str) -> None:
-    extra = sorted(set(d) - allowed)
+    if not isinstance(d, Mapping):
+        raise ScenarioError(f"{path or 'scenario'} = {d!r}: expected a table")
+    extra = sorted(str(k) for k in set(d) - allowed)
     if extra:
         where = path or "scenario"
         raise ScenarioError(f"{where}: unknown field(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
@@ -185,6 +187,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
                 if c not in names:
                     raise ScenarioError(f"{p}.components[{j}] = {c!r}: not a component of {sensor} ({', '.join(names)})")
                 idx.append(names.index(c))
+            if not idx:
+                raise ScenarioError(f"{p}.components: at least one component is required (or \"all\")")
         kind = _str(_need(f, "kind", p), f"{p}.kind")
         per = {"step": "", "ramp": "/s", "quadratic": "/s2"}
         if kind not in per:
