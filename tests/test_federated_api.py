@@ -86,3 +86,21 @@ def test_bad_configuration_and_input():
         fed.step(np.eye(n), -np.eye(n), [np.zeros(2), np.zeros(3), np.zeros(1)])
     np.testing.assert_array_equal(fed.x, before[0])
     np.testing.assert_array_equal(fed.P, before[1])
+
+
+def test_set_model_changes_the_measurement_model():
+    rng = np.random.default_rng(3)
+    fed, x0, P0, Hs, Rs = make(rng)
+    n = x0.size
+    with pytest.raises(ValueError, match="no such sub-filter"):
+        fed.set_model("zz", Hs[0], Rs[0])
+    with pytest.raises(ValueError, match="H: expected shape"):
+        fed.set_model("s0", np.eye(3, n), Rs[0])
+    with pytest.raises(ValueError, match="R: not positive semi-definite"):
+        fed.set_model("s0", Hs[0], -np.eye(2))
+    H0 = np.zeros((2, n))
+    H0[0, 0] = H0[1, 1] = 1.0
+    fed.set_model("s0", H0, np.eye(2) * 1e-6)
+    # s0 now measures states 0 and 1 almost exactly.
+    step = fed.step(np.eye(n), np.zeros((n, n)), [np.array([3.0, -2.0]), np.full(3, np.nan), np.full(1, np.nan)])
+    np.testing.assert_allclose(step.x[:2], [3.0, -2.0], atol=1e-3)

@@ -428,6 +428,9 @@ class FederatedFilter:
         isolation: bool = True,
         isolated_update: bool = False,
     ) -> FederatedFilter: ...
+    def set_model(self, name: str, H: ArrayLike, R: ArrayLike) -> None:
+        """Replace the measurement model of sub-filter ``name``: ``H`` (m_i, n), ``R`` (m_i, m_i)
+        symmetric PSD, same m_i as before (e.g. position rows that depend on latitude)."""
     def step(self, Phi: ArrayLike, Q: ArrayLike, measurements: list[ArrayLike]) -> FederatedStep:
         """One epoch with ``Phi``, ``Q`` (n, n) and one measurement (m_i,) per sub-filter (NaN
         components are missing). Validated first; on error the filter is unchanged."""

@@ -184,6 +184,19 @@ impl PyFederatedFilter {
         Ok(PyFederatedStep { report, names, det_names, x: self.inner.x().clone(), p: self.inner.p().clone() })
     }
 
+    /// Replace the measurement model (H, R) of the sub-filter named `name`.
+    #[pyo3(signature = (name, H, R))]
+    #[allow(non_snake_case)]
+    fn set_model(&mut self, name: &str, H: &Bound<'_, PyAny>, R: &Bound<'_, PyAny>) -> PyResult<()> {
+        let names = self.inner.names();
+        let i = names
+            .iter()
+            .position(|n| n == name)
+            .ok_or_else(|| PyValueError::new_err(format!("name = {name:?}: no such sub-filter (known: {})", names.join(", "))))?;
+        let h = matrix("H", H)?;
+        let r = matrix("R", R)?;
+        self.inner.set_model(i, h, r).py()
+    }
     /// Global estimate, shape (n,).
     #[getter]
     fn x<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
