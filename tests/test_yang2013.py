@@ -144,3 +144,17 @@ def test_cli_run_reports_bad_scenario(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "navfdi", "run", str(f)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 2
     assert "faults[0].sensor = 'cnss'" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_isolated_update_mode_absorbs_the_ramp():
+    """With isolated = "update" (METHODS §5 read literally) the isolated CNS sub-filter absorbs
+    the ramp, and its joint alarm outlasts the ramp by minutes instead of clearing at 500 s."""
+    raw = navfdi.load_scenario("yang2013").raw
+    import copy
+
+    raw = copy.deepcopy(raw)
+    raw["federated"]["isolated"] = "update"
+    r = navfdi.run_scenario(navfdi.load_scenario(raw), seed=1, compare_isolation=False)
+    joint = r.detector("cns", "joint")["alarm"]
+    end = next(iv.end for iv in alarm_intervals(joint, r.t) if iv.start <= 499 < (iv.end or np.inf))
+    assert end is None or end > 560

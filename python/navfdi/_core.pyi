@@ -395,8 +395,10 @@ class FederatedFilter:
     ``"reset"`` mode each healthy sub-filter is then reset to ``x_g, P_g/β_i`` (shares
     renormalised over the healthy sources; this mode equals the centralised filter for linear
     systems); ``"no_reset"`` fuses independent sub-filters. A reinstated sub-filter is reset
-    from the global solution. An isolated sub-filter only predicts (its detectors keep testing
-    against that prediction) unless ``isolated_update=True``.
+    from the global solution. An isolated sub-filter never feeds the master; with
+    ``isolated="track"`` (default) it takes the global solution after each fusion, so its
+    detectors test its sensor against the fault-free solution; ``"predict"`` only predicts;
+    ``"update"`` keeps updating with its own (faulty) sensor.
 
     Parameters
     ----------
@@ -414,8 +416,8 @@ class FederatedFilter:
         Master's share ``β_m >= 0``; shares must sum to 1.
     isolation : bool
         Whether alarms isolate sub-filters (False: detectors only report).
-    isolated_update : bool
-        Whether an isolated sub-filter keeps updating with its own sensor.
+    isolated : {"track", "predict", "update"}
+        What an isolated sub-filter does (see above).
     """
 
     def __new__(
@@ -426,7 +428,7 @@ class FederatedFilter:
         mode: str = "reset",
         master_share: float = 0.0,
         isolation: bool = True,
-        isolated_update: bool = False,
+        isolated: str = "track",
     ) -> FederatedFilter: ...
     def set_model(self, name: str, H: ArrayLike, R: ArrayLike) -> None:
         """Replace the measurement model of sub-filter ``name``: ``H`` (m_i, n), ``R`` (m_i, m_i)

@@ -229,7 +229,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     core["faults"] = faults
 
     fed = _need(raw, "federated", "")
-    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated_update"}, "federated")
+    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated"}, "federated")
     mode = _str(_need(fed, "mode", "federated"), "federated.mode")
     if mode not in ("reset", "no_reset"):
         raise ScenarioError(f"federated.mode = {mode!r}: use reset or no_reset")
@@ -262,14 +262,14 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
                 "isolation": None if iso is None else _str(iso, f"{p}.isolation"),
             }
         )
-    iu = fed.get("isolated_update", False)
-    if not isinstance(iu, bool):
-        raise ScenarioError(f"federated.isolated_update = {iu!r}: expected true or false")
+    iu = fed.get("isolated", "track")
+    if iu not in ("track", "predict", "update"):
+        raise ScenarioError(f"federated.isolated = {iu!r}: use track, predict or update")
     core["federated"] = {
         "mode": mode,
         "master_share": _number(fed.get("master_share", 0.0), "federated.master_share"),
         "subfilters": subs,
-        "isolated_update": iu,
+        "isolated": iu,
     }
     return core
 

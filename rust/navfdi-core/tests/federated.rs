@@ -158,3 +158,49 @@ fn step_rejects_bad_input_and_keeps_state() {
     assert!(fed.step(&phi, &(-&q), &zs).is_err());
     assert_eq!((fed.x().clone(), fed.p().clone()), before);
 }
+
+#[test]
+fn isolated_modes_track_predict_update() {
+    use navfdi_core::sim::spec::IsolatedMode;
+    let run = |mode: IsolatedMode| {
+        let mut rng = Lcg(11);
+        let n = 2;
+        let mk = |name: &str, iso: bool| SubFilterConfig {
+            name: name.into(),
+            h: DMatrix::identity(2, 2),
+            r: DMatrix::identity(2, 2) * 0.1,
+            share: 0.5,
+            detectors: vec![("chi2".into(), Detector::Chi2(ResidualChi2::new(1e-4).unwrap()))],
+            isolation: if iso { Some(0) } else { None },
+        };
+        let mut fed = FederatedFilter::new(DVector::zeros(n), DMatrix::identity(n, n), vec![mk("good", false), mk("bad", true)], FusionMode::Reset, 0.0, true).unwrap();
+        fed.set_isolated_mode(mode);
+        let (phi, q) = (DMatrix::identity(n, n), DMatrix::identity(n, n) * 1e-4);
+        let mut during = Vec::new();
+        let mut cleared_at = None;
+        for k in 0..120 {
+            let good = DVector::from_fn(2, |_, _| 0.3 * rng.next());
+            let bad = DVector::from_fn(2, |_, _| 0.3 * rng.next()).add_scalar(if (30..40).contains(&k) { 50.0 } else { 0.0 });
+            let rep = fed.step(&phi, &q, &[good, bad]).unwrap();
+            if (31..40).contains(&k) {
+                during.push((fed.sub_x(1).unwrap() - fed.x()).amax());
+            }
+            if k >= 40 && cleared_at.is_none() && !rep.subs[1].isolated {
+                cleared_at = Some(k);
+            }
+        }
+        (during, cleared_at)
+    };
+    // Track: while isolated the sub-filter holds the global solution; it clears at the fault's end.
+    let (d, c) = run(IsolatedMode::Track);
+    assert!(d.iter().all(|v| *v == 0.0), "{d:?}");
+    assert_eq!(c, Some(40));
+    // Predict: it keeps its own (unupdated) state, close to but not equal to the global.
+    let (d, c) = run(IsolatedMode::Predict);
+    assert!(d.iter().all(|v| *v > 0.0 && *v < 1.0), "{d:?}");
+    assert_eq!(c, Some(40));
+    // Update: it absorbs the 50-unit fault, and its residual stays large after the fault ends.
+    let (d, c) = run(IsolatedMode::Update);
+    assert!(d.last().unwrap() > &5.0, "{d:?}");
+    assert!(c.is_none_or(|k| k > 45), "{c:?}");
+}

@@ -5,7 +5,7 @@ use crate::detect::PyDecision;
 use crate::errors::IntoPyResult;
 use navfdi_core::fusion::{FederatedFilter, StepReport, SubFilterConfig};
 use navfdi_core::sim::run::make_detector;
-use navfdi_core::sim::spec::{DetectorKind, FusionMode};
+use navfdi_core::sim::spec::{DetectorKind, FusionMode, IsolatedMode};
 use numpy::{IxDyn, PyArray};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -141,7 +141,7 @@ pub struct PyFederatedFilter {
 #[pymethods]
 impl PyFederatedFilter {
     #[new]
-    #[pyo3(signature = (x0, P0, subfilters, mode = "reset", master_share = 0.0, isolation = true, isolated_update = false))]
+    #[pyo3(signature = (x0, P0, subfilters, mode = "reset", master_share = 0.0, isolation = true, isolated = "track"))]
     #[allow(non_snake_case, clippy::too_many_arguments)]
     fn new(
         x0: &Bound<'_, PyAny>,
@@ -150,7 +150,7 @@ impl PyFederatedFilter {
         mode: &str,
         master_share: f64,
         isolation: bool,
-        isolated_update: bool,
+        isolated: &str,
     ) -> PyResult<Self> {
         let x0 = vector("x0", x0, None)?;
         let p0 = matrix("P0", P0)?;
@@ -161,8 +161,14 @@ impl PyFederatedFilter {
         };
         let list = subfilters.cast::<PyList>().map_err(|_| PyValueError::new_err("subfilters: expected a list of dicts"))?;
         let subs = list.iter().enumerate().map(|(i, o)| parse_sub(i, &o)).collect::<PyResult<Vec<_>>>()?;
+        let isolated = match isolated {
+            "track" => IsolatedMode::Track,
+            "predict" => IsolatedMode::Predict,
+            "update" => IsolatedMode::Update,
+            other => return Err(PyValueError::new_err(format!("isolated = {other:?}: use \"track\", \"predict\" or \"update\""))),
+        };
         let mut inner = FederatedFilter::new(x0, p0, subs, mode, master_share, isolation).py()?;
-        inner.set_isolated_update(isolated_update);
+        inner.set_isolated_mode(isolated);
         Ok(PyFederatedFilter { inner })
     }
 

@@ -18,11 +18,15 @@
 //!    to one (isolation then loses no information share). A reinstated sub-filter is reset from
 //!    the global solution (in both modes) and rejoins the fusion at the next epoch.
 //!
-//! An isolated sub-filter neither feeds the master nor is reset from it. **Resolution** (METHODS
-//! §5 is silent, §7 gives the principle): by default it only predicts, and its detectors keep
-//! testing the measurement against that prediction, so the end of the fault is seen as soon as
-//! it happens. With `isolated_update = true` it keeps updating with its (faulty) sensor, as a
-//! plain sub-filter would; it then absorbs the fault and its residuals understate it. With no healthy source the
+//! An isolated sub-filter never feeds the master. **Resolution** (a measured departure from
+//! METHODS §5's "nor is reset from it", see docs/yang2013.md): by default
+//! ([`IsolatedMode::Track`]) it takes the global solution after each fusion without
+//! contributing to it, so its detectors test its sensor against the fault-free navigation
+//! solution and see the fault's end at once. The literal alternatives are selectable:
+//! [`IsolatedMode::Update`] keeps updating with the faulty sensor (it absorbs the fault, and
+//! its alarm outlasts the fault by minutes); [`IsolatedMode::Predict`] only predicts (no
+//! absorption, but a sub-filter isolated before it has converged, or for long, carries a
+//! stale state whose persistent residual keeps the SPRT in alarm: it may never be reinstated). With no healthy source the
 //! global solution is the previous one propagated (`Φ x_g`, `ΦP_gΦᵀ + Q`), so it is always
 //! available. In reset mode with `Q_i = Q/β_i`, `P_i = P_g/β_i` and fusion at every epoch the
 //! federated filter reproduces the centralised Kalman filter exactly for linear systems
@@ -33,7 +37,7 @@ use crate::detect::{Decision, Detector};
 use crate::error::{Error, Result};
 use crate::kalman::KalmanFilter;
 use crate::validate::{check_covariance, check_finite_matrix, check_len, check_no_inf, check_shape};
-use crate::sim::spec::FusionMode;
+use crate::sim::spec::{FusionMode, IsolatedMode};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Configuration of one sub-filter.
@@ -97,7 +101,7 @@ pub struct FederatedFilter {
     x: DVector<f64>,
     p: DMatrix<f64>,
     isolation_enabled: bool,
-    isolated_update: bool,
+    isolated_mode: IsolatedMode,
 }
 
 impl FederatedFilter {
@@ -152,13 +156,12 @@ impl FederatedFilter {
         } else {
             None
         };
-        Ok(FederatedFilter { subs: built, mode, master_share, master, x: x0, p: p0, isolation_enabled, isolated_update: false })
+        Ok(FederatedFilter { subs: built, mode, master_share, master, x: x0, p: p0, isolation_enabled, isolated_mode: IsolatedMode::Track })
     }
 
-    /// Whether an isolated sub-filter keeps updating with its own sensor (default false: it
-    /// only predicts while isolated).
-    pub fn set_isolated_update(&mut self, on: bool) {
-        self.isolated_update = on;
+    /// What an isolated sub-filter does (default [`IsolatedMode::Track`]).
+    pub fn set_isolated_mode(&mut self, mode: IsolatedMode) {
+        self.isolated_mode = mode;
     }
 
     /// Global estimate `x_g` (n).
@@ -274,7 +277,7 @@ impl FederatedFilter {
                     sub.isolated = decisions[k].alarm;
                 }
             }
-            if !sub.isolated || self.isolated_update {
+            if !sub.isolated || self.isolated_mode == IsolatedMode::Update {
                 if let Some(pending) = pending {
                     sub.kf.apply_pending(pending, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
                 }
@@ -347,7 +350,8 @@ impl FederatedFilter {
         let scale = if share_sum > 0.0 { 1.0 / share_sum } else { 1.0 };
         for (i, sub) in self.subs.iter_mut().enumerate() {
             let r = &reports[i];
-            let do_reset = (reset && r.fused) || r.reinstated;
+            let track = r.isolated && self.isolated_mode == IsolatedMode::Track;
+            let do_reset = (reset && r.fused) || r.reinstated || track;
             if do_reset {
                 let beta = match self.mode {
                     FusionMode::Reset => sub.cfg.share * scale,

@@ -113,7 +113,7 @@ pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter>
         spec.federated.master_share,
         isolation,
     )?;
-    fed.set_isolated_update(spec.federated.isolated_update);
+    fed.set_isolated_mode(spec.federated.isolated);
     Ok(fed)
 }
 

@@ -278,10 +278,23 @@ pub struct FederatedSpec {
     pub master_share: f64,
     /// Sub-filters.
     pub subfilters: Vec<SubfilterSpec>,
-    /// Whether an isolated sub-filter keeps updating with its own sensor (default false: it
-    /// only predicts while isolated, so its residuals show the fault's end).
+    /// What an isolated sub-filter does (default: track the global solution).
     #[serde(default)]
-    pub isolated_update: bool,
+    pub isolated: IsolatedMode,
+}
+
+/// Behaviour of an isolated sub-filter (it never feeds the master in any mode).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IsolatedMode {
+    /// After each fusion take the global solution (`x_g`, `P_g/β_i`); its detectors then test
+    /// the sensor against the fault-free navigation solution.
+    #[default]
+    Track,
+    /// Predict only (no update, no reset) until reinstated.
+    Predict,
+    /// Keep updating with its own sensor (absorbs the fault).
+    Update,
 }
 
 fn bad(path: impl Into<String>, msg: impl std::fmt::Display) -> Error {
