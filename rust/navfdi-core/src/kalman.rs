@@ -18,6 +18,7 @@ use crate::validate::{
     check_covariance, check_finite_matrix, check_finite_vector, check_len, check_no_inf,
     check_shape, symmetrize,
 };
+use crate::linalg::{gemm, gemm_nt};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// Result of one measurement update.
@@ -53,7 +54,6 @@ impl Innovation {
 #[derive(Debug, Clone)]
 struct Workspace {
     nn_a: DMatrix<f64>,
-    nn_b: DMatrix<f64>,
     nn_c: DMatrix<f64>,
     x: DVector<f64>,
 }
@@ -62,7 +62,6 @@ impl Workspace {
     fn new(n: usize) -> Self {
         Workspace {
             nn_a: DMatrix::zeros(n, n),
-            nn_b: DMatrix::zeros(n, n),
             nn_c: DMatrix::zeros(n, n),
             x: DVector::zeros(n),
         }
@@ -159,10 +158,9 @@ impl KalmanFilter {
         // x⁻ = Φx
         ws.x.gemv(1.0, phi, &self.x, 0.0);
         // P⁻ = S·(ΦP)Φᵀ + Q
-        ws.nn_a.gemm(1.0, phi, &self.p, 0.0);
-        phi.transpose_to(&mut ws.nn_b);
+        gemm(&mut ws.nn_a, 1.0, phi, &self.p, 0.0);
         ws.nn_c.copy_from(q);
-        ws.nn_c.gemm(fading, &ws.nn_a, &ws.nn_b, 1.0);
+        gemm_nt(&mut ws.nn_c, fading, &ws.nn_a, phi, 1.0);
         symmetrize(&mut ws.nn_c);
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
             return Err(Error::Numerical {
@@ -227,11 +225,11 @@ impl KalmanFilter {
             *mw = MWork::new(n, k);
         }
         // HP⁻ (k × n); PHᵀ = (HP)ᵀ since P is symmetric.
-        mw.hp.gemm(1.0, h, &self.p, 0.0);
+        gemm(&mut mw.hp, 1.0, h, &self.p, 0.0);
         h.transpose_to(&mut mw.ht);
         // A = (HP)Hᵀ + R  (k × k)
         let mut a = r.clone();
-        a.gemm(1.0, &mw.hp, &mw.ht, 1.0);
+        gemm(&mut a, 1.0, &mw.hp, &mw.ht, 1.0);
         symmetrize(&mut a);
         // residual r = z − Hx⁻
         let mut res = z.clone();
@@ -266,19 +264,18 @@ impl KalmanFilter {
         // K = PHᵀA⁻¹ (n × k) by substitution with the Cholesky factor, then Kᵀ.
         mw.hp.transpose_to(&mut mw.k);
         gain_from_cholesky(chol.l_dirty(), &mut mw.k, &mut mw.inv_diag);
-        mw.k.transpose_to(&mut mw.kt);
         let ws = &mut self.ws;
         // x = x⁻ + K r
         ws.x.copy_from(&self.x);
         ws.x.gemv(1.0, &mw.k, res, 1.0);
         // T = P⁻ − K(HP⁻)
         ws.nn_a.copy_from(&self.p);
-        ws.nn_a.gemm(-1.0, &mw.k, &mw.hp, 1.0);
+        gemm(&mut ws.nn_a, -1.0, &mw.k, &mw.hp, 1.0);
         // U = THᵀ − KR  (n × k)
-        mw.u.gemm(1.0, &ws.nn_a, &mw.ht, 0.0);
-        mw.u.gemm(-1.0, &mw.k, r, 1.0);
+        gemm(&mut mw.u, 1.0, &ws.nn_a, &mw.ht, 0.0);
+        gemm(&mut mw.u, -1.0, &mw.k, r, 1.0);
         // P = T − U Kᵀ
-        ws.nn_a.gemm(-1.0, &mw.u, &mw.kt, 1.0);
+        gemm_nt(&mut ws.nn_a, -1.0, &mw.u, &mw.k, 1.0);
         symmetrize(&mut ws.nn_a);
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_a.as_slice()) {
             return Err(Error::Numerical {
@@ -350,7 +347,6 @@ pub struct Pending {
 struct MWork {
     hp: DMatrix<f64>,
     ht: DMatrix<f64>,
-    kt: DMatrix<f64>,
     k: DMatrix<f64>,
     u: DMatrix<f64>,
     inv_diag: Vec<f64>,
@@ -361,7 +357,6 @@ impl MWork {
         MWork {
             hp: DMatrix::zeros(k, n),
             ht: DMatrix::zeros(n, k),
-            kt: DMatrix::zeros(k, n),
             k: DMatrix::zeros(n, k),
             u: DMatrix::zeros(n, k),
             inv_diag: vec![0.0; k],
@@ -378,17 +373,18 @@ impl MWork {
 pub(crate) fn gain_from_cholesky(l: &DMatrix<f64>, y: &mut DMatrix<f64>, inv_diag: &mut [f64]) {
     let n = y.nrows();
     let k = y.ncols();
+    let lk = l.nrows();
+    let ls = l.as_slice(); // column-major: L[(i, j)] = ls[i + j·lk]
     for i in 0..k {
-        inv_diag[i] = 1.0 / l[(i, i)];
+        inv_diag[i] = 1.0 / ls[i + i * lk];
     }
     let data = y.as_mut_slice();
     // Forward: Z[:, i] = (Y[:, i] − Σ_{j<i} L[i, j] Z[:, j]) / L[i, i]
     for i in 0..k {
         let (done, rest) = data.split_at_mut(i * n);
         let col = &mut rest[..n];
-        for j in 0..i {
-            let c = l[(i, j)];
-            let zj = &done[j * n..(j + 1) * n];
+        for (j, zj) in done.chunks_exact(n).enumerate() {
+            let c = ls[i + j * lk];
             for (a, b) in col.iter_mut().zip(zj) {
                 *a -= c * b;
             }
@@ -400,9 +396,8 @@ pub(crate) fn gain_from_cholesky(l: &DMatrix<f64>, y: &mut DMatrix<f64>, inv_dia
     for i in (0..k).rev() {
         let (head, done) = data.split_at_mut((i + 1) * n);
         let col = &mut head[i * n..];
-        for j in (i + 1)..k {
-            let c = l[(j, i)];
-            let kj = &done[(j - i - 1) * n..(j - i) * n];
+        let lcol = &ls[i * lk + i + 1..i * lk + k];
+        for (c, kj) in lcol.iter().zip(done.chunks_exact(n)) {
             for (a, b) in col.iter_mut().zip(kj) {
                 *a -= c * b;
             }

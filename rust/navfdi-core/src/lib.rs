@@ -20,6 +20,7 @@ pub mod error;
 pub mod fusion;
 pub mod ins;
 pub mod kalman;
+pub mod linalg;
 pub mod run;
 pub mod stats;
 pub mod validate;

@@ -323,6 +323,7 @@ impl FederatedFilter {
             let mut p = p0.clone();
             let mut k = DMatrix::<f64>::zeros(x.len(), x.len());
             let mut inv_diag = vec![0.0; x.len()];
+            let mut kp = DMatrix::<f64>::zeros(x.len(), x.len());
             for (name, xi, pi) in sources_iter {
                 let chol = Cholesky::new(&p + pi).ok_or_else(|| Error::NotPositiveDefinite {
                     name: format!("sum of the fused covariance and that of {name}"),
@@ -332,8 +333,9 @@ impl FederatedFilter {
                 crate::kalman::gain_from_cholesky(chol.l_dirty(), &mut k, &mut inv_diag);
                 let dx = xi - &x;
                 x.gemv(1.0, &k, &dx, 1.0);
-                let kp = &k * &p;
-                p -= kp;
+                // P ← P − K P (K P computed into the spare buffer, then subtracted)
+                kp.copy_from(&p);
+                crate::linalg::gemm(&mut p, -1.0, &k, &kp, 1.0);
                 crate::validate::symmetrize(&mut p);
             }
             if !x.iter().chain(p.iter()).all(|v| v.is_finite()) {
