@@ -132,6 +132,14 @@ impl KalmanFilter {
         self.p = p;
     }
 
+    /// Set `x` and `p_scale·P` by copying into the existing buffers (no validation: same
+    /// shapes, finite, `p_scale > 0`).
+    pub fn set_state_scaled(&mut self, x: &DVector<f64>, p: &DMatrix<f64>, p_scale: f64) {
+        self.x.copy_from(x);
+        self.p.copy_from(p);
+        self.p *= p_scale;
+    }
+
     /// Validate the arguments of [`KalmanFilter::predict`] without changing anything.
     pub fn check_predict(&self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
         let n = self.dim();
@@ -154,12 +162,20 @@ impl KalmanFilter {
     /// [`KalmanFilter::predict`] without input validation, for loops whose inputs were validated
     /// once up front. Still refuses to commit a non-finite result.
     pub fn predict_trusted(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+        self.predict_scaled(phi, q, 1.0, fading)
+    }
+
+    /// `P⁻ = S·ΦPΦᵀ + c·Q` without validation (`c > 0`, e.g. `1/β_i` in a federated filter).
+    pub fn predict_scaled(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, q_scale: f64, fading: f64) -> Result<()> {
         let ws = &mut self.ws;
         // x⁻ = Φx
         ws.x.gemv(1.0, phi, &self.x, 0.0);
         // P⁻ = S·(ΦP)Φᵀ + Q
         gemm(&mut ws.nn_a, 1.0, phi, &self.p, 0.0);
         ws.nn_c.copy_from(q);
+        if q_scale != 1.0 {
+            ws.nn_c *= q_scale;
+        }
         gemm_nt(&mut ws.nn_c, fading, &ws.nn_a, phi, 1.0);
         symmetrize(&mut ws.nn_c);
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {

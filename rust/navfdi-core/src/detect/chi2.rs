@@ -63,6 +63,17 @@ impl ResidualChi2 {
         Ok(Decision { statistic, threshold, alarm, dof })
     }
 
+    /// Decide on a statistic computed elsewhere (e.g. [`crate::kalman::Innovation::statistic`],
+    /// which is `rᵀA⁻¹r` over `dof` components): no validation, no factorisation.
+    pub fn test_statistic(&mut self, statistic: f64, dof: usize) -> Result<Decision> {
+        if dof == 0 {
+            return Ok(Decision { statistic: f64::NAN, threshold: f64::NAN, alarm: self.alarm, dof });
+        }
+        let threshold = self.threshold(dof)?;
+        self.alarm = statistic >= threshold;
+        Ok(Decision { statistic, threshold, alarm: self.alarm, dof })
+    }
+
     /// Forget the last alarm state.
     pub fn reset(&mut self) {
         self.alarm = false;

@@ -68,6 +68,21 @@ impl JointChi2Sprt {
         Ok(JointDecision { decision: s, chi2: c, reset: fell })
     }
 
+    /// [`JointChi2Sprt::test`] without validation, with the chi-square statistic computed
+    /// elsewhere (`rᵀA⁻¹r` over the `dof` non-NaN components).
+    pub fn test_trusted(&mut self, r: &DVector<f64>, a: &DMatrix<f64>, statistic: f64, dof: usize) -> Result<JointDecision> {
+        let c = self.chi2.test_statistic(statistic, dof)?;
+        let fell = c.dof > 0 && self.chi2_alarm && !c.alarm;
+        if fell {
+            self.sprt.reset();
+        }
+        let s = self.sprt.test_trusted(r, a);
+        if c.dof > 0 {
+            self.chi2_alarm = c.alarm;
+        }
+        Ok(JointDecision { decision: s, chi2: c, reset: fell })
+    }
+
     /// Reset both tests.
     pub fn reset(&mut self) {
         self.chi2.reset();

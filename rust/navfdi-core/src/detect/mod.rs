@@ -118,6 +118,16 @@ impl Detector {
         }
     }
 
+    /// Test an innovation produced by a filter: no validation, and the chi-square statistic is
+    /// taken from `λ = rᵀA⁻¹r` (`statistic`, over `dof` components) instead of re-factoring `A`.
+    pub fn test_innovation(&mut self, r: &DVector<f64>, a: &DMatrix<f64>, statistic: f64, dof: usize) -> Result<Decision> {
+        match self {
+            Detector::Chi2(d) => d.test_statistic(statistic, dof),
+            Detector::Sprt(d) => Ok(d.test_trusted(r, a)),
+            Detector::Joint(d) => d.test_trusted(r, a, statistic, dof).map(|j| j.decision),
+        }
+    }
+
     /// Clear all accumulated state.
     pub fn reset(&mut self) {
         match self {

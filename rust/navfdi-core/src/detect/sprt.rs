@@ -93,32 +93,37 @@ impl ImprovedSprt {
                 got: format!("({m},)"),
             });
         }
-        // Validate before touching the accumulators.
-        let mut xs = Vec::with_capacity(idx.len());
-        for &j in &idx {
-            let x = match self.variance {
-                SprtVariance::Known => {
-                    let s2 = a[(j, j)];
-                    if !(s2 > 0.0) {
-                        return Err(Error::NotPositiveDefinite {
-                            name: "covariance".into(),
-                            detail: format!("diagonal element [{j}, {j}] = {s2} must be positive"),
-                        });
-                    }
-                    r[j] / s2.sqrt()
+        if self.variance == SprtVariance::Known {
+            for &j in &idx {
+                if !(a[(j, j)] > 0.0) {
+                    return Err(Error::NotPositiveDefinite {
+                        name: "covariance".into(),
+                        detail: format!("diagonal element [{j}, {j}] = {} must be positive", a[(j, j)]),
+                    });
                 }
-                SprtVariance::Sample => r[j],
-            };
-            xs.push((j, x));
+            }
         }
-        if self.acc.is_empty() {
+        Ok(self.test_trusted(r, a))
+    }
+
+    /// [`ImprovedSprt::test`] without validation, for residuals from a filter (`A` positive
+    /// definite on the non-NaN components, constant dimension).
+    pub fn test_trusted(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Decision {
+        let m = r.len();
+        if self.acc.len() != m {
             self.acc = vec![Accumulator::default(); m];
         }
-        if idx.is_empty() {
-            return Ok(Decision { statistic: f64::NAN, threshold: self.threshold, alarm: self.alarm, dof: 0 });
-        }
-        for (j, x) in xs {
-            let acc = &mut self.acc[j];
+        let mut dof = 0;
+        for (j, acc) in self.acc.iter_mut().enumerate() {
+            let raw = r[j];
+            if raw.is_nan() {
+                continue;
+            }
+            dof += 1;
+            let x = match self.variance {
+                SprtVariance::Known => raw / a[(j, j)].sqrt(),
+                SprtVariance::Sample => raw,
+            };
             acc.count += 1;
             let k = acc.count as f64;
             let d = x - acc.mean;
@@ -130,9 +135,12 @@ impl ImprovedSprt {
             };
             acc.lambda = if s2 > 0.0 { k * acc.mean * acc.mean / (2.0 * s2) } else { 0.0 };
         }
+        if dof == 0 {
+            return Decision { statistic: f64::NAN, threshold: self.threshold, alarm: self.alarm, dof: 0 };
+        }
         let statistic = self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max);
         self.alarm = statistic >= self.threshold;
-        Ok(Decision { statistic, threshold: self.threshold, alarm: self.alarm, dof: idx.len() })
+        Decision { statistic, threshold: self.threshold, alarm: self.alarm, dof }
     }
 
     /// Reset every accumulator to zero (keeps the residual dimension).

@@ -257,19 +257,15 @@ impl FederatedFilter {
     pub fn step_trusted(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, zs: &[DVector<f64>]) -> Result<StepReport> {
         let reset = self.mode == FusionMode::Reset;
         let mut reports = Vec::with_capacity(self.subs.len());
-        let mut qi = q.clone();
         for (sub, z) in self.subs.iter_mut().zip(zs) {
             // 1. filter
-            if reset {
-                qi.copy_from(q);
-                qi /= sub.cfg.share;
-            }
-            sub.kf.predict_trusted(phi, if reset { &qi } else { q }, 1.0).map_err(|e| ctx(&sub.cfg.name, e))?;
+            let q_scale = if reset { 1.0 / sub.cfg.share } else { 1.0 };
+            sub.kf.predict_scaled(phi, q, q_scale, 1.0).map_err(|e| ctx(&sub.cfg.name, e))?;
             let (inn, pending) = sub.kf.innovation_pending(z, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
             // 2. detect
             let mut decisions = Vec::with_capacity(sub.cfg.detectors.len());
             for (_, det) in sub.cfg.detectors.iter_mut() {
-                decisions.push(det.test(&inn.residual, &inn.covariance).map_err(|e| ctx(&sub.cfg.name, e))?);
+                decisions.push(det.test_innovation(&inn.residual, &inn.covariance, inn.statistic, inn.dof()).map_err(|e| ctx(&sub.cfg.name, e))?);
             }
             let was = sub.isolated;
             if self.isolation_enabled {
@@ -293,9 +289,7 @@ impl FederatedFilter {
         }
         // 3. fuse
         if let Some(m) = self.master.as_mut() {
-            let mut qm = q.clone();
-            qm /= self.master_share;
-            m.predict_trusted(phi, &qm, 1.0)?;
+            m.predict_scaled(phi, q, 1.0 / self.master_share, 1.0)?;
         }
         let healthy: Vec<usize> = (0..self.subs.len()).filter(|&i| !reports[i].isolated && !reports[i].reinstated).collect();
         let use_master = self.master.is_some() && reset;
@@ -359,13 +353,13 @@ impl FederatedFilter {
                     FusionMode::Reset => sub.cfg.share * scale,
                     FusionMode::NoReset => 1.0,
                 };
-                sub.kf.set_state_trusted(self.x.clone(), &self.p / beta);
+                sub.kf.set_state_scaled(&self.x, &self.p, 1.0 / beta);
             }
         }
         if use_master {
             let beta = self.master_share * scale;
             if let Some(m) = self.master.as_mut() {
-                m.set_state_trusted(self.x.clone(), &self.p / beta);
+                m.set_state_scaled(&self.x, &self.p, 1.0 / beta);
             }
         }
         Ok(StepReport { subs: reports, sources })
