@@ -14,7 +14,14 @@ const N: usize = 15;
 const M: usize = 6;
 
 /// `x0, P0, Φ, Q, H, R`.
-type Problem = (DVector<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>);
+type Problem = (
+    DVector<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+);
 
 /// A deterministic INS-like error model at 1 Hz: attitude (0..3), velocity (3..6), position
 /// (6..9), gyro drift (9..12), accelerometer bias (12..15); position and velocity measured.
@@ -35,7 +42,9 @@ fn problem() -> Problem {
     let phi = DMatrix::identity(N, N) + &f * dt + &f * &f * (dt * dt / 2.0);
     let x0 = DVector::zeros(N);
     let mut p0 = DMatrix::zeros(N, N);
-    let sd = [1e-3, 1e-3, 3e-3, 0.6, 0.6, 0.6, 50.0, 50.0, 50.0, 1e-6, 1e-6, 1e-6, 1e-3, 1e-3, 1e-3];
+    let sd = [
+        1e-3, 1e-3, 3e-3, 0.6, 0.6, 0.6, 50.0, 50.0, 50.0, 1e-6, 1e-6, 1e-6, 1e-3, 1e-3, 1e-3,
+    ];
     for i in 0..N {
         p0[(i, i)] = sd[i] * sd[i];
     }
@@ -46,7 +55,13 @@ fn problem() -> Problem {
         q[(9 + i, 9 + i)] = 1e-14;
         q[(12 + i, 12 + i)] = 1e-9;
     }
-    let h = DMatrix::from_fn(M, N, |i, j| if (i < 3 && j == 6 + i) || (i >= 3 && j == i) { 1.0 } else { 0.0 });
+    let h = DMatrix::from_fn(M, N, |i, j| {
+        if (i < 3 && j == 6 + i) || (i >= 3 && j == i) {
+            1.0
+        } else {
+            0.0
+        }
+    });
     let r = DMatrix::from_diagonal(&DVector::from_vec(vec![25.0, 25.0, 25.0, 0.01, 0.01, 0.01]));
     (x0, p0, phi, q, h, r)
 }
@@ -73,7 +88,9 @@ fn bench(c: &mut Criterion) {
         })
     });
     let t = 10_000;
-    let zs: Vec<f64> = (0..t * M).map(|i| ((i * 37 % 101) as f64 - 50.0) / 50.0).collect();
+    let zs: Vec<f64> = (0..t * M)
+        .map(|i| ((i * 37 % 101) as f64 - 50.0) / 50.0)
+        .collect();
     let (phi_s, q_s, h_s, r_s) = (
         MatrixSeq::Const(phi.clone()),
         MatrixSeq::Const(q.clone()),
@@ -83,7 +100,22 @@ fn bench(c: &mut Criterion) {
     g.throughput(Throughput::Elements(t as u64));
     g.sample_size(20);
     g.bench_function("run_filter_10000_epochs", |b| {
-        b.iter(|| black_box(run_filter(x0.clone(), p0.clone(), &phi_s, &q_s, &zs, t, &h_s, &r_s, 1.0).unwrap()))
+        b.iter(|| {
+            black_box(
+                run_filter(
+                    x0.clone(),
+                    p0.clone(),
+                    &phi_s,
+                    &q_s,
+                    &zs,
+                    t,
+                    &h_s,
+                    &r_s,
+                    1.0,
+                )
+                .unwrap(),
+            )
+        })
     });
     g.finish();
 }
@@ -97,8 +129,12 @@ fn parts(c: &mut Criterion) {
     let base = KalmanFilter::new(x0, p0).unwrap();
     let mut g = c.benchmark_group("parts");
     let mut kf = base.clone();
-    g.bench_function("predict_trusted", |b| b.iter(|| kf.predict_trusted(&phi, &q, 1.0).unwrap()));
+    g.bench_function("predict_trusted", |b| {
+        b.iter(|| kf.predict_trusted(&phi, &q, 1.0).unwrap())
+    });
     let mut kf = base.clone();
-    g.bench_function("update_trusted", |b| b.iter(|| black_box(kf.update_trusted(&z, &h, &r).unwrap())));
+    g.bench_function("update_trusted", |b| {
+        b.iter(|| black_box(kf.update_trusted(&z, &h, &r).unwrap()))
+    });
     g.finish();
 }

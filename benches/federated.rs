@@ -29,7 +29,9 @@ fn bench(c: &mut Criterion) {
     let t = prep.epochs();
     let mut g = c.benchmark_group("federated");
     g.sample_size(20);
-    g.bench_function("federated_run", |b| b.iter(|| black_box(run_federated(&prep, &sim, true).expect("run"))));
+    g.bench_function("federated_run", |b| {
+        b.iter(|| black_box(run_federated(&prep, &sim, true).expect("run")))
+    });
     let phi = MatrixSeq::PerEpoch(prep.phi.clone());
     let q = MatrixSeq::PerEpoch(prep.q.clone());
     for (label, si) in [("run_filter_m3", 0usize), ("run_filter_m6", 1usize)] {
@@ -38,7 +40,22 @@ fn bench(c: &mut Criterion) {
         let r = MatrixSeq::Const(prep.r[si].clone());
         let p0 = prep.p0.clone();
         g.bench_function(label, |b| {
-            b.iter(|| black_box(run_filter(nalgebra::DVector::zeros(15), p0.clone(), &phi, &q, &zs, t, &h, &r, 1.0).expect("run")))
+            b.iter(|| {
+                black_box(
+                    run_filter(
+                        nalgebra::DVector::zeros(15),
+                        p0.clone(),
+                        &phi,
+                        &q,
+                        &zs,
+                        t,
+                        &h,
+                        &r,
+                        1.0,
+                    )
+                    .expect("run"),
+                )
+            })
         });
     }
     g.finish();

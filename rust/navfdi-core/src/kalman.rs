@@ -14,11 +14,11 @@
 //! state only when it is finite, so a failed call leaves the filter exactly as it was.
 
 use crate::error::{Error, Result};
+use crate::linalg::{gemm, gemm_nt};
 use crate::validate::{
     check_covariance, check_finite_matrix, check_finite_vector, check_len, check_no_inf,
     check_shape, symmetrize,
 };
-use crate::linalg::{gemm, gemm_nt};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 /// Result of one measurement update.
@@ -94,7 +94,12 @@ impl KalmanFilter {
         check_covariance("P0", &p0)?;
         let mut p = p0;
         symmetrize(&mut p);
-        Ok(KalmanFilter { x: x0, p, ws: Workspace::new(n), mws: None })
+        Ok(KalmanFilter {
+            x: x0,
+            p,
+            ws: Workspace::new(n),
+            mws: None,
+        })
     }
 
     /// State dimension n.
@@ -161,12 +166,23 @@ impl KalmanFilter {
 
     /// [`KalmanFilter::predict`] without input validation, for loops whose inputs were validated
     /// once up front. Still refuses to commit a non-finite result.
-    pub fn predict_trusted(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+    pub fn predict_trusted(
+        &mut self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        fading: f64,
+    ) -> Result<()> {
         self.predict_scaled(phi, q, 1.0, fading)
     }
 
     /// `P⁻ = S·ΦPΦᵀ + c·Q` without validation (`c > 0`, e.g. `1/β_i` in a federated filter).
-    pub fn predict_scaled(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, q_scale: f64, fading: f64) -> Result<()> {
+    pub fn predict_scaled(
+        &mut self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        q_scale: f64,
+        fading: f64,
+    ) -> Result<()> {
         let ws = &mut self.ws;
         // x⁻ = Φx
         ws.x.gemv(1.0, phi, &self.x, 0.0);
@@ -177,7 +193,7 @@ impl KalmanFilter {
             ws.nn_c *= q_scale;
         }
         gemm_nt(&mut ws.nn_c, fading, &ws.nn_a, phi, 1.0);
-        symmetrize(&mut ws.nn_c);
+        symmetrize_with(&mut ws.nn_c, &mut ws.nn_a);
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
             return Err(Error::Numerical {
                 context: "predict".into(),
@@ -212,13 +228,23 @@ impl KalmanFilter {
     ///
     /// Fails with [`Error::NotPositiveDefinite`] when the innovation covariance of the used
     /// components cannot be factored; the filter is then unchanged.
-    pub fn update(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
+    pub fn update(
+        &mut self,
+        z: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<Innovation> {
         self.check_update(z, h, r)?;
         self.update_trusted(z, h, r)
     }
 
     /// [`KalmanFilter::update`] without input validation (shapes must already be right).
-    pub fn update_trusted(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<Innovation> {
+    pub fn update_trusted(
+        &mut self,
+        z: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<Innovation> {
         let (inn, pending) = self.innovation_pending(z, h, r)?;
         if let Some(p) = pending {
             self.apply_pending(p, r)?;
@@ -250,18 +276,25 @@ impl KalmanFilter {
         // residual r = z − Hx⁻
         let mut res = z.clone();
         res.gemv(-1.0, h, &self.x, 1.0);
-        let chol: Cholesky<f64, Dyn> = Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
-            name: "innovation covariance A = H P Hᵀ + R".into(),
-            detail: "Cholesky factorisation failed; check R and P".into(),
-        })?;
+        let chol: Cholesky<f64, Dyn> =
+            Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+                name: "innovation covariance A = H P Hᵀ + R".into(),
+                detail: "Cholesky factorisation failed; check R and P".into(),
+            })?;
         // Whitened residual w = L⁻¹r, λ = ‖w‖².
-        let w = chol.l_dirty().solve_lower_triangular(&res).ok_or_else(|| Error::Numerical {
-            context: "update".into(),
-            detail: "triangular solve of the innovation covariance failed".into(),
-        })?;
+        let w = chol
+            .l_dirty()
+            .solve_lower_triangular(&res)
+            .ok_or_else(|| Error::Numerical {
+                context: "update".into(),
+                detail: "triangular solve of the innovation covariance failed".into(),
+            })?;
         let stat = w.norm_squared();
         if !stat.is_finite() {
-            return Err(Error::Numerical { context: "update".into(), detail: "the innovation statistic is not finite".into() });
+            return Err(Error::Numerical {
+                context: "update".into(),
+                detail: "the innovation statistic is not finite".into(),
+            });
         }
         Ok((res, a, chol, stat))
     }
@@ -273,9 +306,17 @@ impl KalmanFilter {
     /// matrix `I − KH`: `T = (I − KH)P⁻ = P⁻ − K(HP⁻)`, then `T(I − KH)ᵀ = T − (THᵀ)Kᵀ`, so
     /// `P = T − (THᵀ − KR)Kᵀ`. The identity factors are applied exactly; every product has an
     /// inner dimension of m, which keeps the update O(n²m).
-    fn apply_core(&mut self, r: &DMatrix<f64>, res: &DVector<f64>, chol: &Cholesky<f64, Dyn>) -> Result<()> {
+    fn apply_core(
+        &mut self,
+        r: &DMatrix<f64>,
+        res: &DVector<f64>,
+        chol: &Cholesky<f64, Dyn>,
+    ) -> Result<()> {
         let Some(mw) = self.mws.as_mut() else {
-            return Err(Error::Numerical { context: "update".into(), detail: "no innovation prepared".into() });
+            return Err(Error::Numerical {
+                context: "update".into(),
+                detail: "no innovation prepared".into(),
+            });
         };
         // K = PHᵀA⁻¹ (n × k) by substitution with the Cholesky factor, then Kᵀ.
         mw.hp.transpose_to(&mut mw.k);
@@ -292,7 +333,7 @@ impl KalmanFilter {
         gemm(&mut mw.u, -1.0, &mw.k, r, 1.0);
         // P = T − U Kᵀ
         gemm_nt(&mut ws.nn_a, -1.0, &mw.u, &mw.k, 1.0);
-        symmetrize(&mut ws.nn_a);
+        symmetrize_with(&mut ws.nn_a, &mut ws.nn_c);
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_a.as_slice()) {
             return Err(Error::Numerical {
                 context: "update".into(),
@@ -308,7 +349,12 @@ impl KalmanFilter {
     /// changing the state, plus what [`KalmanFilter::apply_pending`] needs to update with the
     /// same measurement afterwards (None when no component is available). Inputs must be valid
     /// as for [`KalmanFilter::update_trusted`].
-    pub fn innovation_pending(&mut self, z: &DVector<f64>, h: &DMatrix<f64>, r: &DMatrix<f64>) -> Result<(Innovation, Option<Pending>)> {
+    pub fn innovation_pending(
+        &mut self,
+        z: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<(Innovation, Option<Pending>)> {
         let m = z.len();
         let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
         let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
@@ -317,10 +363,26 @@ impl KalmanFilter {
         }
         if idx.len() == m {
             let (res, a, chol, stat) = self.innovate_core(z, h, r)?;
-            let inn = Innovation { residual: res.clone(), covariance: a, statistic: stat, used };
-            return Ok((inn, Some(Pending { idx: None, res, chol })));
+            let inn = Innovation {
+                residual: res.clone(),
+                covariance: a,
+                statistic: stat,
+                used,
+            };
+            return Ok((
+                inn,
+                Some(Pending {
+                    idx: None,
+                    res,
+                    chol,
+                }),
+            ));
         }
-        let (zr, hr, rr) = (z.select_rows(&idx), h.select_rows(&idx), r.select_rows(&idx).select_columns(&idx));
+        let (zr, hr, rr) = (
+            z.select_rows(&idx),
+            h.select_rows(&idx),
+            r.select_rows(&idx).select_columns(&idx),
+        );
         let (res_r, a_r, chol, stat) = self.innovate_core(&zr, &hr, &rr)?;
         let mut residual = DVector::from_element(m, f64::NAN);
         let mut covariance = DMatrix::from_element(m, m, f64::NAN);
@@ -330,7 +392,19 @@ impl KalmanFilter {
                 covariance[(i, j)] = a_r[(ai, bi)];
             }
         }
-        Ok((Innovation { residual, covariance, statistic: stat, used }, Some(Pending { idx: Some(idx), res: res_r, chol })))
+        Ok((
+            Innovation {
+                residual,
+                covariance,
+                statistic: stat,
+                used,
+            },
+            Some(Pending {
+                idx: Some(idx),
+                res: res_r,
+                chol,
+            }),
+        ))
     }
 
     /// Test-before-update, step 2: update with the measurement whose innovation
@@ -435,8 +509,30 @@ pub fn check_fading(fading: f64) -> Result<()> {
     Ok(())
 }
 
+/// `M ← (M + Mᵀ)/2` through a scratch buffer of the same shape: one transpose and one
+/// vectorisable pass; exactly symmetric because floating-point addition commutes.
+fn symmetrize_with(m: &mut DMatrix<f64>, scratch: &mut DMatrix<f64>) {
+    m.transpose_to(scratch);
+    for (a, b) in m.as_mut_slice().iter_mut().zip(scratch.as_slice()) {
+        *a = 0.5 * (*a + *b);
+    }
+}
+
+/// True when every element is finite: `v·0` is 0 for finite `v` and NaN otherwise; four
+/// independent accumulators let the loop vectorise (no early exit needed on the hot path).
 fn all_finite(s: &[f64]) -> bool {
-    s.iter().all(|v| v.is_finite())
+    let mut acc = [0.0f64; 4];
+    let mut chunks = s.chunks_exact(4);
+    for c in &mut chunks {
+        for (a, v) in acc.iter_mut().zip(c) {
+            *a += v * 0.0;
+        }
+    }
+    let mut r = acc[0] + acc[1] + acc[2] + acc[3];
+    for v in chunks.remainder() {
+        r += v * 0.0;
+    }
+    r == 0.0
 }
 
 #[cfg(test)]
@@ -447,10 +543,23 @@ mod tests {
     #[test]
     fn scalar_closed_form() {
         // x0 = 0, P0 = 4, Φ = 1, Q = 1 → P⁻ = 5; z = 2, H = 1, R = 5 → K = 0.5, x = 1, P = 2.5.
-        let mut kf = KalmanFilter::new(DVector::from_element(1, 0.0), DMatrix::from_element(1, 1, 4.0)).unwrap();
-        kf.predict(&DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 1.0), 1.0).unwrap();
+        let mut kf = KalmanFilter::new(
+            DVector::from_element(1, 0.0),
+            DMatrix::from_element(1, 1, 4.0),
+        )
+        .unwrap();
+        kf.predict(
+            &DMatrix::from_element(1, 1, 1.0),
+            &DMatrix::from_element(1, 1, 1.0),
+            1.0,
+        )
+        .unwrap();
         let inn = kf
-            .update(&DVector::from_element(1, 2.0), &DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 5.0))
+            .update(
+                &DVector::from_element(1, 2.0),
+                &DMatrix::from_element(1, 1, 1.0),
+                &DMatrix::from_element(1, 1, 5.0),
+            )
             .unwrap();
         assert_relative_eq!(kf.x()[0], 1.0, max_relative = 1e-14);
         assert_relative_eq!(kf.p()[(0, 0)], 2.5, max_relative = 1e-14);
@@ -460,27 +569,55 @@ mod tests {
 
     #[test]
     fn fading_scales_propagated_covariance() {
-        let mut kf = KalmanFilter::new(DVector::from_element(1, 0.0), DMatrix::from_element(1, 1, 4.0)).unwrap();
-        kf.predict(&DMatrix::from_element(1, 1, 2.0), &DMatrix::from_element(1, 1, 1.0), 1.5).unwrap();
+        let mut kf = KalmanFilter::new(
+            DVector::from_element(1, 0.0),
+            DMatrix::from_element(1, 1, 4.0),
+        )
+        .unwrap();
+        kf.predict(
+            &DMatrix::from_element(1, 1, 2.0),
+            &DMatrix::from_element(1, 1, 1.0),
+            1.5,
+        )
+        .unwrap();
         assert_relative_eq!(kf.p()[(0, 0)], 1.5 * 16.0 + 1.0, max_relative = 1e-14);
-        assert!(kf.predict(&DMatrix::from_element(1, 1, 1.0), &DMatrix::from_element(1, 1, 1.0), 0.5).is_err());
+        assert!(kf
+            .predict(
+                &DMatrix::from_element(1, 1, 1.0),
+                &DMatrix::from_element(1, 1, 1.0),
+                0.5
+            )
+            .is_err());
     }
 
     #[test]
     fn failed_update_leaves_state() {
-        let mut kf = KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::zeros(2, 2)).unwrap();
+        let mut kf =
+            KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::zeros(2, 2)).unwrap();
         let before = (kf.x().clone(), kf.p().clone());
         // P = 0 and R = 0 → A = 0, not positive definite.
-        let err = kf.update(&DVector::from_element(1, 0.0), &DMatrix::from_element(1, 2, 1.0), &DMatrix::zeros(1, 1));
+        let err = kf.update(
+            &DVector::from_element(1, 0.0),
+            &DMatrix::from_element(1, 2, 1.0),
+            &DMatrix::zeros(1, 1),
+        );
         assert!(matches!(err, Err(Error::NotPositiveDefinite { .. })));
         assert_eq!((kf.x().clone(), kf.p().clone()), before);
         // Wrong shapes and non-finite values are refused too.
         assert!(matches!(
-            kf.update(&DVector::from_element(2, 0.0), &DMatrix::from_element(1, 2, 1.0), &DMatrix::identity(1, 1)),
+            kf.update(
+                &DVector::from_element(2, 0.0),
+                &DMatrix::from_element(1, 2, 1.0),
+                &DMatrix::identity(1, 1)
+            ),
             Err(Error::Shape { .. })
         ));
         assert!(matches!(
-            kf.update(&DVector::from_element(1, f64::INFINITY), &DMatrix::from_element(1, 2, 1.0), &DMatrix::identity(1, 1)),
+            kf.update(
+                &DVector::from_element(1, f64::INFINITY),
+                &DMatrix::from_element(1, 2, 1.0),
+                &DMatrix::identity(1, 1)
+            ),
             Err(Error::NonFinite { .. })
         ));
         assert_eq!((kf.x().clone(), kf.p().clone()), before);
@@ -488,9 +625,14 @@ mod tests {
 
     #[test]
     fn all_missing_is_a_no_op() {
-        let mut kf = KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::identity(2, 2)).unwrap();
+        let mut kf =
+            KalmanFilter::new(DVector::from_element(2, 1.0), DMatrix::identity(2, 2)).unwrap();
         let inn = kf
-            .update(&DVector::from_element(2, f64::NAN), &DMatrix::identity(2, 2), &DMatrix::identity(2, 2))
+            .update(
+                &DVector::from_element(2, f64::NAN),
+                &DMatrix::identity(2, 2),
+                &DMatrix::identity(2, 2),
+            )
             .unwrap();
         assert_eq!(inn.dof(), 0);
         assert!(inn.statistic.is_nan());

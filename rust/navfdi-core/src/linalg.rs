@@ -21,7 +21,24 @@ pub fn gemm(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>
     // SAFETY: c is m × n, a is m × k, b is k × n, all contiguous column-major (nalgebra's
     // DMatrix storage), checked above; the strides describe exactly those buffers.
     unsafe {
-        plan.execute_unchecked(m, n, k, c.as_mut_ptr(), 1, m as isize, a.as_ptr(), 1, m as isize, b.as_ptr(), 1, k as isize, beta, alpha, false, false);
+        plan.execute_unchecked(
+            m,
+            n,
+            k,
+            c.as_mut_ptr(),
+            1,
+            m as isize,
+            a.as_ptr(),
+            1,
+            m as isize,
+            b.as_ptr(),
+            1,
+            k as isize,
+            beta,
+            alpha,
+            false,
+            false,
+        );
     }
 }
 
@@ -37,7 +54,24 @@ pub fn gemm_nt(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f
     // b[(j, i)] at offset j + i·n, i.e. row stride n and column stride 1), all contiguous
     // column-major buffers, checked above.
     unsafe {
-        plan.execute_unchecked(m, n, k, c.as_mut_ptr(), 1, m as isize, a.as_ptr(), 1, m as isize, b.as_ptr(), n as isize, 1, beta, alpha, false, false);
+        plan.execute_unchecked(
+            m,
+            n,
+            k,
+            c.as_mut_ptr(),
+            1,
+            m as isize,
+            a.as_ptr(),
+            1,
+            m as isize,
+            b.as_ptr(),
+            n as isize,
+            1,
+            beta,
+            alpha,
+            false,
+            false,
+        );
     }
 }
 

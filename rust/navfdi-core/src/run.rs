@@ -27,7 +27,14 @@ impl MatrixSeq {
         }
     }
 
-    fn validate(&self, name: &str, t: usize, rows: usize, cols: usize, covariance: bool) -> Result<()> {
+    fn validate(
+        &self,
+        name: &str,
+        t: usize,
+        rows: usize,
+        cols: usize,
+        covariance: bool,
+    ) -> Result<()> {
         let check = |label: &str, m: &DMatrix<f64>| -> Result<()> {
             check_shape(label, m, rows, cols)?;
             if covariance {
@@ -80,10 +87,14 @@ pub struct RunOutput {
 /// Prefix an error with the epoch at which it happened.
 pub fn at_epoch(k: usize, e: Error) -> Error {
     match e {
-        Error::NotPositiveDefinite { name, detail } => {
-            Error::NotPositiveDefinite { name: format!("epoch {k}: {name}"), detail }
-        }
-        Error::Numerical { context, detail } => Error::Numerical { context: format!("epoch {k}: {context}"), detail },
+        Error::NotPositiveDefinite { name, detail } => Error::NotPositiveDefinite {
+            name: format!("epoch {k}: {name}"),
+            detail,
+        },
+        Error::Numerical { context, detail } => Error::Numerical {
+            context: format!("epoch {k}: {context}"),
+            detail,
+        },
         other => Error::Invalid(format!("epoch {k}: {other}")),
     }
 }
@@ -119,7 +130,11 @@ pub fn run_filter(
     }
     let m = zs.len() / epochs;
     if m == 0 {
-        return Err(Error::Shape { name: "zs".into(), expected: "(T, m) with m >= 1".into(), got: format!("({epochs}, 0)") });
+        return Err(Error::Shape {
+            name: "zs".into(),
+            expected: "(T, m) with m >= 1".into(),
+            got: format!("({epochs}, 0)"),
+        });
     }
     check_fading(fading)?;
     phi.validate("Phi", epochs, n, n, false)?;
@@ -127,7 +142,11 @@ pub fn run_filter(
     h.validate("H", epochs, m, n, false)?;
     r.validate("R", epochs, m, m, true)?;
     if let Some((i, v)) = zs.iter().enumerate().find(|(_, v)| v.is_infinite()) {
-        return Err(Error::NonFinite { name: "zs".into(), index: format!("[{}, {}]", i / m, i % m), value: *v });
+        return Err(Error::NonFinite {
+            name: "zs".into(),
+            index: format!("[{}, {}]", i / m, i % m),
+            value: *v,
+        });
     }
 
     let mut out = RunOutput {
@@ -142,9 +161,12 @@ pub fn run_filter(
         used: Vec::with_capacity(epochs * m),
     };
     for k in 0..epochs {
-        kf.predict_trusted(phi.at(k), q.at(k), fading).map_err(|e| at_epoch(k, e))?;
+        kf.predict_trusted(phi.at(k), q.at(k), fading)
+            .map_err(|e| at_epoch(k, e))?;
         let z = DVector::from_column_slice(&zs[k * m..(k + 1) * m]);
-        let inn = kf.update_trusted(&z, h.at(k), r.at(k)).map_err(|e| at_epoch(k, e))?;
+        let inn = kf
+            .update_trusted(&z, h.at(k), r.at(k))
+            .map_err(|e| at_epoch(k, e))?;
         out.x.extend_from_slice(kf.x().as_slice());
         // P and A are symmetric, so column-major storage equals row-major.
         out.p.extend_from_slice(kf.p().as_slice());

@@ -157,7 +157,9 @@ pub fn noncentrality(pf: f64, pm: f64, dof: usize) -> Result<f64> {
         return Err(Error::InvalidParameter {
             name: "pf + pm".into(),
             value: pf + pm,
-            requirement: "must be below 1: a fault with zero bias is already missed with probability 1 - pf".into(),
+            requirement:
+                "must be below 1: a fault with zero bias is already missed with probability 1 - pf"
+                    .into(),
         });
     }
     // g(λ) = F(T_D; λ) − pm is decreasing in λ, g(0) = 1 − pf − pm > 0.
@@ -232,22 +234,51 @@ mod tests {
 
     #[test]
     fn paper_thresholds() {
-        assert_relative_eq!(chi2_threshold(0.1, 3).unwrap(), 6.251388631170325, max_relative = 1e-12);
-        assert_relative_eq!(chi2_threshold(0.005, 6).unwrap(), 18.547584178511087, max_relative = 1e-12);
-        assert_relative_eq!(chi2_threshold(0.05, 5).unwrap(), 11.070497693516351, max_relative = 1e-12);
-        assert_relative_eq!(sprt_threshold(0.1, 0.1).unwrap(), 2.1972245773362196, max_relative = 1e-14);
-        assert_relative_eq!(sprt_threshold(0.005, 0.005).unwrap(), 5.293304824724492, max_relative = 1e-14);
+        assert_relative_eq!(
+            chi2_threshold(0.1, 3).unwrap(),
+            6.251388631170325,
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            chi2_threshold(0.005, 6).unwrap(),
+            18.547584178511087,
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            chi2_threshold(0.05, 5).unwrap(),
+            11.070497693516351,
+            max_relative = 1e-12
+        );
+        assert_relative_eq!(
+            sprt_threshold(0.1, 0.1).unwrap(),
+            2.1972245773362196,
+            max_relative = 1e-14
+        );
+        assert_relative_eq!(
+            sprt_threshold(0.005, 0.005).unwrap(),
+            5.293304824724492,
+            max_relative = 1e-14
+        );
     }
 
     #[test]
     fn noncentral_reduces_to_central() {
         let c = ncx2_cdf(5.0, 3, 0.0).unwrap();
-        assert_relative_eq!(c, ChiSquared::new(3.0).unwrap().cdf(5.0), max_relative = 1e-14);
+        assert_relative_eq!(
+            c,
+            ChiSquared::new(3.0).unwrap().cdf(5.0),
+            max_relative = 1e-14
+        );
     }
 
     #[test]
     fn noncentrality_solves_its_equation() {
-        for &(pf, pm, m) in &[(0.1, 0.05, 6usize), (0.005, 0.005, 6), (0.005, 0.005, 1), (0.01, 0.2, 3)] {
+        for &(pf, pm, m) in &[
+            (0.1, 0.05, 6usize),
+            (0.005, 0.005, 6),
+            (0.005, 0.005, 1),
+            (0.01, 0.2, 3),
+        ] {
             let l = noncentrality(pf, pm, m).unwrap();
             let td = chi2_threshold(pf, m).unwrap();
             assert_relative_eq!(ncx2_cdf(td, m, l).unwrap(), pm, max_relative = 1e-9);
@@ -261,7 +292,10 @@ mod tests {
         assert!(sprt_threshold(0.6, 0.5).is_err());
         assert!(noncentrality(0.5, 0.6, 3).is_err());
         let not_pd = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-        assert!(matches!(mdb(&not_pd, 0.01, 0.01), Err(Error::NotPositiveDefinite { .. })));
+        assert!(matches!(
+            mdb(&not_pd, 0.01, 0.01),
+            Err(Error::NotPositiveDefinite { .. })
+        ));
     }
 
     #[test]
@@ -269,6 +303,10 @@ mod tests {
         // Scalar A = σ²: MDB = σ·sqrt(λ0).
         let a = DMatrix::from_element(1, 1, 100.0);
         let l0 = noncentrality(0.005, 0.005, 1).unwrap();
-        assert_relative_eq!(mdb(&a, 0.005, 0.005).unwrap()[0], 10.0 * l0.sqrt(), max_relative = 1e-12);
+        assert_relative_eq!(
+            mdb(&a, 0.005, 0.005).unwrap()[0],
+            10.0 * l0.sqrt(),
+            max_relative = 1e-12
+        );
     }
 }

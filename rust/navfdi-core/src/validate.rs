@@ -209,9 +209,15 @@ mod tests {
             Err(Error::NotPositiveSemiDefinite { .. })
         ));
         let asym = DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.0, 1.0]);
-        assert!(matches!(check_covariance("M", &asym), Err(Error::NotSymmetric { .. })));
+        assert!(matches!(
+            check_covariance("M", &asym),
+            Err(Error::NotSymmetric { .. })
+        ));
         let nan = DMatrix::from_row_slice(2, 2, &[1.0, f64::NAN, f64::NAN, 1.0]);
-        assert!(matches!(check_covariance("M", &nan), Err(Error::NonFinite { .. })));
+        assert!(matches!(
+            check_covariance("M", &nan),
+            Err(Error::NonFinite { .. })
+        ));
         let neg = DMatrix::from_row_slice(1, 1, &[-1.0]);
         assert!(matches!(
             check_covariance("M", &neg),

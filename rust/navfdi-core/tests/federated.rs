@@ -10,7 +10,10 @@ use navfdi_core::KalmanFilter;
 struct Lcg(u64);
 impl Lcg {
     fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
     fn matrix(&mut self, r: usize, c: usize) -> DMatrix<f64> {
@@ -34,7 +37,16 @@ fn block_diag(blocks: &[DMatrix<f64>]) -> DMatrix<f64> {
     out
 }
 
-type Setup = (FederatedFilter, KalmanFilter, Vec<DMatrix<f64>>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, Lcg);
+type Setup = (
+    FederatedFilter,
+    KalmanFilter,
+    Vec<DMatrix<f64>>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    DMatrix<f64>,
+    Lcg,
+);
 
 fn setup(master_share: f64, shares: &[f64]) -> Setup {
     let mut rng = Lcg(42);
@@ -52,13 +64,28 @@ fn setup(master_share: f64, shares: &[f64]) -> Setup {
             h: hs[i].clone(),
             r: rs[i].clone(),
             share: shares[i],
-            detectors: vec![("chi2".into(), Detector::Chi2(ResidualChi2::new(0.01).unwrap()))],
+            detectors: vec![(
+                "chi2".into(),
+                Detector::Chi2(ResidualChi2::new(0.01).unwrap()),
+            )],
             isolation: None,
         })
         .collect();
-    let fed = FederatedFilter::new(x0.clone(), p0.clone(), subs, FusionMode::Reset, master_share, true).unwrap();
+    let fed = FederatedFilter::new(
+        x0.clone(),
+        p0.clone(),
+        subs,
+        FusionMode::Reset,
+        master_share,
+        true,
+    )
+    .unwrap();
     let central = KalmanFilter::new(x0, p0).unwrap();
-    let h_all = DMatrix::from_rows(&hs.iter().flat_map(|h| h.row_iter().map(|r| r.into_owned()).collect::<Vec<_>>()).collect::<Vec<_>>());
+    let h_all = DMatrix::from_rows(
+        &hs.iter()
+            .flat_map(|h| h.row_iter().map(|r| r.into_owned()).collect::<Vec<_>>())
+            .collect::<Vec<_>>(),
+    );
     let r_all = block_diag(&rs);
     (fed, central, hs, h_all, r_all, phi, q, rng)
 }
@@ -66,8 +93,12 @@ fn setup(master_share: f64, shares: &[f64]) -> Setup {
 fn check_equivalence(master_share: f64, shares: &[f64]) {
     let (mut fed, mut central, hs, h_all, r_all, phi, q, mut rng) = setup(master_share, shares);
     for k in 0..60 {
-        let zs: Vec<DVector<f64>> = hs.iter().map(|h| DVector::from_fn(h.nrows(), |_, _| 2.0 * rng.next())).collect();
-        let z_all = DVector::from_iterator(h_all.nrows(), zs.iter().flat_map(|z| z.iter().copied()));
+        let zs: Vec<DVector<f64>> = hs
+            .iter()
+            .map(|h| DVector::from_fn(h.nrows(), |_, _| 2.0 * rng.next()))
+            .collect();
+        let z_all =
+            DVector::from_iterator(h_all.nrows(), zs.iter().flat_map(|z| z.iter().copied()));
         let rep = fed.step(&phi, &q, &zs).unwrap();
         assert_eq!(rep.sources, 3 + usize::from(master_share > 0.0));
         central.predict(&phi, &q, 1.0).unwrap();
@@ -92,15 +123,22 @@ fn reset_mode_with_master_share_equals_centralised_filter() {
 fn missing_measurements_match_centralised_reduced_update() {
     let (mut fed, mut central, hs, h_all, r_all, phi, q, mut rng) = setup(0.0, &[0.4, 0.4, 0.2]);
     for k in 0..30 {
-        let mut zs: Vec<DVector<f64>> = hs.iter().map(|h| DVector::from_fn(h.nrows(), |_, _| rng.next())).collect();
+        let mut zs: Vec<DVector<f64>> = hs
+            .iter()
+            .map(|h| DVector::from_fn(h.nrows(), |_, _| rng.next()))
+            .collect();
         if k % 3 == 0 {
             zs[1] = DVector::from_element(3, f64::NAN); // sensor 1 missing this epoch
         }
-        let z_all = DVector::from_iterator(h_all.nrows(), zs.iter().flat_map(|z| z.iter().copied()));
+        let z_all =
+            DVector::from_iterator(h_all.nrows(), zs.iter().flat_map(|z| z.iter().copied()));
         fed.step(&phi, &q, &zs).unwrap();
         central.predict(&phi, &q, 1.0).unwrap();
         central.update(&z_all, &h_all, &r_all).unwrap();
-        assert!((fed.x() - central.x()).amax() < 1e-9 * central.x().amax().max(1.0), "epoch {k}");
+        assert!(
+            (fed.x() - central.x()).amax() < 1e-9 * central.x().amax().max(1.0),
+            "epoch {k}"
+        );
     }
 }
 
@@ -115,10 +153,21 @@ fn isolated_subfilter_is_left_out_and_reinstated() {
         h: h.clone(),
         r: r.clone(),
         share: 0.5,
-        detectors: vec![("chi2".into(), Detector::Chi2(ResidualChi2::new(1e-4).unwrap()))],
+        detectors: vec![(
+            "chi2".into(),
+            Detector::Chi2(ResidualChi2::new(1e-4).unwrap()),
+        )],
         isolation: if iso { Some(0) } else { None },
     };
-    let mut fed = FederatedFilter::new(DVector::zeros(n), DMatrix::identity(n, n), vec![mk("good", false), mk("bad", true)], FusionMode::Reset, 0.0, true).unwrap();
+    let mut fed = FederatedFilter::new(
+        DVector::zeros(n),
+        DMatrix::identity(n, n),
+        vec![mk("good", false), mk("bad", true)],
+        FusionMode::Reset,
+        0.0,
+        true,
+    )
+    .unwrap();
     let phi = DMatrix::identity(n, n);
     let q = DMatrix::identity(n, n) * 1e-4;
     let mut saw_isolation = false;
@@ -170,17 +219,29 @@ fn isolated_modes_track_predict_update() {
             h: DMatrix::identity(2, 2),
             r: DMatrix::identity(2, 2) * 0.1,
             share: 0.5,
-            detectors: vec![("chi2".into(), Detector::Chi2(ResidualChi2::new(1e-4).unwrap()))],
+            detectors: vec![(
+                "chi2".into(),
+                Detector::Chi2(ResidualChi2::new(1e-4).unwrap()),
+            )],
             isolation: if iso { Some(0) } else { None },
         };
-        let mut fed = FederatedFilter::new(DVector::zeros(n), DMatrix::identity(n, n), vec![mk("good", false), mk("bad", true)], FusionMode::Reset, 0.0, true).unwrap();
+        let mut fed = FederatedFilter::new(
+            DVector::zeros(n),
+            DMatrix::identity(n, n),
+            vec![mk("good", false), mk("bad", true)],
+            FusionMode::Reset,
+            0.0,
+            true,
+        )
+        .unwrap();
         fed.set_isolated_mode(mode);
         let (phi, q) = (DMatrix::identity(n, n), DMatrix::identity(n, n) * 1e-4);
         let mut during = Vec::new();
         let mut cleared_at = None;
         for k in 0..120 {
             let good = DVector::from_fn(2, |_, _| 0.3 * rng.next());
-            let bad = DVector::from_fn(2, |_, _| 0.3 * rng.next()).add_scalar(if (30..40).contains(&k) { 50.0 } else { 0.0 });
+            let bad = DVector::from_fn(2, |_, _| 0.3 * rng.next())
+                .add_scalar(if (30..40).contains(&k) { 50.0 } else { 0.0 });
             let rep = fed.step(&phi, &q, &[good, bad]).unwrap();
             if (31..40).contains(&k) {
                 during.push((fed.sub_x(1).unwrap() - fed.x()).amax());

@@ -17,9 +17,22 @@ fn prep() -> Prepared {
 fn bits(v: &[RunMetrics]) -> Vec<u64> {
     v.iter()
         .flat_map(|m| {
-            let mut b = vec![m.run, m.att_rms.to_bits(), m.att_max.to_bits(), m.pos_rms.to_bits(), m.pos_max.to_bits()];
+            let mut b = vec![
+                m.run,
+                m.att_rms.to_bits(),
+                m.att_max.to_bits(),
+                m.pos_rms.to_bits(),
+                m.pos_max.to_bits(),
+            ];
             for c in &m.cells {
-                b.extend([c.detected as u64, c.delay.to_bits(), c.clear_delay.to_bits(), c.false_alarm_epochs as u64, c.outside_epochs as u64, c.wrong_isolations as u64]);
+                b.extend([
+                    c.detected as u64,
+                    c.delay.to_bits(),
+                    c.clear_delay.to_bits(),
+                    c.false_alarm_epochs as u64,
+                    c.outside_epochs as u64,
+                    c.wrong_isolations as u64,
+                ]);
             }
             b
         })
@@ -35,7 +48,10 @@ fn identical_across_threads_and_chunking() {
     chunked.extend(run_chunk(&p, 7, 3, 5, 1, &[]).unwrap());
     assert_eq!(bits(&one), bits(&two));
     assert_eq!(bits(&one), bits(&chunked));
-    assert_eq!(one.iter().map(|m| m.run).collect::<Vec<_>>(), (0..8).collect::<Vec<_>>());
+    assert_eq!(
+        one.iter().map(|m| m.run).collect::<Vec<_>>(),
+        (0..8).collect::<Vec<_>>()
+    );
     // Different seeds give different runs.
     let other = run_chunk(&p, 8, 0, 8, 2, &[]).unwrap();
     assert_ne!(bits(&one), bits(&other));

@@ -6,7 +6,9 @@
 
 use nalgebra::{DMatrix, DVector};
 use navfdi_core::run::MatrixSeq;
-use numpy::{AllowTypeChange, IxDyn, PyArray, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{
+    AllowTypeChange, IxDyn, PyArray, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -20,15 +22,28 @@ fn shape_str(shape: &[usize]) -> String {
     match shape.len() {
         0 => "() (a scalar)".to_string(),
         1 => format!("({},)", shape[0]),
-        _ => format!("({})", shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
     }
 }
 
 /// Read any array-like as float64.
 pub fn read(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Array> {
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj.extract().map_err(|_| {
-        let tname = obj.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
-        PyValueError::new_err(format!("{name}: expected an array of numbers, got an object of type {tname}"))
+        let tname = obj
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into());
+        PyValueError::new_err(format!(
+            "{name}: expected an array of numbers, got an object of type {tname}"
+        ))
     })?;
     let shape = arr.shape().to_vec();
     let data: Vec<f64> = match arr.as_slice() {
@@ -86,16 +101,30 @@ pub fn matrix_seq(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<MatrixSeq> {
 }
 
 /// Move row-major data into a new numpy array of the given shape (no copy of the buffer).
-pub fn to_numpy<'py, T: numpy::Element>(py: Python<'py>, data: Vec<T>, shape: &[usize]) -> PyResult<Bound<'py, PyArray<T, IxDyn>>> {
+pub fn to_numpy<'py, T: numpy::Element>(
+    py: Python<'py>,
+    data: Vec<T>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyArray<T, IxDyn>>> {
     PyArray::from_vec(py, data).reshape(IxDyn(shape))
 }
 
 /// A column-major matrix as a row-major numpy array.
-pub fn matrix_to_numpy<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
-    to_numpy(py, m.transpose().as_slice().to_vec(), &[m.nrows(), m.ncols()])
+pub fn matrix_to_numpy<'py>(
+    py: Python<'py>,
+    m: &DMatrix<f64>,
+) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+    to_numpy(
+        py,
+        m.transpose().as_slice().to_vec(),
+        &[m.nrows(), m.ncols()],
+    )
 }
 
 /// A vector as a 1-D numpy array.
-pub fn vector_to_numpy<'py>(py: Python<'py>, v: &DVector<f64>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+pub fn vector_to_numpy<'py>(
+    py: Python<'py>,
+    v: &DVector<f64>,
+) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
     to_numpy(py, v.as_slice().to_vec(), &[v.len()])
 }

@@ -28,7 +28,14 @@ pub struct PyDecision {
 impl PyDecision {
     /// A plain decision (no SPRT components, no chi-square part).
     pub fn from_decision(d: Decision) -> Self {
-        PyDecision { report: Report { decision: d, components: None, chi2: None, reset: false } }
+        PyDecision {
+            report: Report {
+                decision: d,
+                components: None,
+                chi2: None,
+                reset: false,
+            },
+        }
     }
 }
 
@@ -61,7 +68,10 @@ impl PyDecision {
     }
     /// SPRT per-component statistics λ_j, shape (m,); None for the chi-square test.
     #[getter]
-    fn components<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+    fn components<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
         match &self.report.components {
             Some(c) => Ok(Some(to_numpy(py, c.clone(), &[c.len()])?)),
             None => Ok(None),
@@ -71,7 +81,12 @@ impl PyDecision {
     #[getter]
     fn chi2(&self) -> Option<PyDecision> {
         self.report.chi2.clone().map(|d| PyDecision {
-            report: Report { decision: d, components: None, chi2: None, reset: false },
+            report: Report {
+                decision: d,
+                components: None,
+                chi2: None,
+                reset: false,
+            },
         })
     }
     /// True when the joint detector's chi-square end-of-fault reset the SPRT this epoch.
@@ -110,12 +125,20 @@ impl PyDetectionRun {
     /// Statistic per epoch, shape (T,).
     #[getter]
     fn statistic<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
-        to_numpy(py, self.col(|r| r.decision.statistic), &[self.reports.len()])
+        to_numpy(
+            py,
+            self.col(|r| r.decision.statistic),
+            &[self.reports.len()],
+        )
     }
     /// Threshold per epoch, shape (T,).
     #[getter]
     fn threshold<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
-        to_numpy(py, self.col(|r| r.decision.threshold), &[self.reports.len()])
+        to_numpy(
+            py,
+            self.col(|r| r.decision.threshold),
+            &[self.reports.len()],
+        )
     }
     /// Alarm per epoch, shape (T,).
     #[getter]
@@ -125,11 +148,18 @@ impl PyDetectionRun {
     /// Components used per epoch, shape (T,).
     #[getter]
     fn dof<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray<i64, IxDyn>>> {
-        to_numpy(py, self.col(|r| r.decision.dof as i64), &[self.reports.len()])
+        to_numpy(
+            py,
+            self.col(|r| r.decision.dof as i64),
+            &[self.reports.len()],
+        )
     }
     /// SPRT per-component statistics, shape (T, m); None for the chi-square test.
     #[getter]
-    fn components<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+    fn components<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
         if self.reports.first().is_none_or(|r| r.components.is_none()) {
             return Ok(None);
         }
@@ -144,17 +174,26 @@ impl PyDetectionRun {
     }
     /// Joint detector: chi-square statistic per epoch, shape (T,); None otherwise.
     #[getter]
-    fn chi2_statistic<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+    fn chi2_statistic<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
         self.chi2_col(py, |d| d.statistic)
     }
     /// Joint detector: chi-square threshold per epoch, shape (T,); None otherwise.
     #[getter]
-    fn chi2_threshold<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
+    fn chi2_threshold<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray<f64, IxDyn>>>> {
         self.chi2_col(py, |d| d.threshold)
     }
     /// Joint detector: chi-square alarm per epoch, shape (T,); None otherwise.
     #[getter]
-    fn chi2_alarm<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyArray<bool, IxDyn>>>> {
+    fn chi2_alarm<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, PyArray<bool, IxDyn>>>> {
         self.chi2_col(py, |d| d.alarm)
     }
     /// Joint detector: epochs at which the SPRT was reset, shape (T,); None otherwise.
@@ -163,7 +202,11 @@ impl PyDetectionRun {
         if self.reports.first().is_none_or(|r| r.chi2.is_none()) {
             return Ok(None);
         }
-        Ok(Some(to_numpy(py, self.col(|r| r.reset), &[self.reports.len()])?))
+        Ok(Some(to_numpy(
+            py,
+            self.col(|r| r.reset),
+            &[self.reports.len()],
+        )?))
     }
     fn __len__(&self) -> usize {
         self.reports.len()
@@ -179,7 +222,11 @@ impl PyDetectionRun {
         if self.reports.first().is_none_or(|r| r.chi2.is_none()) {
             return Ok(None);
         }
-        let v: Vec<T> = self.reports.iter().filter_map(|r| r.chi2.as_ref().map(&f)).collect();
+        let v: Vec<T> = self
+            .reports
+            .iter()
+            .filter_map(|r| r.chi2.as_ref().map(&f))
+            .collect();
         Ok(Some(to_numpy(py, v, &[self.reports.len()])?))
     }
 }
@@ -188,7 +235,10 @@ impl PyDetectionRun {
 type Sequence = (Vec<DVector<f64>>, Vec<DMatrix<f64>>);
 
 /// Read residuals (T, m) and covariances (T, m, m).
-fn read_sequence(residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<Sequence> {
+fn read_sequence(
+    residuals: &Bound<'_, PyAny>,
+    covariances: &Bound<'_, PyAny>,
+) -> PyResult<Sequence> {
     let r = read("residuals", residuals)?;
     let a = read("covariances", covariances)?;
     if r.shape.len() != 2 {
@@ -204,8 +254,12 @@ fn read_sequence(residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -
             a.shape
         )));
     }
-    let rs = (0..t).map(|k| DVector::from_row_slice(&r.data[k * m..(k + 1) * m])).collect();
-    let as_ = (0..t).map(|k| DMatrix::from_row_slice(m, m, &a.data[k * m * m..(k + 1) * m * m])).collect();
+    let rs = (0..t)
+        .map(|k| DVector::from_row_slice(&r.data[k * m..(k + 1) * m]))
+        .collect();
+    let as_ = (0..t)
+        .map(|k| DMatrix::from_row_slice(m, m, &a.data[k * m * m..(k + 1) * m * m]))
+        .collect();
     Ok((rs, as_))
 }
 
@@ -236,8 +290,14 @@ where
     Ok(PyDetectionRun { reports, m })
 }
 
-fn read_pair(residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<(DVector<f64>, DMatrix<f64>)> {
-    Ok((vector("residual", residual, None)?, matrix("covariance", covariance)?))
+fn read_pair(
+    residual: &Bound<'_, PyAny>,
+    covariance: &Bound<'_, PyAny>,
+) -> PyResult<(DVector<f64>, DMatrix<f64>)> {
+    Ok((
+        vector("residual", residual, None)?,
+        matrix("covariance", covariance)?,
+    ))
 }
 
 fn parse_variance(v: &str) -> PyResult<SprtVariance> {
@@ -257,16 +317,38 @@ fn variance_name(v: SprtVariance) -> &'static str {
     }
 }
 
-fn chi2_step(d: &mut ResidualChi2, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
-    Ok(Report { decision: d.test(r, a)?, components: None, chi2: None, reset: false })
+fn chi2_step(
+    d: &mut ResidualChi2,
+    r: &DVector<f64>,
+    a: &DMatrix<f64>,
+) -> navfdi_core::Result<Report> {
+    Ok(Report {
+        decision: d.test(r, a)?,
+        components: None,
+        chi2: None,
+        reset: false,
+    })
 }
 
-fn sprt_step(d: &mut ImprovedSprt, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+fn sprt_step(
+    d: &mut ImprovedSprt,
+    r: &DVector<f64>,
+    a: &DMatrix<f64>,
+) -> navfdi_core::Result<Report> {
     let decision = d.test(r, a)?;
-    Ok(Report { decision, components: Some(d.component_statistics()), chi2: None, reset: false })
+    Ok(Report {
+        decision,
+        components: Some(d.component_statistics()),
+        chi2: None,
+        reset: false,
+    })
 }
 
-fn joint_step(d: &mut JointChi2Sprt, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+fn joint_step(
+    d: &mut JointChi2Sprt,
+    r: &DVector<f64>,
+    a: &DMatrix<f64>,
+) -> navfdi_core::Result<Report> {
     let j = d.test(r, a)?;
     Ok(Report {
         decision: j.decision,
@@ -287,10 +369,16 @@ impl PyResidualChi2 {
     #[new]
     #[pyo3(signature = (pf))]
     fn new(pf: f64) -> PyResult<Self> {
-        Ok(PyResidualChi2 { inner: ResidualChi2::new(pf).py()? })
+        Ok(PyResidualChi2 {
+            inner: ResidualChi2::new(pf).py()?,
+        })
     }
     /// Test one epoch.
-    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+    fn test(
+        &mut self,
+        residual: &Bound<'_, PyAny>,
+        covariance: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDecision> {
         let (r, a) = read_pair(residual, covariance)?;
         let mut work = self.inner.clone();
         let report = chi2_step(&mut work, &r, &a).py()?;
@@ -298,7 +386,12 @@ impl PyResidualChi2 {
         Ok(PyDecision { report })
     }
     /// Test a whole sequence in Rust.
-    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+    fn test_sequence(
+        &mut self,
+        py: Python<'_>,
+        residuals: &Bound<'_, PyAny>,
+        covariances: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDetectionRun> {
         run_sequence(py, &mut self.inner, residuals, covariances, chi2_step)
     }
     /// Forget the last alarm state.
@@ -336,10 +429,16 @@ impl PyImprovedSprt {
     #[new]
     #[pyo3(signature = (pf, pm, variance = "known"))]
     fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
-        Ok(PyImprovedSprt { inner: ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()? })
+        Ok(PyImprovedSprt {
+            inner: ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()?,
+        })
     }
     /// Test one epoch.
-    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+    fn test(
+        &mut self,
+        residual: &Bound<'_, PyAny>,
+        covariance: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDecision> {
         let (r, a) = read_pair(residual, covariance)?;
         let mut work = self.inner.clone();
         let report = sprt_step(&mut work, &r, &a).py()?;
@@ -347,7 +446,12 @@ impl PyImprovedSprt {
         Ok(PyDecision { report })
     }
     /// Test a whole sequence in Rust.
-    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+    fn test_sequence(
+        &mut self,
+        py: Python<'_>,
+        residuals: &Bound<'_, PyAny>,
+        covariances: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDetectionRun> {
         run_sequence(py, &mut self.inner, residuals, covariances, sprt_step)
     }
     /// Reset all accumulators to zero.
@@ -380,7 +484,12 @@ impl PyImprovedSprt {
         self.inner.alarm()
     }
     fn __repr__(&self) -> String {
-        format!("ImprovedSprt(pf={}, pm={}, variance={:?})", self.inner.pf(), self.inner.pm(), variance_name(self.inner.variance()))
+        format!(
+            "ImprovedSprt(pf={}, pm={}, variance={:?})",
+            self.inner.pf(),
+            self.inner.pm(),
+            variance_name(self.inner.variance())
+        )
     }
 }
 
@@ -395,10 +504,16 @@ impl PyJointChi2Sprt {
     #[new]
     #[pyo3(signature = (pf, pm, variance = "known"))]
     fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
-        Ok(PyJointChi2Sprt { inner: JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()? })
+        Ok(PyJointChi2Sprt {
+            inner: JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()?,
+        })
     }
     /// Test one epoch.
-    fn test(&mut self, residual: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<PyDecision> {
+    fn test(
+        &mut self,
+        residual: &Bound<'_, PyAny>,
+        covariance: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDecision> {
         let (r, a) = read_pair(residual, covariance)?;
         let mut work = self.inner.clone();
         let report = joint_step(&mut work, &r, &a).py()?;
@@ -406,7 +521,12 @@ impl PyJointChi2Sprt {
         Ok(PyDecision { report })
     }
     /// Test a whole sequence in Rust.
-    fn test_sequence(&mut self, py: Python<'_>, residuals: &Bound<'_, PyAny>, covariances: &Bound<'_, PyAny>) -> PyResult<PyDetectionRun> {
+    fn test_sequence(
+        &mut self,
+        py: Python<'_>,
+        residuals: &Bound<'_, PyAny>,
+        covariances: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDetectionRun> {
         run_sequence(py, &mut self.inner, residuals, covariances, joint_step)
     }
     /// Reset both tests.
@@ -451,7 +571,9 @@ impl PyJointChi2Sprt {
 /// Validate a Python integer as degrees of freedom.
 pub fn positive_dof(dof: i64) -> PyResult<usize> {
     if dof < 1 {
-        return Err(PyValueError::new_err(format!("dof = {dof}: degrees of freedom must be at least 1")));
+        return Err(PyValueError::new_err(format!(
+            "dof = {dof}: degrees of freedom must be at least 1"
+        )));
     }
     usize::try_from(dof).map_err(|_| PyValueError::new_err(format!("dof = {dof}: too large")))
 }

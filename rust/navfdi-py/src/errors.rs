@@ -18,7 +18,9 @@ create_exception!(
 /// Convert a core error into a Python exception.
 pub fn to_py(e: Error) -> PyErr {
     match &e {
-        Error::NotPositiveDefinite { .. } | Error::Numerical { .. } => LinAlgError::new_err(e.to_string()),
+        Error::NotPositiveDefinite { .. } | Error::Numerical { .. } => {
+            LinAlgError::new_err(e.to_string())
+        }
         _ => PyValueError::new_err(e.to_string()),
     }
 }

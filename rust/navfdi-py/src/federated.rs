@@ -12,28 +12,43 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 fn get<'py>(d: &Bound<'py, PyDict>, key: &str, path: &str) -> PyResult<Bound<'py, PyAny>> {
-    d.get_item(key)?.ok_or_else(|| PyValueError::new_err(format!("{path}.{key}: missing")))
+    d.get_item(key)?
+        .ok_or_else(|| PyValueError::new_err(format!("{path}.{key}: missing")))
 }
 
 fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
     let path = format!("subfilters[{i}]");
-    let d = obj.cast::<PyDict>().map_err(|_| PyValueError::new_err(format!("{path}: expected a dict")))?;
-    let name: String = get(d, "name", &path)?.extract().map_err(|_| PyValueError::new_err(format!("{path}.name: expected a string")))?;
+    let d = obj
+        .cast::<PyDict>()
+        .map_err(|_| PyValueError::new_err(format!("{path}: expected a dict")))?;
+    let name: String = get(d, "name", &path)?
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{path}.name: expected a string")))?;
     let h = matrix(&format!("{path}.H"), &get(d, "H", &path)?)?;
     let r = matrix(&format!("{path}.R"), &get(d, "R", &path)?)?;
-    let share: f64 = get(d, "share", &path)?.extract().map_err(|_| PyValueError::new_err(format!("{path}.share: expected a number")))?;
+    let share: f64 = get(d, "share", &path)?
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{path}.share: expected a number")))?;
     let mut detectors = Vec::new();
     if let Some(list) = d.get_item("detectors")? {
-        let list = list.cast::<PyList>().map_err(|_| PyValueError::new_err(format!("{path}.detectors: expected a list")))?;
+        let list = list
+            .cast::<PyList>()
+            .map_err(|_| PyValueError::new_err(format!("{path}.detectors: expected a list")))?;
         for (j, item) in list.iter().enumerate() {
             let dp = format!("{path}.detectors[{j}]");
-            let dd = item.cast::<PyDict>().map_err(|_| PyValueError::new_err(format!("{dp}: expected a dict")))?;
+            let dd = item
+                .cast::<PyDict>()
+                .map_err(|_| PyValueError::new_err(format!("{dp}: expected a dict")))?;
             let kind: String = get(dd, "kind", &dp)?.extract()?;
             let kind = match kind.as_str() {
                 "chi2" => DetectorKind::Chi2,
                 "sprt" => DetectorKind::Sprt,
                 "joint" => DetectorKind::Joint,
-                other => return Err(PyValueError::new_err(format!("{dp}.kind = {other:?}: use chi2, sprt or joint"))),
+                other => {
+                    return Err(PyValueError::new_err(format!(
+                        "{dp}.kind = {other:?}: use chi2, sprt or joint"
+                    )))
+                }
             };
             let dname: String = match dd.get_item("name")? {
                 Some(v) => v.extract()?,
@@ -42,15 +57,21 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
             let pf: f64 = get(dd, "pf", &dp)?.extract()?;
             let pm: Option<f64> = dd.get_item("pm")?.map(|v| v.extract()).transpose()?;
             if kind != DetectorKind::Chi2 && pm.is_none() {
-                return Err(PyValueError::new_err(format!("{dp}.pm: required for sprt and joint detectors")));
+                return Err(PyValueError::new_err(format!(
+                    "{dp}.pm: required for sprt and joint detectors"
+                )));
             }
-            let variance: Option<String> = dd.get_item("variance")?.map(|v| v.extract()).transpose()?;
+            let variance: Option<String> =
+                dd.get_item("variance")?.map(|v| v.extract()).transpose()?;
             if let Some(v) = &variance {
                 if v != "known" && v != "sample" {
-                    return Err(PyValueError::new_err(format!("{dp}.variance = {v:?}: must be \"known\" or \"sample\"")));
+                    return Err(PyValueError::new_err(format!(
+                        "{dp}.variance = {v:?}: must be \"known\" or \"sample\""
+                    )));
                 }
             }
-            let det = make_detector(kind, pf, pm, variance.as_deref()).map_err(|e| PyValueError::new_err(format!("{dp}: {e}")))?;
+            let det = make_detector(kind, pf, pm, variance.as_deref())
+                .map_err(|e| PyValueError::new_err(format!("{dp}: {e}")))?;
             detectors.push((dname, det));
         }
     }
@@ -63,11 +84,22 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
                 detectors
                     .iter()
                     .position(|(dn, _)| *dn == n)
-                    .ok_or_else(|| PyValueError::new_err(format!("{path}.isolation = {n:?}: not one of this sub-filter's detectors")))?,
+                    .ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "{path}.isolation = {n:?}: not one of this sub-filter's detectors"
+                        ))
+                    })?,
             )
         }
     };
-    Ok(SubFilterConfig { name, h, r, share, detectors, isolation })
+    Ok(SubFilterConfig {
+        name,
+        h,
+        r,
+        share,
+        detectors,
+        isolation,
+    })
 }
 
 /// One epoch of the federated filter.
@@ -124,7 +156,10 @@ impl PyFederatedStep {
         for (i, s) in self.report.subs.iter().enumerate() {
             let d = PyDict::new(py);
             for (j, dec) in s.decisions.iter().enumerate() {
-                d.set_item(&self.det_names[i][j], Py::new(py, PyDecision::from_decision(dec.clone()))?)?;
+                d.set_item(
+                    &self.det_names[i][j],
+                    Py::new(py, PyDecision::from_decision(dec.clone()))?,
+                )?;
             }
             out.set_item(&self.names[i], d)?;
         }
@@ -157,15 +192,29 @@ impl PyFederatedFilter {
         let mode = match mode {
             "reset" => FusionMode::Reset,
             "no_reset" => FusionMode::NoReset,
-            other => return Err(PyValueError::new_err(format!("mode = {other:?}: use \"reset\" or \"no_reset\""))),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "mode = {other:?}: use \"reset\" or \"no_reset\""
+                )))
+            }
         };
-        let list = subfilters.cast::<PyList>().map_err(|_| PyValueError::new_err("subfilters: expected a list of dicts"))?;
-        let subs = list.iter().enumerate().map(|(i, o)| parse_sub(i, &o)).collect::<PyResult<Vec<_>>>()?;
+        let list = subfilters
+            .cast::<PyList>()
+            .map_err(|_| PyValueError::new_err("subfilters: expected a list of dicts"))?;
+        let subs = list
+            .iter()
+            .enumerate()
+            .map(|(i, o)| parse_sub(i, &o))
+            .collect::<PyResult<Vec<_>>>()?;
         let isolated = match isolated {
             "track" => IsolatedMode::Track,
             "predict" => IsolatedMode::Predict,
             "update" => IsolatedMode::Update,
-            other => return Err(PyValueError::new_err(format!("isolated = {other:?}: use \"track\", \"predict\" or \"update\""))),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "isolated = {other:?}: use \"track\", \"predict\" or \"update\""
+                )))
+            }
         };
         let mut inner = FederatedFilter::new(x0, p0, subs, mode, master_share, isolation).py()?;
         inner.set_isolated_mode(isolated);
@@ -175,30 +224,58 @@ impl PyFederatedFilter {
     /// One epoch: predict with Phi, Q; one measurement per sub-filter (NaN = missing).
     #[pyo3(signature = (Phi, Q, measurements))]
     #[allow(non_snake_case)]
-    fn step(&mut self, Phi: &Bound<'_, PyAny>, Q: &Bound<'_, PyAny>, measurements: &Bound<'_, PyAny>) -> PyResult<PyFederatedStep> {
+    fn step(
+        &mut self,
+        Phi: &Bound<'_, PyAny>,
+        Q: &Bound<'_, PyAny>,
+        measurements: &Bound<'_, PyAny>,
+    ) -> PyResult<PyFederatedStep> {
         let phi = matrix("Phi", Phi)?;
         let q = matrix("Q", Q)?;
-        let list = measurements.cast::<PyList>().map_err(|_| PyValueError::new_err("measurements: expected a list with one array per sub-filter"))?;
+        let list = measurements.cast::<PyList>().map_err(|_| {
+            PyValueError::new_err("measurements: expected a list with one array per sub-filter")
+        })?;
         let names = self.inner.names();
         let zs = list
             .iter()
             .enumerate()
-            .map(|(i, z)| vector(&format!("measurements[{}]", names.get(i).map_or("?", |s| s.as_str())), &z, None))
+            .map(|(i, z)| {
+                vector(
+                    &format!("measurements[{}]", names.get(i).map_or("?", |s| s.as_str())),
+                    &z,
+                    None,
+                )
+            })
             .collect::<PyResult<Vec<_>>>()?;
         let report = self.inner.step(&phi, &q, &zs).py()?;
-        let det_names = (0..names.len()).map(|i| self.inner.detector_names(i)).collect();
-        Ok(PyFederatedStep { report, names, det_names, x: self.inner.x().clone(), p: self.inner.p().clone() })
+        let det_names = (0..names.len())
+            .map(|i| self.inner.detector_names(i))
+            .collect();
+        Ok(PyFederatedStep {
+            report,
+            names,
+            det_names,
+            x: self.inner.x().clone(),
+            p: self.inner.p().clone(),
+        })
     }
 
     /// Replace the measurement model (H, R) of the sub-filter named `name`.
     #[pyo3(signature = (name, H, R))]
     #[allow(non_snake_case)]
-    fn set_model(&mut self, name: &str, H: &Bound<'_, PyAny>, R: &Bound<'_, PyAny>) -> PyResult<()> {
+    fn set_model(
+        &mut self,
+        name: &str,
+        H: &Bound<'_, PyAny>,
+        R: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
         let names = self.inner.names();
-        let i = names
-            .iter()
-            .position(|n| n == name)
-            .ok_or_else(|| PyValueError::new_err(format!("name = {name:?}: no such sub-filter (known: {})", names.join(", "))))?;
+        let i = names.iter().position(|n| n == name).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "name = {name:?}: no such sub-filter (known: {})",
+                names.join(", ")
+            ))
+        })?;
         let h = matrix("H", H)?;
         let r = matrix("R", R)?;
         self.inner.set_model(i, h, r).py()

@@ -1,6 +1,8 @@
 //! `KalmanFilter`, `Innovation` and `run_filter` bindings.
 
-use crate::convert::{matrix, matrix_seq, matrix_to_numpy, read, to_numpy, vector, vector_to_numpy};
+use crate::convert::{
+    matrix, matrix_seq, matrix_to_numpy, read, to_numpy, vector, vector_to_numpy,
+};
 use crate::errors::IntoPyResult;
 use navfdi_core::kalman::{Innovation, KalmanFilter};
 use navfdi_core::run::run_filter as core_run_filter;
@@ -47,7 +49,12 @@ impl PyInnovation {
     }
 
     fn __repr__(&self) -> String {
-        format!("Innovation(statistic={:.6}, dof={}, m={})", self.inner.statistic, self.inner.dof(), self.inner.used.len())
+        format!(
+            "Innovation(statistic={:.6}, dof={}, m={})",
+            self.inner.statistic,
+            self.inner.dof(),
+            self.inner.used.len()
+        )
     }
 }
 
@@ -65,13 +72,20 @@ impl PyKalmanFilter {
     fn new(x0: &Bound<'_, PyAny>, P0: &Bound<'_, PyAny>) -> PyResult<Self> {
         let x0 = vector("x0", x0, None)?;
         let p0 = matrix("P0", P0)?;
-        Ok(PyKalmanFilter { inner: KalmanFilter::new(x0, p0).py()? })
+        Ok(PyKalmanFilter {
+            inner: KalmanFilter::new(x0, p0).py()?,
+        })
     }
 
     /// Time update x⁻ = Φx, P⁻ = S·ΦPΦᵀ + Q.
     #[pyo3(signature = (Phi, Q, fading = 1.0))]
     #[allow(non_snake_case)]
-    fn predict(&mut self, Phi: &Bound<'_, PyAny>, Q: &Bound<'_, PyAny>, fading: f64) -> PyResult<()> {
+    fn predict(
+        &mut self,
+        Phi: &Bound<'_, PyAny>,
+        Q: &Bound<'_, PyAny>,
+        fading: f64,
+    ) -> PyResult<()> {
         let phi = matrix("Phi", Phi)?;
         let q = matrix("Q", Q)?;
         self.inner.predict(&phi, &q, fading).py()
@@ -80,11 +94,18 @@ impl PyKalmanFilter {
     /// Measurement update; NaN components of z are skipped.
     #[pyo3(signature = (z, H, R))]
     #[allow(non_snake_case)]
-    fn update(&mut self, z: &Bound<'_, PyAny>, H: &Bound<'_, PyAny>, R: &Bound<'_, PyAny>) -> PyResult<PyInnovation> {
+    fn update(
+        &mut self,
+        z: &Bound<'_, PyAny>,
+        H: &Bound<'_, PyAny>,
+        R: &Bound<'_, PyAny>,
+    ) -> PyResult<PyInnovation> {
         let z = vector("z", z, None)?;
         let h = matrix("H", H)?;
         let r = matrix("R", R)?;
-        Ok(PyInnovation { inner: self.inner.update(&z, &h, &r).py()? })
+        Ok(PyInnovation {
+            inner: self.inner.update(&z, &h, &r).py()?,
+        })
     }
 
     /// Replace the state and covariance.

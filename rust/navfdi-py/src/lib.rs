@@ -7,8 +7,8 @@ mod convert;
 mod detect;
 mod errors;
 mod federated;
-mod montecarlo;
 mod filter;
+mod montecarlo;
 mod scenario;
 
 use crate::errors::IntoPyResult;
@@ -38,7 +38,12 @@ fn noncentrality(pf: f64, pm: f64, dof: i64) -> PyResult<f64> {
 #[pyfunction]
 #[pyo3(signature = (A, pf, pm))]
 #[allow(non_snake_case)]
-fn mdb<'py>(py: Python<'py>, A: &Bound<'py, PyAny>, pf: f64, pm: f64) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
+fn mdb<'py>(
+    py: Python<'py>,
+    A: &Bound<'py, PyAny>,
+    pf: f64,
+    pm: f64,
+) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
     let a = matrix("A", A)?;
     let v = navfdi_core::stats::mdb(&a, pf, pm).py()?;
     let len = v.len();

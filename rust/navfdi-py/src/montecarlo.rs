@@ -25,7 +25,10 @@ impl PyPreparedScenario {
         let spec = ScenarioSpec::from_json(spec_json).py()?;
         let prep = py.detach(move || Prepared::new(spec)).py()?;
         let cells = cells(&prep);
-        Ok(PyPreparedScenario { prep: Arc::new(prep), cells })
+        Ok(PyPreparedScenario {
+            prep: Arc::new(prep),
+            cells,
+        })
     }
 
     /// Number of epochs per run.
@@ -43,7 +46,9 @@ impl PyPreparedScenario {
             .map(|c| {
                 let sf = &spec.federated.subfilters[c.subfilter];
                 let d = &sf.detectors[c.detector];
-                let f = c.fault.map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
+                let f = c
+                    .fault
+                    .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
                 (sf.sensor.clone(), d.name.clone(), f, d.pf)
             })
             .collect()
@@ -55,29 +60,79 @@ impl PyPreparedScenario {
     /// ``wrong_isolations`` (count, cells), ``att_rms``, ``att_max``, ``pos_rms``, ``pos_max``
     /// (count,), and ``records`` ({run: record dict} for the runs listed in ``keep``).
     #[pyo3(signature = (seed, start, count, threads = 0, keep = None))]
-    fn run_chunk<'py>(&self, py: Python<'py>, seed: u64, start: u64, count: u64, threads: usize, keep: Option<Vec<u64>>) -> PyResult<Bound<'py, PyDict>> {
+    fn run_chunk<'py>(
+        &self,
+        py: Python<'py>,
+        seed: u64,
+        start: u64,
+        count: u64,
+        threads: usize,
+        keep: Option<Vec<u64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         if count == 0 {
             return Err(PyValueError::new_err("count: must be at least 1"));
         }
         let keep = keep.unwrap_or_default();
         let prep = Arc::clone(&self.prep);
-        let rows = py.detach(move || run_chunk(&prep, seed, start, count, threads, &keep)).py()?;
+        let rows = py
+            .detach(move || run_chunk(&prep, seed, start, count, threads, &keep))
+            .py()?;
         let n = rows.len();
         let c = self.cells.len();
         let d = PyDict::new(py);
-        d.set_item("run", to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?)?;
-        let grid = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> f64| -> Vec<f64> { rows.iter().flat_map(|r| r.cells.iter().map(f)).collect() };
-        let grid_i = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> i64| -> Vec<i64> { rows.iter().flat_map(|r| r.cells.iter().map(f)).collect() };
-        d.set_item("detected", to_numpy(py, rows.iter().flat_map(|r| r.cells.iter().map(|m| m.detected)).collect::<Vec<bool>>(), &[n, c])?)?;
+        d.set_item(
+            "run",
+            to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?,
+        )?;
+        let grid = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
+            rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
+        };
+        let grid_i = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> i64| -> Vec<i64> {
+            rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
+        };
+        d.set_item(
+            "detected",
+            to_numpy(
+                py,
+                rows.iter()
+                    .flat_map(|r| r.cells.iter().map(|m| m.detected))
+                    .collect::<Vec<bool>>(),
+                &[n, c],
+            )?,
+        )?;
         d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
-        d.set_item("clear_delay", to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?)?;
-        d.set_item("false_alarm_epochs", to_numpy(py, grid_i(&|m| m.false_alarm_epochs as i64), &[n, c])?)?;
-        d.set_item("outside_epochs", to_numpy(py, grid_i(&|m| m.outside_epochs as i64), &[n, c])?)?;
-        d.set_item("wrong_isolations", to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?)?;
-        d.set_item("att_rms", to_numpy(py, rows.iter().map(|r| r.att_rms).collect(), &[n])?)?;
-        d.set_item("att_max", to_numpy(py, rows.iter().map(|r| r.att_max).collect(), &[n])?)?;
-        d.set_item("pos_rms", to_numpy(py, rows.iter().map(|r| r.pos_rms).collect(), &[n])?)?;
-        d.set_item("pos_max", to_numpy(py, rows.iter().map(|r| r.pos_max).collect(), &[n])?)?;
+        d.set_item(
+            "clear_delay",
+            to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?,
+        )?;
+        d.set_item(
+            "false_alarm_epochs",
+            to_numpy(py, grid_i(&|m| m.false_alarm_epochs as i64), &[n, c])?,
+        )?;
+        d.set_item(
+            "outside_epochs",
+            to_numpy(py, grid_i(&|m| m.outside_epochs as i64), &[n, c])?,
+        )?;
+        d.set_item(
+            "wrong_isolations",
+            to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?,
+        )?;
+        d.set_item(
+            "att_rms",
+            to_numpy(py, rows.iter().map(|r| r.att_rms).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "att_max",
+            to_numpy(py, rows.iter().map(|r| r.att_max).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "pos_rms",
+            to_numpy(py, rows.iter().map(|r| r.pos_rms).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "pos_max",
+            to_numpy(py, rows.iter().map(|r| r.pos_max).collect(), &[n])?,
+        )?;
         let recs = PyDict::new(py);
         for r in rows {
             if let Some(rec) = r.record {

@@ -26,14 +26,31 @@ pub fn scenario_trajectory<'py>(py: Python<'py>, spec_json: &str) -> PyResult<Bo
     let t = tr.len();
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, tr.iter().map(|e| e.t).collect(), &[t])?)?;
-    d.set_item("lat", to_numpy(py, tr.iter().map(|e| e.lat).collect(), &[t])?)?;
-    d.set_item("lon", to_numpy(py, tr.iter().map(|e| e.lon).collect(), &[t])?)?;
+    d.set_item(
+        "lat",
+        to_numpy(py, tr.iter().map(|e| e.lat).collect(), &[t])?,
+    )?;
+    d.set_item(
+        "lon",
+        to_numpy(py, tr.iter().map(|e| e.lon).collect(), &[t])?,
+    )?;
     d.set_item("h", to_numpy(py, tr.iter().map(|e| e.h).collect(), &[t])?)?;
-    let v3 = |f: &dyn Fn(&navfdi_core::sim::trajectory::TruthEpoch) -> [f64; 3]| -> Vec<f64> { tr.iter().flat_map(f).collect() };
+    let v3 = |f: &dyn Fn(&navfdi_core::sim::trajectory::TruthEpoch) -> [f64; 3]| -> Vec<f64> {
+        tr.iter().flat_map(f).collect()
+    };
     d.set_item("v", to_numpy(py, v3(&|e| [e.v.x, e.v.y, e.v.z]), &[t, 3])?)?;
-    d.set_item("euler", to_numpy(py, v3(&|e| [e.euler.x, e.euler.y, e.euler.z]), &[t, 3])?)?;
-    d.set_item("f_b", to_numpy(py, v3(&|e| [e.f_b.x, e.f_b.y, e.f_b.z]), &[t, 3])?)?;
-    d.set_item("w_b", to_numpy(py, v3(&|e| [e.w_b.x, e.w_b.y, e.w_b.z]), &[t, 3])?)?;
+    d.set_item(
+        "euler",
+        to_numpy(py, v3(&|e| [e.euler.x, e.euler.y, e.euler.z]), &[t, 3])?,
+    )?;
+    d.set_item(
+        "f_b",
+        to_numpy(py, v3(&|e| [e.f_b.x, e.f_b.y, e.f_b.z]), &[t, 3])?,
+    )?;
+    d.set_item(
+        "w_b",
+        to_numpy(py, v3(&|e| [e.w_b.x, e.w_b.y, e.w_b.z]), &[t, 3])?,
+    )?;
     Ok(d)
 }
 
@@ -75,14 +92,23 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
 /// dict per entry; all share the same truth and measurements. Runs with the GIL released.
 #[pyfunction]
 #[pyo3(signature = (spec_json, seed, stream = 0, isolation = None))]
-pub fn run_scenario<'py>(py: Python<'py>, spec_json: &str, seed: u64, stream: u64, isolation: Option<Vec<bool>>) -> PyResult<Bound<'py, PyList>> {
+pub fn run_scenario<'py>(
+    py: Python<'py>,
+    spec_json: &str,
+    seed: u64,
+    stream: u64,
+    isolation: Option<Vec<bool>>,
+) -> PyResult<Bound<'py, PyList>> {
     let isolation = isolation.unwrap_or_else(|| vec![true]);
     let spec = ScenarioSpec::from_json(spec_json).py()?;
     let records = py
         .detach(move || -> navfdi_core::Result<Vec<RunRecord>> {
             let prep = Prepared::new(spec)?;
             let sim = simulate(&prep, seed, stream);
-            isolation.iter().map(|&iso| run_federated(&prep, &sim, iso)).collect()
+            isolation
+                .iter()
+                .map(|&iso| run_federated(&prep, &sim, iso))
+                .collect()
         })
         .py()?;
     let out = PyList::empty(py);

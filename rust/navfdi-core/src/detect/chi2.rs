@@ -22,7 +22,11 @@ impl ResidualChi2 {
     /// New detector; `pf` in (0, 1).
     pub fn new(pf: f64) -> Result<Self> {
         check_probability("pf", pf)?;
-        Ok(ResidualChi2 { pf, thresholds: Vec::new(), alarm: false })
+        Ok(ResidualChi2 {
+            pf,
+            thresholds: Vec::new(),
+            alarm: false,
+        })
     }
 
     /// False-alarm probability per epoch.
@@ -53,25 +57,49 @@ impl ResidualChi2 {
         let checked = check_residual(r, a)?;
         let dof = checked.idx.len();
         let Some(chol) = checked.chol else {
-            return Ok(Decision { statistic: f64::NAN, threshold: f64::NAN, alarm: self.alarm, dof });
+            return Ok(Decision {
+                statistic: f64::NAN,
+                threshold: f64::NAN,
+                alarm: self.alarm,
+                dof,
+            });
         };
-        let rr = if dof == r.len() { r.clone() } else { r.select_rows(&checked.idx) };
+        let rr = if dof == r.len() {
+            r.clone()
+        } else {
+            r.select_rows(&checked.idx)
+        };
         let statistic = whitened_norm2(&chol, &rr)?;
         let threshold = self.threshold(dof)?;
         let alarm = statistic >= threshold;
         self.alarm = alarm;
-        Ok(Decision { statistic, threshold, alarm, dof })
+        Ok(Decision {
+            statistic,
+            threshold,
+            alarm,
+            dof,
+        })
     }
 
     /// Decide on a statistic computed elsewhere (e.g. [`crate::kalman::Innovation::statistic`],
     /// which is `rᵀA⁻¹r` over `dof` components): no validation, no factorisation.
     pub fn test_statistic(&mut self, statistic: f64, dof: usize) -> Result<Decision> {
         if dof == 0 {
-            return Ok(Decision { statistic: f64::NAN, threshold: f64::NAN, alarm: self.alarm, dof });
+            return Ok(Decision {
+                statistic: f64::NAN,
+                threshold: f64::NAN,
+                alarm: self.alarm,
+                dof,
+            });
         }
         let threshold = self.threshold(dof)?;
         self.alarm = statistic >= threshold;
-        Ok(Decision { statistic, threshold, alarm: self.alarm, dof })
+        Ok(Decision {
+            statistic,
+            threshold,
+            alarm: self.alarm,
+            dof,
+        })
     }
 
     /// Forget the last alarm state.
@@ -82,10 +110,13 @@ impl ResidualChi2 {
 
 /// `rᵀA⁻¹r` as ‖L⁻¹r‖² with `A = LLᵀ`.
 pub(crate) fn whitened_norm2(chol: &Cholesky<f64, Dyn>, r: &DVector<f64>) -> Result<f64> {
-    let w = chol.l_dirty().solve_lower_triangular(r).ok_or_else(|| Error::Numerical {
-        context: "chi-square statistic".into(),
-        detail: "triangular solve failed".into(),
-    })?;
+    let w = chol
+        .l_dirty()
+        .solve_lower_triangular(r)
+        .ok_or_else(|| Error::Numerical {
+            context: "chi-square statistic".into(),
+            detail: "triangular solve failed".into(),
+        })?;
     Ok(w.norm_squared())
 }
 
@@ -104,7 +135,9 @@ mod tests {
         assert!(loud.alarm);
         assert!((loud.threshold - 6.251388631170325).abs() < 1e-9);
         // Missing component: threshold for 2 dof.
-        let part = d.test(&DVector::from_vec(vec![f64::NAN, 1.0, 1.0]), &a).unwrap();
+        let part = d
+            .test(&DVector::from_vec(vec![f64::NAN, 1.0, 1.0]), &a)
+            .unwrap();
         assert_eq!(part.dof, 2);
         assert!((part.threshold - chi2_threshold(0.1, 2).unwrap()).abs() < 1e-12);
     }

@@ -65,12 +65,22 @@ impl JointChi2Sprt {
         if c.dof > 0 {
             self.chi2_alarm = c.alarm;
         }
-        Ok(JointDecision { decision: s, chi2: c, reset: fell })
+        Ok(JointDecision {
+            decision: s,
+            chi2: c,
+            reset: fell,
+        })
     }
 
     /// [`JointChi2Sprt::test`] without validation, with the chi-square statistic computed
     /// elsewhere (`rᵀA⁻¹r` over the `dof` non-NaN components).
-    pub fn test_trusted(&mut self, r: &DVector<f64>, a: &DMatrix<f64>, statistic: f64, dof: usize) -> Result<JointDecision> {
+    pub fn test_trusted(
+        &mut self,
+        r: &DVector<f64>,
+        a: &DMatrix<f64>,
+        statistic: f64,
+        dof: usize,
+    ) -> Result<JointDecision> {
         let c = self.chi2.test_statistic(statistic, dof)?;
         let fell = c.dof > 0 && self.chi2_alarm && !c.alarm;
         if fell {
@@ -80,7 +90,11 @@ impl JointChi2Sprt {
         if c.dof > 0 {
             self.chi2_alarm = c.alarm;
         }
-        Ok(JointDecision { decision: s, chi2: c, reset: fell })
+        Ok(JointDecision {
+            decision: s,
+            chi2: c,
+            reset: fell,
+        })
     }
 
     /// Reset both tests.

@@ -67,7 +67,11 @@ pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Check
     let mut idx = Vec::with_capacity(m);
     for (i, v) in r.iter().enumerate() {
         if v.is_infinite() {
-            return Err(Error::NonFinite { name: "residual".into(), index: format!("[{i}]"), value: *v });
+            return Err(Error::NonFinite {
+                name: "residual".into(),
+                index: format!("[{i}]"),
+                value: *v,
+            });
         }
         if !v.is_nan() {
             idx.push(i);
@@ -88,13 +92,21 @@ pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Check
     if idx.is_empty() {
         return Ok(CheckedResidual { idx, chol: None });
     }
-    let sub = if idx.len() == m { a.clone() } else { a.select_rows(&idx).select_columns(&idx) };
+    let sub = if idx.len() == m {
+        a.clone()
+    } else {
+        a.select_rows(&idx).select_columns(&idx)
+    };
     check_symmetric("covariance", &sub)?;
     let chol = Cholesky::new(sub).ok_or_else(|| Error::NotPositiveDefinite {
         name: "covariance".into(),
-        detail: "Cholesky factorisation of the residual covariance (available components) failed".into(),
+        detail: "Cholesky factorisation of the residual covariance (available components) failed"
+            .into(),
     })?;
-    Ok(CheckedResidual { idx, chol: Some(chol) })
+    Ok(CheckedResidual {
+        idx,
+        chol: Some(chol),
+    })
 }
 
 /// Any of the detectors, for code that configures detectors at run time.
@@ -120,7 +132,13 @@ impl Detector {
 
     /// Test an innovation produced by a filter: no validation, and the chi-square statistic is
     /// taken from `λ = rᵀA⁻¹r` (`statistic`, over `dof` components) instead of re-factoring `A`.
-    pub fn test_innovation(&mut self, r: &DVector<f64>, a: &DMatrix<f64>, statistic: f64, dof: usize) -> Result<Decision> {
+    pub fn test_innovation(
+        &mut self,
+        r: &DVector<f64>,
+        a: &DMatrix<f64>,
+        statistic: f64,
+        dof: usize,
+    ) -> Result<Decision> {
         match self {
             Detector::Chi2(d) => d.test_statistic(statistic, dof),
             Detector::Sprt(d) => Ok(d.test_trusted(r, a)),

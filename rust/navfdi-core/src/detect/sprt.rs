@@ -44,7 +44,14 @@ impl ImprovedSprt {
     /// New detector. `pf`, `pm` in (0, 1) with `pf + pm < 1`.
     pub fn new(pf: f64, pm: f64, variance: SprtVariance) -> Result<Self> {
         let threshold = sprt_threshold(pf, pm)?;
-        Ok(ImprovedSprt { pf, pm, threshold, variance, acc: Vec::new(), alarm: false })
+        Ok(ImprovedSprt {
+            pf,
+            pm,
+            threshold,
+            variance,
+            acc: Vec::new(),
+            alarm: false,
+        })
     }
 
     /// False-alarm probability parameter.
@@ -89,7 +96,10 @@ impl ImprovedSprt {
         if !self.acc.is_empty() && self.acc.len() != m {
             return Err(Error::Shape {
                 name: "residual".into(),
-                expected: format!("({},) as in earlier epochs (call reset_dimension to change)", self.acc.len()),
+                expected: format!(
+                    "({},) as in earlier epochs (call reset_dimension to change)",
+                    self.acc.len()
+                ),
                 got: format!("({m},)"),
             });
         }
@@ -98,7 +108,10 @@ impl ImprovedSprt {
                 if !(a[(j, j)] > 0.0) {
                     return Err(Error::NotPositiveDefinite {
                         name: "covariance".into(),
-                        detail: format!("diagonal element [{j}, {j}] = {} must be positive", a[(j, j)]),
+                        detail: format!(
+                            "diagonal element [{j}, {j}] = {} must be positive",
+                            a[(j, j)]
+                        ),
                     });
                 }
             }
@@ -133,14 +146,28 @@ impl ImprovedSprt {
                 SprtVariance::Known => 1.0,
                 SprtVariance::Sample => acc.m2 / k,
             };
-            acc.lambda = if s2 > 0.0 { k * acc.mean * acc.mean / (2.0 * s2) } else { 0.0 };
+            acc.lambda = if s2 > 0.0 {
+                k * acc.mean * acc.mean / (2.0 * s2)
+            } else {
+                0.0
+            };
         }
         if dof == 0 {
-            return Decision { statistic: f64::NAN, threshold: self.threshold, alarm: self.alarm, dof: 0 };
+            return Decision {
+                statistic: f64::NAN,
+                threshold: self.threshold,
+                alarm: self.alarm,
+                dof: 0,
+            };
         }
         let statistic = self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max);
         self.alarm = statistic >= self.threshold;
-        Decision { statistic, threshold: self.threshold, alarm: self.alarm, dof }
+        Decision {
+            statistic,
+            threshold: self.threshold,
+            alarm: self.alarm,
+            dof,
+        }
     }
 
     /// Reset every accumulator to zero (keeps the residual dimension).
@@ -194,8 +221,11 @@ mod tests {
     #[test]
     fn dimension_is_fixed() {
         let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
-        s.test(&DVector::zeros(2), &DMatrix::identity(2, 2)).unwrap();
-        assert!(s.test(&DVector::zeros(3), &DMatrix::identity(3, 3)).is_err());
+        s.test(&DVector::zeros(2), &DMatrix::identity(2, 2))
+            .unwrap();
+        assert!(s
+            .test(&DVector::zeros(3), &DMatrix::identity(3, 3))
+            .is_err());
         assert_eq!(s.component_counts(), vec![1, 1]);
     }
 }

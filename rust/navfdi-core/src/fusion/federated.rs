@@ -36,8 +36,10 @@
 use crate::detect::{Decision, Detector};
 use crate::error::{Error, Result};
 use crate::kalman::KalmanFilter;
-use crate::validate::{check_covariance, check_finite_matrix, check_len, check_no_inf, check_shape};
 use crate::sim::spec::{FusionMode, IsolatedMode};
+use crate::validate::{
+    check_covariance, check_finite_matrix, check_len, check_no_inf, check_shape,
+};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Configuration of one sub-filter.
@@ -120,20 +122,32 @@ impl FederatedFilter {
         let global = KalmanFilter::new(x0.clone(), p0.clone())?;
         let n = global.dim();
         if subs.is_empty() {
-            return Err(Error::Invalid("subfilters: at least one sub-filter is required".into()));
+            return Err(Error::Invalid(
+                "subfilters: at least one sub-filter is required".into(),
+            ));
         }
         if !(master_share >= 0.0 && master_share.is_finite()) {
-            return Err(Error::InvalidParameter { name: "master_share".into(), value: master_share, requirement: "must be finite and >= 0".into() });
+            return Err(Error::InvalidParameter {
+                name: "master_share".into(),
+                value: master_share,
+                requirement: "must be finite and >= 0".into(),
+            });
         }
         let total: f64 = subs.iter().map(|s| s.share).sum::<f64>() + master_share;
         if (total - 1.0).abs() > 1e-6 {
-            return Err(Error::Invalid(format!("shares must sum to 1 (Σβ_i + master_share = {total})")));
+            return Err(Error::Invalid(format!(
+                "shares must sum to 1 (Σβ_i + master_share = {total})"
+            )));
         }
         let mut built = Vec::with_capacity(subs.len());
         for (i, cfg) in subs.into_iter().enumerate() {
             let label = format!("subfilters[{i}] ({})", cfg.name);
             if !(cfg.share > 0.0 && cfg.share.is_finite()) {
-                return Err(Error::InvalidParameter { name: format!("{label}.share"), value: cfg.share, requirement: "must be > 0".into() });
+                return Err(Error::InvalidParameter {
+                    name: format!("{label}.share"),
+                    value: cfg.share,
+                    requirement: "must be > 0".into(),
+                });
             }
             let m = cfg.h.nrows();
             check_shape(&format!("{label}.H"), &cfg.h, m, n)?;
@@ -142,21 +156,36 @@ impl FederatedFilter {
             check_covariance(&format!("{label}.R"), &cfg.r)?;
             if let Some(k) = cfg.isolation {
                 if k >= cfg.detectors.len() {
-                    return Err(Error::Invalid(format!("{label}.isolation: detector index {k} out of range")));
+                    return Err(Error::Invalid(format!(
+                        "{label}.isolation: detector index {k} out of range"
+                    )));
                 }
             }
             let p = match mode {
                 FusionMode::Reset => &p0 / cfg.share,
                 FusionMode::NoReset => p0.clone(),
             };
-            built.push(SubFilter { kf: KalmanFilter::new(x0.clone(), p)?, cfg, isolated: false });
+            built.push(SubFilter {
+                kf: KalmanFilter::new(x0.clone(), p)?,
+                cfg,
+                isolated: false,
+            });
         }
         let master = if master_share > 0.0 && mode == FusionMode::Reset {
             Some(KalmanFilter::new(x0.clone(), &p0 / master_share)?)
         } else {
             None
         };
-        Ok(FederatedFilter { subs: built, mode, master_share, master, x: x0, p: p0, isolation_enabled, isolated_mode: IsolatedMode::Track })
+        Ok(FederatedFilter {
+            subs: built,
+            mode,
+            master_share,
+            master,
+            x: x0,
+            p: p0,
+            isolation_enabled,
+            isolated_mode: IsolatedMode::Track,
+        })
     }
 
     /// What an isolated sub-filter does (default [`IsolatedMode::Track`]).
@@ -191,7 +220,10 @@ impl FederatedFilter {
 
     /// Detector names of sub-filter `i`.
     pub fn detector_names(&self, i: usize) -> Vec<String> {
-        self.subs.get(i).map(|s| s.cfg.detectors.iter().map(|d| d.0.clone()).collect()).unwrap_or_default()
+        self.subs
+            .get(i)
+            .map(|s| s.cfg.detectors.iter().map(|d| d.0.clone()).collect())
+            .unwrap_or_default()
     }
 
     /// State estimate of sub-filter `i`.
@@ -207,7 +239,10 @@ impl FederatedFilter {
     /// Replace the measurement model of sub-filter `i` (validated).
     pub fn set_model(&mut self, i: usize, h: DMatrix<f64>, r: DMatrix<f64>) -> Result<()> {
         let n = self.x.len();
-        let sub = self.subs.get_mut(i).ok_or_else(|| Error::Invalid(format!("sub-filter index {i} out of range")))?;
+        let sub = self
+            .subs
+            .get_mut(i)
+            .ok_or_else(|| Error::Invalid(format!("sub-filter index {i} out of range")))?;
         let m = sub.cfg.h.nrows();
         check_shape("H", &h, m, n)?;
         check_finite_matrix("H", &h)?;
@@ -226,14 +261,23 @@ impl FederatedFilter {
     }
 
     /// Validate one epoch's inputs: `Φ`, `Q` (n × n) and one measurement per sub-filter.
-    pub fn check_step(&self, phi: &DMatrix<f64>, q: &DMatrix<f64>, zs: &[DVector<f64>]) -> Result<()> {
+    pub fn check_step(
+        &self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        zs: &[DVector<f64>],
+    ) -> Result<()> {
         let n = self.x.len();
         check_shape("Phi", phi, n, n)?;
         check_finite_matrix("Phi", phi)?;
         check_shape("Q", q, n, n)?;
         check_covariance("Q", q)?;
         if zs.len() != self.subs.len() {
-            return Err(Error::Invalid(format!("measurements: {} given for {} sub-filters", zs.len(), self.subs.len())));
+            return Err(Error::Invalid(format!(
+                "measurements: {} given for {} sub-filters",
+                zs.len(),
+                self.subs.len()
+            )));
         }
         for (z, s) in zs.iter().zip(&self.subs) {
             let name = format!("measurements[{}]", s.cfg.name);
@@ -244,7 +288,12 @@ impl FederatedFilter {
     }
 
     /// One validated epoch; on error the filter is unchanged.
-    pub fn step(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, zs: &[DVector<f64>]) -> Result<StepReport> {
+    pub fn step(
+        &mut self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        zs: &[DVector<f64>],
+    ) -> Result<StepReport> {
         self.check_step(phi, q, zs)?;
         let mut work = self.clone();
         let report = work.step_trusted(phi, q, zs)?;
@@ -254,18 +303,31 @@ impl FederatedFilter {
 
     /// One epoch without input validation (for whole-run loops that validated up front).
     /// On error the filter may be partly updated.
-    pub fn step_trusted(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, zs: &[DVector<f64>]) -> Result<StepReport> {
+    pub fn step_trusted(
+        &mut self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        zs: &[DVector<f64>],
+    ) -> Result<StepReport> {
         let reset = self.mode == FusionMode::Reset;
         let mut reports = Vec::with_capacity(self.subs.len());
         for (sub, z) in self.subs.iter_mut().zip(zs) {
             // 1. filter
             let q_scale = if reset { 1.0 / sub.cfg.share } else { 1.0 };
-            sub.kf.predict_scaled(phi, q, q_scale, 1.0).map_err(|e| ctx(&sub.cfg.name, e))?;
-            let (inn, pending) = sub.kf.innovation_pending(z, &sub.cfg.h, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+            sub.kf
+                .predict_scaled(phi, q, q_scale, 1.0)
+                .map_err(|e| ctx(&sub.cfg.name, e))?;
+            let (inn, pending) = sub
+                .kf
+                .innovation_pending(z, &sub.cfg.h, &sub.cfg.r)
+                .map_err(|e| ctx(&sub.cfg.name, e))?;
             // 2. detect
             let mut decisions = Vec::with_capacity(sub.cfg.detectors.len());
             for (_, det) in sub.cfg.detectors.iter_mut() {
-                decisions.push(det.test_innovation(&inn.residual, &inn.covariance, inn.statistic, inn.dof()).map_err(|e| ctx(&sub.cfg.name, e))?);
+                decisions.push(
+                    det.test_innovation(&inn.residual, &inn.covariance, inn.statistic, inn.dof())
+                        .map_err(|e| ctx(&sub.cfg.name, e))?,
+                );
             }
             let was = sub.isolated;
             if self.isolation_enabled {
@@ -275,7 +337,9 @@ impl FederatedFilter {
             }
             if !sub.isolated || self.isolated_mode == IsolatedMode::Update {
                 if let Some(pending) = pending {
-                    sub.kf.apply_pending(pending, &sub.cfg.r).map_err(|e| ctx(&sub.cfg.name, e))?;
+                    sub.kf
+                        .apply_pending(pending, &sub.cfg.r)
+                        .map_err(|e| ctx(&sub.cfg.name, e))?;
                 }
             }
             reports.push(SubReport {
@@ -291,7 +355,9 @@ impl FederatedFilter {
         if let Some(m) = self.master.as_mut() {
             m.predict_scaled(phi, q, 1.0 / self.master_share, 1.0)?;
         }
-        let healthy: Vec<usize> = (0..self.subs.len()).filter(|&i| !reports[i].isolated && !reports[i].reinstated).collect();
+        let healthy: Vec<usize> = (0..self.subs.len())
+            .filter(|&i| !reports[i].isolated && !reports[i].reinstated)
+            .collect();
         let use_master = self.master.is_some() && reset;
         let sources = healthy.len() + usize::from(use_master);
         if sources == 0 {
@@ -310,9 +376,22 @@ impl FederatedFilter {
             // K = P (P + P_i)⁻¹, x ← x + K(x_i − x), P ← P − K P.
             let mut sources_iter = healthy
                 .iter()
-                .map(|&i| (self.subs[i].cfg.name.as_str(), self.subs[i].kf.x(), self.subs[i].kf.p()))
-                .chain(self.master.as_ref().filter(|_| use_master).map(|m| ("master", m.x(), m.p())));
-            let (_, x0, p0) = sources_iter.next().ok_or_else(|| Error::Invalid("fusion: no source".into()))?;
+                .map(|&i| {
+                    (
+                        self.subs[i].cfg.name.as_str(),
+                        self.subs[i].kf.x(),
+                        self.subs[i].kf.p(),
+                    )
+                })
+                .chain(
+                    self.master
+                        .as_ref()
+                        .filter(|_| use_master)
+                        .map(|m| ("master", m.x(), m.p())),
+                );
+            let (_, x0, p0) = sources_iter
+                .next()
+                .ok_or_else(|| Error::Invalid("fusion: no source".into()))?;
             let mut x = x0.clone();
             let mut p = p0.clone();
             let mut k = DMatrix::<f64>::zeros(x.len(), x.len());
@@ -333,7 +412,10 @@ impl FederatedFilter {
                 crate::validate::symmetrize(&mut p);
             }
             if !x.iter().chain(p.iter()).all(|v| v.is_finite()) {
-                return Err(Error::Numerical { context: "fusion".into(), detail: "the fused estimate is not finite".into() });
+                return Err(Error::Numerical {
+                    context: "fusion".into(),
+                    detail: "the fused estimate is not finite".into(),
+                });
             }
             self.x = x;
             self.p = p;
@@ -342,8 +424,13 @@ impl FederatedFilter {
             reports[i].fused = true;
         }
         // 4. reset and reinstatement
-        let share_sum: f64 = healthy.iter().map(|&i| self.subs[i].cfg.share).sum::<f64>() + if use_master { self.master_share } else { 0.0 };
-        let scale = if share_sum > 0.0 { 1.0 / share_sum } else { 1.0 };
+        let share_sum: f64 = healthy.iter().map(|&i| self.subs[i].cfg.share).sum::<f64>()
+            + if use_master { self.master_share } else { 0.0 };
+        let scale = if share_sum > 0.0 {
+            1.0 / share_sum
+        } else {
+            1.0
+        };
         for (i, sub) in self.subs.iter_mut().enumerate() {
             let r = &reports[i];
             let track = r.isolated && self.isolated_mode == IsolatedMode::Track;
@@ -362,14 +449,23 @@ impl FederatedFilter {
                 m.set_state_scaled(&self.x, &self.p, 1.0 / beta);
             }
         }
-        Ok(StepReport { subs: reports, sources })
+        Ok(StepReport {
+            subs: reports,
+            sources,
+        })
     }
 }
 
 fn ctx(name: &str, e: Error) -> Error {
     match e {
-        Error::NotPositiveDefinite { name: n, detail } => Error::NotPositiveDefinite { name: format!("sub-filter {name}: {n}"), detail },
-        Error::Numerical { context, detail } => Error::Numerical { context: format!("sub-filter {name}: {context}"), detail },
+        Error::NotPositiveDefinite { name: n, detail } => Error::NotPositiveDefinite {
+            name: format!("sub-filter {name}: {n}"),
+            detail,
+        },
+        Error::Numerical { context, detail } => Error::Numerical {
+            context: format!("sub-filter {name}: {context}"),
+            detail,
+        },
         other => Error::Invalid(format!("sub-filter {name}: {other}")),
     }
 }

@@ -108,9 +108,15 @@ impl ErrorModel {
         // ∂δω_en/∂δv (columns vE, vN, vU) and ∂δω_en/∂δp (columns δL, δλ, δh).
         let den_dv = Matrix3::new(0.0, -1.0 / rm, 0.0, 1.0 / rn, 0.0, 0.0, tl / rn, 0.0, 0.0);
         let den_dp = Matrix3::new(
-            0.0, 0.0, v.y / (rm * rm),
-            0.0, 0.0, -v.x / (rn * rn),
-            v.x / (cl * cl * rn), 0.0, -v.x * tl / (rn * rn),
+            0.0,
+            0.0,
+            v.y / (rm * rm),
+            0.0,
+            0.0,
+            -v.x / (rn * rn),
+            v.x / (cl * cl * rn),
+            0.0,
+            -v.x * tl / (rn * rn),
         );
         // ∂δω_ie/∂δp: only δL.
         let die_dp = Matrix3::new(0.0, 0.0, 0.0, -w * sl, 0.0, 0.0, w * cl, 0.0, 0.0);
@@ -136,9 +142,15 @@ impl ErrorModel {
         // Position.
         let pv = Matrix3::new(0.0, 1.0 / rm, 0.0, 1.0 / (cl * rn), 0.0, 0.0, 0.0, 0.0, 1.0);
         let pp = Matrix3::new(
-            0.0, 0.0, -v.y / (rm * rm),
-            v.x * tl / (cl * rn), 0.0, -v.x / (cl * rn * rn),
-            0.0, 0.0, 0.0,
+            0.0,
+            0.0,
+            -v.y / (rm * rm),
+            v.x * tl / (cl * rn),
+            0.0,
+            -v.x / (cl * rn * rn),
+            0.0,
+            0.0,
+            0.0,
         );
         put(POS, VEL, &pv);
         put(POS, POS, &pp);
@@ -255,7 +267,13 @@ mod tests {
         let m = model();
         let v = Vector3::new(80.0, 40.0, 5.0);
         let (lat, h) = (0.4, 800.0);
-        let k = Kinematics { lat, h, v, f_n: Vector3::new(0.1, 0.2, 9.8), c_bn: Matrix3::identity() };
+        let k = Kinematics {
+            lat,
+            h,
+            v,
+            f_n: Vector3::new(0.1, 0.2, 9.8),
+            c_bn: Matrix3::identity(),
+        };
         let f = m.f_matrix(&k);
         let acc = |lat: f64, h: f64, v: Vector3<f64>| {
             let rm = earth::r_meridian(lat) + h;
@@ -289,7 +307,12 @@ mod tests {
         let d_l = (acc_frozen(1e-7, 0.0) - acc_frozen(0.0, 0.0)) / 1e-7;
         let d_h = (acc_frozen(0.0, 1e-2) - acc_frozen(0.0, 0.0)) / 1e-2;
         for i in 0..3 {
-            assert!((f[(VEL + i, POS)] - d_l[i]).abs() < 1e-9, "dL {i}: {} vs {}", f[(VEL + i, POS)], d_l[i]);
+            assert!(
+                (f[(VEL + i, POS)] - d_l[i]).abs() < 1e-9,
+                "dL {i}: {} vs {}",
+                f[(VEL + i, POS)],
+                d_l[i]
+            );
             assert!((f[(VEL + i, POS + 2)] - d_h[i]).abs() < 1e-9, "dh {i}");
         }
     }

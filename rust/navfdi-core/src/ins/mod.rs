@@ -7,4 +7,4 @@
 pub mod earth;
 pub mod error_model;
 
-pub use error_model::{ErrorModel, InsErrorParams, ATT, ACC, GYRO, N_STATES, POS, VEL};
+pub use error_model::{ErrorModel, InsErrorParams, ACC, ATT, GYRO, N_STATES, POS, VEL};

@@ -5,9 +5,6 @@
 //! measurement models), then any number of runs draw their noise from a generator seeded by
 //! `(seed, run index)` ([`noise::simulate`]) and filter it ([`run::run_federated`]).
 
-
-
-
 pub mod montecarlo;
 pub mod noise;
 pub mod prepare;

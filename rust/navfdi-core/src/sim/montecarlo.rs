@@ -81,12 +81,22 @@ pub fn cells(prep: &Prepared) -> Vec<Cell> {
     let spec = &prep.spec;
     let mut out = Vec::new();
     for (si, sf) in spec.federated.subfilters.iter().enumerate() {
-        let faults: Vec<usize> = (0..spec.faults.len()).filter(|&f| spec.faults[f].sensor == sf.sensor).collect();
+        let faults: Vec<usize> = (0..spec.faults.len())
+            .filter(|&f| spec.faults[f].sensor == sf.sensor)
+            .collect();
         for di in 0..sf.detectors.len() {
             for &f in &faults {
-                out.push(Cell { subfilter: si, detector: di, fault: Some(f) });
+                out.push(Cell {
+                    subfilter: si,
+                    detector: di,
+                    fault: Some(f),
+                });
             }
-            out.push(Cell { subfilter: si, detector: di, fault: None });
+            out.push(Cell {
+                subfilter: si,
+                detector: di,
+                fault: None,
+            });
         }
     }
     out
@@ -121,15 +131,27 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         let sub = &rec.subs[c.subfilter];
         let det = &sub.detectors[c.detector];
         let sensor = &spec.federated.subfilters[c.subfilter].sensor;
-        let mut faults: Vec<&crate::sim::spec::FaultSpec> = spec.faults.iter().filter(|f| &f.sensor == sensor).collect();
+        let mut faults: Vec<&crate::sim::spec::FaultSpec> =
+            spec.faults.iter().filter(|f| &f.sensor == sensor).collect();
         faults.sort_by(|a, b| a.start.total_cmp(&b.start));
         let ivs = intervals(&det.alarm);
-        let mut m = CellMetrics { detected: false, delay: f64::NAN, clear_delay: f64::NAN, false_alarm_epochs: 0, outside_epochs: 0, wrong_isolations: 0 };
+        let mut m = CellMetrics {
+            detected: false,
+            delay: f64::NAN,
+            clear_delay: f64::NAN,
+            false_alarm_epochs: 0,
+            outside_epochs: 0,
+            wrong_isolations: 0,
+        };
         match c.fault {
             Some(fi) => {
                 let f = &spec.faults[fi];
                 // Previous fault end on the same sensor.
-                let prev_end = faults.iter().filter(|g| g.start < f.start).map(|g| g.end).fold(f64::NEG_INFINITY, f64::max);
+                let prev_end = faults
+                    .iter()
+                    .filter(|g| g.start < f.start)
+                    .map(|g| g.end)
+                    .fold(f64::NEG_INFINITY, f64::max);
                 let matched: Vec<&(usize, Option<usize>)> = ivs
                     .iter()
                     .filter(|(s, e)| {
@@ -154,7 +176,8 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
                         }
                     }
                 }
-                let isolating = spec.federated.subfilters[c.subfilter].isolation.as_deref() == Some(det.name.as_str());
+                let isolating = spec.federated.subfilters[c.subfilter].isolation.as_deref()
+                    == Some(det.name.as_str());
                 if isolating {
                     for (s, e) in intervals(&sub.isolated) {
                         let ts = t[s];
@@ -192,9 +215,16 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
 }
 
 /// One run: simulate, filter with isolation, reduce.
-pub fn one_run(prep: &Prepared, seed: u64, run: u64, cells: &[Cell], keep: bool) -> Result<RunMetrics> {
+pub fn one_run(
+    prep: &Prepared,
+    seed: u64,
+    run: u64,
+    cells: &[Cell],
+    keep: bool,
+) -> Result<RunMetrics> {
     let sim = simulate(prep, seed, run);
-    let rec = run_federated(prep, &sim, true).map_err(|e| Error::Invalid(format!("run {run}: {e}")))?;
+    let rec =
+        run_federated(prep, &sim, true).map_err(|e| Error::Invalid(format!("run {run}: {e}")))?;
     let mut m = metrics(prep, run, &rec, cells);
     if keep {
         m.record = Some(rec);
@@ -204,13 +234,25 @@ pub fn one_run(prep: &Prepared, seed: u64, run: u64, cells: &[Cell], keep: bool)
 
 /// Runs `start..start + count` on `threads` threads (0: rayon's default), in run order. Runs
 /// whose index is in `keep` also return their full record.
-pub fn run_chunk(prep: &Prepared, seed: u64, start: u64, count: u64, threads: usize, keep: &[u64]) -> Result<Vec<RunMetrics>> {
+pub fn run_chunk(
+    prep: &Prepared,
+    seed: u64,
+    start: u64,
+    count: u64,
+    threads: usize,
+    keep: &[u64],
+) -> Result<Vec<RunMetrics>> {
     if start.checked_add(count).is_none() {
-        return Err(Error::Invalid(format!("runs {start} + {count}: the run index would overflow")));
+        return Err(Error::Invalid(format!(
+            "runs {start} + {count}: the run index would overflow"
+        )));
     }
     let cells = cells(prep);
     let work = || -> Result<Vec<RunMetrics>> {
-        (start..start + count).into_par_iter().map(|i| one_run(prep, seed, i, &cells, keep.contains(&i))).collect()
+        (start..start + count)
+            .into_par_iter()
+            .map(|i| one_run(prep, seed, i, &cells, keep.contains(&i)))
+            .collect()
     };
     if threads == 0 {
         return work();
@@ -218,7 +260,11 @@ pub fn run_chunk(prep: &Prepared, seed: u64, start: u64, count: u64, threads: us
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
-        .map_err(|e| Error::Invalid(format!("workers = {threads}: cannot start a thread pool: {e}")))?;
+        .map_err(|e| {
+            Error::Invalid(format!(
+                "workers = {threads}: cannot start a thread pool: {e}"
+            ))
+        })?;
     pool.install(work)
 }
 

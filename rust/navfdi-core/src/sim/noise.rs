@@ -32,7 +32,12 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
     let epochs = prep.epochs();
     let mut x = &prep.p0_factor * normals(&mut rng, n);
     let mut x_true = Vec::with_capacity(epochs);
-    let mut z: Vec<Vec<DVector<f64>>> = prep.spec.sensors.iter().map(|_| Vec::with_capacity(epochs)).collect();
+    let mut z: Vec<Vec<DVector<f64>>> = prep
+        .spec
+        .sensors
+        .iter()
+        .map(|_| Vec::with_capacity(epochs))
+        .collect();
     for k in 0..epochs {
         if k > 0 {
             let w = &prep.q_factor[k] * normals(&mut rng, n);

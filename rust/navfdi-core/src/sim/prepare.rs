@@ -77,12 +77,19 @@ pub fn psd_factor(name: &str, m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     let mut c = DMatrix::zeros(n, n);
     for i in 0..n {
         for j in 0..n {
-            c[(i, j)] = if s[i] > 0.0 && s[j] > 0.0 { m[(i, j)] / (s[i] * s[j]) } else { 0.0 };
+            c[(i, j)] = if s[i] > 0.0 && s[j] > 0.0 {
+                m[(i, j)] / (s[i] * s[j])
+            } else {
+                0.0
+            };
         }
         c[(i, i)] = 1.0 + 1e-12;
     }
     let l = Cholesky::new(c)
-        .ok_or_else(|| Error::NotPositiveDefinite { name: name.to_string(), detail: "cannot factor to draw noise".into() })?
+        .ok_or_else(|| Error::NotPositiveDefinite {
+            name: name.to_string(),
+            detail: "cannot factor to draw noise".into(),
+        })?
         .unpack();
     Ok(DMatrix::from_fn(n, n, |i, j| s[i] * l[(i, j)]))
 }
@@ -116,16 +123,30 @@ impl Prepared {
         let mut available = Vec::new();
         let mut fault = Vec::new();
         for (si, s) in spec.sensors.iter().enumerate() {
-            h.push(truth.iter().map(|e| measurement_matrix(s.kind, e.lat, e.h)).collect());
-            r.push(DMatrix::from_diagonal(&DVector::from_iterator(s.noise.len(), s.noise.iter().map(|n| n * n))));
+            h.push(
+                truth
+                    .iter()
+                    .map(|e| measurement_matrix(s.kind, e.lat, e.h))
+                    .collect(),
+            );
+            r.push(DMatrix::from_diagonal(&DVector::from_iterator(
+                s.noise.len(),
+                s.noise.iter().map(|n| n * n),
+            )));
             let period = (1.0 / (s.rate * dt)).round().max(1.0) as usize;
             available.push(
                 (0..epochs)
-                    .map(|k| k % period == 0 && !s.outages.iter().any(|w| t[k] >= w[0] && t[k] < w[1]))
+                    .map(|k| {
+                        k % period == 0 && !s.outages.iter().any(|w| t[k] >= w[0] && t[k] < w[1])
+                    })
                     .collect(),
             );
             let m = s.kind.dim();
-            let faults: Vec<_> = spec.faults.iter().filter(|f| spec.sensor_index(&f.sensor) == Some(si)).collect();
+            let faults: Vec<_> = spec
+                .faults
+                .iter()
+                .filter(|f| spec.sensor_index(&f.sensor) == Some(si))
+                .collect();
             fault.push(
                 t.iter()
                     .map(|&tk| {
@@ -140,7 +161,20 @@ impl Prepared {
                     .collect(),
             );
         }
-        Ok(Prepared { spec, t, truth, phi, q, q_factor, p0, p0_factor, h, r, available, fault })
+        Ok(Prepared {
+            spec,
+            t,
+            truth,
+            phi,
+            q,
+            q_factor,
+            p0,
+            p0_factor,
+            h,
+            r,
+            available,
+            fault,
+        })
     }
 
     /// Number of epochs.

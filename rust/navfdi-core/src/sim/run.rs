@@ -42,7 +42,9 @@ pub struct SubRecord {
 }
 
 /// Names of the 9 navigation-error columns of [`RunRecord::error`].
-pub const ERROR_COLUMNS: [&str; 9] = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"];
+pub const ERROR_COLUMNS: [&str; 9] = [
+    "att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u",
+];
 
 /// Outputs of one run.
 #[derive(Debug, Clone, PartialEq)]
@@ -61,8 +63,17 @@ pub struct RunRecord {
 }
 
 /// Build a detector from its spec (validated by the scenario).
-pub fn make_detector(kind: DetectorKind, pf: f64, pm: Option<f64>, variance: Option<&str>) -> Result<Detector> {
-    let var = if variance == Some("sample") { SprtVariance::Sample } else { SprtVariance::Known };
+pub fn make_detector(
+    kind: DetectorKind,
+    pf: f64,
+    pm: Option<f64>,
+    variance: Option<&str>,
+) -> Result<Detector> {
+    let var = if variance == Some("sample") {
+        SprtVariance::Sample
+    } else {
+        SprtVariance::Known
+    };
     let pm = pm.unwrap_or(pf);
     Ok(match kind {
         DetectorKind::Chi2 => Detector::Chi2(ResidualChi2::new(pf)?),
@@ -93,9 +104,15 @@ pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter>
         let si = spec.sensor_index(&sf.sensor).unwrap_or(0);
         let mut detectors = Vec::new();
         for d in &sf.detectors {
-            detectors.push((d.name.clone(), make_detector(d.kind, d.pf, d.pm, d.variance.as_deref())?));
+            detectors.push((
+                d.name.clone(),
+                make_detector(d.kind, d.pf, d.pm, d.variance.as_deref())?,
+            ));
         }
-        let isolation_idx = sf.isolation.as_ref().and_then(|n| sf.detectors.iter().position(|d| &d.name == n));
+        let isolation_idx = sf
+            .isolation
+            .as_ref()
+            .and_then(|n| sf.detectors.iter().position(|d| &d.name == n));
         subs.push(SubFilterConfig {
             name: sf.sensor.clone(),
             h: prep.h[si][0].clone(),
@@ -123,8 +140,21 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
     let spec = &prep.spec;
     let mut fed = build_filter(prep, isolation)?;
     let epochs = prep.epochs();
-    let sensor_idx: Vec<usize> = spec.federated.subfilters.iter().map(|sf| spec.sensor_index(&sf.sensor).unwrap_or(0)).collect();
-    let varying_h: Vec<bool> = sensor_idx.iter().map(|&si| !matches!(spec.sensors[si].kind, SensorKind::Cns | SensorKind::GnssVelocity | SensorKind::Baro)).collect();
+    let sensor_idx: Vec<usize> = spec
+        .federated
+        .subfilters
+        .iter()
+        .map(|sf| spec.sensor_index(&sf.sensor).unwrap_or(0))
+        .collect();
+    let varying_h: Vec<bool> = sensor_idx
+        .iter()
+        .map(|&si| {
+            !matches!(
+                spec.sensors[si].kind,
+                SensorKind::Cns | SensorKind::GnssVelocity | SensorKind::Baro
+            )
+        })
+        .collect();
     let mut rec = RunRecord {
         t: prep.t.clone(),
         error: Vec::with_capacity(epochs * 9),
@@ -144,7 +174,12 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
                 detectors: sf
                     .detectors
                     .iter()
-                    .map(|d| DetectorRecord { name: d.name.clone(), statistic: Vec::new(), threshold: Vec::new(), alarm: Vec::new() })
+                    .map(|d| DetectorRecord {
+                        name: d.name.clone(),
+                        statistic: Vec::new(),
+                        threshold: Vec::new(),
+                        alarm: Vec::new(),
+                    })
                     .collect(),
             })
             .collect(),
@@ -158,7 +193,9 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
                 fed.set_h_trusted(i, &prep.h[si][k]);
             }
         }
-        let rep = fed.step_trusted(&prep.phi[k], &prep.q[k], &zs).map_err(|e| crate::run::at_epoch(k, e))?;
+        let rep = fed
+            .step_trusted(&prep.phi[k], &prep.q[k], &zs)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
         rec.sources.push(rep.sources as u32);
         for (sub, r) in rec.subs.iter_mut().zip(&rep.subs) {
             sub.statistic.push(r.statistic);
@@ -183,4 +220,3 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
     }
     Ok(rec)
 }
-

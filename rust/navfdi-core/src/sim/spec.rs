@@ -318,7 +318,8 @@ fn non_negative(path: &str, v: f64) -> Result<()> {
 impl ScenarioSpec {
     /// Parse from JSON (the form the Python layer produces) and validate.
     pub fn from_json(s: &str) -> Result<Self> {
-        let spec: ScenarioSpec = serde_json::from_str(s).map_err(|e| Error::Invalid(format!("scenario: {e}")))?;
+        let spec: ScenarioSpec =
+            serde_json::from_str(s).map_err(|e| Error::Invalid(format!("scenario: {e}")))?;
         spec.validate()?;
         Ok(spec)
     }
@@ -343,20 +344,39 @@ impl ScenarioSpec {
         positive("duration", self.duration)?;
         positive("dt", self.dt)?;
         if self.epochs() < 1 {
-            return Err(bad("duration", format!("{} s is shorter than one filter period dt = {} s", self.duration, self.dt)));
+            return Err(bad(
+                "duration",
+                format!(
+                    "{} s is shorter than one filter period dt = {} s",
+                    self.duration, self.dt
+                ),
+            ));
         }
         let tr = &self.trajectory;
         if !(tr.latitude.abs() < 89.0f64.to_radians()) {
-            return Err(bad("trajectory.latitude", format!("{} rad: must be within ±89° (the ENU model is singular at the poles)", tr.latitude)));
+            return Err(bad(
+                "trajectory.latitude",
+                format!(
+                    "{} rad: must be within ±89° (the ENU model is singular at the poles)",
+                    tr.latitude
+                ),
+            ));
         }
-        for (p, v) in [("trajectory.longitude", tr.longitude), ("trajectory.height", tr.height), ("trajectory.heading", tr.heading)] {
+        for (p, v) in [
+            ("trajectory.longitude", tr.longitude),
+            ("trajectory.height", tr.height),
+            ("trajectory.heading", tr.heading),
+        ] {
             if !v.is_finite() {
                 return Err(bad(p, format!("{v} must be finite")));
             }
         }
         non_negative("trajectory.speed", tr.speed)?;
         if tr.segments.is_empty() {
-            return Err(bad("trajectory.segments", "at least one segment is required"));
+            return Err(bad(
+                "trajectory.segments",
+                "at least one segment is required",
+            ));
         }
         for (i, s) in tr.segments.iter().enumerate() {
             let p = format!("trajectory.segments[{i}]");
@@ -365,8 +385,12 @@ impl ScenarioSpec {
                 SegmentSpec::Accelerate { acceleration, .. } if !acceleration.is_finite() => {
                     return Err(bad(format!("{p}.acceleration"), "must be finite"));
                 }
-                SegmentSpec::Climb { rate, .. } | SegmentSpec::Descent { rate, .. } => positive(&format!("{p}.rate"), *rate)?,
-                SegmentSpec::Turn { rate, .. } if !rate.is_finite() => return Err(bad(format!("{p}.rate"), "must be finite")),
+                SegmentSpec::Climb { rate, .. } | SegmentSpec::Descent { rate, .. } => {
+                    positive(&format!("{p}.rate"), *rate)?
+                }
+                SegmentSpec::Turn { rate, .. } if !rate.is_finite() => {
+                    return Err(bad(format!("{p}.rate"), "must be finite"))
+                }
                 _ => {}
             }
         }
@@ -385,7 +409,12 @@ impl ScenarioSpec {
         }
         positive("ins.gyro_tau", ins.gyro_tau)?;
         positive("ins.accel_tau", ins.accel_tau)?;
-        for p in [ins.init_level, ins.init_heading, ins.init_velocity, ins.init_position] {
+        for p in [
+            ins.init_level,
+            ins.init_heading,
+            ins.init_velocity,
+            ins.init_position,
+        ] {
             if p == 0.0 {
                 return Err(bad("ins", "initial-error standard deviations must be positive (P0 must be positive definite)"));
             }
@@ -400,12 +429,21 @@ impl ScenarioSpec {
                 return Err(bad(format!("{p}.name"), "must not be empty"));
             }
             if self.sensors[..i].iter().any(|o| o.name == s.name) {
-                return Err(bad(format!("{p}.name"), format!("{:?} is used by an earlier sensor", s.name)));
+                return Err(bad(
+                    format!("{p}.name"),
+                    format!("{:?} is used by an earlier sensor", s.name),
+                ));
             }
             if s.noise.len() != s.kind.dim() {
                 return Err(bad(
                     format!("{p}.noise"),
-                    format!("{} values given; a {:?} sensor has {} components ({})", s.noise.len(), s.kind, s.kind.dim(), s.kind.components().join(", ")),
+                    format!(
+                        "{} values given; a {:?} sensor has {} components ({})",
+                        s.noise.len(),
+                        s.kind,
+                        s.kind.dim(),
+                        s.kind.components().join(", ")
+                    ),
                 ));
             }
             for (j, n) in s.noise.iter().enumerate() {
@@ -413,86 +451,162 @@ impl ScenarioSpec {
             }
             positive(&format!("{p}.rate"), s.rate)?;
             if s.rate * self.dt > 1.0 + 1e-9 {
-                return Err(bad(format!("{p}.rate"), format!("{} Hz exceeds the filter rate 1/dt = {} Hz", s.rate, 1.0 / self.dt)));
+                return Err(bad(
+                    format!("{p}.rate"),
+                    format!(
+                        "{} Hz exceeds the filter rate 1/dt = {} Hz",
+                        s.rate,
+                        1.0 / self.dt
+                    ),
+                ));
             }
             for (j, w) in s.outages.iter().enumerate() {
                 if !(w[0].is_finite() && w[1].is_finite() && w[0] < w[1]) {
-                    return Err(bad(format!("{p}.outages[{j}]"), format!("[{}, {}] must be a finite window with start < end", w[0], w[1])));
+                    return Err(bad(
+                        format!("{p}.outages[{j}]"),
+                        format!(
+                            "[{}, {}] must be a finite window with start < end",
+                            w[0], w[1]
+                        ),
+                    ));
                 }
             }
         }
         for (i, f) in self.faults.iter().enumerate() {
             let p = format!("faults[{i}]");
             if self.faults[..i].iter().any(|o| o.id == f.id) {
-                return Err(bad(format!("{p}.id"), format!("{:?} is used by an earlier fault", f.id)));
+                return Err(bad(
+                    format!("{p}.id"),
+                    format!("{:?} is used by an earlier fault", f.id),
+                ));
             }
             let Some(si) = self.sensor_index(&f.sensor) else {
-                return Err(bad(format!("{p}.sensor"), format!("{:?} is not a sensor (known: {})", f.sensor, self.sensor_names())));
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!(
+                        "{:?} is not a sensor (known: {})",
+                        f.sensor,
+                        self.sensor_names()
+                    ),
+                ));
             };
             let dim = self.sensors[si].kind.dim();
             if f.components.is_empty() {
-                return Err(bad(format!("{p}.components"), "at least one component is required"));
+                return Err(bad(
+                    format!("{p}.components"),
+                    "at least one component is required",
+                ));
             }
             for (j, c) in f.components.iter().enumerate() {
                 if *c >= dim {
-                    return Err(bad(format!("{p}.components[{j}]"), format!("index {c} out of range for sensor {:?} with {dim} components", f.sensor)));
+                    return Err(bad(
+                        format!("{p}.components[{j}]"),
+                        format!(
+                            "index {c} out of range for sensor {:?} with {dim} components",
+                            f.sensor
+                        ),
+                    ));
                 }
             }
             if !f.magnitude.is_finite() {
                 return Err(bad(format!("{p}.magnitude"), "must be finite"));
             }
             if !(f.start.is_finite() && f.end.is_finite() && f.start < f.end) {
-                return Err(bad(p.clone(), format!("window start = {}, end = {} must be finite with start < end", f.start, f.end)));
+                return Err(bad(
+                    p.clone(),
+                    format!(
+                        "window start = {}, end = {} must be finite with start < end",
+                        f.start, f.end
+                    ),
+                ));
             }
         }
         let fed = &self.federated;
         non_negative("federated.master_share", fed.master_share)?;
         if fed.subfilters.is_empty() {
-            return Err(bad("federated.subfilters", "at least one sub-filter is required"));
+            return Err(bad(
+                "federated.subfilters",
+                "at least one sub-filter is required",
+            ));
         }
         let mut total = fed.master_share;
         for (i, sf) in fed.subfilters.iter().enumerate() {
             let p = format!("federated.subfilters[{i}]");
             if self.sensor_index(&sf.sensor).is_none() {
-                return Err(bad(format!("{p}.sensor"), format!("{:?} is not a sensor (known: {})", sf.sensor, self.sensor_names())));
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!(
+                        "{:?} is not a sensor (known: {})",
+                        sf.sensor,
+                        self.sensor_names()
+                    ),
+                ));
             }
             if fed.subfilters[..i].iter().any(|o| o.sensor == sf.sensor) {
-                return Err(bad(format!("{p}.sensor"), format!("sensor {:?} already has a sub-filter", sf.sensor)));
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!("sensor {:?} already has a sub-filter", sf.sensor),
+                ));
             }
             positive(&format!("{p}.share"), sf.share)?;
             total += sf.share;
             for (j, d) in sf.detectors.iter().enumerate() {
                 let dp = format!("{p}.detectors[{j}]");
                 if d.name.is_empty() || sf.detectors[..j].iter().any(|o| o.name == d.name) {
-                    return Err(bad(format!("{dp}.name"), format!("{:?} must be non-empty and unique in the sub-filter", d.name)));
+                    return Err(bad(
+                        format!("{dp}.name"),
+                        format!(
+                            "{:?} must be non-empty and unique in the sub-filter",
+                            d.name
+                        ),
+                    ));
                 }
-                crate::validate::check_probability(&format!("{dp}.pf"), d.pf).map_err(|e| Error::Invalid(e.to_string()))?;
+                crate::validate::check_probability(&format!("{dp}.pf"), d.pf)
+                    .map_err(|e| Error::Invalid(e.to_string()))?;
                 match (d.kind, d.pm) {
                     (DetectorKind::Chi2, _) => {}
-                    (_, None) => return Err(bad(format!("{dp}.pm"), "required for sprt and joint detectors")),
+                    (_, None) => {
+                        return Err(bad(
+                            format!("{dp}.pm"),
+                            "required for sprt and joint detectors",
+                        ))
+                    }
                     (_, Some(pm)) => {
                         crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(dp.clone(), e))?;
                     }
                 }
                 if let Some(v) = &d.variance {
                     if v != "known" && v != "sample" {
-                        return Err(bad(format!("{dp}.variance"), format!("{v:?} must be \"known\" or \"sample\"")));
+                        return Err(bad(
+                            format!("{dp}.variance"),
+                            format!("{v:?} must be \"known\" or \"sample\""),
+                        ));
                     }
                 }
             }
             if let Some(iso) = &sf.isolation {
                 if !sf.detectors.iter().any(|d| &d.name == iso) {
-                    return Err(bad(format!("{p}.isolation"), format!("{iso:?} is not one of this sub-filter's detectors")));
+                    return Err(bad(
+                        format!("{p}.isolation"),
+                        format!("{iso:?} is not one of this sub-filter's detectors"),
+                    ));
                 }
             }
         }
         if (total - 1.0).abs() > 1e-6 {
-            return Err(bad("federated", format!("shares must sum to 1 (Σβ_i + master_share = {total})")));
+            return Err(bad(
+                "federated",
+                format!("shares must sum to 1 (Σβ_i + master_share = {total})"),
+            ));
         }
         Ok(())
     }
 
     fn sensor_names(&self) -> String {
-        self.sensors.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ")
+        self.sensors
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 }

@@ -42,7 +42,13 @@ pub struct TruthEpoch {
 impl TruthEpoch {
     /// What the error model needs.
     pub fn kinematics(&self) -> Kinematics {
-        Kinematics { lat: self.lat, h: self.h, v: self.v, f_n: self.f_n, c_bn: self.c_bn }
+        Kinematics {
+            lat: self.lat,
+            h: self.h,
+            v: self.v,
+            f_n: self.f_n,
+            c_bn: self.c_bn,
+        }
     }
 }
 
@@ -65,7 +71,13 @@ struct Motion {
 
 fn motion_at(spec: &TrajectorySpec, t: f64) -> Motion {
     // Replay segments up to time t (closed form within each segment).
-    let mut m = Motion { speed: spec.speed, heading: spec.heading, vu: 0.0, accel: 0.0, turn: 0.0 };
+    let mut m = Motion {
+        speed: spec.speed,
+        heading: spec.heading,
+        vu: 0.0,
+        accel: 0.0,
+        turn: 0.0,
+    };
     let mut t0 = 0.0;
     let n = spec.segments.len();
     for (i, seg) in spec.segments.iter().enumerate() {
@@ -119,7 +131,11 @@ pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch
         let g = earth::gravity(lat, h);
         let roll = (m.speed * m.turn / g).atan();
         let pitch = m.vu.atan2(m.speed.max(1e-9));
-        let pitch = if m.speed < 1e-9 && m.vu == 0.0 { 0.0 } else { pitch };
+        let pitch = if m.speed < 1e-9 && m.vu == 0.0 {
+            0.0
+        } else {
+            pitch
+        };
         let c = c_bn(roll, pitch, m.heading);
         let rm = earth::r_meridian(lat) + h;
         let rn = earth::r_normal(lat) + h;
@@ -137,10 +153,18 @@ pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch
         let eps = 1e-3;
         let m2 = motion_at(spec, t + eps);
         let roll2 = (m2.speed * m2.turn / g).atan();
-        let pitch2 = if m2.speed < 1e-9 && m2.vu == 0.0 { 0.0 } else { m2.vu.atan2(m2.speed.max(1e-9)) };
+        let pitch2 = if m2.speed < 1e-9 && m2.vu == 0.0 {
+            0.0
+        } else {
+            m2.vu.atan2(m2.speed.max(1e-9))
+        };
         let c2 = c_bn(roll2, pitch2, m2.heading);
         let d = c.transpose() * c2; // ≈ I + [ω_nb^b ×] eps
-        let w_nb = Vector3::new(d[(2, 1)] - d[(1, 2)], d[(0, 2)] - d[(2, 0)], d[(1, 0)] - d[(0, 1)]) / (2.0 * eps);
+        let w_nb = Vector3::new(
+            d[(2, 1)] - d[(1, 2)],
+            d[(0, 2)] - d[(2, 0)],
+            d[(1, 0)] - d[(0, 1)],
+        ) / (2.0 * eps);
         let w_b = c.transpose() * (w_ie + w_en) + w_nb;
         out.push(TruthEpoch {
             t,
@@ -159,7 +183,11 @@ pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch
         for s in 0..sub {
             let ts = t + (s as f64 + 0.5) * hs;
             let ms = motion_at(spec, ts);
-            let vs = Vector3::new(ms.speed * ms.heading.sin(), ms.speed * ms.heading.cos(), ms.vu);
+            let vs = Vector3::new(
+                ms.speed * ms.heading.sin(),
+                ms.speed * ms.heading.cos(),
+                ms.vu,
+            );
             let rm = earth::r_meridian(lat) + h;
             let rn = earth::r_normal(lat) + h;
             lat += vs.y / rm * hs;
@@ -175,16 +203,32 @@ mod tests {
     use super::*;
 
     fn spec(segments: Vec<SegmentSpec>) -> TrajectorySpec {
-        TrajectorySpec { latitude: 20f64.to_radians(), longitude: 110f64.to_radians(), height: 500.0, heading: 0.0, speed: 0.0, segments }
+        TrajectorySpec {
+            latitude: 20f64.to_radians(),
+            longitude: 110f64.to_radians(),
+            height: 500.0,
+            heading: 0.0,
+            speed: 0.0,
+            segments,
+        }
     }
 
     #[test]
     fn segments_change_speed_height_and_heading() {
         let s = spec(vec![
             SegmentSpec::Stationary { duration: 10.0 },
-            SegmentSpec::Accelerate { duration: 20.0, acceleration: 5.0 },
-            SegmentSpec::Climb { duration: 50.0, rate: 10.0 },
-            SegmentSpec::Turn { duration: 90.0, rate: 1f64.to_radians() },
+            SegmentSpec::Accelerate {
+                duration: 20.0,
+                acceleration: 5.0,
+            },
+            SegmentSpec::Climb {
+                duration: 50.0,
+                rate: 10.0,
+            },
+            SegmentSpec::Turn {
+                duration: 90.0,
+                rate: 1f64.to_radians(),
+            },
             SegmentSpec::Level { duration: 10.0 },
         ]);
         let tr = generate(&s, 1.0, 200);
