@@ -79,11 +79,20 @@ def test_chi2_false_alarm_rate_matches_pf(calibration):
 def test_rates_that_are_not_pf(calibration):
     s = calibration.summary()
     # Reset mode: sub-filter covariances inflated by 1/β make chi-square conservative.
-    assert rate(s, "reset", "cns", "chi2").false_alarm_rate < 0.1
-    # The improved SPRT's per-epoch rate is not its pf (its statistic is a random walk).
-    sprt = rate(s, "no_reset", "cns", "sprt")
-    assert not sprt.false_alarm_ci_low <= 0.1 <= sprt.false_alarm_ci_high
-    assert sprt.false_alarm_rate > 0.1
+    assert rate(s, "reset", "cns", "chi2").false_alarm_ci_high < 0.1
+    # The improved SPRT's alarms come in long runs (its statistic is a normalised random walk),
+    # so its per-run false-alarm rate spreads far more than independent epochs would allow;
+    # chi-square's spread is the binomial one. (Its mean rate over campaigns happens to be
+    # near 0.1 but varies from 0.08 to 0.13 between 100-run campaigns: it is not set by pf.)
+    runs = calibration.runs
+    ratios = {}
+    for det in ("chi2", "sprt"):
+        g = runs[(runs["federated.mode"] == "no_reset") & (runs.subfilter == "cns") & (runs.detector == det)]
+        per_run = g.false_alarm_epochs / g.outside_epochs
+        p = per_run.mean()
+        ratios[det] = per_run.std() / np.sqrt(p * (1 - p) / 1000)
+    assert 0.75 < ratios["chi2"] < 1.3, ratios
+    assert ratios["sprt"] > 5, ratios
 
 
 @pytest.fixture(scope="module")
