@@ -130,13 +130,6 @@ impl KalmanFilter {
         Ok(())
     }
 
-    /// Replace state and covariance without validation (the caller guarantees a finite `x` of
-    /// length n and a symmetric PSD `P`, e.g. a fused covariance divided by a share).
-    pub fn set_state_trusted(&mut self, x: DVector<f64>, p: DMatrix<f64>) {
-        self.x = x;
-        self.p = p;
-    }
-
     /// Set `x` and `p_scale·P` by copying into the existing buffers (no validation: same
     /// shapes, finite, `p_scale > 0`).
     pub fn set_state_scaled(&mut self, x: &DVector<f64>, p: &DMatrix<f64>, p_scale: f64) {

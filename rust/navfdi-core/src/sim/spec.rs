@@ -324,11 +324,6 @@ impl ScenarioSpec {
         Ok(spec)
     }
 
-    /// To JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string(self).unwrap_or_default()
-    }
-
     /// Number of filter epochs: `floor(duration / dt)`.
     pub fn epochs(&self) -> usize {
         (self.duration / self.dt + 1e-9).floor() as usize
