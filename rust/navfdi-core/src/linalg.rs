@@ -12,47 +12,40 @@ use nalgebra::DMatrix;
 
 /// `c ← α·a·b + β·c` (nalgebra's `gemm` convention).
 pub fn gemm(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64) {
-    let (m, k, n) = (a.nrows(), a.ncols(), b.ncols());
-    if m == 0 || n == 0 || k == 0 || b.nrows() != k || c.nrows() != m || c.ncols() != n {
+    if b.nrows() != a.ncols() || !product(c, alpha, a, b, b.ncols(), (1, b.nrows()), beta) {
         c.gemm(alpha, a, b, beta);
-        return;
-    }
-    let plan = nano_gemm::Plan::new_colmajor_lhs_and_dst_f64(m, n, k);
-    // SAFETY: c is m × n, a is m × k, b is k × n, all contiguous column-major (nalgebra's
-    // DMatrix storage), checked above; the strides describe exactly those buffers.
-    unsafe {
-        plan.execute_unchecked(
-            m,
-            n,
-            k,
-            c.as_mut_ptr(),
-            1,
-            m as isize,
-            a.as_ptr(),
-            1,
-            m as isize,
-            b.as_ptr(),
-            1,
-            k as isize,
-            beta,
-            alpha,
-            false,
-            false,
-        );
     }
 }
 
 /// `c ← α·a·bᵀ + β·c` without forming `bᵀ`.
 pub fn gemm_nt(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64) {
-    let (m, k, n) = (a.nrows(), a.ncols(), b.nrows());
-    if m == 0 || n == 0 || k == 0 || b.ncols() != k || c.nrows() != m || c.ncols() != n {
+    // Element (i, j) of bᵀ is b[(j, i)] at offset j + i·n: row stride n, column stride 1.
+    if b.ncols() != a.ncols() || !product(c, alpha, a, b, b.nrows(), (b.nrows(), 1), beta) {
         c.gemm(alpha, a, &b.transpose(), beta);
-        return;
+    }
+}
+
+/// `c ← α·a·B + β·c` where `B` (k × n, k = `a.ncols()`) is read from `b`'s buffer with
+/// `(row, column)` strides `rhs`. Returns false, touching nothing, when a dimension is zero or
+/// `c` is not m × n; the callers have checked that `b`'s buffer holds exactly k·n elements laid
+/// out by those strides.
+fn product(
+    c: &mut DMatrix<f64>,
+    alpha: f64,
+    a: &DMatrix<f64>,
+    b: &DMatrix<f64>,
+    n: usize,
+    rhs: (usize, usize),
+    beta: f64,
+) -> bool {
+    let (m, k) = (a.nrows(), a.ncols());
+    if m == 0 || n == 0 || k == 0 || c.nrows() != m || c.ncols() != n || b.len() != k * n {
+        return false;
     }
     let plan = nano_gemm::Plan::new_colmajor_lhs_and_dst_f64(m, n, k);
-    // SAFETY: c is m × n, a is m × k, b is n × k (so bᵀ is k × n: element (i, j) of bᵀ is
-    // b[(j, i)] at offset j + i·n, i.e. row stride n and column stride 1), all contiguous
-    // column-major buffers, checked above.
+    // SAFETY: c is m × n and a is m × k, contiguous column-major (nalgebra's DMatrix storage);
+    // b's buffer holds k·n elements and the callers' strides address B[(i, j)] at
+    // i·rhs.0 + j·rhs.1 < k·n, all checked above.
     unsafe {
         plan.execute_unchecked(
             m,
@@ -65,14 +58,15 @@ pub fn gemm_nt(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f
             1,
             m as isize,
             b.as_ptr(),
-            n as isize,
-            1,
+            rhs.0 as isize,
+            rhs.1 as isize,
             beta,
             alpha,
             false,
             false,
         );
     }
+    true
 }
 
 #[cfg(test)]
