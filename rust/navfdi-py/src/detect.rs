@@ -300,6 +300,20 @@ fn read_pair(
     ))
 }
 
+/// Test one epoch. The core detectors validate before changing any state, so a rejected call
+/// leaves the detector as it was without a copy here.
+fn test_one<D>(
+    det: &mut D,
+    residual: &Bound<'_, PyAny>,
+    covariance: &Bound<'_, PyAny>,
+    step: fn(&mut D, &DVector<f64>, &DMatrix<f64>) -> navfdi_core::Result<Report>,
+) -> PyResult<PyDecision> {
+    let (r, a) = read_pair(residual, covariance)?;
+    Ok(PyDecision {
+        report: step(det, &r, &a).py()?,
+    })
+}
+
 fn parse_variance(v: &str) -> PyResult<SprtVariance> {
     match v {
         "known" => Ok(SprtVariance::Known),
@@ -379,11 +393,7 @@ impl PyResidualChi2 {
         residual: &Bound<'_, PyAny>,
         covariance: &Bound<'_, PyAny>,
     ) -> PyResult<PyDecision> {
-        let (r, a) = read_pair(residual, covariance)?;
-        let mut work = self.inner.clone();
-        let report = chi2_step(&mut work, &r, &a).py()?;
-        self.inner = work;
-        Ok(PyDecision { report })
+        test_one(&mut self.inner, residual, covariance, chi2_step)
     }
     /// Test a whole sequence in Rust.
     fn test_sequence(
@@ -439,11 +449,7 @@ impl PyImprovedSprt {
         residual: &Bound<'_, PyAny>,
         covariance: &Bound<'_, PyAny>,
     ) -> PyResult<PyDecision> {
-        let (r, a) = read_pair(residual, covariance)?;
-        let mut work = self.inner.clone();
-        let report = sprt_step(&mut work, &r, &a).py()?;
-        self.inner = work;
-        Ok(PyDecision { report })
+        test_one(&mut self.inner, residual, covariance, sprt_step)
     }
     /// Test a whole sequence in Rust.
     fn test_sequence(
@@ -514,11 +520,7 @@ impl PyJointChi2Sprt {
         residual: &Bound<'_, PyAny>,
         covariance: &Bound<'_, PyAny>,
     ) -> PyResult<PyDecision> {
-        let (r, a) = read_pair(residual, covariance)?;
-        let mut work = self.inner.clone();
-        let report = joint_step(&mut work, &r, &a).py()?;
-        self.inner = work;
-        Ok(PyDecision { report })
+        test_one(&mut self.inner, residual, covariance, joint_step)
     }
     /// Test a whole sequence in Rust.
     fn test_sequence(
