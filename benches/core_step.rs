@@ -5,70 +5,17 @@
 //! 10 000-epoch `run_filter` divided by the number of epochs (reference: `step_trusted`).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use nalgebra::{DMatrix, DVector};
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::KalmanFilter;
 use std::hint::black_box;
 
-const N: usize = 15;
-const M: usize = 6;
-
-/// `x0, P0, Φ, Q, H, R`.
-type Problem = (
-    DVector<f64>,
-    DMatrix<f64>,
-    DMatrix<f64>,
-    DMatrix<f64>,
-    DMatrix<f64>,
-    DMatrix<f64>,
-);
-
-/// A deterministic INS-like error model at 1 Hz: attitude (0..3), velocity (3..6), position
-/// (6..9), gyro drift (9..12), accelerometer bias (12..15); position and velocity measured.
-fn problem() -> Problem {
-    let dt = 1.0;
-    let mut f = DMatrix::<f64>::zeros(N, N);
-    // attitude ← gyro drift; velocity ← attitude × specific force (≈ g up) and accel bias;
-    // position ← velocity; biases first-order Markov.
-    for i in 0..3 {
-        f[(i, 9 + i)] = -1.0;
-        f[(3 + i, 12 + i)] = 1.0;
-        f[(6 + i, 3 + i)] = 1.0;
-        f[(9 + i, 9 + i)] = -1.0 / 3600.0;
-        f[(12 + i, 12 + i)] = -1.0 / 1800.0;
-    }
-    f[(3, 1)] = -9.8;
-    f[(4, 0)] = 9.8;
-    let phi = DMatrix::identity(N, N) + &f * dt + &f * &f * (dt * dt / 2.0);
-    let x0 = DVector::zeros(N);
-    let mut p0 = DMatrix::zeros(N, N);
-    let sd = [
-        1e-3, 1e-3, 3e-3, 0.6, 0.6, 0.6, 50.0, 50.0, 50.0, 1e-6, 1e-6, 1e-6, 1e-3, 1e-3, 1e-3,
-    ];
-    for i in 0..N {
-        p0[(i, i)] = sd[i] * sd[i];
-    }
-    let mut q = DMatrix::zeros(N, N);
-    for i in 0..3 {
-        q[(i, i)] = 1e-12;
-        q[(3 + i, 3 + i)] = 1e-8;
-        q[(9 + i, 9 + i)] = 1e-14;
-        q[(12 + i, 12 + i)] = 1e-9;
-    }
-    let h = DMatrix::from_fn(M, N, |i, j| {
-        if (i < 3 && j == 6 + i) || (i >= 3 && j == i) {
-            1.0
-        } else {
-            0.0
-        }
-    });
-    let r = DMatrix::from_diagonal(&DVector::from_vec(vec![25.0, 25.0, 25.0, 0.01, 0.01, 0.01]));
-    (x0, p0, phi, q, h, r)
-}
+#[path = "ins_problem.rs"]
+mod ins_problem;
+use ins_problem::{measurement, problem, M};
 
 fn bench(c: &mut Criterion) {
     let (x0, p0, phi, q, h, r) = problem();
-    let z = DVector::from_fn(M, |i, _| 0.1 * i as f64);
+    let z = measurement();
     let mut g = c.benchmark_group("core");
     g.throughput(Throughput::Elements(1));
     // A persistent filter stepped repeatedly (steady state, as inside a run).
@@ -125,7 +72,7 @@ criterion_main!(benches);
 
 fn parts(c: &mut Criterion) {
     let (x0, p0, phi, q, h, r) = problem();
-    let z = DVector::from_fn(M, |i, _| 0.1 * i as f64);
+    let z = measurement();
     let base = KalmanFilter::new(x0, p0).unwrap();
     let mut g = c.benchmark_group("parts");
     let mut kf = base.clone();
