@@ -142,16 +142,13 @@ fn missing_measurements_match_centralised_reduced_update() {
     }
 }
 
-#[test]
-fn isolated_subfilter_is_left_out_and_reinstated() {
-    let mut rng = Lcg(7);
-    let n = 2;
-    let h = DMatrix::identity(2, 2);
-    let r = DMatrix::identity(2, 2) * 0.1;
+/// Two 2-state sub-filters measuring the state directly (R = 0.1 I), shares 0.5/0.5, reset
+/// mode; only "bad" is isolated by its chi-square detector (pf 1e-4).
+fn good_and_bad() -> FederatedFilter {
     let mk = |name: &str, iso: bool| SubFilterConfig {
         name: name.into(),
-        h: h.clone(),
-        r: r.clone(),
+        h: DMatrix::identity(2, 2),
+        r: DMatrix::identity(2, 2) * 0.1,
         share: 0.5,
         detectors: vec![(
             "chi2".into(),
@@ -159,15 +156,22 @@ fn isolated_subfilter_is_left_out_and_reinstated() {
         )],
         isolation: if iso { Some(0) } else { None },
     };
-    let mut fed = FederatedFilter::new(
-        DVector::zeros(n),
-        DMatrix::identity(n, n),
+    FederatedFilter::new(
+        DVector::zeros(2),
+        DMatrix::identity(2, 2),
         vec![mk("good", false), mk("bad", true)],
         FusionMode::Reset,
         0.0,
         true,
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn isolated_subfilter_is_left_out_and_reinstated() {
+    let mut rng = Lcg(7);
+    let n = 2;
+    let mut fed = good_and_bad();
     let phi = DMatrix::identity(n, n);
     let q = DMatrix::identity(n, n) * 1e-4;
     let mut saw_isolation = false;
@@ -214,26 +218,7 @@ fn isolated_modes_track_predict_update() {
     let run = |mode: IsolatedMode| {
         let mut rng = Lcg(11);
         let n = 2;
-        let mk = |name: &str, iso: bool| SubFilterConfig {
-            name: name.into(),
-            h: DMatrix::identity(2, 2),
-            r: DMatrix::identity(2, 2) * 0.1,
-            share: 0.5,
-            detectors: vec![(
-                "chi2".into(),
-                Detector::Chi2(ResidualChi2::new(1e-4).unwrap()),
-            )],
-            isolation: if iso { Some(0) } else { None },
-        };
-        let mut fed = FederatedFilter::new(
-            DVector::zeros(n),
-            DMatrix::identity(n, n),
-            vec![mk("good", false), mk("bad", true)],
-            FusionMode::Reset,
-            0.0,
-            true,
-        )
-        .unwrap();
+        let mut fed = good_and_bad();
         fed.set_isolated_mode(mode);
         let (phi, q) = (DMatrix::identity(n, n), DMatrix::identity(n, n) * 1e-4);
         let mut during = Vec::new();
