@@ -54,31 +54,24 @@ impl ResidualChi2 {
     /// Test one epoch: residual `r` (m, NaN = unavailable) and covariance `A` (m × m, positive
     /// definite on the available components).
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        let (statistic, dof) = Self::statistic(r, a)?;
+        self.test_statistic(statistic, dof)
+    }
+
+    /// Validate a residual and compute `λ = rᵀA⁻¹r` over its non-NaN components, without
+    /// changing any detector: returns `(λ, dof)` (λ is NaN when `dof = 0`).
+    pub fn statistic(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<(f64, usize)> {
         let checked = check_residual(r, a)?;
         let dof = checked.idx.len();
         let Some(chol) = checked.chol else {
-            return Ok(Decision {
-                statistic: f64::NAN,
-                threshold: f64::NAN,
-                alarm: self.alarm,
-                dof,
-            });
+            return Ok((f64::NAN, dof));
         };
         let rr = if dof == r.len() {
             r.clone()
         } else {
             r.select_rows(&checked.idx)
         };
-        let statistic = whitened_norm2(&chol, &rr)?;
-        let threshold = self.threshold(dof)?;
-        let alarm = statistic >= threshold;
-        self.alarm = alarm;
-        Ok(Decision {
-            statistic,
-            threshold,
-            alarm,
-            dof,
-        })
+        Ok((whitened_norm2(&chol, &rr)?, dof))
     }
 
     /// Decide on a statistic computed elsewhere (e.g. [`crate::kalman::Innovation::statistic`],

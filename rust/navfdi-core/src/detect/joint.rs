@@ -51,25 +51,12 @@ impl JointChi2Sprt {
 
     /// Test one epoch.
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<JointDecision> {
-        // Validate for both parts before changing either: run on clones, commit on success.
-        let mut chi2 = self.chi2.clone();
-        let mut sprt = self.sprt.clone();
-        let c = chi2.test(r, a)?;
-        let fell = c.dof > 0 && self.chi2_alarm && !c.alarm;
-        if fell {
-            sprt.reset();
-        }
-        let s = sprt.test(r, a)?;
-        self.chi2 = chi2;
-        self.sprt = sprt;
-        if c.dof > 0 {
-            self.chi2_alarm = c.alarm;
-        }
-        Ok(JointDecision {
-            decision: s,
-            chi2: c,
-            reset: fell,
-        })
+        // Validate everything (and compute λ) before changing either test; a residual whose
+        // covariance is positive definite on its components also has the positive diagonal
+        // the known-variance SPRT divides by.
+        let (statistic, dof) = ResidualChi2::statistic(r, a)?;
+        self.sprt.check_dimension(r.len())?;
+        self.test_trusted(r, a, statistic, dof)
     }
 
     /// [`JointChi2Sprt::test`] without validation, with the chi-square statistic computed

@@ -92,17 +92,7 @@ impl ImprovedSprt {
     /// Test one epoch. The residual dimension is fixed by the first call.
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
         let idx = check_residual(r, a)?.idx;
-        let m = r.len();
-        if !self.acc.is_empty() && self.acc.len() != m {
-            return Err(Error::Shape {
-                name: "residual".into(),
-                expected: format!(
-                    "({},) as in earlier epochs (call reset_dimension to change)",
-                    self.acc.len()
-                ),
-                got: format!("({m},)"),
-            });
-        }
+        self.check_dimension(r.len())?;
         if self.variance == SprtVariance::Known {
             for &j in &idx {
                 if !(a[(j, j)] > 0.0) {
@@ -117,6 +107,21 @@ impl ImprovedSprt {
             }
         }
         Ok(self.test_trusted(r, a))
+    }
+
+    /// Check a residual length against the dimension fixed by the first test.
+    pub fn check_dimension(&self, m: usize) -> Result<()> {
+        if !self.acc.is_empty() && self.acc.len() != m {
+            return Err(Error::Shape {
+                name: "residual".into(),
+                expected: format!(
+                    "({},) as in earlier epochs (call reset_dimension to change)",
+                    self.acc.len()
+                ),
+                got: format!("({m},)"),
+            });
+        }
+        Ok(())
     }
 
     /// [`ImprovedSprt::test`] without validation, for residuals from a filter (`A` positive
