@@ -5,6 +5,7 @@
 //! 10 000-epoch `run_filter` divided by the number of epochs (reference: `step_trusted`).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use navfdi_core::cancel::NEVER;
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::KalmanFilter;
 use std::hint::black_box;
@@ -59,6 +60,7 @@ fn bench(c: &mut Criterion) {
                     &h_s,
                     &r_s,
                     1.0,
+                    &NEVER,
                 )
                 .unwrap(),
             )

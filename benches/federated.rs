@@ -10,6 +10,7 @@
 //! Target: federated ≤ 2 × (m3 + m6).
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use navfdi_core::cancel::NEVER;
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
@@ -30,7 +31,7 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("federated");
     g.sample_size(20);
     g.bench_function("federated_run", |b| {
-        b.iter(|| black_box(run_federated(&prep, &sim, true).expect("run")))
+        b.iter(|| black_box(run_federated(&prep, &sim, true, &NEVER).expect("run")))
     });
     let phi = MatrixSeq::PerEpoch(prep.phi.clone());
     let q = MatrixSeq::PerEpoch(prep.q.clone());
@@ -52,6 +53,7 @@ fn bench(c: &mut Criterion) {
                         &h,
                         &r,
                         1.0,
+                        &NEVER,
                     )
                     .expect("run"),
                 )

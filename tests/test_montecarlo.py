@@ -25,7 +25,7 @@ SLOPES = ["0.05 sigma/s", "0.1 sigma/s", "0.2 sigma/s", "0.5 sigma/s"]
 def short():
     """yang2013 shortened to 300 s (faults moved) for fast determinism tests."""
     sc = navfdi.load_scenario("yang2013")
-    for path, v in [("duration", "300 s"), ("faults[0].start", "60 s"), ("faults[0].end", "160 s"), ("faults[1].start", "220 s"), ("faults[1].end", "240 s")]:
+    for path, v in [("faults[0].start", "60 s"), ("faults[0].end", "160 s"), ("faults[1].start", "220 s"), ("faults[1].end", "240 s"), ("duration", "300 s")]:
         sc = sc.with_value(path, v)
     return sc
 

@@ -95,5 +95,6 @@ def test_cli_unwritable_output_is_a_clear_error(tmp_path):
     blocker.write_text("not a directory")
     out = run("-m", "navfdi", "run", "yang2013", "--out", str(blocker / "sub"))
     assert out.returncode == 2
-    assert "cannot write the outputs" in out.stderr and "Traceback" not in out.stderr
+    assert "is not a directory" in out.stderr and "Traceback" not in out.stderr
+    assert out.stdout == ""  # refused before the run, not after it
     assert blocker.read_text() == "not a directory"

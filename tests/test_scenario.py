@@ -68,7 +68,7 @@ DELETE = object()
         ("sensors.0.kind", "lidar", r"sensors\[0\]\.kind = 'lidar': unknown sensor"),
         ("sensors.1.noise", ["5 m", "5 m"], r"sensors\[1\]\.noise: 2 values for a gnss sensor with 6 components"),
         ("sensors.0.rate", "5 Hz", r"sensors\[0\]\.rate: 5 Hz exceeds the filter rate"),
-        ("faults.0.sensor", "cnss", r"faults\[0\]\.sensor = 'cnss': not a sensor \(known: cns, gnss\)"),
+        ("faults.0.sensor", "cnss", r"faults\[0\]\.sensor = 'cnss': not a sensor \(known: 'cns', 'gnss'\)"),
         ("faults.1.components", ["roll"], r"faults\[1\]\.components\[0\] = 'roll': not a component of cns \(phi_e, phi_n, phi_u\)"),
         ("faults.0.magnitude", "0.1 sigma", r"faults\[0\]\.magnitude = '0\.1 sigma': a ramp needs a unit ending in '/s'"),
         ("faults.1.magnitude", "20 m", r"faults\[1\]\.magnitude = '20 m': unknown unit 'm' for angle"),

@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "__version__",
+    "memory_available",
     "LinAlgError",
     "KalmanFilter",
     "Innovation",
@@ -241,8 +242,9 @@ class ResidualChi2:
         one. On an error (naming the epoch) the detector is unchanged."""
     def reset(self) -> None:
         """Forget the last alarm state."""
-    def threshold(self, dof: int) -> float:
-        """Threshold ``T_D`` for ``dof >= 1`` components."""
+    def threshold(self, dof: int | None = None) -> float:
+        """Threshold ``T_D`` for ``dof >= 1`` components (required: it depends on ``dof``).
+        Every detector has ``threshold(dof)``, so detectors can be queried alike."""
     @property
     def pf(self) -> float:
         """False-alarm probability per epoch."""
@@ -262,9 +264,18 @@ class ImprovedSprt:
     variance : {"known", "sample"}, default "known"
         ``"known"``: normalise component j by ``sqrt(A_jj)`` (σ = 1). ``"sample"``: running
         sample variance of the raw component (Welford).
+    min_samples : int, optional
+        Samples a component needs since the last reset before it may alarm (≥ 1). Default 1
+        with the known variance, 20 with the sample variance: right after a reset the
+        sample-variance statistic is ``(k/(k-1)) t²/2`` with Student's ``t`` on ``k - 1``
+        degrees of freedom, huge by chance for small k (without the minimum most fault-free
+        runs alarmed at their second epoch).
+
+    Not thread-safe: one detector used from two threads at once raises ``RuntimeError``
+    ("Already borrowed"); give each thread its own detector (``copy.deepcopy``).
     """
 
-    def __new__(cls, pf: float, pm: float, variance: str = "known") -> ImprovedSprt: ...
+    def __new__(cls, pf: float, pm: float, variance: str = "known", min_samples: int | None = None) -> ImprovedSprt: ...
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch (``residual`` (m,), ``covariance`` (m, m)); the dimension m is fixed
         by the first call. NaN components are skipped."""
@@ -273,9 +284,14 @@ class ImprovedSprt:
         :meth:`ResidualChi2.test_sequence`."""
     def reset(self) -> None:
         """Reset every accumulator to zero."""
+    def reset_dimension(self) -> None:
+        """Reset and forget the residual dimension, so the next test may use another length."""
+    def threshold(self, dof: int | None = None) -> float:
+        """``T(H1) = ln((1 - pm)/pf)``, the same for every ``dof`` (accepted for a uniform
+        call across detectors)."""
     @property
-    def threshold(self) -> float:
-        """``T(H1) = ln((1 - pm)/pf)``."""
+    def min_samples(self) -> int:
+        """Samples a component needs since the last reset before it may alarm."""
     @property
     def pf(self) -> float:
         """False-alarm probability parameter."""
@@ -298,16 +314,20 @@ class JointChi2Sprt:
     chi-square part uses the same ``pf``.
     """
 
-    def __new__(cls, pf: float, pm: float, variance: str = "known") -> JointChi2Sprt: ...
+    def __new__(cls, pf: float, pm: float, variance: str = "known", min_samples: int | None = None) -> JointChi2Sprt: ...
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch; the decision carries ``chi2`` and ``reset``."""
     def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
         """Test a whole sequence in Rust; the run carries ``chi2_*`` and ``reset`` arrays."""
     def reset(self) -> None:
         """Reset both tests."""
+    def reset_dimension(self) -> None:
+        """Reset both tests and forget the residual dimension."""
+    def threshold(self, dof: int | None = None) -> float:
+        """SPRT threshold ``T(H1)`` (the alarm is the SPRT's), the same for every ``dof``."""
     @property
-    def threshold(self) -> float:
-        """SPRT threshold ``T(H1)``."""
+    def min_samples(self) -> int:
+        """The SPRT's minimum samples per component before it may alarm."""
     @property
     def pf(self) -> float:
         """False-alarm probability parameter."""
@@ -340,6 +360,12 @@ def mdb(A: ArrayLike, pf: float, pm: float) -> NDArray[np.float64]:
     """Minimal detectable bias per component, shape (m,), in measurement units:
     ``sqrt(λ0 / (A⁻¹)_ii)`` with ``A`` (m, m) the residual covariance (symmetric positive
     definite) and ``λ0 = noncentrality(pf, pm, m)``."""
+
+def memory_available() -> float:
+    """Bytes of memory available to this process: the smallest of MemAvailable
+    (/proc/meminfo), the cgroup v2 limit less current use, and the environment variable
+    ``NAVFDI_MEMORY_LIMIT`` (bytes); 8 GiB where none can be read. Whole runs refuse (with
+    ``MemoryError``) to plan beyond 80 % of it."""
 
 def validate_scenario(spec_json: str) -> None:
     """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises

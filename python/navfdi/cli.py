@@ -3,67 +3,164 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import traceback
+import warnings
 from pathlib import Path
 
 from navfdi import _core
 
 
+def _seed(text: str) -> int:
+    """argparse type: an integer seed in 0 .. 2**64 - 1."""
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer") from None
+    if not 0 <= v < 2**64:
+        raise argparse.ArgumentTypeError(f"{text} is outside 0 .. 2**64 - 1")
+    return v
+
+
+def _positive(text: str) -> int:
+    """argparse type: a positive integer (``1000`` or ``1e3``)."""
+    try:
+        f = float(text)
+        v = int(f)
+    except (ValueError, OverflowError):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer") from None
+    if v != f or v < 1:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a positive integer")
+    return v
+
+
+def _keep_series(text: str) -> list[int]:
+    """argparse type: comma-separated run indices."""
+    out = []
+    for part in text.split(","):
+        part = part.strip()
+        if not part:
+            continue
+        try:
+            out.append(int(part))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{part!r} is not a run index; give comma-separated integers, e.g. 0,5,17") from None
+    return out
+
+
+def check_output_dir(out: str) -> Path:
+    """Check, before any work, that ``out`` can be used as an output directory: not empty,
+    not an existing file, and writable (or creatable under a writable parent). Creates
+    nothing. Raises ``ValueError`` naming the problem."""
+    if not out.strip():
+        raise ValueError("--out: empty path; give a directory for the outputs")
+    path = Path(out)
+    if path.exists():
+        if not path.is_dir():
+            raise ValueError(f"--out {out}: exists and is not a directory")
+        if not os.access(path, os.W_OK | os.X_OK):
+            raise ValueError(f"--out {out}: directory is not writable")
+        return path
+    parent = path.absolute().parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise ValueError(f"--out {out}: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"--out {out}: cannot create it, {parent} is not writable")
+    return path
+
+
+def _one_line_warnings() -> None:
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001
+        print(f"navfdi: warning: {message}", file=sys.stderr)
+
+    warnings.showwarning = show
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``navfdi`` command; returns the process exit code."""
+    """Entry point of the ``navfdi`` command; returns the process exit code.
+
+    Every error is printed as one line ``navfdi: error: ...`` with exit code 2 (``--debug``
+    prints the traceback instead); an interrupt (Ctrl-C) exits with 130.
+    """
     parser = argparse.ArgumentParser(prog="navfdi", description="Fault detection and isolation for integrated navigation.")
     parser.add_argument("--version", action="version", version=f"navfdi {_core.__version__}")
+    parser.add_argument("--debug", action="store_true", help="show Python tracebacks of errors")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run the chi-square, SPRT and joint detectors on a simulated ramp and step fault")
-    demo.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    demo.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     demo.add_argument("--pf", type=float, default=1e-3, help="false-alarm probability (default 1e-3)")
     demo.add_argument("--pm", type=float, default=1e-3, help="missed-detection probability (default 1e-3)")
     run = sub.add_parser("run", help="simulate and filter a scenario; print per-fault tables and write outputs")
     run.add_argument("scenario", help="bundled scenario name (see `navfdi scenarios`) or a TOML file")
-    run.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    run.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     sub.add_parser("scenarios", help="list the bundled scenarios")
     mc = sub.add_parser("montecarlo", help="Monte-Carlo campaign: runs × sweep points, run in parallel in Rust")
     mc.add_argument("scenario", help="bundled scenario name or a TOML file")
-    mc.add_argument("--runs", type=int, required=True, help="runs per sweep point")
-    mc.add_argument("--seed", type=int, default=0, help="campaign seed (default 0); run i uses (seed, i)")
+    mc.add_argument("--runs", type=_positive, required=True, help="runs per sweep point")
+    mc.add_argument("--seed", type=_seed, default=0, help="campaign seed (default 0); run i uses (seed, i)")
     mc.add_argument("--sweep", action="append", default=[], metavar="PATH=v1,v2,...", help='vary a scenario field, e.g. --sweep "faults[0].magnitude=0.05 sigma/s,0.1 sigma/s" (repeatable: cartesian product)')
     where = mc.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None, help="threads in this process (default: all cores)")
+    where.add_argument("--workers", type=_positive, default=None, help="threads in this process (default: all cores)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster (pip install navfdi[dask])")
     mc.add_argument("--out", default=None, help="directory for runs.parquet, summary.csv, campaign.json and plots")
-    mc.add_argument("--keep-series", default="", metavar="RUN,...", help="run indices whose time series to keep (written as series_pPOINT_rRUN.parquet)")
-    mc.add_argument("--chunk-size", type=int, default=None, help="runs per chunk (default 16)")
+    mc.add_argument("--keep-series", type=_keep_series, default=[], metavar="RUN,...", help="run indices whose time series to keep (written as series_pPOINT_rRUN.parquet)")
+    mc.add_argument("--chunk-size", type=_positive, default=None, help="runs per chunk (default 16)")
     args = parser.parse_args(argv)
+    _one_line_warnings()
     try:
-        if args.command == "demo":
-            from navfdi.demo import report
-
-            print(report(seed=args.seed, pf=args.pf, pm=args.pm))
-        elif args.command == "scenarios":
-            from navfdi.scenario import bundled_scenarios, load_scenario
-
-            for name in bundled_scenarios():
-                desc = load_scenario(name).raw.get("description", "")
-                print(f"{name:<14} {desc}")
-        elif args.command == "run":
-            from navfdi.federated import run_scenario
-
-            result = run_scenario(args.scenario, seed=args.seed)
-            print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}\n")
-            print(result.format_tables(), end="")
-            if args.out:
-                paths = result.write(args.out, figures=not args.no_figures)
-                print(f"\nwrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
-        elif args.command == "montecarlo":
-            return _montecarlo(args)
-    except ValueError as e:
-        print(f"navfdi: error: {e}", file=sys.stderr)
+        return _dispatch(args)
+    except KeyboardInterrupt:
+        print("navfdi: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - the CLI turns every error into one line
+        if args.debug:
+            traceback.print_exc()
+        else:
+            print(f"navfdi: error: {_describe(e)}", file=sys.stderr)
         return 2
-    except OSError as e:
-        print(f"navfdi: error: cannot write the outputs: {e}", file=sys.stderr)
-        return 2
+
+
+def _describe(e: BaseException) -> str:
+    """One line for an exception: the message, prefixed where the type says more."""
+    msg = " ".join(str(e).split()) or type(e).__name__
+    if isinstance(e, MemoryError):
+        return msg if "needs about" in msg else f"out of memory: {msg}"
+    if isinstance(e, ValueError):
+        return msg
+    if isinstance(e, OSError):
+        return f"{e.strerror or msg}: {e.filename}" if e.filename else msg
+    return f"{type(e).__name__}: {msg} (this is a bug in navfdi; --debug shows the traceback)"
+
+
+def _dispatch(args: argparse.Namespace) -> int:
+    if getattr(args, "out", None) is not None:
+        check_output_dir(args.out)
+    if args.command == "demo":
+        from navfdi.demo import report
+
+        print(report(seed=args.seed, pf=args.pf, pm=args.pm))
+    elif args.command == "scenarios":
+        from navfdi.scenario import bundled_scenarios, load_scenario
+
+        for name in bundled_scenarios():
+            desc = load_scenario(name).raw.get("description", "")
+            print(f"{name:<14} {desc}")
+    elif args.command == "run":
+        from navfdi.federated import run_scenario
+
+        result = run_scenario(args.scenario, seed=args.seed)
+        print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}\n")
+        print(result.format_tables(), end="")
+        if args.out:
+            paths = result.write(args.out, figures=not args.no_figures)
+            print(f"\nwrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
+    elif args.command == "montecarlo":
+        return _montecarlo(args)
     return 0
 
 
@@ -71,7 +168,7 @@ def _montecarlo(args: argparse.Namespace) -> int:
     from navfdi.montecarlo import montecarlo, parse_sweep
 
     sweep = parse_sweep(args.sweep)
-    keep = [int(k) for k in args.keep_series.split(",") if k.strip()] if args.keep_series else []
+    keep = args.keep_series
     client = None
     if args.scheduler:
         try:
@@ -79,7 +176,10 @@ def _montecarlo(args: argparse.Namespace) -> int:
         except ImportError:
             print("navfdi: error: --scheduler needs Dask: pip install 'navfdi[dask]'", file=sys.stderr)
             return 2
-        client = Client(args.scheduler)
+        try:
+            client = Client(args.scheduler, timeout="10s")
+        except (OSError, TimeoutError, ValueError) as e:
+            raise ValueError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({' '.join(str(e).split())})") from None
     camp = montecarlo(args.scenario, runs=args.runs, seed=args.seed, sweep=sweep, workers=args.workers, client=client, chunk_size=args.chunk_size, keep_series=keep)
     print(camp.format_table(), end="")
     if args.out:

@@ -300,7 +300,7 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
         Also filter the same measurements with isolation disabled (for the error comparison).
     """
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed = {seed!r}: must be a non-negative integer")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+        raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core
-from navfdi.scenario import Scenario, ScenarioError, load_scenario
+from navfdi.scenario import Scenario, ScenarioError, ScenarioTooLarge, load_scenario
 
 Z95 = statistics.NormalDist().inv_cdf(0.975)
 
@@ -50,6 +50,24 @@ RUN_COLUMNS = [
     "att_max",
     "pos_rms",
     "pos_max",
+]
+
+
+#: Figures of :meth:`Campaign.summary` after the key columns and ``runs``.
+SUMMARY_FIGURES = [
+    "detection_probability",
+    "detection_ci_low",
+    "detection_ci_high",
+    "delay_mean",
+    "delay_median",
+    "delay_p95",
+    "clear_delay_mean",
+    "false_alarm_rate",
+    "false_alarm_ci_low",
+    "false_alarm_ci_high",
+    "wrong_isolations",
+    "error_rms",
+    "position_error_rms",
 ]
 
 
@@ -145,6 +163,13 @@ class Campaign:
     partial: bool
     backend: str
     series: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
+    cells: list[list[tuple[str, str, str, float]]] = field(default_factory=list)
+
+    def runs_per_point(self) -> list[int]:
+        """Finished runs of each sweep point, in point order (all equal ``runs_requested``
+        unless the campaign was interrupted)."""
+        done = self.runs.groupby("point")["run"].nunique().to_dict() if len(self.runs) else {}
+        return [int(done.get(i, 0)) for i in range(len(self.points))]
 
     @property
     def sweep_columns(self) -> list[str]:
@@ -161,16 +186,18 @@ class Campaign:
         faults; Wilson 95 % treating epochs as independent trials, which understates the
         interval for detectors with memory such as the SPRT), ``wrong_isolations`` (per run),
         ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
-        ``position_error_rms`` (m). Fault rows carry NaN false-alarm rates; ``none`` rows NaN
-        detection figures.
+        ``position_error_rms`` (m), ``runs_requested`` and ``partial`` (True where the point
+        has fewer finished runs than requested: an interrupted campaign). Fault rows carry NaN
+        false-alarm rates; ``none`` rows NaN detection figures. Every point × cell has a row,
+        with ``runs = 0`` and NaN figures where an interrupted campaign ran none.
         """
         import pandas as pd
 
         df = self.runs
         keys = ["point", *self.sweep_columns, "subfilter", "detector", "fault_id", "pf"]
-        if df.empty:
-            return pd.DataFrame(columns=[k for k in keys if k != "point"])
+        per_point = self.runs_per_point()
         rows = []
+        seen = set()
         for key, g in df.groupby(keys, sort=False, dropna=False):
             rec = dict(zip(keys, key))
             n = len(g)
@@ -212,12 +239,31 @@ class Campaign:
             rec["error_rms"] = float(np.sqrt(np.mean(g["att_rms"].to_numpy() ** 2)))
             rec["position_error_rms"] = float(np.sqrt(np.mean(g["pos_rms"].to_numpy() ** 2)))
             rows.append(rec)
-        return pd.DataFrame(rows).drop(columns=["point"])
+            seen.add((rec["point"], rec["subfilter"], rec["detector"], rec["fault_id"]))
+        for point, cells in enumerate(self.cells):
+            for sub, det, fid, pf in cells:
+                if (point, sub, det, fid) not in seen:
+                    rec = {"point": point, **{c: self.points[point][c] for c in self.sweep_columns}, "subfilter": sub, "detector": det, "fault_id": fid, "pf": float(pf), "runs": 0}
+                    rows.append(rec)
+        cols = [*keys, "runs", *SUMMARY_FIGURES]
+        out = pd.DataFrame(rows, columns=cols) if rows else pd.DataFrame(columns=cols)
+        if rows:
+            order = {(p, c[0], c[1], c[2]): i for p, cells in enumerate(self.cells) for i, c in enumerate(cells)}
+            out["_order"] = [order.get((r.point, r.subfilter, r.detector, r.fault_id), -1) for r in out.itertuples()]
+            out = out.sort_values(["point", "_order"], kind="stable").drop(columns=["_order"]).reset_index(drop=True)
+        out["runs_requested"] = self.runs_requested
+        out["partial"] = [per_point[int(p)] < self.runs_requested for p in out["point"]] if len(out) else []
+        return out.drop(columns=["point"])
 
     def format_table(self) -> str:
         """The summary as printed by ``navfdi montecarlo``."""
         s = self.summary()
-        head = f"{self.scenario.name}: {self.runs['run'].nunique() if len(self.runs) else 0} of {self.runs_requested} runs per point, seed {self.seed}, {self.backend}"
+        per_point = self.runs_per_point()
+        if len(set(per_point)) == 1:
+            done = f"{per_point[0]} of {self.runs_requested} runs per point"
+        else:
+            done = f"runs per point {', '.join(map(str, per_point))} of {self.runs_requested} each"
+        head = f"{self.scenario.name}: {done}, seed {self.seed}, {self.backend}"
         if self.partial:
             head += "  [PARTIAL: interrupted]"
         lines = [head, ""]
@@ -228,6 +274,9 @@ class Campaign:
         arcsec = math.degrees(1) * 3600
         for _, r in s.iterrows():
             line = "".join(f"{str(r[c]):>24}" if c in self.sweep_columns else f"{str(r[c]):>10}" for c in cols)
+            if r["runs"] == 0:
+                lines.append(line + "   (no finished runs)")
+                continue
             if r["fault_id"] != "none":
                 line += f"{r['detection_probability']:>8.3f} [{r['detection_ci_low']:.3f},{r['detection_ci_high']:.3f}]"
                 line += f"{r['delay_mean']:>10.1f}/{r['delay_median']:.1f}/{r['delay_p95']:.1f}".rjust(26)
@@ -302,6 +351,38 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
     return df.sort_values(["point", "run"], kind="stable", ignore_index=True)
 
 
+#: Bytes per row of :attr:`Campaign.runs` (pandas, object columns included), measured.
+_ROW_BYTES = 400.0
+
+
+def _check_campaign_memory(base: Scenario, runs: int, points: int, keep: tuple[int, ...]) -> None:
+    """Refuse a campaign whose per-run table and kept series would not fit in memory."""
+    core = base.core
+    epochs = math.floor(core["duration"] / core["dt"] + 1e-9)
+    subs = core["federated"]["subfilters"]
+    faults = core["faults"]
+    cells = sum(len(sf["detectors"]) * (1 + sum(f["sensor"] == sf["sensor"] for f in faults)) for sf in subs)
+    per_epoch = 160 + sum(20 + 17 * len(sf["detectors"]) for sf in subs)
+    table = float(runs) * points * max(cells, 1) * _ROW_BYTES
+    series = float(len(keep)) * points * epochs * per_epoch
+    need = table + series
+    avail = _core.memory_available()
+    if need > 0.8 * avail:
+        raise ScenarioTooLarge(
+            f"montecarlo: needs about {_human(need)} of memory ({runs} runs × {points} point(s) × {cells} metric cells"
+            f" = {_human(table)} of per-run metrics, {len(keep)} kept series × {points} point(s) × {epochs} epochs = {_human(series)})"
+            f" but {_human(avail)} is available; use fewer runs or sweep points, or keep fewer series"
+        )
+
+
+def _human(b: float) -> str:
+    for unit, size in (("GiB", 2.0**30), ("MiB", 2.0**20)):
+        if b >= size:
+            v = b / size
+            return f"{v:.1e} {unit}" if v >= 1e5 else f"{v:.1f} {unit}"
+    return f"{b / 1024:.1f} KiB"
+
+
 def montecarlo(
     scenario: Scenario | str | Path,
     runs: int,
@@ -334,7 +415,8 @@ def montecarlo(
     chunk_size : int, optional
         Runs per chunk (default 16, or enough for 4 chunks per Dask worker thread).
     keep_series : sequence of int
-        Run indices whose full time series to keep (``Campaign.series``).
+        Run indices (each in ``0 .. runs - 1``) whose full time series to keep
+        (``Campaign.series``).
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
 
@@ -342,17 +424,32 @@ def montecarlo(
     -------
     Campaign
         With ``partial=True`` if interrupted by Ctrl-C (the finished runs are kept).
+
+    Raises
+    ------
+    ValueError
+        Bad ``runs``, ``seed``, ``workers``, ``chunk_size`` or ``keep_series``.
+    ScenarioError
+        A malformed sweep (path, values given as a string, invalid value at some point).
+    ScenarioTooLarge
+        The per-run table and kept series would not fit in memory (also a ``MemoryError``).
     """
     if isinstance(runs, bool) or not isinstance(runs, (int, np.integer)) or runs < 1:
         raise ValueError(f"runs = {runs!r}: must be a positive integer")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed = {seed!r}: must be a non-negative integer")
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+        raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r}: must be a positive integer")
     if workers is not None and client is not None:
         raise ValueError("workers and client are exclusive: threads are set by the Dask workers")
     base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    sweep_lists: dict[str, list[Any]] = {str(k): list(v) for k, v in (sweep or {}).items()}
+    if sweep is not None and not isinstance(sweep, Mapping):
+        raise ScenarioError(f"sweep = {sweep!r}: expected a mapping {{path: [values]}}")
+    sweep_lists: dict[str, list[Any]] = {}
+    for k, v in (sweep or {}).items():
+        if isinstance(v, (str, bytes)) or isinstance(v, Mapping) or not isinstance(v, Iterable):
+            raise ScenarioError(f"sweep {k} = {v!r}: expected a list of values, e.g. [{v!r}]")
+        sweep_lists[str(k)] = list(v)
     for k, v in sweep_lists.items():
         if not v:
             raise ScenarioError(f"sweep {k}: no values")
@@ -366,7 +463,16 @@ def montecarlo(
             except ScenarioError as e:
                 raise ScenarioError(f"sweep {path}={value!r}: {e}") from None
         scenarios.append(sc)
-    keep = tuple(sorted({int(k) for k in keep_series}))
+    if isinstance(keep_series, (str, bytes)) or not isinstance(keep_series, Iterable):
+        raise ValueError(f"keep_series = {keep_series!r}: expected a list of run indices")
+    keep_list = list(keep_series)
+    for idx in keep_list:
+        if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
+            raise ValueError(f"keep_series: {idx!r} is not a run index (an integer)")
+        if not 0 <= idx < runs:
+            raise ValueError(f"keep_series: run {idx} is outside the campaign's runs 0..{runs - 1}")
+    keep = tuple(sorted({int(idx) for idx in keep_list}))
+    _check_campaign_memory(base, int(runs), len(points), keep)
     threads = workers or 0
     if chunk_size is None:
         chunk_size = 16
@@ -414,4 +520,4 @@ def montecarlo(
             bar.close()
     series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
     runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points)
-    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series)
+    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import copy
 import json
 import math
+import re
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -65,6 +66,17 @@ class ScenarioError(ValueError):
     """A scenario that cannot be run; the message names the field path and the value."""
 
 
+class ScenarioTooLarge(ScenarioError, MemoryError):
+    """A scenario (or campaign) that would need more memory than is available; the message
+    says how much and which fields to change. Both a :class:`ScenarioError` and a
+    ``MemoryError``."""
+
+
+class ScenarioWarning(UserWarning):
+    """Something in a scenario that runs but may not be what was meant (e.g. a trajectory
+    shorter than the run, whose last segment is then held)."""
+
+
 def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
     if not isinstance(d, Mapping):
         raise ScenarioError(f"{path}: expected a table, got {type(d).__name__}")
@@ -94,10 +106,26 @@ def _str(v: Any, path: str) -> str:
     return v
 
 
+def _name(v: Any, path: str) -> str:
+    """A non-empty name without surrounding white space."""
+    s = _str(v, path)
+    if not s.strip():
+        raise ScenarioError(f"{path} = {v!r}: must not be empty")
+    if s != s.strip():
+        raise ScenarioError(f"{path} = {v!r}: must not start or end with white space")
+    return s
+
+
 def _number(v: Any, path: str) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
         raise ScenarioError(f"{path} = {v!r}: expected a finite number")
     return float(v)
+
+
+def _count(v: Any, path: str) -> int:
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise ScenarioError(f"{path} = {v!r}: expected an integer >= 1")
+    return v
 
 
 def _unit(v: Any, dim: str, path: str) -> float:
@@ -128,6 +156,17 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         for key, dim in _SEGMENTS[kind].items():
             seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
         segs.append(seg)
+    covered = sum(seg["duration"] for seg in segs)
+    duration = core["duration"]
+    if segs and covered < duration - 1e-9 * max(duration, 1.0):
+        import warnings
+
+        warnings.warn(
+            f"trajectory.segments cover {covered:g} s of the {duration:g} s run: the last segment "
+            f"({segs[-1]['kind']}) is held for the remaining {duration - covered:g} s",
+            ScenarioWarning,
+            stacklevel=4,
+        )
     core["trajectory"] = {
         "latitude": _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude"),
         "longitude": _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude"),
@@ -146,7 +185,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
         p = f"sensors[{i}]"
         _check_keys(s, {"name", "kind", "noise", "rate", "outages"}, p)
-        name = _str(_need(s, "name", p), f"{p}.name")
+        name = _name(_need(s, "name", p), f"{p}.name")
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in SENSOR_COMPONENTS:
             raise ScenarioError(f"{p}.kind = {kind!r}: unknown sensor (use one of: {', '.join(SENSOR_COMPONENTS)})")
@@ -157,7 +196,13 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             raise ScenarioError(
                 f"{p}.noise: {len(values)} values for a {kind} sensor with {len(comps)} components ({', '.join(c for c, _ in comps)}); give one value or one per component"
             )
-        ns = [_unit(v, dim, f"{p}.noise[{j}]" if isinstance(noise, list) else f"{p}.noise") for j, (v, (_, dim)) in enumerate(zip(values, comps))]
+        ns = []
+        for j, (v, (_, dim)) in enumerate(zip(values, comps)):
+            np_ = f"{p}.noise[{j}]" if isinstance(noise, list) else f"{p}.noise"
+            x = _unit(v, dim, np_)
+            if not x > 0:
+                raise ScenarioError(f"{np_} = {v!r}: a noise standard deviation must be positive")
+            ns.append(x)
         outages = []
         for j, w in enumerate(_list(s.get("outages", []), f"{p}.outages")):
             w = _list(w, f"{p}.outages[{j}]")
@@ -175,7 +220,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end"}, p)
         sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
         if sensor not in kinds:
-            raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(kinds)})")
+            raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(repr(k) for k in kinds)})")
         comps = SENSOR_COMPONENTS[kinds[sensor]]
         names = [c for c, _ in comps]
         want = _need(f, "components", p)
@@ -186,6 +231,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             for j, c in enumerate(_list(want, f"{p}.components")):
                 if c not in names:
                     raise ScenarioError(f"{p}.components[{j}] = {c!r}: not a component of {sensor} ({', '.join(names)})")
+                if names.index(c) in idx:
+                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: listed twice (the fault would be added twice)")
                 idx.append(names.index(c))
             if not idx:
                 raise ScenarioError(f"{p}.components: at least one component is required (or \"all\")")
@@ -217,7 +264,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             magnitude = number * UNITS[dim][base]
         faults.append(
             {
-                "id": _str(_need(f, "id", p), f"{p}.id"),
+                "id": _name(_need(f, "id", p), f"{p}.id"),
                 "sensor": sensor,
                 "components": idx,
                 "kind": kind,
@@ -240,17 +287,18 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         dets = []
         for j, d in enumerate(_list(sf.get("detectors", []), f"{p}.detectors")):
             dp = f"{p}.detectors[{j}]"
-            _check_keys(d, {"name", "kind", "pf", "pm", "variance"}, dp)
+            _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
             kind = _str(_need(d, "kind", dp), f"{dp}.kind")
             if kind not in ("chi2", "sprt", "joint"):
                 raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt or joint")
             dets.append(
                 {
-                    "name": _str(d.get("name", kind), f"{dp}.name"),
+                    "name": _name(d.get("name", kind), f"{dp}.name"),
                     "kind": kind,
                     "pf": _number(_need(d, "pf", dp), f"{dp}.pf"),
                     "pm": None if "pm" not in d else _number(d["pm"], f"{dp}.pm"),
                     "variance": None if "variance" not in d else _str(d["variance"], f"{dp}.variance"),
+                    "min_samples": None if "min_samples" not in d else _count(d["min_samples"], f"{dp}.min_samples"),
                 }
             )
         iso = sf.get("isolation")
@@ -326,22 +374,20 @@ class Scenario:
         return from_dict(raw, source=self.source)
 
 
+_PATH = re.compile(r"[A-Za-z_]\w*(\[\d+\])*(\.[A-Za-z_]\w*(\[\d+\])*)*")
+
+
 def _parse_path(path: str) -> list[str | int]:
+    """``"faults[0].magnitude"`` → ``["faults", 0, "magnitude"]``; malformed paths (unbalanced
+    brackets, empty parts, non-integer indices) raise :class:`ScenarioError`."""
+    if not isinstance(path, str) or not _PATH.fullmatch(path):
+        raise ScenarioError(
+            f"{path!r}: malformed field path; write names joined by dots with list indices in "
+            "brackets, e.g. faults[0].magnitude or sensors[1].noise"
+        )
     out: list[str | int] = []
-    for piece in path.split("."):
-        while "[" in piece:
-            head, _, rest = piece.partition("[")
-            if head:
-                out.append(head)
-            idx, _, piece = rest.partition("]")
-            try:
-                out.append(int(idx))
-            except ValueError:
-                raise ScenarioError(f"{path}: {idx!r} is not a list index") from None
-        if piece:
-            out.append(piece)
-    if not out:
-        raise ScenarioError(f"{path!r}: empty field path")
+    for name, idx in re.findall(r"([A-Za-z_]\w*)|\[(\d+)\]", path):
+        out.append(name if name else int(idx))
     return out
 
 
@@ -353,6 +399,8 @@ def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
     text = json.dumps(core)
     try:
         _core.validate_scenario(text)
+    except MemoryError as e:
+        raise ScenarioTooLarge(str(e)) from None
     except ValueError as e:
         raise ScenarioError(str(e)) from None
     return Scenario(raw=copy.deepcopy(dict(raw)), core=core, source=source, _json=text)
@@ -368,26 +416,47 @@ def load_scenario(source: str | Path | Mapping[str, Any]) -> Scenario:
     """Load a scenario: a bundled name (see :func:`bundled_scenarios`), a TOML file path, or a
     mapping with the same structure.
 
+    A bundled name wins over a file or directory of the same name in the working directory;
+    write ``./name`` (or a path ending in ``.toml``) to load such a file instead.
+
     Raises
     ------
     ScenarioError
         Unknown name, missing file, malformed TOML, or an invalid field (named with its path).
+    ScenarioTooLarge
+        The run would need more memory than is available (a :class:`ScenarioError` and a
+        ``MemoryError``); the message names ``duration`` and ``dt``.
+
+    Warns
+    -----
+    ScenarioWarning
+        The trajectory's segments are shorter than the run (the last segment is held).
     """
     if isinstance(source, Mapping):
         return from_dict(source)
     s = str(source)
+    if not s:
+        raise ScenarioError("scenario: empty name; give a bundled scenario name or a TOML file path")
     path = Path(s)
-    if path.suffix == ".toml" or path.exists():
-        if not path.is_file():
-            raise ScenarioError(f"{s}: no such scenario file")
-        text = path.read_text(encoding="utf-8")
-        origin = str(path)
-    else:
-        names = bundled_scenarios()
-        if s not in names:
-            raise ScenarioError(f"{s!r}: neither a scenario file nor a bundled scenario (bundled: {', '.join(names)})")
+    names = bundled_scenarios()
+    # A bundled name wins over a file or directory of the same name in the working directory
+    # unless the argument is written as a path (with a separator, or ending in .toml).
+    looks_like_path = isinstance(source, Path) or "/" in s or "\\" in s or path.suffix == ".toml"
+    if s in names and not looks_like_path:
         text = (resources.files("navfdi") / "scenarios" / f"{s}.toml").read_text(encoding="utf-8")
         origin = s
+    elif looks_like_path or path.exists():
+        if path.is_dir():
+            raise ScenarioError(f"{s}: is a directory, not a scenario file")
+        if not path.is_file():
+            raise ScenarioError(f"{s}: no such scenario file")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as e:
+            raise ScenarioError(f"{s}: cannot read the scenario file: {e}") from None
+        origin = str(path)
+    else:
+        raise ScenarioError(f"{s!r}: neither a scenario file nor a bundled scenario (bundled: {', '.join(names)})")
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:

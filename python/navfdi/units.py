@@ -67,6 +67,9 @@ def split(value: object, path: str) -> tuple[float, str]:
         raise UnitError(f"{path} = {value!r}: expected \"<number> <unit>\"")
     number, unit = value.split()
     try:
-        return float(number), unit
+        x = float(number)
     except ValueError:
         raise UnitError(f"{path} = {value!r}: {number!r} is not a number") from None
+    if not math.isfinite(x):
+        raise UnitError(f"{path} = {value!r}: must be finite")
+    return x, unit

@@ -59,7 +59,7 @@ pub enum Error {
         detail: String,
     },
     /// A scalar parameter is outside its allowed range.
-    #[error("{name} = {value}: {requirement}")]
+    #[error("{name} = {}: {requirement}", num(*value))]
     InvalidParameter {
         /// Parameter name.
         name: String,
@@ -71,6 +71,13 @@ pub enum Error {
     /// A configuration is inconsistent (e.g. a stack length differs from the number of epochs).
     #[error("{0}")]
     Invalid(String),
+    /// The computation was stopped through its [`crate::cancel::Cancel`] flag (e.g. Ctrl-C).
+    #[error("cancelled")]
+    Cancelled,
+    /// The computation would need more memory than is available; the message says how much
+    /// and which inputs to change.
+    #[error("{0}")]
+    TooLarge(String),
     /// A numerical procedure failed to produce a finite result.
     #[error("numerical failure in {context}: {detail}")]
     Numerical {
@@ -79,6 +86,16 @@ pub enum Error {
         /// What happened.
         detail: String,
     },
+}
+
+/// A number for messages: plain decimals for moderate magnitudes (`0.1`, `-5`), scientific
+/// notation otherwise (`1e-300`), never hundreds of digits.
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e16).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Result alias of the core.

@@ -210,6 +210,14 @@ impl KalmanFilter {
             });
         }
         check_no_inf("z", z)?;
+        if h.ncols() == n && h.nrows() != m {
+            // H fits the state: the measurement vector is the one of the wrong length.
+            return Err(Error::Shape {
+                name: "z".into(),
+                expected: format!("({},) to match H ({} × {n})", h.nrows(), h.nrows()),
+                got: format!("({m},)"),
+            });
+        }
         check_shape("H", h, m, n)?;
         check_finite_matrix("H", h)?;
         check_shape("R", r, m, m)?;

@@ -15,12 +15,14 @@
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod cancel;
 pub mod detect;
 pub mod error;
 pub mod fusion;
 pub mod ins;
 pub mod kalman;
 pub mod linalg;
+pub mod memory;
 pub mod run;
 pub mod stats;
 pub mod validate;

@@ -4,6 +4,7 @@
 //! predicts with `Φ_k, Q_k` and then updates with `z_k, H_k, R_k`. Outputs are the posterior
 //! estimates after each epoch's update.
 
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::kalman::{check_fading, KalmanFilter};
 use crate::validate::{check_covariance, check_finite_matrix, check_shape};
@@ -95,6 +96,8 @@ pub fn at_epoch(k: usize, e: Error) -> Error {
             context: format!("epoch {k}: {context}"),
             detail,
         },
+        Error::Cancelled => Error::Cancelled,
+        Error::TooLarge(m) => Error::TooLarge(m),
         other => Error::Invalid(format!("epoch {k}: {other}")),
     }
 }
@@ -106,8 +109,9 @@ pub fn at_epoch(k: usize, e: Error) -> Error {
 /// * `zs`: measurements, row-major `epochs × m`; NaN marks a missing component.
 /// * `fading`: factor `S ≥ 1` applied at every prediction.
 ///
-/// All inputs are validated before the first epoch. A numerical failure at epoch k is
-/// reported with `k` in the message.
+/// All inputs are validated, and the memory of the outputs checked against what is available,
+/// before the first epoch. A numerical failure at epoch k is reported with `k` in the message;
+/// `cancel` is checked every epoch ([`Error::Cancelled`]).
 #[allow(clippy::too_many_arguments)]
 pub fn run_filter(
     x0: DVector<f64>,
@@ -119,6 +123,7 @@ pub fn run_filter(
     h: &MatrixSeq,
     r: &MatrixSeq,
     fading: f64,
+    cancel: &Cancel,
 ) -> Result<RunOutput> {
     let mut kf = KalmanFilter::new(x0, p0)?;
     let n = kf.dim();
@@ -149,6 +154,13 @@ pub fn run_filter(
         });
     }
 
+    let per_epoch = (n + n * n + m + m * m + 1) as f64 * 8.0 + m as f64;
+    crate::memory::check(
+        "run_filter",
+        per_epoch * epochs as f64,
+        &format!("{epochs} epochs with n = {n} states and m = {m} measurements (the outputs hold P, shape (T, n, n), and A, shape (T, m, m))"),
+        "run fewer epochs per call (split zs) or reduce the state dimension",
+    )?;
     let mut out = RunOutput {
         epochs,
         n,
@@ -161,6 +173,7 @@ pub fn run_filter(
         used: Vec::with_capacity(epochs * m),
     };
     for k in 0..epochs {
+        cancel.check()?;
         kf.predict_trusted(phi.at(k), q.at(k), fading)
             .map_err(|e| at_epoch(k, e))?;
         let z = DVector::from_column_slice(&zs[k * m..(k + 1) * m]);

@@ -30,7 +30,8 @@ fn check_dof(dof: usize) -> Result<()> {
 /// freedom: the `1 − pf` quantile of `χ²(dof)`.
 ///
 /// The quantile from `statrs` is polished with Newton steps on the survival function, so small
-/// `pf` (down to 1e-15) keep full relative accuracy.
+/// `pf` keep full relative accuracy; below about 1e-16 (where `1 − pf` rounds to 1) the
+/// iteration starts from the tail asymptote, so thresholds exist down to `pf` ≈ 1e-300.
 ///
 /// Reference values: `(0.1, 3) → 6.2514`, `(0.005, 6) → 18.548`, `(0.05, 5) → 11.0705`.
 pub fn chi2_threshold(pf: f64, dof: usize) -> Result<f64> {
@@ -41,14 +42,21 @@ pub fn chi2_threshold(pf: f64, dof: usize) -> Result<f64> {
         detail: e.to_string(),
     })?;
     let mut x = dist.inverse_cdf(1.0 - pf);
-    // Newton on sf(x) = pf, safeguarded: keep x positive and stop when converged.
-    for _ in 0..20 {
-        let f = dist.sf(x) - pf;
+    if !(x.is_finite() && x > 0.0) {
+        // 1 − pf rounds to 1 for pf below about 1e-16: start from the tail asymptote
+        // sf(x) ≈ exp(−x/2)·(x/2)^(dof/2 − 1)/Γ(dof/2), to leading order x ≈ dof − 2 ln pf.
+        x = dof as f64 - 2.0 * pf.ln();
+    }
+    // Newton on ln sf(x) = ln pf (well scaled down to pf ~ 1e-300), safeguarded: keep x
+    // positive and stop when converged.
+    let target = pf.ln();
+    for _ in 0..60 {
+        let s = dist.sf(x);
         let d = dist.pdf(x);
-        if !(d > 0.0) {
+        if !(s > 0.0 && d > 0.0) {
             break;
         }
-        let step = f / d;
+        let step = (s.ln() - target) * s / d;
         let next = x + step;
         let next = if next <= 0.0 { 0.5 * x } else { next };
         let converged = (next - x).abs() <= 1e-15 * x.abs();
@@ -60,7 +68,7 @@ pub fn chi2_threshold(pf: f64, dof: usize) -> Result<f64> {
     if !x.is_finite() || x <= 0.0 {
         return Err(Error::Numerical {
             context: "chi2_threshold".into(),
-            detail: format!("quantile for pf = {pf}, dof = {dof} did not converge"),
+            detail: format!("quantile for pf = {pf:e}, dof = {dof} did not converge"),
         });
     }
     Ok(x)
@@ -172,7 +180,7 @@ pub fn noncentrality(pf: f64, pm: f64, dof: usize) -> Result<f64> {
         if hi > 1e7 {
             return Err(Error::Numerical {
                 context: "noncentrality".into(),
-                detail: format!("no root below 1e7 for pf = {pf}, pm = {pm}, dof = {dof}"),
+                detail: format!("no root below 1e7 for pf = {pf:e}, pm = {pm:e}, dof = {dof}"),
             });
         }
     }

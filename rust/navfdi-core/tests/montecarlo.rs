@@ -1,5 +1,6 @@
 //! Monte-Carlo determinism: results depend only on (seed, run index).
 
+use navfdi_core::cancel::NEVER;
 use navfdi_core::sim::montecarlo::{cells, run_chunk, RunMetrics};
 use navfdi_core::sim::prepare::Prepared;
 use navfdi_core::sim::spec::ScenarioSpec;
@@ -42,10 +43,10 @@ fn bits(v: &[RunMetrics]) -> Vec<u64> {
 #[test]
 fn identical_across_threads_and_chunking() {
     let p = prep();
-    let one = run_chunk(&p, 7, 0, 8, 1, &[]).unwrap();
-    let two = run_chunk(&p, 7, 0, 8, 2, &[]).unwrap();
-    let mut chunked = run_chunk(&p, 7, 0, 3, 2, &[]).unwrap();
-    chunked.extend(run_chunk(&p, 7, 3, 5, 1, &[]).unwrap());
+    let one = run_chunk(&p, 7, 0, 8, 1, &[], &NEVER).unwrap();
+    let two = run_chunk(&p, 7, 0, 8, 2, &[], &NEVER).unwrap();
+    let mut chunked = run_chunk(&p, 7, 0, 3, 2, &[], &NEVER).unwrap();
+    chunked.extend(run_chunk(&p, 7, 3, 5, 1, &[], &NEVER).unwrap());
     assert_eq!(bits(&one), bits(&two));
     assert_eq!(bits(&one), bits(&chunked));
     assert_eq!(
@@ -53,7 +54,7 @@ fn identical_across_threads_and_chunking() {
         (0..8).collect::<Vec<_>>()
     );
     // Different seeds give different runs.
-    let other = run_chunk(&p, 8, 0, 8, 2, &[]).unwrap();
+    let other = run_chunk(&p, 8, 0, 8, 2, &[], &NEVER).unwrap();
     assert_ne!(bits(&one), bits(&other));
 }
 
@@ -63,7 +64,7 @@ fn cells_cover_faults_and_outside() {
     let c = cells(&p);
     // CNS: 3 detectors × (2 faults + none); GNSS: 1 detector × none.
     assert_eq!(c.len(), 3 * 3 + 1);
-    let m = run_chunk(&p, 1, 0, 2, 1, &[1]).unwrap();
+    let m = run_chunk(&p, 1, 0, 2, 1, &[1], &NEVER).unwrap();
     assert!(m[0].record.is_none() && m[1].record.is_some());
     // The step (20 σ) is found by the joint detector (cells: [ramp, step, none] per detector).
     let joint_step = &m[0].cells[2 * 3 + 1];

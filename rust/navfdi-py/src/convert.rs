@@ -1,13 +1,17 @@
 //! numpy ⇄ nalgebra conversions with argument-named errors.
 //!
 //! Inputs are accepted as anything numpy can turn into a float64 array (arrays of any float or
-//! integer dtype, nested lists); the fast path is a C-contiguous float64 array. numpy is
-//! row-major and nalgebra column-major, so matrices are built row by row.
+//! integer dtype, nested lists); the fast path is a C-contiguous float64 array. Every array is
+//! read in its logical (row-major) order whatever its memory layout (C or Fortran order,
+//! transposed views, negative strides, slices): `as_slice` alone would accept Fortran-ordered
+//! data and read it transposed. numpy is row-major and nalgebra column-major, so matrices are
+//! built row by row.
 
 use nalgebra::{DMatrix, DVector};
 use navfdi_core::run::MatrixSeq;
 use numpy::{
-    AllowTypeChange, IxDyn, PyArray, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods,
+    AllowTypeChange, IxDyn, PyArray, PyArrayDescrMethods, PyArrayDyn, PyArrayLikeDyn,
+    PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -33,24 +37,82 @@ fn shape_str(shape: &[usize]) -> String {
     }
 }
 
-/// Read any array-like as float64.
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// Refuse dtypes that are not real numbers (complex, strings, objects, dates): numpy would
+/// drop an imaginary part or parse strings silently when casting to float64.
+fn check_kind(name: &str, arr: &Bound<'_, PyUntypedArray>) -> PyResult<()> {
+    let dtype = arr.dtype();
+    match dtype.kind() {
+        b'b' | b'i' | b'u' | b'f' => Ok(()),
+        b'c' => Err(PyValueError::new_err(format!(
+            "{name}: complex values are not accepted (dtype {dtype}); pass the real part explicitly if that is what you mean"
+        ))),
+        _ => Err(PyValueError::new_err(format!(
+            "{name}: expected real numbers, got an array of dtype {dtype}"
+        ))),
+    }
+}
+
+/// Copy an array view in logical (row-major, C) order, whatever its memory layout: C or F
+/// order, transposed views, negative strides, non-contiguous slices.
+fn logical(view: numpy::ndarray::ArrayViewD<'_, f64>) -> Array {
+    let shape = view.shape().to_vec();
+    let data = match view.as_slice() {
+        // `ArrayView::as_slice` is `Some` only for standard (C) layout.
+        Some(s) => s.to_vec(),
+        None => view.iter().copied().collect(),
+    };
+    Array { shape, data }
+}
+
+/// Read any array-like of real numbers as float64, in logical (row-major) order.
+///
+/// Accepts float64 arrays of any memory layout (fast path), real arrays of other dtypes (cast)
+/// and nested sequences of numbers. Complex, string and object data are refused naming `name`.
 pub fn read(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Array> {
-    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj.extract().map_err(|_| {
-        let tname = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
+    if let Ok(a) = obj.cast::<PyArrayDyn<f64>>() {
+        let ro = a
+            .try_readonly()
+            .map_err(|e| PyValueError::new_err(format!("{name}: cannot read the array: {e}")))?;
+        return Ok(logical(ro.as_array()));
+    }
+    let py = obj.py();
+    let arr: Bound<'_, PyAny> = if let Ok(u) = obj.cast::<PyUntypedArray>() {
+        check_kind(name, u)?;
+        obj.clone()
+    } else {
+        let np = py.import("numpy")?;
+        let a = np.call_method1("asarray", (obj,)).map_err(|e| {
+            if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+                return e;
+            }
+            PyValueError::new_err(format!(
+                "{name}: expected an array of numbers, got an object of type {} ({e})",
+                type_name(obj)
+            ))
+        })?;
+        let u = a.cast::<PyUntypedArray>().map_err(|_| {
+            PyValueError::new_err(format!(
+                "{name}: expected an array of numbers, got an object of type {}",
+                type_name(obj)
+            ))
+        })?;
+        check_kind(name, u)?;
+        a
+    };
+    let f: PyArrayLikeDyn<'_, f64, AllowTypeChange> = arr.extract().map_err(|_| {
         PyValueError::new_err(format!(
-            "{name}: expected an array of numbers, got an object of type {tname}"
+            "{name}: expected an array of numbers, got an object of type {}",
+            type_name(obj)
         ))
     })?;
-    let shape = arr.shape().to_vec();
-    let data: Vec<f64> = match arr.as_slice() {
-        Ok(s) => s.to_vec(),
-        Err(_) => arr.as_array().iter().copied().collect(),
-    };
-    Ok(Array { shape, data })
+    Ok(logical(f.as_array()))
 }
 
 /// Read a 1-D array of length `len` (any length when `None`).

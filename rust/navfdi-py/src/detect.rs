@@ -277,15 +277,17 @@ where
     let (rs, as_) = read_sequence(residuals, covariances)?;
     let m = rs.first().map_or(0, |r| r.len());
     let mut work = det.clone();
-    let reports = py
-        .detach(|| {
-            rs.iter()
-                .zip(&as_)
-                .enumerate()
-                .map(|(k, (r, a))| step(&mut work, r, a).map_err(|e| at_epoch(k, e)))
-                .collect::<navfdi_core::Result<Vec<Report>>>()
-        })
-        .py()?;
+    let work_ref = &mut work;
+    let reports = crate::interrupt::run(py, move |cancel| {
+        rs.iter()
+            .zip(&as_)
+            .enumerate()
+            .map(|(k, (r, a))| {
+                cancel.check()?;
+                step(work_ref, r, a).map_err(|e| at_epoch(k, e))
+            })
+            .collect::<navfdi_core::Result<Vec<Report>>>()
+    })?;
     *det = work;
     Ok(PyDetectionRun { reports, m })
 }
@@ -409,7 +411,13 @@ impl PyResidualChi2 {
         self.inner.reset()
     }
     /// Threshold T_D for `dof` residual components.
-    fn threshold(&mut self, dof: i64) -> PyResult<f64> {
+    #[pyo3(signature = (dof = None))]
+    fn threshold(&mut self, dof: Option<i64>) -> PyResult<f64> {
+        let dof = dof.ok_or_else(|| {
+            PyValueError::new_err(
+                "dof: the chi-square threshold depends on the number of residual components; give dof",
+            )
+        })?;
         let dof = positive_dof(dof)?;
         self.inner.threshold(dof).py()
     }
@@ -437,11 +445,14 @@ pub struct PyImprovedSprt {
 #[pymethods]
 impl PyImprovedSprt {
     #[new]
-    #[pyo3(signature = (pf, pm, variance = "known"))]
-    fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
-        Ok(PyImprovedSprt {
-            inner: ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()?,
-        })
+    #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
+    fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
+        let d = ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()?;
+        let inner = match min_samples {
+            None => d,
+            Some(n) => d.with_min_samples(positive_count("min_samples", n)?).py()?,
+        };
+        Ok(PyImprovedSprt { inner })
     }
     /// Test one epoch.
     fn test(
@@ -464,10 +475,22 @@ impl PyImprovedSprt {
     fn reset(&mut self) {
         self.inner.reset()
     }
-    /// Threshold T(H1) = ln((1 − pm)/pf).
+    /// Reset and forget the residual dimension, so the next test may use another length.
+    fn reset_dimension(&mut self) {
+        self.inner.reset_dimension()
+    }
+    /// Threshold T(H1) = ln((1 − pm)/pf) (the same for any `dof`).
+    #[pyo3(signature = (dof = None))]
+    fn threshold(&self, dof: Option<i64>) -> PyResult<f64> {
+        if let Some(d) = dof {
+            positive_dof(d)?;
+        }
+        Ok(self.inner.threshold())
+    }
+    /// Minimum samples per component since the last reset before it may alarm.
     #[getter]
-    fn threshold(&self) -> f64 {
-        self.inner.threshold()
+    fn min_samples(&self) -> u64 {
+        self.inner.min_samples()
     }
     /// False-alarm probability parameter.
     #[getter]
@@ -508,11 +531,14 @@ pub struct PyJointChi2Sprt {
 #[pymethods]
 impl PyJointChi2Sprt {
     #[new]
-    #[pyo3(signature = (pf, pm, variance = "known"))]
-    fn new(pf: f64, pm: f64, variance: &str) -> PyResult<Self> {
-        Ok(PyJointChi2Sprt {
-            inner: JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()?,
-        })
+    #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
+    fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
+        let d = JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()?;
+        let inner = match min_samples {
+            None => d,
+            Some(n) => d.with_min_samples(positive_count("min_samples", n)?).py()?,
+        };
+        Ok(PyJointChi2Sprt { inner })
     }
     /// Test one epoch.
     fn test(
@@ -535,10 +561,22 @@ impl PyJointChi2Sprt {
     fn reset(&mut self) {
         self.inner.reset()
     }
-    /// SPRT threshold T(H1).
+    /// Reset and forget the residual dimension, so the next test may use another length.
+    fn reset_dimension(&mut self) {
+        self.inner.reset_dimension()
+    }
+    /// SPRT threshold T(H1) (the same for any `dof`; the alarm is the SPRT's).
+    #[pyo3(signature = (dof = None))]
+    fn threshold(&self, dof: Option<i64>) -> PyResult<f64> {
+        if let Some(d) = dof {
+            positive_dof(d)?;
+        }
+        Ok(self.inner.sprt().threshold())
+    }
+    /// Minimum samples per component since the last reset before the SPRT may alarm.
     #[getter]
-    fn threshold(&self) -> f64 {
-        self.inner.sprt().threshold()
+    fn min_samples(&self) -> u64 {
+        self.inner.sprt().min_samples()
     }
     /// False-alarm probability parameter.
     #[getter]
@@ -568,6 +606,14 @@ impl PyJointChi2Sprt {
             variance_name(self.inner.sprt().variance())
         )
     }
+}
+
+/// Validate a Python integer as a count of at least 1 named `name`.
+pub fn positive_count(name: &str, n: i64) -> PyResult<u64> {
+    u64::try_from(n)
+        .ok()
+        .filter(|v| *v >= 1)
+        .ok_or_else(|| PyValueError::new_err(format!("{name} = {n}: must be at least 1")))
 }
 
 /// Validate a Python integer as degrees of freedom.

@@ -1,11 +1,14 @@
 //! Core errors → Python exceptions.
 //!
 //! `NotPositiveDefinite` and `Numerical` (numerical failures during a computation) become
-//! `navfdi.LinAlgError`, a subclass of `ValueError`; every other variant is a `ValueError`.
+//! `navfdi.LinAlgError`, a subclass of `ValueError`; `TooLarge` (a computation refused before
+//! allocating more memory than is available) is a `MemoryError` whose message says how much
+//! is needed and what to change; `Cancelled` is a `KeyboardInterrupt`; every other variant is
+//! a `ValueError`.
 //! The message is the core error's message, which names the argument and the problem.
 
 use navfdi_core::Error;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyValueError};
 use pyo3::{create_exception, PyErr};
 
 create_exception!(
@@ -21,6 +24,8 @@ pub fn to_py(e: Error) -> PyErr {
         Error::NotPositiveDefinite { .. } | Error::Numerical { .. } => {
             LinAlgError::new_err(e.to_string())
         }
+        Error::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
+        Error::TooLarge(_) => PyMemoryError::new_err(e.to_string()),
         _ => PyValueError::new_err(e.to_string()),
     }
 }

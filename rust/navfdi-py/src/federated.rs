@@ -16,20 +16,86 @@ fn get<'py>(d: &Bound<'py, PyDict>, key: &str, path: &str) -> PyResult<Bound<'py
         .ok_or_else(|| PyValueError::new_err(format!("{path}.{key}: missing")))
 }
 
+/// Refuse keys that are not in `allowed` (a typo such as "isolaton" would otherwise silently
+/// disable what it meant to set).
+fn check_keys(d: &Bound<'_, PyDict>, allowed: &[&str], path: &str) -> PyResult<()> {
+    for k in d.keys() {
+        let key: String = k.str()?.extract()?;
+        if !k.is_instance_of::<pyo3::types::PyString>() || !allowed.contains(&key.as_str()) {
+            return Err(PyValueError::new_err(format!(
+                "{path}: unknown key {key:?} (allowed: {})",
+                allowed.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+fn type_name(v: &Bound<'_, PyAny>) -> String {
+    v.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+fn as_str(v: &Bound<'_, PyAny>, path: &str) -> PyResult<String> {
+    if !v.is_instance_of::<pyo3::types::PyString>() {
+        return Err(PyValueError::new_err(format!(
+            "{path}: expected a string, got {} {}",
+            type_name(v),
+            v.repr()?
+        )));
+    }
+    v.extract()
+}
+
+fn as_f64(v: &Bound<'_, PyAny>, path: &str) -> PyResult<f64> {
+    let is_bool = v.is_instance_of::<pyo3::types::PyBool>();
+    let is_num = v.is_instance_of::<pyo3::types::PyFloat>()
+        || v.is_instance_of::<pyo3::types::PyInt>()
+        || v.hasattr("__float__")? && !v.is_instance_of::<pyo3::types::PyString>();
+    if is_bool || !is_num {
+        return Err(PyValueError::new_err(format!(
+            "{path}: expected a number, got {} {}",
+            type_name(v),
+            v.repr()?
+        )));
+    }
+    v.extract()
+}
+
+fn as_u64(v: &Bound<'_, PyAny>, path: &str) -> PyResult<u64> {
+    if v.is_instance_of::<pyo3::types::PyBool>() || !v.is_instance_of::<pyo3::types::PyInt>() {
+        return Err(PyValueError::new_err(format!(
+            "{path}: expected a positive integer, got {} {}",
+            type_name(v),
+            v.repr()?
+        )));
+    }
+    v.extract().map_err(|_| {
+        PyValueError::new_err(format!("{path}: expected a positive integer, got {}", v))
+    })
+}
+
+const SUB_KEYS: [&str; 6] = ["name", "H", "R", "share", "detectors", "isolation"];
+const DETECTOR_KEYS: [&str; 6] = ["name", "kind", "pf", "pm", "variance", "min_samples"];
+
 fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
     let path = format!("subfilters[{i}]");
     let d = obj
         .cast::<PyDict>()
         .map_err(|_| PyValueError::new_err(format!("{path}: expected a dict")))?;
-    let name: String = get(d, "name", &path)?
-        .extract()
-        .map_err(|_| PyValueError::new_err(format!("{path}.name: expected a string")))?;
+    check_keys(d, &SUB_KEYS, &path)?;
+    let name = as_str(&get(d, "name", &path)?, &format!("{path}.name"))?;
+    if name.is_empty() {
+        return Err(PyValueError::new_err(format!(
+            "{path}.name: must not be empty"
+        )));
+    }
     let h = matrix(&format!("{path}.H"), &get(d, "H", &path)?)?;
     let r = matrix(&format!("{path}.R"), &get(d, "R", &path)?)?;
-    let share: f64 = get(d, "share", &path)?
-        .extract()
-        .map_err(|_| PyValueError::new_err(format!("{path}.share: expected a number")))?;
-    let mut detectors = Vec::new();
+    let share = as_f64(&get(d, "share", &path)?, &format!("{path}.share"))?;
+    let mut detectors: Vec<(String, navfdi_core::detect::Detector)> = Vec::new();
     if let Some(list) = d.get_item("detectors")? {
         let list = list
             .cast::<PyList>()
@@ -39,7 +105,8 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
             let dd = item
                 .cast::<PyDict>()
                 .map_err(|_| PyValueError::new_err(format!("{dp}: expected a dict")))?;
-            let kind: String = get(dd, "kind", &dp)?.extract()?;
+            check_keys(dd, &DETECTOR_KEYS, &dp)?;
+            let kind = as_str(&get(dd, "kind", &dp)?, &format!("{dp}.kind"))?;
             let kind = match kind.as_str() {
                 "chi2" => DetectorKind::Chi2,
                 "sprt" => DetectorKind::Sprt,
@@ -51,18 +118,33 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
                 }
             };
             let dname: String = match dd.get_item("name")? {
-                Some(v) => v.extract()?,
+                Some(v) => as_str(&v, &format!("{dp}.name"))?,
                 None => format!("{kind:?}").to_lowercase(),
             };
-            let pf: f64 = get(dd, "pf", &dp)?.extract()?;
-            let pm: Option<f64> = dd.get_item("pm")?.map(|v| v.extract()).transpose()?;
+            if dname.is_empty() {
+                return Err(PyValueError::new_err(format!(
+                    "{dp}.name: must not be empty"
+                )));
+            }
+            if detectors.iter().any(|(n, _)| *n == dname) {
+                return Err(PyValueError::new_err(format!(
+                    "{dp}.name = {dname:?}: used by an earlier detector of this sub-filter (decisions are keyed by name)"
+                )));
+            }
+            let pf = as_f64(&get(dd, "pf", &dp)?, &format!("{dp}.pf"))?;
+            let pm = dd
+                .get_item("pm")?
+                .map(|v| as_f64(&v, &format!("{dp}.pm")))
+                .transpose()?;
             if kind != DetectorKind::Chi2 && pm.is_none() {
                 return Err(PyValueError::new_err(format!(
                     "{dp}.pm: required for sprt and joint detectors"
                 )));
             }
-            let variance: Option<String> =
-                dd.get_item("variance")?.map(|v| v.extract()).transpose()?;
+            let variance = dd
+                .get_item("variance")?
+                .map(|v| as_str(&v, &format!("{dp}.variance")))
+                .transpose()?;
             if let Some(v) = &variance {
                 if v != "known" && v != "sample" {
                     return Err(PyValueError::new_err(format!(
@@ -70,7 +152,11 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
                     )));
                 }
             }
-            let det = make_detector(kind, pf, pm, variance.as_deref())
+            let min_samples = dd
+                .get_item("min_samples")?
+                .map(|v| as_u64(&v, &format!("{dp}.min_samples")))
+                .transpose()?;
+            let det = make_detector(kind, pf, pm, variance.as_deref(), min_samples)
                 .map_err(|e| PyValueError::new_err(format!("{dp}: {e}")))?;
             detectors.push((dname, det));
         }
@@ -79,7 +165,7 @@ fn parse_sub(i: usize, obj: &Bound<'_, PyAny>) -> PyResult<SubFilterConfig> {
         None => None,
         Some(v) if v.is_none() => None,
         Some(v) => {
-            let n: String = v.extract()?;
+            let n = as_str(&v, &format!("{path}.isolation"))?;
             Some(
                 detectors
                     .iter()
@@ -206,6 +292,14 @@ impl PyFederatedFilter {
             .enumerate()
             .map(|(i, o)| parse_sub(i, &o))
             .collect::<PyResult<Vec<_>>>()?;
+        for (i, s) in subs.iter().enumerate() {
+            if subs[..i].iter().any(|o| o.name == s.name) {
+                return Err(PyValueError::new_err(format!(
+                    "subfilters[{i}].name = {:?}: used by an earlier sub-filter (decisions are keyed by name)",
+                    s.name
+                )));
+            }
+        }
         let isolated = match isolated {
             "track" => IsolatedMode::Track,
             "predict" => IsolatedMode::Predict,

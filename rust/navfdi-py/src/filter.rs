@@ -179,9 +179,9 @@ pub fn run_filter<'py>(
         )));
     }
     let epochs = z.shape[0];
-    let out = py
-        .detach(move || core_run_filter(x0, p0, &phi, &q, &z.data, epochs, &h, &r, fading))
-        .py()?;
+    let out = crate::interrupt::run(py, move |cancel| {
+        core_run_filter(x0, p0, &phi, &q, &z.data, epochs, &h, &r, fading, cancel)
+    })?;
     let (t, n, m) = (out.epochs, out.n, out.m);
     Ok((
         to_numpy(py, out.x, &[t, n])?,

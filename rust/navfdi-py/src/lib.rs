@@ -8,6 +8,7 @@ mod detect;
 mod errors;
 mod federated;
 mod filter;
+mod interrupt;
 mod montecarlo;
 mod scenario;
 
@@ -56,8 +57,64 @@ fn ncx2_cdf(x: f64, dof: i64, noncentrality: f64) -> PyResult<f64> {
     navfdi_core::stats::ncx2_cdf(x, detect::positive_dof(dof)?, noncentrality).py()
 }
 
+/// Load numpy's C API (see `_core`). rust-numpy loads it on first use and panics if that fails,
+/// which it does when a Ctrl-C arrives while it runs `numpy.lib.NumpyVersion` (Python code).
+/// Here the same Python steps run first with errors propagated, and the remaining load is
+/// guarded: a panic becomes `KeyboardInterrupt` (if the failure was one) or `ImportError`.
+/// Upstream: rust-numpy's `PyArrayAPI::get` uses `expect` on a fallible initialisation.
+fn load_numpy_api(py: Python<'_>) -> PyResult<()> {
+    let np = py.import("numpy")?;
+    let version = np.getattr("__version__")?;
+    let major: u8 = py
+        .import("numpy.lib")?
+        .getattr("NumpyVersion")?
+        .call1((version,))?
+        .getattr("major")?
+        .extract()?;
+    py.import(if major >= 2 {
+        "numpy._core.multiarray"
+    } else {
+        "numpy.core.multiarray"
+    })?;
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let loaded = std::panic::catch_unwind(|| {
+        drop(numpy::PyArray1::<f64>::zeros(py, 0, false));
+    });
+    std::panic::set_hook(hook);
+    match loaded {
+        Ok(()) => Ok(()),
+        Err(payload) => {
+            let msg = payload
+                .downcast_ref::<String>()
+                .cloned()
+                .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+                .unwrap_or_default();
+            if msg.contains("KeyboardInterrupt") {
+                Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+                    "interrupted while loading numpy's C API",
+                ))
+            } else {
+                Err(pyo3::exceptions::PyImportError::new_err(format!(
+                    "navfdi: cannot load numpy's C API: {msg}"
+                )))
+            }
+        }
+    }
+}
+
+/// Bytes of memory available to this process (MemAvailable, cgroup limit, NAVFDI_MEMORY_LIMIT).
+#[pyfunction]
+fn memory_available() -> f64 {
+    navfdi_core::memory::available()
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Load numpy's C API now, where an interrupt or import failure is an ordinary exception:
+    // loaded lazily at the first array conversion, a Ctrl-C during numpy's import would make
+    // rust-numpy panic ("Failed to access NumPy array API capsule").
+    load_numpy_api(m.py())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("LinAlgError", m.py().get_type::<errors::LinAlgError>())?;
     m.add_class::<filter::PyKalmanFilter>()?;
@@ -73,6 +130,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(noncentrality, m)?)?;
     m.add_function(wrap_pyfunction!(ncx2_cdf, m)?)?;
     m.add_function(wrap_pyfunction!(mdb, m)?)?;
+    m.add_function(wrap_pyfunction!(memory_available, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::validate_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::scenario_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;

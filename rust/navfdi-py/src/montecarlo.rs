@@ -23,7 +23,7 @@ impl PyPreparedScenario {
     #[new]
     fn new(py: Python<'_>, spec_json: &str) -> PyResult<Self> {
         let spec = ScenarioSpec::from_json(spec_json).py()?;
-        let prep = py.detach(move || Prepared::new(spec)).py()?;
+        let prep = crate::interrupt::run(py, move |_| Prepared::new(spec))?;
         let cells = cells(&prep);
         Ok(PyPreparedScenario {
             prep: Arc::new(prep),
@@ -74,9 +74,9 @@ impl PyPreparedScenario {
         }
         let keep = keep.unwrap_or_default();
         let prep = Arc::clone(&self.prep);
-        let rows = py
-            .detach(move || run_chunk(&prep, seed, start, count, threads, &keep))
-            .py()?;
+        let rows = crate::interrupt::run(py, move |cancel| {
+            run_chunk(&prep, seed, start, count, threads, &keep, cancel)
+        })?;
         let n = rows.len();
         let c = self.cells.len();
         let d = PyDict::new(py);

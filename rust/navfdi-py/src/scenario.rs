@@ -101,16 +101,17 @@ pub fn run_scenario<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     let isolation = isolation.unwrap_or_else(|| vec![true]);
     let spec = ScenarioSpec::from_json(spec_json).py()?;
-    let records = py
-        .detach(move || -> navfdi_core::Result<Vec<RunRecord>> {
+    let records =
+        crate::interrupt::run(py, move |cancel| -> navfdi_core::Result<Vec<RunRecord>> {
+            spec.check_memory(isolation.len() as f64)?;
             let prep = Prepared::new(spec)?;
+            cancel.check()?;
             let sim = simulate(&prep, seed, stream);
             isolation
                 .iter()
-                .map(|&iso| run_federated(&prep, &sim, iso))
+                .map(|&iso| run_federated(&prep, &sim, iso, cancel))
                 .collect()
-        })
-        .py()?;
+        })?;
     let out = PyList::empty(py);
     for r in records {
         out.append(record_to_py(py, r)?)?;

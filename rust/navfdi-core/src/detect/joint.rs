@@ -90,6 +90,19 @@ impl JointChi2Sprt {
         self.sprt.reset();
         self.chi2_alarm = false;
     }
+
+    /// Set the SPRT's minimum sample count ([`ImprovedSprt::with_min_samples`]).
+    pub fn with_min_samples(mut self, min_samples: u64) -> Result<Self> {
+        self.sprt = self.sprt.with_min_samples(min_samples)?;
+        Ok(self)
+    }
+
+    /// Reset both tests and forget the residual dimension (the next test may use another
+    /// length).
+    pub fn reset_dimension(&mut self) {
+        self.reset();
+        self.sprt.reset_dimension();
+    }
 }
 
 #[cfg(test)]

@@ -6,6 +6,14 @@
 //! from Welford's recursion `M2_k = M2_{k−1} + ((k−1)/k)(x_k − x̄_{k−1})²`, `σ_k² = M2_k / k`
 //! (the paper's recursion (14) is a typo; see METHODS §3). The alarm is raised when any
 //! component reaches `T(H1) = ln((1 − Pm)/Pf)`.
+//!
+//! Minimum sample count: with the sample variance, the statistic after k samples is
+//! `(k/(k−1))·t²/2` with `t` Student-distributed with k − 1 degrees of freedom, so right after a
+//! reset it is huge by chance (at k = 2, `P(λ ≥ 6.9) ≈ 0.23` per component: most fault-free
+//! runs alarmed at their second epoch). A component may therefore alarm only once it has
+//! [`ImprovedSprt::min_samples`] samples since the last reset: by default
+//! [`DEFAULT_MIN_SAMPLES_SAMPLE`] with the sample variance and 1 (no restriction) with the
+//! known variance. The statistic itself is always reported.
 
 use super::{check_residual, Decision};
 use crate::error::{Error, Result};
@@ -29,6 +37,9 @@ struct Accumulator {
     lambda: f64,
 }
 
+/// Default minimum sample count before a sample-variance component may alarm.
+pub const DEFAULT_MIN_SAMPLES_SAMPLE: u64 = 20;
+
 /// Improved SPRT detector over the components of a residual vector.
 #[derive(Debug, Clone)]
 pub struct ImprovedSprt {
@@ -36,6 +47,7 @@ pub struct ImprovedSprt {
     pm: f64,
     threshold: f64,
     variance: SprtVariance,
+    min_samples: u64,
     acc: Vec<Accumulator>,
     alarm: bool,
 }
@@ -49,9 +61,32 @@ impl ImprovedSprt {
             pm,
             threshold,
             variance,
+            min_samples: match variance {
+                SprtVariance::Known => 1,
+                SprtVariance::Sample => DEFAULT_MIN_SAMPLES_SAMPLE,
+            },
             acc: Vec::new(),
             alarm: false,
         })
+    }
+
+    /// Set the minimum number of samples (since the last reset) a component needs before it
+    /// may raise the alarm (≥ 1; see the module documentation).
+    pub fn with_min_samples(mut self, min_samples: u64) -> Result<Self> {
+        if min_samples < 1 {
+            return Err(Error::InvalidParameter {
+                name: "min_samples".into(),
+                value: min_samples as f64,
+                requirement: "must be at least 1".into(),
+            });
+        }
+        self.min_samples = min_samples;
+        Ok(self)
+    }
+
+    /// Minimum samples per component before it may alarm.
+    pub fn min_samples(&self) -> u64 {
+        self.min_samples
     }
 
     /// False-alarm probability parameter.
@@ -115,7 +150,7 @@ impl ImprovedSprt {
             return Err(Error::Shape {
                 name: "residual".into(),
                 expected: format!(
-                    "({},) as in earlier epochs (call reset_dimension to change)",
+                    "({},) as in earlier epochs (call reset_dimension() to change it)",
                     self.acc.len()
                 ),
                 got: format!("({m},)"),
@@ -166,7 +201,11 @@ impl ImprovedSprt {
             };
         }
         let statistic = self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max);
-        self.alarm = statistic >= self.threshold;
+        let min = self.min_samples;
+        self.alarm = self
+            .acc
+            .iter()
+            .any(|a| a.count >= min && a.lambda >= self.threshold);
         Decision {
             statistic,
             threshold: self.threshold,

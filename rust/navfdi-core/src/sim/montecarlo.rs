@@ -23,6 +23,7 @@
 use super::noise::simulate;
 use super::prepare::Prepared;
 use super::run::{run_federated, RunRecord};
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
 
@@ -221,10 +222,14 @@ pub fn one_run(
     run: u64,
     cells: &[Cell],
     keep: bool,
+    cancel: &Cancel,
 ) -> Result<RunMetrics> {
+    cancel.check()?;
     let sim = simulate(prep, seed, run);
-    let rec =
-        run_federated(prep, &sim, true).map_err(|e| Error::Invalid(format!("run {run}: {e}")))?;
+    let rec = run_federated(prep, &sim, true, cancel).map_err(|e| match e {
+        Error::Cancelled => Error::Cancelled,
+        e => Error::Invalid(format!("run {run}: {e}")),
+    })?;
     let mut m = metrics(prep, run, &rec, cells);
     if keep {
         m.record = Some(rec);
@@ -233,7 +238,9 @@ pub fn one_run(
 }
 
 /// Runs `start..start + count` on `threads` threads (0: rayon's default), in run order. Runs
-/// whose index is in `keep` also return their full record.
+/// whose index is in `keep` also return their full record. The memory of the runs held at
+/// once (one per thread, plus the kept records) is checked before anything runs; `cancel` is
+/// checked every epoch of every run.
 pub fn run_chunk(
     prep: &Prepared,
     seed: u64,
@@ -241,17 +248,38 @@ pub fn run_chunk(
     count: u64,
     threads: usize,
     keep: &[u64],
+    cancel: &Cancel,
 ) -> Result<Vec<RunMetrics>> {
     if start.checked_add(count).is_none() {
         return Err(Error::Invalid(format!(
             "runs {start} + {count}: the run index would overflow"
         )));
     }
+    let workers = if threads == 0 {
+        rayon::current_num_threads()
+    } else {
+        threads
+    };
+    let kept = keep
+        .iter()
+        .filter(|&&k| k >= start && k < start + count)
+        .count();
+    let held = (workers.min(count as usize) + kept) as f64;
+    let run_bytes = prep.spec.memory_estimate(held) - prep.spec.memory_estimate(0.0);
+    crate::memory::check(
+        "Monte-Carlo chunk",
+        run_bytes,
+        &format!(
+            "{held} runs of {} epochs held at once ({kept} kept series)",
+            prep.epochs()
+        ),
+        "keep fewer series, use fewer workers, or shorten the scenario",
+    )?;
     let cells = cells(prep);
     let work = || -> Result<Vec<RunMetrics>> {
         (start..start + count)
             .into_par_iter()
-            .map(|i| one_run(prep, seed, i, &cells, keep.contains(&i)))
+            .map(|i| one_run(prep, seed, i, &cells, keep.contains(&i), cancel))
             .collect()
     };
     if threads == 0 {

@@ -94,6 +94,27 @@ pub fn psd_factor(name: &str, m: &DMatrix<f64>) -> Result<DMatrix<f64>> {
     Ok(DMatrix::from_fn(n, n, |i, j| s[i] * l[(i, j)]))
 }
 
+/// The truth must stay where the navigation model holds: finite, and clear of the poles
+/// (the ENU error model is singular there).
+fn check_truth(truth: &[TruthEpoch]) -> Result<()> {
+    for e in truth {
+        let finite = [
+            e.lat, e.lon, e.h, e.v.x, e.v.y, e.v.z, e.f_b.x, e.f_b.y, e.f_b.z,
+        ]
+        .iter()
+        .all(|v| v.is_finite());
+        if !finite || !(e.lat.abs() < 89.0f64.to_radians()) {
+            return Err(Error::Invalid(format!(
+                "trajectory: at t = {} s the truth {} (latitude {:.3}°); change the segments (speeds, headings, durations)",
+                e.t,
+                if finite { "comes within 1° of a pole, where the ENU model is singular" } else { "is no longer finite" },
+                e.lat.to_degrees()
+            )));
+        }
+    }
+    Ok(())
+}
+
 impl Prepared {
     /// Prepare a validated scenario.
     pub fn new(spec: ScenarioSpec) -> Result<Self> {
@@ -101,6 +122,7 @@ impl Prepared {
         let epochs = spec.epochs();
         let dt = spec.dt;
         let truth = generate(&spec.trajectory, dt, epochs);
+        check_truth(&truth)?;
         let model = ErrorModel { params: spec.ins };
         let mut phi = Vec::with_capacity(epochs);
         let mut q = Vec::with_capacity(epochs);

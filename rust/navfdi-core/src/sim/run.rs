@@ -3,6 +3,7 @@
 use super::noise::Simulated;
 use super::prepare::Prepared;
 use super::spec::{DetectorKind, SensorKind};
+use crate::cancel::Cancel;
 use crate::detect::{Detector, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
 use crate::error::Result;
 use crate::fusion::{FederatedFilter, SubFilterConfig};
@@ -62,12 +63,14 @@ pub struct RunRecord {
     pub subs: Vec<SubRecord>,
 }
 
-/// Build a detector from its spec (validated by the scenario).
+/// Build a detector from its spec (validated by the scenario). `min_samples` (SPRT and joint)
+/// overrides the default minimum sample count of the SPRT.
 pub fn make_detector(
     kind: DetectorKind,
     pf: f64,
     pm: Option<f64>,
     variance: Option<&str>,
+    min_samples: Option<u64>,
 ) -> Result<Detector> {
     let var = if variance == Some("sample") {
         SprtVariance::Sample
@@ -77,8 +80,20 @@ pub fn make_detector(
     let pm = pm.unwrap_or(pf);
     Ok(match kind {
         DetectorKind::Chi2 => Detector::Chi2(ResidualChi2::new(pf)?),
-        DetectorKind::Sprt => Detector::Sprt(ImprovedSprt::new(pf, pm, var)?),
-        DetectorKind::Joint => Detector::Joint(JointChi2Sprt::new(pf, pm, var)?),
+        DetectorKind::Sprt => {
+            let d = ImprovedSprt::new(pf, pm, var)?;
+            Detector::Sprt(match min_samples {
+                Some(n) => d.with_min_samples(n)?,
+                None => d,
+            })
+        }
+        DetectorKind::Joint => {
+            let d = JointChi2Sprt::new(pf, pm, var)?;
+            Detector::Joint(match min_samples {
+                Some(n) => d.with_min_samples(n)?,
+                None => d,
+            })
+        }
     })
 }
 
@@ -106,7 +121,7 @@ pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter>
         for d in &sf.detectors {
             detectors.push((
                 d.name.clone(),
-                make_detector(d.kind, d.pf, d.pm, d.variance.as_deref())?,
+                make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples)?,
             ));
         }
         let isolation_idx = sf
@@ -136,7 +151,14 @@ pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter>
 
 /// Run the federated filter over one simulated run. `isolation = false` runs the same filter
 /// with isolation disabled (the detectors still run and report).
-pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Result<RunRecord> {
+///
+/// `cancel` is checked every epoch ([`crate::Error::Cancelled`]).
+pub fn run_federated(
+    prep: &Prepared,
+    sim: &Simulated,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
     let spec = &prep.spec;
     let mut fed = build_filter(prep, isolation)?;
     let epochs = prep.epochs();
@@ -187,6 +209,7 @@ pub fn run_federated(prep: &Prepared, sim: &Simulated, isolation: bool) -> Resul
     let mut zs: Vec<DVector<f64>> = sensor_idx.iter().map(|&si| sim.z[si][0].clone()).collect();
     let mut sig = DVector::zeros(N_STATES);
     for k in 0..epochs {
+        cancel.check()?;
         for (i, &si) in sensor_idx.iter().enumerate() {
             zs[i].copy_from(&sim.z[si][k]);
             if varying_h[i] {

@@ -249,6 +249,10 @@ pub struct DetectorSpec {
     /// SPRT variance: "known" (default) or "sample".
     #[serde(default)]
     pub variance: Option<String>,
+    /// SPRT: samples a component needs since its last reset before it may alarm (default 1
+    /// with the known variance, 20 with the sample variance).
+    #[serde(default)]
+    pub min_samples: Option<u64>,
 }
 
 /// One sub-filter: INS error state + one sensor.
@@ -303,14 +307,20 @@ fn bad(path: impl Into<String>, msg: impl std::fmt::Display) -> Error {
 
 fn positive(path: &str, v: f64) -> Result<()> {
     if !(v > 0.0 && v.is_finite()) {
-        return Err(bad(path, format!("{v} must be a positive finite number")));
+        return Err(bad(
+            path,
+            format!("{} must be a positive finite number", crate::error::num(v)),
+        ));
     }
     Ok(())
 }
 
 fn non_negative(path: &str, v: f64) -> Result<()> {
     if !(v >= 0.0 && v.is_finite()) {
-        return Err(bad(path, format!("{v} must be a finite number >= 0")));
+        return Err(bad(
+            path,
+            format!("{} must be a finite number >= 0", crate::error::num(v)),
+        ));
     }
     Ok(())
 }
@@ -322,6 +332,46 @@ impl ScenarioSpec {
             serde_json::from_str(s).map_err(|e| Error::Invalid(format!("scenario: {e}")))?;
         spec.validate()?;
         Ok(spec)
+    }
+
+    /// Estimated bytes for the prepared scenario plus `runs` runs held at once (simulated
+    /// measurements and the per-epoch record of each run). Computed in floating point so that
+    /// absurd durations cannot overflow.
+    pub fn memory_estimate(&self, runs: f64) -> f64 {
+        let epochs = (self.duration / self.dt + 1e-9).floor().max(1.0);
+        let n = crate::ins::N_STATES as f64;
+        let mat = |r: f64, c: f64| r * c * 8.0 + 48.0;
+        // Prepared: Φ, Q and a factor of Q per epoch, the truth epoch, times; per sensor H,
+        // the fault vector and the availability flag.
+        let mut prep = 3.0 * mat(n, n) + 360.0 + 8.0;
+        // One run: the true state, measurements; the record: error and sigma (9 each), sources.
+        let mut run = mat(n, 1.0) + 2.0 * 9.0 * 8.0 + 4.0;
+        for s in &self.sensors {
+            let m = s.kind.dim() as f64;
+            prep += mat(m, n) + mat(m, 1.0) + 1.0;
+            run += mat(m, 1.0);
+        }
+        for sf in &self.federated.subfilters {
+            run += 8.0 + 4.0 + 3.0 + sf.detectors.len() as f64 * 17.0;
+        }
+        epochs * (prep + runs * run)
+    }
+
+    /// Refuse a scenario whose prepared data and `runs` simultaneous runs would not fit in
+    /// memory ([`crate::memory::check`]); the message names `duration` and `dt`.
+    pub fn check_memory(&self, runs: f64) -> Result<()> {
+        let epochs = (self.duration / self.dt + 1e-9).floor();
+        crate::memory::check(
+            "scenario",
+            self.memory_estimate(runs),
+            &format!(
+                "{} epochs = duration {} s / dt {} s, {runs} run(s) at once",
+                crate::error::num(epochs),
+                crate::error::num(self.duration),
+                crate::error::num(self.dt)
+            ),
+            "shorten duration or increase dt",
+        )
     }
 
     /// Number of filter epochs: `floor(duration / dt)`.
@@ -347,6 +397,8 @@ impl ScenarioSpec {
                 ),
             ));
         }
+        // One run with isolation and its no-isolation baseline, as `navfdi run` holds them.
+        self.check_memory(2.0)?;
         let tr = &self.trajectory;
         if !(tr.latitude.abs() < 89.0f64.to_radians()) {
             return Err(bad(
@@ -363,7 +415,7 @@ impl ScenarioSpec {
             ("trajectory.heading", tr.heading),
         ] {
             if !v.is_finite() {
-                return Err(bad(p, format!("{v} must be finite")));
+                return Err(bad(p, format!("{} must be finite", crate::error::num(v))));
             }
         }
         non_negative("trajectory.speed", tr.speed)?;
@@ -373,6 +425,7 @@ impl ScenarioSpec {
                 "at least one segment is required",
             ));
         }
+        self.check_kinematics()?;
         for (i, s) in tr.segments.iter().enumerate() {
             let p = format!("trajectory.segments[{i}]");
             positive(&format!("{p}.duration"), s.duration())?;
@@ -493,6 +546,20 @@ impl ScenarioSpec {
                 ));
             }
             for (j, c) in f.components.iter().enumerate() {
+                if f.components[..j].contains(c) {
+                    return Err(bad(
+                        format!("{p}.components[{j}]"),
+                        format!(
+                            "component {:?} is listed twice (the fault would be added twice)",
+                            self.sensors[si]
+                                .kind
+                                .components()
+                                .get(*c)
+                                .copied()
+                                .unwrap_or("?")
+                        ),
+                    ));
+                }
                 if *c >= dim {
                     return Err(bad(
                         format!("{p}.components[{j}]"),
@@ -512,6 +579,30 @@ impl ScenarioSpec {
                     format!(
                         "window start = {}, end = {} must be finite with start < end",
                         f.start, f.end
+                    ),
+                ));
+            }
+            let last = (self.epochs().saturating_sub(1)) as f64 * self.dt;
+            if f.start > last || f.end <= 0.0 {
+                return Err(bad(
+                    p.clone(),
+                    format!(
+                        "window [{}, {}] s lies outside the run, whose epochs span [0, {last}] s",
+                        f.start, f.end
+                    ),
+                ));
+            }
+            if !self
+                .federated
+                .subfilters
+                .iter()
+                .any(|sf| sf.sensor == f.sensor)
+            {
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!(
+                        "no sub-filter uses sensor {:?}, so the fault would never be seen; add a sub-filter for it or remove the fault",
+                        f.sensor
                     ),
                 ));
             }
@@ -570,6 +661,9 @@ impl ScenarioSpec {
                         crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(dp.clone(), e))?;
                     }
                 }
+                if d.min_samples == Some(0) {
+                    return Err(bad(format!("{dp}.min_samples"), "0 must be at least 1"));
+                }
                 if let Some(v) = &d.variance {
                     if v != "known" && v != "sample" {
                         return Err(bad(
@@ -592,6 +686,92 @@ impl ScenarioSpec {
             return Err(bad(
                 "federated",
                 format!("shares must sum to 1 (Σβ_i + master_share = {total})"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Lowest height the truth may reach (m): the lowest land surface is about −430 m.
+    pub const MIN_HEIGHT: f64 = -500.0;
+    /// Highest ground speed the truth may reach (m/s); the INS error model is for aircraft.
+    pub const MAX_SPEED: f64 = 3000.0;
+    /// Largest along-track acceleration of a segment (m/s², about 10 g).
+    pub const MAX_ACCELERATION: f64 = 100.0;
+
+    /// Kinematic limits of the trajectory over the whole run (the last segment is held until
+    /// the end): height, speed and acceleration, checked segment by segment in closed form so
+    /// that a descent below the surface or a runaway speed is named before anything runs.
+    fn check_kinematics(&self) -> Result<()> {
+        let tr = &self.trajectory;
+        let end = self.duration;
+        let (mut t0, mut h, mut speed) = (0.0f64, tr.height, tr.speed);
+        let n = tr.segments.len();
+        for (i, seg) in tr.segments.iter().enumerate() {
+            let p = format!("trajectory.segments[{i}]");
+            if t0 >= end {
+                break;
+            }
+            let last = i + 1 == n;
+            let dur = if last {
+                (end - t0).max(0.0)
+            } else {
+                seg.duration().min(end - t0)
+            };
+            let held = if last && end - t0 > seg.duration() {
+                " (the last segment is held until the end of the run)"
+            } else {
+                ""
+            };
+            match *seg {
+                SegmentSpec::Accelerate { acceleration, .. } => {
+                    if acceleration.abs() > Self::MAX_ACCELERATION {
+                        return Err(bad(
+                            format!("{p}.acceleration"),
+                            format!(
+                                "{acceleration} m/s² exceeds the {} m/s² (about 10 g) the INS error model is meant for",
+                                Self::MAX_ACCELERATION
+                            ),
+                        ));
+                    }
+                    let d = seg.duration().min(end - t0);
+                    speed = (speed + acceleration * d).max(0.0);
+                    if speed > Self::MAX_SPEED {
+                        return Err(bad(
+                            p.clone(),
+                            format!(
+                                "the ground speed reaches {speed:.0} m/s at t = {:.0} s, beyond the {} m/s the model is meant for",
+                                t0 + d,
+                                Self::MAX_SPEED
+                            ),
+                        ));
+                    }
+                }
+                SegmentSpec::Climb { rate, .. } => h += rate * dur,
+                SegmentSpec::Descent { rate, .. } => {
+                    h -= rate * dur;
+                    if h < Self::MIN_HEIGHT {
+                        let t_hit = t0 + (h + rate * dur - Self::MIN_HEIGHT) / rate;
+                        return Err(bad(
+                            p.clone(),
+                            format!(
+                                "the descent goes below the Earth's surface: the height reaches {} m at t = {t_hit:.0} s{held}; shorten the descent or lower its rate",
+                                Self::MIN_HEIGHT
+                            ),
+                        ));
+                    }
+                }
+                _ => {}
+            }
+            t0 += seg.duration();
+        }
+        if tr.height < Self::MIN_HEIGHT {
+            return Err(bad(
+                "trajectory.height",
+                format!(
+                    "{} m is below the Earth's surface (lowest allowed {} m)",
+                    tr.height,
+                    Self::MIN_HEIGHT
+                ),
             ));
         }
         Ok(())

@@ -1,0 +1,116 @@
+//! Memory estimates checked before large allocations.
+//!
+//! A failed allocation aborts the process (and kills a Jupyter kernel), and on Linux an
+//! over-committed one may instead bring the out-of-memory killer. So whole-run functions
+//! estimate what they will allocate and refuse, with [`crate::Error::TooLarge`], when it
+//! exceeds [`FRACTION`] of the memory available: the message says how much is needed and what
+//! to change.
+//!
+//! The memory available is the smallest of: `MemAvailable` in `/proc/meminfo`, the cgroup v2
+//! limit less current use (`/sys/fs/cgroup/memory.max`, `memory.current`), and the
+//! environment variable `NAVFDI_MEMORY_LIMIT` (bytes) when set. Where none can be read,
+//! [`FALLBACK`] bytes are assumed.
+
+use crate::error::{Error, Result};
+
+/// Share of the available memory one computation may plan to use.
+pub const FRACTION: f64 = 0.8;
+
+/// Bytes assumed available where the system does not say (8 GiB).
+pub const FALLBACK: f64 = 8.0 * 1024.0 * 1024.0 * 1024.0;
+
+fn read_number(path: &str) -> Option<f64> {
+    std::fs::read_to_string(path)
+        .ok()?
+        .trim()
+        .parse::<f64>()
+        .ok()
+}
+
+fn meminfo_available() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024.0)
+}
+
+/// Bytes of memory available to this process now (see the module documentation).
+pub fn available() -> f64 {
+    let mut avail: Option<f64> = meminfo_available();
+    if let (Some(max), Some(cur)) = (
+        read_number("/sys/fs/cgroup/memory.max"),
+        read_number("/sys/fs/cgroup/memory.current"),
+    ) {
+        let free = (max - cur).max(0.0);
+        avail = Some(avail.map_or(free, |a| a.min(free)));
+    }
+    if let Some(limit) = std::env::var("NAVFDI_MEMORY_LIMIT")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| *v > 0.0)
+    {
+        avail = Some(avail.map_or(limit, |a| a.min(limit)));
+    }
+    avail.unwrap_or(FALLBACK)
+}
+
+/// A byte count for people: `"512 MiB"`, `"3.2 GiB"`, `"8.1e+06 GiB"`.
+pub fn human(bytes: f64) -> String {
+    const KIB: f64 = 1024.0;
+    let (v, unit) = if bytes < KIB * KIB {
+        (bytes / KIB, "KiB")
+    } else if bytes < KIB * KIB * KIB {
+        (bytes / (KIB * KIB), "MiB")
+    } else {
+        (bytes / (KIB * KIB * KIB), "GiB")
+    };
+    if v >= 1e5 {
+        format!("{v:.1e} {unit}")
+    } else if v >= 100.0 {
+        format!("{v:.0} {unit}")
+    } else {
+        format!("{v:.1} {unit}")
+    }
+}
+
+/// Refuse a computation `what` that needs `bytes` (described by `detail`) when it exceeds
+/// [`FRACTION`] of [`available`]; `advice` says which inputs to change.
+pub fn check(what: &str, bytes: f64, detail: &str, advice: &str) -> Result<()> {
+    check_against(what, bytes, detail, advice, available())
+}
+
+/// [`check`] against a given number of available bytes.
+pub fn check_against(
+    what: &str,
+    bytes: f64,
+    detail: &str,
+    advice: &str,
+    available: f64,
+) -> Result<()> {
+    if bytes.is_finite() && bytes <= FRACTION * available {
+        return Ok(());
+    }
+    Err(Error::TooLarge(format!(
+        "{what}: needs about {} of memory ({detail}) but {} is available; {advice}",
+        human(bytes),
+        human(available)
+    )))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refuses_beyond_the_fraction() {
+        let gib = 1024.0 * 1024.0 * 1024.0;
+        assert!(check_against("x", 0.5 * gib, "d", "a", gib).is_ok());
+        let e = check_against("run", 2.0 * gib, "1000 epochs", "reduce duration", gib)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2.0 GiB") && e.contains("1.0 GiB") && e.contains("reduce duration"));
+        assert!(check_against("x", f64::INFINITY, "d", "a", gib).is_err());
+        assert_eq!(human(8e15 * gib), "8.0e15 GiB");
+        assert!(available() > 0.0);
+    }
+}
