@@ -438,3 +438,37 @@ def test_threshold_is_a_method_on_every_detector():
         dets[0].threshold()
     with pytest.raises(ValueError, match=r"dof = 0"):
         dets[1].threshold(0)
+
+
+# ---- 12. partial sweeps reported honestly -----------------------------------------------------
+def test_partial_sweep_reports_runs_per_point(monkeypatch, tmp_path):
+    import pandas as pd
+
+    mc = sys.modules["navfdi.montecarlo"]
+
+    sc = navfdi.load_scenario("yang2013")
+    for path, v in [("faults[0].start", "60 s"), ("faults[0].end", "160 s"), ("faults[1].start", "220 s"), ("faults[1].end", "240 s"), ("duration", "300 s")]:
+        sc = sc.with_value(path, v)
+    real = mc._chunk
+    calls = {"n": 0}
+
+    def flaky(*a, **k):
+        calls["n"] += 1
+        if calls["n"] == 2:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(mc, "_chunk", flaky)
+    camp = navfdi.montecarlo(sc, runs=4, chunk_size=4, sweep={"faults[1].magnitude": ["10 sigma", "20 sigma", "30 sigma"]}, progress=False)
+    assert camp.partial and camp.runs_per_point() == [4, 0, 0]
+    head = camp.format_table().splitlines()[0]
+    assert "runs per point 4, 0, 0 of 4 each" in head and "PARTIAL" in head
+    assert "(no finished runs)" in camp.format_table()
+    camp.write(tmp_path)
+    s = pd.read_csv(tmp_path / "summary.csv")
+    assert set(s["faults[1].magnitude"]) == {"10 sigma", "20 sigma", "30 sigma"}
+    done = s[s["faults[1].magnitude"] == "10 sigma"]
+    empty = s[s["faults[1].magnitude"] != "10 sigma"]
+    assert (~done.partial).all() and (done.runs == 4).all()
+    assert empty.partial.all() and (empty.runs == 0).all() and empty.detection_probability.isna().all()
+    assert len(empty) == 2 * len(done)
