@@ -22,6 +22,10 @@ from navfdi import _core
 from navfdi.scenario import ScenarioTooLarge, ScenarioWarning
 
 
+def equal(a, b) -> None:
+    np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
 def cli(*args: str, cwd: Path | None = None, timeout: float = 300) -> subprocess.CompletedProcess[str]:
     return subprocess.run([sys.executable, "-m", "navfdi", *args], capture_output=True, text=True, timeout=timeout, cwd=cwd)
 
@@ -472,3 +476,77 @@ def test_partial_sweep_reports_runs_per_point(monkeypatch, tmp_path):
     assert (~done.partial).all() and (done.runs == 4).all()
     assert empty.partial.all() and (empty.runs == 0).all() and empty.detection_probability.isna().all()
     assert len(empty) == 2 * len(done)
+
+
+# ---- 13. pickling and copying ------------------------------------------------------------------
+def _federated(rng):
+    n = 3
+    subs = [
+        {"name": "a", "H": rng.standard_normal((2, n)), "R": np.eye(2), "share": 0.5, "detectors": [{"name": "j", "kind": "joint", "pf": 0.01, "pm": 0.01}], "isolation": "j"},
+        {"name": "b", "H": rng.standard_normal((1, n)), "R": np.eye(1), "share": 0.5, "detectors": [{"kind": "sprt", "pf": 0.01, "pm": 0.01, "variance": "sample"}]},
+    ]
+    return navfdi.FederatedFilter(np.zeros(n), np.eye(n), subs, mode="no_reset")
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy", "copy"])
+def test_stateful_objects_pickle_and_continue_identically(how):
+    import copy as copy_mod
+    import pickle
+
+    dup = {"pickle": lambda o: pickle.loads(pickle.dumps(o)), "deepcopy": copy_mod.deepcopy, "copy": copy_mod.copy}[how]
+    rng = np.random.default_rng(5)
+    n = 3
+    Phi, Q = np.eye(n) + 0.1 * rng.standard_normal((n, n)), 0.01 * np.eye(n)
+    kf = navfdi.KalmanFilter(rng.standard_normal(n), np.eye(n))
+    dets = [navfdi.ResidualChi2(0.05), navfdi.ImprovedSprt(0.01, 0.01, "sample", min_samples=3), navfdi.JointChi2Sprt(0.05, 0.05)]
+    fed = _federated(rng)
+    H, R = rng.standard_normal((2, n)), np.eye(2)
+    for _ in range(7):  # build up state
+        kf.predict(Phi, Q)
+        inn = kf.update(rng.standard_normal(2), H, R)
+        for d in dets:
+            d.test(inn.residual + 0.5, inn.covariance)
+        fed.step(Phi, Q, [rng.standard_normal(2), rng.standard_normal(1)])
+    copies = [dup(o) for o in (kf, *dets, fed)]
+    assert all(type(c) is type(o) for c, o in zip(copies, (kf, *dets, fed)))
+    kf2, dets2, fed2 = copies[0], copies[1:4], copies[4]
+    for _ in range(5):
+        z = rng.standard_normal(2)
+        zs = [rng.standard_normal(2), rng.standard_normal(1)]
+        for a in (kf, kf2):
+            a.predict(Phi, Q)
+        i1, i2 = kf.update(z, H, R), kf2.update(z, H, R)
+        equal(i1.residual, i2.residual)
+        equal(kf.P, kf2.P)
+        for d1, d2 in zip(dets, dets2):
+            a, b = d1.test(i1.residual + 0.5, i1.covariance), d2.test(i2.residual + 0.5, i2.covariance)
+            assert a.statistic == b.statistic and a.alarm == b.alarm
+        s1, s2 = fed.step(Phi, Q, zs), fed2.step(Phi, Q, zs)
+        equal(s1.x, s2.x)
+        equal(s1.P, s2.P)
+        assert s1.isolated == s2.isolated
+    assert dets2[1].min_samples == 3 and fed2.names == ["a", "b"]
+
+
+def test_pickled_objects_cross_process_boundaries():
+    """What Dask and multiprocessing do: unpickle in another interpreter."""
+    import pickle
+
+    kf = navfdi.KalmanFilter(np.array([1.0, 2.0]), np.eye(2))
+    kf.predict(np.array([[1.0, 1.0], [0.0, 1.0]]), np.eye(2))
+    code = "import pickle, sys; kf = pickle.loads(sys.stdin.buffer.read()); print(repr(kf.P.tolist()))"
+    out = subprocess.run([sys.executable, "-c", code], input=pickle.dumps(kf), capture_output=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert eval(out.stdout.decode()) == kf.P.tolist()
+
+
+def test_corrupt_pickle_state_is_a_clear_error():
+    with pytest.raises(ValueError, match=r"cannot restore a KalmanFilter"):
+        _core._restore("KalmanFilter", '{"x": [1.0], "p": "nonsense"}')
+    with pytest.raises(ValueError, match=r"P0: not positive semi-definite|cannot restore"):
+        _core._restore("KalmanFilter", '{"x": [0.0], "p": [[-1.0], 1, 1]}')
+
+
+def test_thread_safety_is_documented():
+    stub = (Path(navfdi.__file__).parent / "_core.pyi").read_text(encoding="utf-8")
+    assert "not thread-safe" in stub and "Already borrowed" in stub

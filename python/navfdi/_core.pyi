@@ -1,10 +1,17 @@
 """Rust core of navfdi (PyO3 bindings). Re-exported from :mod:`navfdi`.
 
-Array arguments accept anything numpy converts to float64; the fast path is a C-contiguous
-float64 array. Returned arrays are new numpy arrays (copies of the Rust state).
+Array arguments accept real numbers in any memory layout (C or Fortran order, transposed
+views, negative strides, slices; any integer, bool or float dtype; nested lists) and are read
+in their logical order; complex, string and object data are refused. The fast path is a
+C-contiguous float64 array. Returned arrays are new numpy arrays (copies of the Rust state).
+
+The stateful classes (:class:`KalmanFilter`, the detectors, :class:`FederatedFilter`) can be
+pickled and deep-copied (Dask, multiprocessing); the copy continues exactly where the original
+was. They are not thread-safe: using one object from two threads at the same time raises
+``RuntimeError: Already borrowed``; give each thread its own copy (``copy.deepcopy``).
 """
 
-from typing import Any, final
+from typing import Any, Callable, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -12,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "memory_available",
+    "_restore",
     "LinAlgError",
     "KalmanFilter",
     "Innovation",
@@ -81,6 +89,8 @@ class KalmanFilter:
     """
 
     def __new__(cls, x0: ArrayLike, P0: ArrayLike) -> KalmanFilter: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
     def predict(self, Phi: ArrayLike, Q: ArrayLike, fading: float = 1.0) -> None:
         """Time update ``x⁻ = Φ x``, ``P⁻ = S Φ P Φᵀ + Q``.
 
@@ -231,6 +241,8 @@ class ResidualChi2:
     """
 
     def __new__(cls, pf: float) -> ResidualChi2: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch: ``residual`` shape (m,), ``covariance`` shape (m, m), positive
         definite on the available components. Raises ``ValueError`` for bad shapes or values
@@ -276,6 +288,8 @@ class ImprovedSprt:
     """
 
     def __new__(cls, pf: float, pm: float, variance: str = "known", min_samples: int | None = None) -> ImprovedSprt: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch (``residual`` (m,), ``covariance`` (m, m)); the dimension m is fixed
         by the first call. NaN components are skipped."""
@@ -315,6 +329,8 @@ class JointChi2Sprt:
     """
 
     def __new__(cls, pf: float, pm: float, variance: str = "known", min_samples: int | None = None) -> JointChi2Sprt: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
         """Test one epoch; the decision carries ``chi2`` and ``reset``."""
     def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
@@ -360,6 +376,9 @@ def mdb(A: ArrayLike, pf: float, pm: float) -> NDArray[np.float64]:
     """Minimal detectable bias per component, shape (m,), in measurement units:
     ``sqrt(λ0 / (A⁻¹)_ii)`` with ``A`` (m, m) the residual covariance (symmetric positive
     definite) and ``λ0 = noncentrality(pf, pm, m)``."""
+
+def _restore(kind: str, state: str) -> Any:
+    """Rebuild a pickled object (called by pickle; not for direct use)."""
 
 def memory_available() -> float:
     """Bytes of memory available to this process: the smallest of MemAvailable
@@ -456,6 +475,8 @@ class FederatedFilter:
         isolation: bool = True,
         isolated: str = "track",
     ) -> FederatedFilter: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
     def set_model(self, name: str, H: ArrayLike, R: ArrayLike) -> None:
         """Replace the measurement model of sub-filter ``name``: ``H`` (m_i, n), ``R`` (m_i, m_i)
         symmetric PSD, same m_i as before (e.g. position rows that depend on latitude)."""

@@ -69,12 +69,35 @@ impl Workspace {
 }
 
 /// A linear Kalman filter with state `x` (n) and covariance `P` (n × n).
-#[derive(Debug, Clone)]
+///
+/// Serialises as its state `{x, p}` only (the scratch buffers are rebuilt), for pickling.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[serde(into = "KalmanState", try_from = "KalmanState")]
 pub struct KalmanFilter {
     x: DVector<f64>,
     p: DMatrix<f64>,
     ws: Workspace,
     mws: Option<MWork>,
+}
+
+/// The serialised form of a [`KalmanFilter`].
+#[derive(serde::Serialize, serde::Deserialize)]
+struct KalmanState {
+    x: DVector<f64>,
+    p: DMatrix<f64>,
+}
+
+impl From<KalmanFilter> for KalmanState {
+    fn from(kf: KalmanFilter) -> Self {
+        KalmanState { x: kf.x, p: kf.p }
+    }
+}
+
+impl TryFrom<KalmanState> for KalmanFilter {
+    type Error = Error;
+    fn try_from(s: KalmanState) -> Result<Self> {
+        KalmanFilter::new(s.x, s.p)
+    }
 }
 
 impl KalmanFilter {

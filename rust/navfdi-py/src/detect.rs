@@ -380,6 +380,13 @@ pub struct PyResidualChi2 {
     inner: ResidualChi2,
 }
 
+impl PyResidualChi2 {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: ResidualChi2) -> Self {
+        PyResidualChi2 { inner }
+    }
+}
+
 #[pymethods]
 impl PyResidualChi2 {
     #[new]
@@ -431,6 +438,14 @@ impl PyResidualChi2 {
     fn alarm(&self) -> bool {
         self.inner.alarm()
     }
+    /// Pickle support: ``(navfdi._core._restore, ("ResidualChi2", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(
+            py,
+            "ResidualChi2",
+            crate::pickling::state("ResidualChi2", &self.inner)?,
+        )
+    }
     fn __repr__(&self) -> String {
         format!("ResidualChi2(pf={})", self.inner.pf())
     }
@@ -440,6 +455,13 @@ impl PyResidualChi2 {
 #[pyclass(name = "ImprovedSprt", module = "navfdi._core")]
 pub struct PyImprovedSprt {
     inner: ImprovedSprt,
+}
+
+impl PyImprovedSprt {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: ImprovedSprt) -> Self {
+        PyImprovedSprt { inner }
+    }
 }
 
 #[pymethods]
@@ -512,6 +534,14 @@ impl PyImprovedSprt {
     fn alarm(&self) -> bool {
         self.inner.alarm()
     }
+    /// Pickle support: ``(navfdi._core._restore, ("ImprovedSprt", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(
+            py,
+            "ImprovedSprt",
+            crate::pickling::state("ImprovedSprt", &self.inner)?,
+        )
+    }
     fn __repr__(&self) -> String {
         format!(
             "ImprovedSprt(pf={}, pm={}, variance={:?})",
@@ -526,6 +556,13 @@ impl PyImprovedSprt {
 #[pyclass(name = "JointChi2Sprt", module = "navfdi._core")]
 pub struct PyJointChi2Sprt {
     inner: JointChi2Sprt,
+}
+
+impl PyJointChi2Sprt {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: JointChi2Sprt) -> Self {
+        PyJointChi2Sprt { inner }
+    }
 }
 
 #[pymethods]
@@ -597,6 +634,14 @@ impl PyJointChi2Sprt {
     #[getter]
     fn alarm(&self) -> bool {
         self.inner.sprt().alarm()
+    }
+    /// Pickle support: ``(navfdi._core._restore, ("JointChi2Sprt", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(
+            py,
+            "JointChi2Sprt",
+            crate::pickling::state("JointChi2Sprt", &self.inner)?,
+        )
     }
     fn __repr__(&self) -> String {
         format!(

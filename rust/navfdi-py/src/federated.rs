@@ -259,6 +259,13 @@ pub struct PyFederatedFilter {
     inner: FederatedFilter,
 }
 
+impl PyFederatedFilter {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: FederatedFilter) -> Self {
+        PyFederatedFilter { inner }
+    }
+}
+
 #[pymethods]
 impl PyFederatedFilter {
     #[new]
@@ -388,6 +395,14 @@ impl PyFederatedFilter {
     #[getter]
     fn names(&self) -> Vec<String> {
         self.inner.names()
+    }
+    /// Pickle support: ``(navfdi._core._restore, ("FederatedFilter", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(
+            py,
+            "FederatedFilter",
+            crate::pickling::state("FederatedFilter", &self.inner)?,
+        )
     }
     /// Current isolation flags.
     #[getter]

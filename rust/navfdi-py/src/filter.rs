@@ -64,6 +64,13 @@ pub struct PyKalmanFilter {
     inner: KalmanFilter,
 }
 
+impl PyKalmanFilter {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: KalmanFilter) -> Self {
+        PyKalmanFilter { inner }
+    }
+}
+
 #[pymethods]
 impl PyKalmanFilter {
     #[new]
@@ -136,6 +143,14 @@ impl PyKalmanFilter {
         self.inner.dim()
     }
 
+    /// Pickle support: ``(navfdi._core._restore, ("KalmanFilter", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(
+            py,
+            "KalmanFilter",
+            crate::pickling::state("KalmanFilter", &self.inner)?,
+        )
+    }
     fn __repr__(&self) -> String {
         format!("KalmanFilter(n={})", self.inner.dim())
     }

@@ -10,6 +10,7 @@ mod federated;
 mod filter;
 mod interrupt;
 mod montecarlo;
+mod pickling;
 mod scenario;
 
 use crate::errors::IntoPyResult;
@@ -131,6 +132,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ncx2_cdf, m)?)?;
     m.add_function(wrap_pyfunction!(mdb, m)?)?;
     m.add_function(wrap_pyfunction!(memory_available, m)?)?;
+    m.add_function(wrap_pyfunction!(pickling::_restore, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::validate_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::scenario_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;

@@ -11,7 +11,7 @@ use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 ///
 /// The threshold follows the number of available residual components (NaN components are
 /// skipped); thresholds are computed once per degree of freedom and cached.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ResidualChi2 {
     pf: f64,
     thresholds: Vec<f64>,

@@ -21,7 +21,7 @@ pub struct JointDecision {
 }
 
 /// Joint chi-square / SPRT detector with reset.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct JointChi2Sprt {
     chi2: ResidualChi2,
     sprt: ImprovedSprt,

@@ -110,7 +110,7 @@ pub(crate) fn check_residual(r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Check
 }
 
 /// Any of the detectors, for code that configures detectors at run time.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub enum Detector {
     /// Residual chi-square test.
     Chi2(ResidualChi2),

@@ -21,7 +21,7 @@ use crate::stats::sprt_threshold;
 use nalgebra::{DMatrix, DVector};
 
 /// Which variance normalises the SPRT statistic.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum SprtVariance {
     /// Use the residual covariance diagonal `A_jj` (σ = 1 after normalisation).
     Known,
@@ -29,7 +29,7 @@ pub enum SprtVariance {
     Sample,
 }
 
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Accumulator {
     count: u64,
     mean: f64,
@@ -41,7 +41,7 @@ struct Accumulator {
 pub const DEFAULT_MIN_SAMPLES_SAMPLE: u64 = 20;
 
 /// Improved SPRT detector over the components of a residual vector.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct ImprovedSprt {
     pf: f64,
     pm: f64,

@@ -43,7 +43,7 @@ use crate::validate::{
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// Configuration of one sub-filter.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SubFilterConfig {
     /// Name (e.g. the sensor's).
     pub name: String,
@@ -59,7 +59,7 @@ pub struct SubFilterConfig {
     pub isolation: Option<usize>,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 struct SubFilter {
     cfg: SubFilterConfig,
     kf: KalmanFilter,
@@ -94,7 +94,7 @@ pub struct StepReport {
 }
 
 /// The federated filter.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct FederatedFilter {
     subs: Vec<SubFilter>,
     mode: FusionMode,
