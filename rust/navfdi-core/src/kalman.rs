@@ -536,6 +536,10 @@ pub fn check_fading(fading: f64) -> Result<()> {
 /// `M ← (M + Mᵀ)/2` through a scratch buffer of the same shape: one transpose and one
 /// vectorisable pass; exactly symmetric because floating-point addition commutes.
 fn symmetrize_with(m: &mut DMatrix<f64>, scratch: &mut DMatrix<f64>) {
+    if m.nrows() >= 64 {
+        crate::linalg::symmetrize_tiled(m);
+        return;
+    }
     m.transpose_to(scratch);
     for (a, b) in m.as_mut_slice().iter_mut().zip(scratch.as_slice()) {
         *a = 0.5 * (*a + *b);

@@ -7,8 +7,16 @@
 //! shapes and fall back to nalgebra's product when a dimension is zero or the shapes do not
 //! match (where nalgebra reports the mismatch), so the unsafe call only ever sees valid,
 //! contiguous column-major buffers.
+//!
+//! Large products (m·n·k ≥ [`BLOCKED_MIN`], e.g. the covariance propagation of a state with
+//! hundreds of components) go to the `gemm` crate instead: cache-blocked, packed, SIMD kernels
+//! run in parallel on rayon's threads, where the small-matrix kernels were 5–10× slower than
+//! numpy's OpenBLAS (benches/README.md, "Large states").
 
 use nalgebra::DMatrix;
+
+/// Products with at least this many multiply-adds (m·n·k) use the blocked kernel.
+pub const BLOCKED_MIN: usize = 48 * 48 * 48;
 
 /// `c ← α·a·b + β·c` (nalgebra's `gemm` convention).
 pub fn gemm(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64) {
@@ -42,6 +50,34 @@ fn product(
     if m == 0 || n == 0 || k == 0 || c.nrows() != m || c.ncols() != n || b.len() != k * n {
         return false;
     }
+    if m * n * k >= BLOCKED_MIN {
+        // SAFETY: as below (same buffers, shapes and strides). The gemm crate computes
+        // dst := α_g·dst + β_g·lhs·rhs, so α_g = β and β_g = α; with β = 0 dst is not read.
+        unsafe {
+            gemm::gemm(
+                m,
+                n,
+                k,
+                c.as_mut_ptr(),
+                m as isize,
+                1,
+                beta != 0.0,
+                a.as_ptr(),
+                m as isize,
+                1,
+                b.as_ptr(),
+                rhs.1 as isize,
+                rhs.0 as isize,
+                beta,
+                alpha,
+                false,
+                false,
+                false,
+                gemm::Parallelism::Rayon(0),
+            );
+        }
+        return true;
+    }
     let plan = nano_gemm::Plan::new_colmajor_lhs_and_dst_f64(m, n, k);
     // SAFETY: c is m × n and a is m × k, contiguous column-major (nalgebra's DMatrix storage);
     // b's buffer holds k·n elements and the callers' strides address B[(i, j)] at
@@ -67,6 +103,68 @@ fn product(
         );
     }
     true
+}
+
+/// Tile edge of the blocked element-wise loops below (keeps both tiles in L1).
+const TILE: usize = 32;
+
+/// A matrix from row-major data (numpy's C order): a tiled transpose into nalgebra's
+/// column-major storage, several times faster than an element-wise one for large matrices.
+pub fn from_row_major(rows: usize, cols: usize, data: &[f64]) -> DMatrix<f64> {
+    if rows * cols < 64 * 64 {
+        return DMatrix::from_row_slice(rows, cols, data);
+    }
+    let mut out = vec![0.0; rows * cols];
+    for i0 in (0..rows).step_by(TILE) {
+        for j0 in (0..cols).step_by(TILE) {
+            for i in i0..(i0 + TILE).min(rows) {
+                for j in j0..(j0 + TILE).min(cols) {
+                    out[i + j * rows] = data[i * cols + j];
+                }
+            }
+        }
+    }
+    DMatrix::from_vec(rows, cols, out)
+}
+
+/// `M ← (M + Mᵀ)/2` in place for a square matrix, tile by tile.
+pub fn symmetrize_tiled(m: &mut DMatrix<f64>) {
+    let n = m.nrows();
+    let s = m.as_mut_slice();
+    for j0 in (0..n).step_by(TILE) {
+        for i0 in (j0..n).step_by(TILE) {
+            for j in j0..(j0 + TILE).min(n) {
+                let start = if i0 == j0 { j + 1 } else { i0 };
+                for i in start..(i0 + TILE).min(n) {
+                    let v = 0.5 * (s[i + j * n] + s[j + i * n]);
+                    s[i + j * n] = v;
+                    s[j + i * n] = v;
+                }
+            }
+        }
+    }
+}
+
+/// Largest `|M[i, j] − M[j, i]|` and where (i > j), tile by tile.
+pub fn max_asymmetry(m: &DMatrix<f64>) -> (f64, (usize, usize)) {
+    let n = m.nrows();
+    let s = m.as_slice();
+    let (mut worst, mut at) = (0.0, (0, 0));
+    for j0 in (0..n).step_by(TILE) {
+        for i0 in (j0..n).step_by(TILE) {
+            for j in j0..(j0 + TILE).min(n) {
+                let start = if i0 == j0 { j + 1 } else { i0 };
+                for i in start..(i0 + TILE).min(n) {
+                    let d = (s[i + j * n] - s[j + i * n]).abs();
+                    if d > worst {
+                        worst = d;
+                        at = (i, j);
+                    }
+                }
+            }
+        }
+    }
+    (worst, at)
 }
 
 #[cfg(test)]
@@ -100,6 +198,53 @@ mod tests {
                     assert!((&c3 - &a * &b).amax() < 1e-12);
                 }
             }
+        }
+    }
+
+    #[test]
+    fn tiled_loops_match_plain_ones() {
+        for (r, c) in [(3, 5), (64, 64), (100, 37), (130, 130)] {
+            let data: Vec<f64> = (0..r * c).map(|v| v as f64 * 0.5 - 7.0).collect();
+            assert_eq!(
+                from_row_major(r, c, &data),
+                DMatrix::from_row_slice(r, c, &data)
+            );
+        }
+        for n in [1, 5, 33, 100] {
+            let a = DMatrix::from_fn(n, n, |i, j| ((i * 31 + j * 17) % 23) as f64 - 11.0);
+            let mut m = a.clone();
+            symmetrize_tiled(&mut m);
+            let expect = (&a + a.transpose()) * 0.5;
+            assert_eq!(m, expect);
+            let (w, at) = max_asymmetry(&a);
+            let d = &a - a.transpose();
+            assert_eq!(w, d.amax());
+            assert_eq!((a[at] - a[(at.1, at.0)]).abs(), w);
+        }
+    }
+
+    #[test]
+    fn blocked_kernel_matches_nalgebra() {
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        for (m, k, n) in [(48, 48, 48), (100, 60, 70), (130, 130, 130), (61, 200, 50)] {
+            assert!(m * n * k >= BLOCKED_MIN);
+            let a = DMatrix::from_fn(m, k, |_, _| next());
+            let b = DMatrix::from_fn(k, n, |_, _| next());
+            let c0 = DMatrix::from_fn(m, n, |_, _| next());
+            let reference = &a * &b * 1.5 + &c0 * -0.5;
+            let mut c1 = c0.clone();
+            gemm(&mut c1, 1.5, &a, &b, -0.5);
+            assert!((&c1 - &reference).amax() < 1e-11, "{m}x{k}x{n}");
+            let mut c2 = c0.clone();
+            gemm_nt(&mut c2, 1.5, &a, &b.transpose(), -0.5);
+            assert!((&c2 - &reference).amax() < 1e-11, "nt {m}x{k}x{n}");
+            let mut c3 = DMatrix::from_element(m, n, f64::NAN);
+            gemm(&mut c3, 1.0, &a, &b, 0.0);
+            assert!((&c3 - &a * &b).amax() < 1e-11);
         }
     }
 }

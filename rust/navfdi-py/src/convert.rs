@@ -140,14 +140,16 @@ pub fn matrix(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<DMatrix<f64>> {
             shape_str(&a.shape)
         )));
     }
-    Ok(DMatrix::from_row_slice(a.shape[0], a.shape[1], &a.data))
+    Ok(navfdi_core::linalg::from_row_major(
+        a.shape[0], a.shape[1], &a.data,
+    ))
 }
 
 /// Read either one matrix (2-D) or a stack with one matrix per epoch (3-D).
 pub fn matrix_seq(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<MatrixSeq> {
     let a = read(name, obj)?;
     match a.shape.len() {
-        2 => Ok(MatrixSeq::Const(DMatrix::from_row_slice(a.shape[0], a.shape[1], &a.data))),
+        2 => Ok(MatrixSeq::Const(navfdi_core::linalg::from_row_major(a.shape[0], a.shape[1], &a.data))),
         3 => {
             let (t, r, c) = (a.shape[0], a.shape[1], a.shape[2]);
             let step = r * c;
