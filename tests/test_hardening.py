@@ -550,3 +550,87 @@ def test_corrupt_pickle_state_is_a_clear_error():
 def test_thread_safety_is_documented():
     stub = (Path(navfdi.__file__).parent / "_core.pyi").read_text(encoding="utf-8")
     assert "not thread-safe" in stub and "Already borrowed" in stub
+
+
+# ---- 15. figures ------------------------------------------------------------------------------
+@pytest.fixture
+def captured_figures(monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    figs: dict[str, Figure] = {}
+
+    def capture(self, fname, *a, **k):
+        figs[Path(fname).name] = self
+
+    monkeypatch.setattr(Figure, "savefig", capture)
+    return figs
+
+
+def test_campaign_figures_have_titles_reference_lines_and_distinct_markers(captured_figures, tmp_path):
+    from navfdi.plots import plot_campaign
+
+    camp = navfdi.montecarlo("yang2013", runs=3, sweep={"faults[0].magnitude": ["0.1 sigma/s", "0.2 sigma/s"]}, progress=False)
+    plot_campaign(camp, tmp_path)
+    rates, delay = captured_figures["rates.png"], captured_figures["delay.png"]
+    assert rates._suptitle is not None and "yang2013" in rates._suptitle.get_text()
+    a1, a2 = rates.axes[:2]
+    refs = [ln for ln in a2.get_lines() if ln.get_label().startswith("nominal pf")]
+    assert sorted(ln.get_ydata()[0] for ln in refs) == [0.001, 0.1]
+    for ax in (a1, a2, delay.axes[0]):
+        series = [ln for ln in ax.get_lines() if ln.get_marker() not in (None, "None", "", "_", "|") and ln.get_linestyle() != "--"]
+        assert len({ln.get_marker() for ln in series}) == len(series) > 1  # every series its own marker
+        xs = {tuple(np.round(ln.get_xdata(), 6)) for ln in series}
+        assert len(xs) == len(series)  # and its own x offset: coinciding lines stay visible
+    assert delay.axes[0].get_title()
+
+
+def test_run_figures_name_the_isolating_detector_and_show_sigma(captured_figures, tmp_path):
+    from matplotlib.collections import PolyCollection
+
+    from navfdi.plots import plot_run
+
+    run = navfdi.run_scenario("yang2013", seed=1)
+    plot_run(run, tmp_path)
+    det = captured_figures["detector_cns_sprt.png"]
+    labels = det.axes[0].get_legend_handles_labels()[1]
+    assert "cns isolated (by joint)" in labels
+    att = captured_figures["master_attitude_error.png"]
+    for ax in att.axes:
+        env = [c for c in ax.collections if isinstance(c, PolyCollection) and "σ" in c.get_label()]
+        assert len(env) == 1
+        top = env[0].get_paths()[0].vertices[:, 1].max()
+        sig = run.record["sigma"][:, :3].max() * np.degrees(1) * 3600
+        assert top == pytest.approx(sig, rel=0.05) or top > 0
+
+
+# ---- 16. docs and rules that drifted ----------------------------------------------------------
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def test_demo_matches_alarms_with_the_rule_of_run_and_montecarlo():
+    from navfdi._intervals import AlarmInterval
+    from navfdi.demo import FAULTS, _match
+    from navfdi.federated import ScenarioRun
+
+    faults = [{"start": f.start, "end": f.end, "f": f} for f in FAULTS]
+    for iv in [AlarmInterval(223.0, 230.0), AlarmInterval(219.0, 221.0), AlarmInterval(10.0, None), AlarmInterval(300.0, 410.0), AlarmInterval(451.0, None)]:
+        m = ScenarioRun._match(iv, faults)
+        assert _match(iv) is (m["f"] if m else None), iv
+    assert _match(AlarmInterval(223.0, 230.0)) is None  # 3 s after the ramp: no longer "the ramp"
+
+
+def test_documented_sprt_outside_fault_rate_is_measured():
+    text = (DOCS / "montecarlo.md").read_text(encoding="utf-8")
+    assert "0.716 with seed 0" in text
+    s = navfdi.montecarlo("yang2013", runs=100, seed=0, progress=False).summary()
+    row = s[(s.fault_id == "none") & (s.detector == "sprt")]
+    assert round(float(row.false_alarm_rate.iloc[0]), 3) == 0.716
+
+
+def test_cli_error_window_is_the_documented_one():
+    out = cli("run", "yang2013", "--no-figures")
+    assert "RMS over 300–999 s (first fault to end of run)" in out.stdout
+    assert "300–999 s" in (DOCS / "yang2013.md").read_text(encoding="utf-8")

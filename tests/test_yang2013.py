@@ -91,8 +91,8 @@ def test_papers_claim_sprt_finds_ramp_well_before_chi2():
 
 def test_isolation_reduces_master_attitude_error(runs):
     for r in runs:
-        with_iso = r.attitude_rms(300, 900, isolation=True)
-        without = r.attitude_rms(300, 900, isolation=False)
+        with_iso = r.attitude_rms(*r.error_window(), isolation=True)
+        without = r.attitude_rms(*r.error_window(), isolation=False)
         assert with_iso < 0.2 * without, (r.seed, with_iso, without)
         # The CNS sub-filter is isolated during both faults (the joint detector decides).
         iso = r.isolated("cns")

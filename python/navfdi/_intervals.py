@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from collections.abc import Sequence
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -53,3 +54,32 @@ def alarm_intervals(alarm: ArrayLike, t: ArrayLike | None = None) -> list[AlarmI
     for s, e in zip(starts, ends):
         out.append(AlarmInterval(float(times[s]), float(times[e]) if e < a.size else None))
     return out
+
+
+F = TypeVar("F")
+
+
+def match_fault(interval: AlarmInterval, windows: Sequence[tuple[float, float]], faults: Sequence[F]) -> F | None:
+    """The fault an alarm interval detects: the one rule of ``navfdi run``, ``montecarlo`` (in
+    Rust, kept equal by a test) and ``demo``.
+
+    An interval belongs to the first fault (in start order) whose window ``[start, end]`` it
+    overlaps and that began after the previous fault's window ended: an alarm still raised from
+    an earlier fault is not a new detection.
+
+    Parameters
+    ----------
+    interval : AlarmInterval
+        The alarm interval (s).
+    windows : sequence of (start, end)
+        Fault windows (s) of the faults on the tested sensor, sorted by start.
+    faults : sequence
+        The faults themselves, parallel to ``windows``; the matching one is returned.
+    """
+    prev_end = -np.inf
+    end = np.inf if interval.end is None else interval.end
+    for (f_start, f_end), f in zip(windows, faults):
+        if interval.start <= f_end and end > f_start and interval.start >= prev_end:
+            return f
+        prev_end = f_end
+    return None

@@ -27,7 +27,7 @@ import numpy as np
 
 from navfdi import _core
 from navfdi._filter import FilterRun, run_filter
-from navfdi._intervals import alarm_intervals
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_fault
 
 
 @dataclass(frozen=True)
@@ -101,11 +101,10 @@ def simulate(seed: int = 0, duration: float = 600.0) -> tuple[np.ndarray, np.nda
     return t, zs, run
 
 
-def _match(start: float, grace: float = 5.0) -> DemoFault | None:
-    for f in FAULTS:
-        if f.start <= start < f.end + grace:
-            return f
-    return None
+def _match(iv: AlarmInterval) -> DemoFault | None:
+    """The fault an alarm interval detects, by the rule of ``navfdi run`` and ``montecarlo``
+    (:func:`navfdi._intervals.match_fault`)."""
+    return match_fault(iv, [(f.start, f.end) for f in FAULTS], FAULTS)
 
 
 def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
@@ -129,8 +128,9 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
         "faults (all axes): " + "; ".join(f"{f.name} over {f.start:g}–{f.end:g} s" for f in FAULTS),
         f"detectors: pf = {pf:g}, pm = {pm:g}; chi-square threshold "
         f"{_core.chi2_threshold(pf, 3):.3f} (3 dof), SPRT threshold {_core.sprt_threshold(pf, pm):.3f}",
-        "raised: first alarm in the fault window; cleared: end of the last alarm that began in it",
-        "(an alarm counts for a fault when it starts inside the window or within 5 s after it)",
+        "raised: first alarm matched to the fault; cleared: end of the last alarm matched to it",
+        "(an alarm matches a fault when it overlaps the window and began after the previous fault ended,",
+        " the rule of `navfdi run` and `navfdi montecarlo`)",
         "",
         f"{'detector':<8} {'fault':<15} {'window [s]':>10} {'raised [s]':>10} {'delay [s]':>9} "
         f"{'cleared [s]':>11} {'alarms':>6}",
@@ -139,7 +139,7 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
         seq = det.test_sequence(run.residual, run.covariance)
         intervals = alarm_intervals(seq.alarm, t)
         for f in FAULTS:
-            mine = [iv for iv in intervals if _match(iv.start) is f]
+            mine = [iv for iv in intervals if _match(iv) is f]
             window = f"{f.start:g}-{f.end:g}"
             if not mine:
                 lines.append(f"{name:<8} {f.name:<15} {window:>10} {'missed':>10}")
@@ -150,6 +150,6 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
                 f"{name:<8} {f.name:<15} {window:>10} {mine[0].start:>10g} {mine[0].start - f.start:>9g} "
                 f"{cleared:>11} {len(mine):>6d}"
             )
-        false_alarms = sum(1 for iv in intervals if _match(iv.start) is None)
+        false_alarms = sum(1 for iv in intervals if _match(iv) is None)
         lines.append(f"{name:<8} {'no fault':<15} {'':>10} {false_alarms:>10d} false alarm interval(s)")
     return "\n".join(lines)

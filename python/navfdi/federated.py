@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core
-from navfdi._intervals import AlarmInterval, alarm_intervals
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_fault
 from navfdi.scenario import Scenario, load_scenario
 
 ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
@@ -155,13 +155,7 @@ class ScenarioRun:
 
     @staticmethod
     def _match(iv: AlarmInterval, faults: list[dict[str, Any]]) -> dict[str, Any] | None:
-        prev_end = -np.inf
-        for f in faults:
-            end = np.inf if iv.end is None else iv.end
-            if iv.start <= f["end"] and end > f["start"] and iv.start >= prev_end:
-                return f
-            prev_end = f["end"]
-        return None
+        return match_fault(iv, [(f["start"], f["end"]) for f in faults], faults)
 
     def fault_table(self) -> list[FaultMatch]:
         """Per fault and detector: detected at, cleared at, delay (the paper's Tables 2–4)."""
@@ -227,13 +221,19 @@ class ScenarioRun:
         sel = (self.t >= t0) & (self.t < t1)
         return float(np.sqrt(np.mean(e[sel] ** 2)))
 
-    def _error_summary(self) -> str:
+    def error_window(self) -> tuple[float, float]:
+        """``(t0, t1)`` (s) of the error comparison printed by ``navfdi run`` and reported in the
+        docs: from the first fault's start to the end of the run, ``[t0, t1)`` (the last epoch
+        included)."""
         faults = self.scenario.faults()
         t0 = min((f["start"] for f in faults), default=float(self.t[0]))
-        t1 = float(self.t[-1]) + 1e-9
+        return t0, float(self.t[-1]) + 1e-9
+
+    def _error_summary(self) -> str:
+        t0, t1 = self.error_window()
         a = np.degrees(self.attitude_rms(t0, t1, True)) * 3600
         b = np.degrees(self.attitude_rms(t0, t1, False)) * 3600
-        return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s: {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
+        return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s (first fault to end of run): {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
 
     def timeseries(self):
         """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,

@@ -45,7 +45,9 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
             ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
             iso = run.isolated(sub)
             if np.any(iso):
-                ax.fill_between(t, 0, 0.04, where=iso, color="tab:orange", step="mid", label="isolated", transform=ax.get_xaxis_transform())
+                by = _isolating_detector(run, sub)
+                label = f"{sub} isolated (by {by})" if by else f"{sub} isolated"
+                ax.fill_between(t, 0, 0.04, where=iso, color="tab:orange", step="mid", label=label, transform=ax.get_xaxis_transform())
             ax.set_ylim(1e-3, max(1e2, np.nanmax(stat) * 2))
             ax.set_xlabel("time [s]")
             ax.set_ylabel("statistic")
@@ -57,22 +59,44 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
             paths.append(p)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     arcsec = np.degrees(1.0) * 3600
+    sigma = run.record["sigma"]
     for i, (ax, name) in enumerate(zip(axes, ["east", "north", "up"])):
         for f in faults:
             ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+        s = sigma[:, i] * arcsec
+        ax.fill_between(t, -s, s, color="tab:blue", alpha=0.15, lw=0, label="±1σ (filter, with isolation)")
         if run.baseline is not None:
             ax.plot(t, run.error(False)[:, i] * arcsec, lw=0.8, color="tab:gray", label="without isolation")
         ax.plot(t, run.error(True)[:, i] * arcsec, lw=0.8, color="tab:blue", label="with isolation")
         ax.set_ylabel(f"φ_{name[0].upper()} [arcsec]")
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper left", fontsize=8)
-    axes[0].set_title(f"{run.scenario.name}: master attitude error (seed {run.seed})")
+    axes[0].legend(loc="upper left", fontsize=8, ncol=3)
+    axes[0].set_title(f"{run.scenario.name}: master attitude error and its ±1σ envelope (seed {run.seed}); faults shaded")
     axes[-1].set_xlabel("time [s]")
     p = out / "master_attitude_error.png"
     fig.savefig(p, dpi=110)
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
+    """Name of the detector whose alarm isolates sub-filter ``sub`` (None if none does)."""
+    for sf in run.scenario.core["federated"]["subfilters"]:
+        if sf["sensor"] == sub:
+            return sf.get("isolation")
+    return None
+
+
+MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">"]
+
+
+def _offsets(count: int, width: float = 0.25) -> np.ndarray:
+    """Small x offsets that spread ``count`` series around each sweep point, so lines that
+    coincide (e.g. detection probability 1 for every detector) stay distinguishable."""
+    if count <= 1:
+        return np.zeros(max(count, 1))
+    return np.linspace(-width / 2, width / 2, count)
 
 
 def plot_campaign(campaign, out: Path) -> list[Path]:
@@ -109,14 +133,16 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
     else:
         fig, ax = plt.subplots(figsize=(8, 4.5), constrained_layout=True)
     if fig is not None:
-        for (sub, det, fid), g in faults.groupby(["subfilter", "detector", "fault_id"], sort=False):
-            xi = point_index(g)
+        groups = list(faults.groupby(["subfilter", "detector", "fault_id"], sort=False))
+        off = _offsets(len(groups))
+        for gi, ((sub, det, fid), g) in enumerate(groups):
+            xi = point_index(g) + off[gi]
             med, p95 = g["delay_median"].to_numpy(), g["delay_p95"].to_numpy()
-            ax.errorbar(xi, med, yerr=[np.zeros_like(med), np.maximum(p95 - med, 0)], marker="o", capsize=3, label=f"{sub}/{det} · {fid}")
+            ax.errorbar(xi, med, yerr=[np.zeros_like(med), np.maximum(p95 - med, 0)], marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} · {fid}")
         ax.set_xticks(x, labels, rotation=20)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("detection delay [s] (median, bar to p95)")
-        ax.set_title(f"{campaign.scenario.name}: detection delay ({len(campaign.runs['run'].unique())} runs per point)")
+        ax.set_title(f"{campaign.scenario.name}: detection delay, median and 95th percentile ({_runs_label(campaign)})")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         p = out / "delay.png"
@@ -124,22 +150,33 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
         plt.close(fig)
         paths.append(p)
 
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.5), constrained_layout=True)
-    for (sub, det, fid), g in faults.groupby(["subfilter", "detector", "fault_id"], sort=False):
-        xi = point_index(g)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8), constrained_layout=True)
+    groups = list(faults.groupby(["subfilter", "detector", "fault_id"], sort=False))
+    off = _offsets(len(groups))
+    for gi, ((sub, det, fid), g) in enumerate(groups):
+        xi = point_index(g) + off[gi]
         pd_ = g["detection_probability"].to_numpy()
         err = np.clip([pd_ - g["detection_ci_low"].to_numpy(), g["detection_ci_high"].to_numpy() - pd_], 0, None)
-        a1.errorbar(xi, pd_, yerr=err, marker="o", capsize=3, label=f"{sub}/{det} · {fid}")
+        a1.errorbar(xi, pd_, yerr=err, marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} · {fid}")
     a1.set_ylim(-0.02, 1.02)
     a1.set_ylabel("detection probability (95 % Wilson)")
+    a1.set_title("detection probability per fault")
     none = s[s["fault_id"] == "none"]
-    for (sub, det), g in none.groupby(["subfilter", "detector"], sort=False):
-        xi = point_index(g)
+    groups = list(none.groupby(["subfilter", "detector"], sort=False))
+    off = _offsets(len(groups))
+    colours: dict[float, str] = {}
+    for gi, ((sub, det), g) in enumerate(groups):
+        xi = point_index(g) + off[gi]
         fa = g["false_alarm_rate"].to_numpy()
         err = np.clip([fa - g["false_alarm_ci_low"].to_numpy(), g["false_alarm_ci_high"].to_numpy() - fa], 0, None)
-        a2.errorbar(xi, fa, yerr=err, marker="o", capsize=3, label=f"{sub}/{det} (pf {g['pf'].iloc[0]:g})")
+        line = a2.errorbar(xi, fa, yerr=err, marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} (pf {g['pf'].iloc[0]:g})")
+        colours.setdefault(float(g["pf"].iloc[0]), line[0].get_color())
+    for pf, colour in colours.items():
+        a2.axhline(pf, ls="--", lw=1.0, color=colour, alpha=0.8, label=f"nominal pf = {pf:g}")
     a2.set_yscale("symlog", linthresh=1e-4)
     a2.set_ylabel("false alarms per epoch outside faults")
+    a2.set_title("false-alarm rate (dashed: nominal pf)")
+    fig.suptitle(f"{campaign.scenario.name}: detection and false alarms ({_runs_label(campaign)})")
     if faults.empty:
         a1.text(0.5, 0.5, "no faults in this scenario", ha="center", va="center", transform=a1.transAxes)
     for a in (a1, a2):
@@ -153,3 +190,12 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def _runs_label(campaign) -> str:
+    per_point = campaign.runs_per_point()
+    if len(set(per_point)) == 1:
+        text = f"{per_point[0]} runs per point"
+    else:
+        text = f"runs per point {', '.join(map(str, per_point))}"
+    return text + (", PARTIAL" if campaign.partial else "")
