@@ -15,6 +15,7 @@
 // `!(x > 0.0)` is used on purpose throughout: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod arch;
 pub mod cancel;
 pub mod detect;
 pub mod error;

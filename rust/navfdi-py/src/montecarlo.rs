@@ -41,15 +41,16 @@ impl PyPreparedScenario {
     #[getter]
     fn cells(&self) -> Vec<(String, String, String, f64)> {
         let spec = &self.prep.spec;
+        let channels = spec.channels();
         self.cells
             .iter()
             .map(|c| {
-                let sf = &spec.federated.subfilters[c.subfilter];
-                let d = &sf.detectors[c.detector];
+                let ch = &channels[c.subfilter];
+                let d = &ch.detectors[c.detector];
                 let f = c
                     .fault
                     .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
-                (sf.sensor.clone(), d.name.clone(), f, d.pf)
+                (ch.sensor.to_string(), d.name.clone(), f, d.pf)
             })
             .collect()
     }

@@ -5,7 +5,7 @@ use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::run::{run_federated, RunRecord, ERROR_COLUMNS};
+use navfdi_core::sim::run::{run_architecture, RunRecord, ERROR_COLUMNS};
 use navfdi_core::sim::spec::ScenarioSpec;
 use navfdi_core::sim::trajectory::generate;
 use pyo3::prelude::*;
@@ -109,7 +109,7 @@ pub fn run_scenario<'py>(
             let sim = simulate(&prep, seed, stream);
             isolation
                 .iter()
-                .map(|&iso| run_federated(&prep, &sim, iso, cancel))
+                .map(|&iso| run_architecture(&prep, &sim, iso, cancel))
                 .collect()
         })?;
     let out = PyList::empty(py);

@@ -222,6 +222,14 @@ impl ImprovedSprt {
         self.alarm = false;
     }
 
+    /// Restart component `j`'s accumulator (its "pseudo-normal" state, paper 002); the alarm
+    /// is re-evaluated at the next test. Out-of-range `j` does nothing.
+    pub fn reset_component(&mut self, j: usize) {
+        if let Some(a) = self.acc.get_mut(j) {
+            *a = Accumulator::default();
+        }
+    }
+
     /// Reset and forget the residual dimension, so the next test may use another length.
     pub fn reset_dimension(&mut self) {
         self.acc.clear();

@@ -22,7 +22,7 @@
 
 use super::noise::simulate;
 use super::prepare::Prepared;
-use super::run::{run_federated, RunRecord};
+use super::run::{run_architecture, RunRecord};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use rayon::prelude::*;
@@ -81,7 +81,7 @@ pub struct RunMetrics {
 pub fn cells(prep: &Prepared) -> Vec<Cell> {
     let spec = &prep.spec;
     let mut out = Vec::new();
-    for (si, sf) in spec.federated.subfilters.iter().enumerate() {
+    for (si, sf) in spec.channels().iter().enumerate() {
         let faults: Vec<usize> = (0..spec.faults.len())
             .filter(|&f| spec.faults[f].sensor == sf.sensor)
             .collect();
@@ -131,9 +131,10 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
     for c in cells {
         let sub = &rec.subs[c.subfilter];
         let det = &sub.detectors[c.detector];
-        let sensor = &spec.federated.subfilters[c.subfilter].sensor;
+        let channels = spec.channels();
+        let sensor = channels[c.subfilter].sensor;
         let mut faults: Vec<&crate::sim::spec::FaultSpec> =
-            spec.faults.iter().filter(|f| &f.sensor == sensor).collect();
+            spec.faults.iter().filter(|f| f.sensor == sensor).collect();
         faults.sort_by(|a, b| a.start.total_cmp(&b.start));
         let ivs = intervals(&det.alarm);
         let mut m = CellMetrics {
@@ -177,8 +178,7 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
                         }
                     }
                 }
-                let isolating = spec.federated.subfilters[c.subfilter].isolation.as_deref()
-                    == Some(det.name.as_str());
+                let isolating = channels[c.subfilter].decision == Some(det.name.as_str());
                 if isolating {
                     for (s, e) in intervals(&sub.isolated) {
                         let ts = t[s];
@@ -226,7 +226,7 @@ pub fn one_run(
 ) -> Result<RunMetrics> {
     cancel.check()?;
     let sim = simulate(prep, seed, run);
-    let rec = run_federated(prep, &sim, true, cancel).map_err(|e| match e {
+    let rec = run_architecture(prep, &sim, true, cancel).map_err(|e| match e {
         Error::Cancelled => Error::Cancelled,
         e => Error::Invalid(format!("run {run}: {e}")),
     })?;

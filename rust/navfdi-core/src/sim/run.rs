@@ -2,7 +2,7 @@
 
 use super::noise::Simulated;
 use super::prepare::Prepared;
-use super::spec::{DetectorKind, SensorKind};
+use super::spec::{Architecture, DetectorKind, SensorKind};
 use crate::cancel::Cancel;
 use crate::detect::{Detector, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
 use crate::error::Result;
@@ -115,7 +115,8 @@ fn to_nav(x: &DVector<f64>, lat: f64, h: f64, out: &mut Vec<f64>) {
 pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter> {
     let spec = &prep.spec;
     let mut subs = Vec::new();
-    for sf in &spec.federated.subfilters {
+    let fspec = spec.federated()?;
+    for sf in &fspec.subfilters {
         let si = spec.sensor_index(&sf.sensor).unwrap_or(0);
         let mut detectors = Vec::new();
         for d in &sf.detectors {
@@ -141,11 +142,11 @@ pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter>
         DVector::zeros(N_STATES),
         prep.p0.clone(),
         subs,
-        spec.federated.mode,
-        spec.federated.master_share,
+        fspec.mode,
+        fspec.master_share,
         isolation,
     )?;
-    fed.set_isolated_mode(spec.federated.isolated);
+    fed.set_isolated_mode(fspec.isolated);
     Ok(fed)
 }
 
@@ -159,53 +160,11 @@ pub fn run_federated(
     isolation: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
-    let spec = &prep.spec;
     let mut fed = build_filter(prep, isolation)?;
     let epochs = prep.epochs();
-    let sensor_idx: Vec<usize> = spec
-        .federated
-        .subfilters
-        .iter()
-        .map(|sf| spec.sensor_index(&sf.sensor).unwrap_or(0))
-        .collect();
-    let varying_h: Vec<bool> = sensor_idx
-        .iter()
-        .map(|&si| {
-            !matches!(
-                spec.sensors[si].kind,
-                SensorKind::Cns | SensorKind::GnssVelocity | SensorKind::Baro
-            )
-        })
-        .collect();
-    let mut rec = RunRecord {
-        t: prep.t.clone(),
-        error: Vec::with_capacity(epochs * 9),
-        sigma: Vec::with_capacity(epochs * 9),
-        sources: Vec::with_capacity(epochs),
-        subs: spec
-            .federated
-            .subfilters
-            .iter()
-            .map(|sf| SubRecord {
-                sensor: sf.sensor.clone(),
-                statistic: Vec::with_capacity(epochs),
-                dof: Vec::with_capacity(epochs),
-                isolated: Vec::with_capacity(epochs),
-                reinstated: Vec::with_capacity(epochs),
-                fused: Vec::with_capacity(epochs),
-                detectors: sf
-                    .detectors
-                    .iter()
-                    .map(|d| DetectorRecord {
-                        name: d.name.clone(),
-                        statistic: Vec::new(),
-                        threshold: Vec::new(),
-                        alarm: Vec::new(),
-                    })
-                    .collect(),
-            })
-            .collect(),
-    };
+    let sensor_idx = channel_sensors(prep);
+    let varying_h = varying_h(prep, &sensor_idx);
+    let mut rec = RunRecord::empty(prep);
     let mut zs: Vec<DVector<f64>> = sensor_idx.iter().map(|&si| sim.z[si][0].clone()).collect();
     let mut sig = DVector::zeros(N_STATES);
     for k in 0..epochs {
@@ -232,14 +191,100 @@ pub fn run_federated(
                 d.alarm.push(dec.alarm);
             }
         }
+        rec.push_navigation(prep, sim, k, fed.x(), fed.p(), &mut sig);
+    }
+    Ok(rec)
+}
+
+/// Sensor index of each detection channel.
+pub fn channel_sensors(prep: &Prepared) -> Vec<usize> {
+    let spec = &prep.spec;
+    spec.channels()
+        .iter()
+        .map(|ch| spec.sensor_index(ch.sensor).unwrap_or(0))
+        .collect()
+}
+
+/// Whether each channel's measurement matrix changes along the trajectory (position sensors).
+pub fn varying_h(prep: &Prepared, sensor_idx: &[usize]) -> Vec<bool> {
+    sensor_idx
+        .iter()
+        .map(|&si| {
+            !matches!(
+                prep.spec.sensors[si].kind,
+                SensorKind::Cns | SensorKind::GnssVelocity | SensorKind::Baro
+            )
+        })
+        .collect()
+}
+
+impl RunRecord {
+    /// An empty record with one channel per detection channel of the scenario.
+    pub fn empty(prep: &Prepared) -> Self {
+        let epochs = prep.epochs();
+        RunRecord {
+            t: prep.t.clone(),
+            error: Vec::with_capacity(epochs * 9),
+            sigma: Vec::with_capacity(epochs * 9),
+            sources: Vec::with_capacity(epochs),
+            subs: prep
+                .spec
+                .channels()
+                .iter()
+                .map(|ch| SubRecord {
+                    sensor: ch.sensor.to_string(),
+                    statistic: Vec::with_capacity(epochs),
+                    dof: Vec::with_capacity(epochs),
+                    isolated: Vec::with_capacity(epochs),
+                    reinstated: Vec::with_capacity(epochs),
+                    fused: Vec::with_capacity(epochs),
+                    detectors: ch
+                        .detectors
+                        .iter()
+                        .map(|d| DetectorRecord {
+                            name: d.name.clone(),
+                            statistic: Vec::with_capacity(epochs),
+                            threshold: Vec::with_capacity(epochs),
+                            alarm: Vec::with_capacity(epochs),
+                        })
+                        .collect(),
+                })
+                .collect(),
+        }
+    }
+
+    /// Append epoch `k`'s navigation error `x_true − x` and 1σ from `p`.
+    pub fn push_navigation(
+        &mut self,
+        prep: &Prepared,
+        sim: &Simulated,
+        k: usize,
+        x: &DVector<f64>,
+        p: &nalgebra::DMatrix<f64>,
+        sig: &mut DVector<f64>,
+    ) {
         let tr = &prep.truth[k];
-        let e = &sim.x_true[k] - fed.x();
-        to_nav(&e, tr.lat, tr.h, &mut rec.error);
-        let p = fed.p();
+        let e = &sim.x_true[k] - x;
+        to_nav(&e, tr.lat, tr.h, &mut self.error);
         for i in 0..N_STATES {
             sig[i] = p[(i, i)].max(0.0).sqrt();
         }
-        to_nav(&sig, tr.lat, tr.h, &mut rec.sigma);
+        to_nav(sig, tr.lat, tr.h, &mut self.sigma);
     }
-    Ok(rec)
+}
+
+/// Run the scenario's architecture over one simulated run (`isolation = false`: detectors
+/// report but never act).
+pub fn run_architecture(
+    prep: &Prepared,
+    sim: &Simulated,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    match prep.spec.architecture {
+        Architecture::Federated => run_federated(prep, sim, isolation, cancel),
+        Architecture::Centralized => {
+            crate::arch::centralized::run_centralized(prep, sim, isolation, cancel)
+        }
+    }
 }

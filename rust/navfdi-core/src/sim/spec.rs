@@ -26,8 +26,93 @@ pub struct ScenarioSpec {
     /// Injected faults.
     #[serde(default)]
     pub faults: Vec<FaultSpec>,
-    /// Federated filter configuration.
-    pub federated: FederatedSpec,
+    /// Integration architecture (default: federated).
+    #[serde(default)]
+    pub architecture: Architecture,
+    /// Federated filter configuration (architecture `federated`).
+    #[serde(default)]
+    pub federated: Option<FederatedSpec>,
+    /// Centralized filter configuration (architecture `centralized`).
+    #[serde(default)]
+    pub centralized: Option<CentralizedSpec>,
+}
+
+/// Integration architecture of a scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Architecture {
+    /// One sub-filter per sensor, master fusion, isolation (paper 000).
+    #[default]
+    Federated,
+    /// One Kalman filter over the INS error state updated by all chosen sensors, detectors
+    /// per sensor and a fault-handling policy (paper 002).
+    Centralized,
+}
+
+/// What a centralized filter does with a detector's alarm (METHODS §7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Policy {
+    /// The sensor's whole measurement is dropped in an epoch its deciding detector alarms.
+    Exclude,
+    /// Plain improved SPRT: components in alarm are left out of the update until their
+    /// statistic falls below the threshold.
+    Latched,
+    /// Paper 002: on an alarm of component i its SPRT restarts ("pseudo-normal" state) and i is
+    /// left out (reduced-dimension update) until its restarted SPRT has stayed below the
+    /// threshold for `confirm` seconds; the fading factor applies for `fading_duration` after
+    /// each detection.
+    Fading,
+}
+
+/// One sensor of a centralized filter.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CentralSensorSpec {
+    /// Sensor name.
+    pub sensor: String,
+    /// Detectors run on this sensor's block of the innovation.
+    #[serde(default)]
+    pub detectors: Vec<DetectorSpec>,
+    /// Name of the detector whose alarms drive the policy (None: never acted on).
+    #[serde(default)]
+    pub decision: Option<String>,
+}
+
+/// Centralized filter configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CentralizedSpec {
+    /// Fault-handling policy.
+    pub policy: Policy,
+    /// Sensors updating the filter.
+    pub sensors: Vec<CentralSensorSpec>,
+    /// Fading factor S > 1 (policy `fading`).
+    #[serde(default = "default_fading")]
+    pub fading: f64,
+    /// Seconds the fading factor applies after each detection (policy `fading`).
+    #[serde(default)]
+    pub fading_duration: f64,
+    /// Seconds a restarted component must stay below the threshold before its fault is
+    /// declared over (policy `fading`).
+    #[serde(default)]
+    pub confirm: f64,
+}
+
+fn default_fading() -> f64 {
+    1.0
+}
+
+/// A detection channel: a sensor tested by detectors, whatever the architecture (a federated
+/// sub-filter, or one sensor of a centralized filter).
+#[derive(Debug, Clone, Copy)]
+pub struct Channel<'a> {
+    /// Sensor name.
+    pub sensor: &'a str,
+    /// Detectors.
+    pub detectors: &'a [DetectorSpec],
+    /// Detector whose alarm isolates / excludes (None: none).
+    pub decision: Option<&'a str>,
 }
 
 /// Start state and flight segments.
@@ -351,10 +436,50 @@ impl ScenarioSpec {
             prep += mat(m, n) + mat(m, 1.0) + 1.0;
             run += mat(m, 1.0);
         }
-        for sf in &self.federated.subfilters {
-            run += 8.0 + 4.0 + 3.0 + sf.detectors.len() as f64 * 17.0;
+        for ch in self.channels() {
+            run += 8.0 + 4.0 + 3.0 + ch.detectors.len() as f64 * 17.0;
         }
         epochs * (prep + runs * run)
+    }
+
+    /// The detection channels in configuration order.
+    pub fn channels(&self) -> Vec<Channel<'_>> {
+        match self.architecture {
+            Architecture::Federated => self.federated.as_ref().map_or_else(Vec::new, |f| {
+                f.subfilters
+                    .iter()
+                    .map(|sf| Channel {
+                        sensor: &sf.sensor,
+                        detectors: &sf.detectors,
+                        decision: sf.isolation.as_deref(),
+                    })
+                    .collect()
+            }),
+            Architecture::Centralized => self.centralized.as_ref().map_or_else(Vec::new, |c| {
+                c.sensors
+                    .iter()
+                    .map(|cs| Channel {
+                        sensor: &cs.sensor,
+                        detectors: &cs.detectors,
+                        decision: cs.decision.as_deref(),
+                    })
+                    .collect()
+            }),
+        }
+    }
+
+    /// The federated configuration (validated to exist for that architecture).
+    pub fn federated(&self) -> Result<&FederatedSpec> {
+        self.federated
+            .as_ref()
+            .ok_or_else(|| bad("federated", "missing (architecture = \"federated\")"))
+    }
+
+    /// The centralized configuration (validated to exist for that architecture).
+    pub fn centralized(&self) -> Result<&CentralizedSpec> {
+        self.centralized
+            .as_ref()
+            .ok_or_else(|| bad("centralized", "missing (architecture = \"centralized\")"))
     }
 
     /// Refuse a scenario whose prepared data and `runs` simultaneous runs would not fit in
@@ -592,22 +717,131 @@ impl ScenarioSpec {
                     ),
                 ));
             }
-            if !self
-                .federated
-                .subfilters
-                .iter()
-                .any(|sf| sf.sensor == f.sensor)
-            {
+            if !self.channels().iter().any(|ch| ch.sensor == f.sensor) {
                 return Err(bad(
                     format!("{p}.sensor"),
                     format!(
-                        "no sub-filter uses sensor {:?}, so the fault would never be seen; add a sub-filter for it or remove the fault",
+                        "no {} uses sensor {:?}, so the fault would never be seen; add one for it or remove the fault",
+                        match self.architecture {
+                            Architecture::Federated => "sub-filter",
+                            Architecture::Centralized => "centralized.sensors entry",
+                        },
                         f.sensor
                     ),
                 ));
             }
         }
-        let fed = &self.federated;
+        match self.architecture {
+            Architecture::Federated => {
+                if self.centralized.is_some() {
+                    return Err(bad(
+                        "centralized",
+                        "given, but architecture is \"federated\" (set architecture = \"centralized\" or remove it)",
+                    ));
+                }
+                self.validate_federated()
+            }
+            Architecture::Centralized => {
+                if self.federated.is_some() {
+                    return Err(bad(
+                        "federated",
+                        "given, but architecture is \"centralized\" (set architecture = \"federated\" or remove it)",
+                    ));
+                }
+                self.validate_centralized()
+            }
+        }
+    }
+
+    fn validate_detectors(&self, p: &str, detectors: &[DetectorSpec]) -> Result<()> {
+        for (j, d) in detectors.iter().enumerate() {
+            let dp = format!("{p}.detectors[{j}]");
+            if d.name.is_empty() || detectors[..j].iter().any(|o| o.name == d.name) {
+                return Err(bad(
+                    format!("{dp}.name"),
+                    format!("{:?} must be non-empty and unique in the sub-filter", d.name),
+                ));
+            }
+            crate::validate::check_probability(&format!("{dp}.pf"), d.pf)
+                .map_err(|e| Error::Invalid(e.to_string()))?;
+            match (d.kind, d.pm) {
+                (DetectorKind::Chi2, _) => {}
+                (_, None) => {
+                    return Err(bad(
+                        format!("{dp}.pm"),
+                        "required for sprt and joint detectors",
+                    ))
+                }
+                (_, Some(pm)) => {
+                    crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(dp.clone(), e))?;
+                }
+            }
+            if d.min_samples == Some(0) {
+                return Err(bad(format!("{dp}.min_samples"), "0 must be at least 1"));
+            }
+            if let Some(v) = &d.variance {
+                if v != "known" && v != "sample" {
+                    return Err(bad(
+                        format!("{dp}.variance"),
+                        format!("{v:?} must be \"known\" or \"sample\""),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn validate_centralized(&self) -> Result<()> {
+        let c = self.centralized()?;
+        if c.sensors.is_empty() {
+            return Err(bad("centralized.sensors", "at least one sensor is required"));
+        }
+        for (i, cs) in c.sensors.iter().enumerate() {
+            let p = format!("centralized.sensors[{i}]");
+            if self.sensor_index(&cs.sensor).is_none() {
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!("{:?} is not a sensor (known: {})", cs.sensor, self.sensor_names()),
+                ));
+            }
+            if c.sensors[..i].iter().any(|o| o.sensor == cs.sensor) {
+                return Err(bad(
+                    format!("{p}.sensor"),
+                    format!("sensor {:?} is listed twice", cs.sensor),
+                ));
+            }
+            self.validate_detectors(&p, &cs.detectors)?;
+            if let Some(dn) = &cs.decision {
+                let Some(d) = cs.detectors.iter().find(|d| &d.name == dn) else {
+                    return Err(bad(
+                        format!("{p}.decision"),
+                        format!("{dn:?} is not one of this sensor's detectors"),
+                    ));
+                };
+                if c.policy != Policy::Exclude && d.kind != DetectorKind::Sprt {
+                    return Err(bad(
+                        format!("{p}.decision"),
+                        format!(
+                            "policy {:?} acts on residual components and needs an sprt detector; {dn:?} is {:?}",
+                            c.policy, d.kind
+                        ),
+                    ));
+                }
+            }
+        }
+        if !(c.fading >= 1.0 && c.fading.is_finite()) {
+            return Err(bad(
+                "centralized.fading",
+                format!("{} must be a finite number >= 1", crate::error::num(c.fading)),
+            ));
+        }
+        non_negative("centralized.fading_duration", c.fading_duration)?;
+        non_negative("centralized.confirm", c.confirm)?;
+        Ok(())
+    }
+
+    fn validate_federated(&self) -> Result<()> {
+        let fed = self.federated()?;
         non_negative("federated.master_share", fed.master_share)?;
         if fed.subfilters.is_empty() {
             return Err(bad(
@@ -636,43 +870,7 @@ impl ScenarioSpec {
             }
             positive(&format!("{p}.share"), sf.share)?;
             total += sf.share;
-            for (j, d) in sf.detectors.iter().enumerate() {
-                let dp = format!("{p}.detectors[{j}]");
-                if d.name.is_empty() || sf.detectors[..j].iter().any(|o| o.name == d.name) {
-                    return Err(bad(
-                        format!("{dp}.name"),
-                        format!(
-                            "{:?} must be non-empty and unique in the sub-filter",
-                            d.name
-                        ),
-                    ));
-                }
-                crate::validate::check_probability(&format!("{dp}.pf"), d.pf)
-                    .map_err(|e| Error::Invalid(e.to_string()))?;
-                match (d.kind, d.pm) {
-                    (DetectorKind::Chi2, _) => {}
-                    (_, None) => {
-                        return Err(bad(
-                            format!("{dp}.pm"),
-                            "required for sprt and joint detectors",
-                        ))
-                    }
-                    (_, Some(pm)) => {
-                        crate::stats::sprt_threshold(d.pf, pm).map_err(|e| bad(dp.clone(), e))?;
-                    }
-                }
-                if d.min_samples == Some(0) {
-                    return Err(bad(format!("{dp}.min_samples"), "0 must be at least 1"));
-                }
-                if let Some(v) = &d.variance {
-                    if v != "known" && v != "sample" {
-                        return Err(bad(
-                            format!("{dp}.variance"),
-                            format!("{v:?} must be \"known\" or \"sample\""),
-                        ));
-                    }
-                }
-            }
+            self.validate_detectors(&p, &sf.detectors)?;
             if let Some(iso) = &sf.isolation {
                 if !sf.detectors.iter().any(|d| &d.name == iso) {
                     return Err(bad(

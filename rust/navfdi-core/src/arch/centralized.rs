@@ -1,0 +1,214 @@
+//! Centralized fault-tolerant filtering (paper 002, METHODS §7).
+//!
+//! One Kalman filter over the 15-state INS error model, updated each epoch by the stacked
+//! measurements of the chosen sensors. Each sensor's block of the innovation (`r_i`, `A_ii`) is
+//! tested by that sensor's detectors *before* the update (test before update), and the
+//! deciding detector's alarms act through the scenario's policy:
+//!
+//! * `exclude`: an alarm drops the sensor's whole measurement this epoch (prediction only for
+//!   it), as a residual chi-square system does;
+//! * `latched`: the plain improved SPRT; every component whose statistic is at or above the
+//!   threshold is left out of the update, until its statistic falls below the threshold
+//!   (which, without a reset, takes long after a fault ends);
+//! * `fading` (paper 002): on an alarm of component i, i's SPRT restarts from zero (the
+//!   "pseudo-normal" state) and i is left out of the update (reduced-dimension update). i keeps
+//!   being tested against the prediction; a re-alarm restarts it again, and once its restarted
+//!   SPRT has stayed below the threshold for `confirm` seconds the fault is declared over and i
+//!   rejoins the update (**resolution** of METHODS §7). After each new detection the fading
+//!   factor `S = fading` multiplies `ΦPΦᵀ` for `fading_duration` seconds.
+//!
+//! Recorded per channel: the innovation statistic of the sensor block, its components used,
+//! `isolated` = some component of the sensor left out of this epoch's update, `reinstated` =
+//! a fault declared over this epoch, `fused` = the sensor updated the filter. The deciding
+//! detector's `alarm` is the policy's fault state (for `fading`: a component is faulty), so
+//! event matching scores what the policy decided.
+
+use crate::cancel::Cancel;
+use crate::detect::Detector;
+use crate::error::{Error, Result};
+use crate::ins::N_STATES;
+use crate::kalman::KalmanFilter;
+use crate::sim::noise::Simulated;
+use crate::sim::prepare::Prepared;
+use crate::sim::run::{channel_sensors, make_detector, varying_h, RunRecord};
+use crate::sim::spec::Policy;
+use nalgebra::{DMatrix, DVector};
+
+/// Per-component state of the `fading` policy.
+#[derive(Debug, Clone, Copy, Default)]
+struct Component {
+    faulty: bool,
+    below: u32,
+}
+
+/// Run the centralized filter over one simulated run. `isolation = false`: the detectors run
+/// and report but the policy never acts (every measurement is used).
+pub fn run_centralized(
+    prep: &Prepared,
+    sim: &Simulated,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    let spec = &prep.spec;
+    let c = spec.centralized()?;
+    let channels = spec.channels();
+    let sensor_idx = channel_sensors(prep);
+    let varying = varying_h(prep, &sensor_idx);
+    let dims: Vec<usize> = sensor_idx.iter().map(|&si| spec.sensors[si].kind.dim()).collect();
+    let offsets: Vec<usize> = dims
+        .iter()
+        .scan(0, |acc, d| {
+            let o = *acc;
+            *acc += d;
+            Some(o)
+        })
+        .collect();
+    let m: usize = dims.iter().sum();
+    let mut h = DMatrix::zeros(m, N_STATES);
+    let mut r = DMatrix::zeros(m, m);
+    for (i, &si) in sensor_idx.iter().enumerate() {
+        let (o, d) = (offsets[i], dims[i]);
+        h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][0]);
+        r.view_mut((o, o), (d, d)).copy_from(&prep.r[si]);
+    }
+    let mut kf = KalmanFilter::new(DVector::zeros(N_STATES), prep.p0.clone())?;
+    let mut detectors: Vec<Vec<Detector>> = Vec::with_capacity(channels.len());
+    let mut decision: Vec<Option<usize>> = Vec::with_capacity(channels.len());
+    for ch in &channels {
+        detectors.push(
+            ch.detectors
+                .iter()
+                .map(|d| make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples))
+                .collect::<Result<_>>()?,
+        );
+        decision.push(ch.decision.and_then(|n| ch.detectors.iter().position(|d| d.name == n)));
+    }
+    let dt = spec.dt;
+    let confirm = (c.confirm / dt).round().max(1.0) as u32;
+    let fading_epochs = (c.fading_duration / dt).round() as usize;
+    let mut fading_left = 0usize;
+    let mut comps: Vec<Vec<Component>> = dims.iter().map(|&d| vec![Component::default(); d]).collect();
+    let mut rec = RunRecord::empty(prep);
+    let mut z = DVector::from_element(m, f64::NAN);
+    let mut z_used = z.clone();
+    let mut sig = DVector::zeros(N_STATES);
+    for k in 0..spec.epochs() {
+        cancel.check()?;
+        let s = if fading_left > 0 { c.fading } else { 1.0 };
+        fading_left = fading_left.saturating_sub(1);
+        kf.predict_trusted(&prep.phi[k], &prep.q[k], s)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+        for (i, &si) in sensor_idx.iter().enumerate() {
+            let (o, d) = (offsets[i], dims[i]);
+            z.rows_mut(o, d).copy_from(&sim.z[si][k]);
+            if varying[i] {
+                h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][k]);
+            }
+        }
+        // Test before update: the innovation of every available component.
+        let (inn, _) = kf
+            .innovation_pending(&z, &h, &r)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+        z_used.copy_from(&z);
+        let mut sources = 0u32;
+        for (i, ch_det) in detectors.iter_mut().enumerate() {
+            let (o, d) = (offsets[i], dims[i]);
+            let ri: DVector<f64> = inn.residual.rows(o, d).into_owned();
+            let ai: DMatrix<f64> = inn.covariance.view((o, o), (d, d)).into_owned();
+            let sub = &mut rec.subs[i];
+            let (lambda, dof) = if ri.iter().all(|v| v.is_nan()) {
+                (f64::NAN, 0)
+            } else {
+                crate::detect::ResidualChi2::statistic(&ri, &ai)
+                    .map_err(|e| crate::run::at_epoch(k, e))?
+            };
+            sub.statistic.push(lambda);
+            sub.dof.push(dof as u32);
+            let mut decisions = Vec::with_capacity(ch_det.len());
+            for det in ch_det.iter_mut() {
+                decisions.push(det.test(&ri, &ai).map_err(|e| crate::run::at_epoch(k, e))?);
+            }
+            let mut excluded = vec![false; d];
+            let mut reinstated = false;
+            if let Some(di) = decision[i] {
+                match c.policy {
+                    Policy::Exclude => {
+                        if decisions[di].alarm {
+                            excluded.iter_mut().for_each(|e| *e = true);
+                        }
+                    }
+                    Policy::Latched => {
+                        let (stats, thr) = sprt_components(&ch_det[di])?;
+                        for j in 0..d {
+                            excluded[j] = stats.get(j).is_some_and(|l| *l >= thr);
+                        }
+                    }
+                    Policy::Fading => {
+                        let (stats, thr) = sprt_components(&ch_det[di])?;
+                        let mut new_detection = false;
+                        for j in 0..d {
+                            let cj = &mut comps[i][j];
+                            let alarmed = stats.get(j).is_some_and(|l| *l >= thr) && decisions[di].alarm;
+                            if alarmed {
+                                if !cj.faulty {
+                                    new_detection = true;
+                                }
+                                cj.faulty = true;
+                                cj.below = 0;
+                                if let Detector::Sprt(sp) = &mut ch_det[di] {
+                                    sp.reset_component(j); // the "pseudo-normal" state
+                                }
+                            } else if cj.faulty && !ri[j].is_nan() {
+                                cj.below += 1;
+                                if cj.below >= confirm {
+                                    cj.faulty = false;
+                                    cj.below = 0;
+                                    reinstated = true;
+                                }
+                            }
+                            excluded[j] = cj.faulty;
+                        }
+                        if new_detection {
+                            fading_left = fading_epochs;
+                        }
+                        decisions[di].alarm = comps[i].iter().any(|cj| cj.faulty);
+                    }
+                }
+            }
+            let act = isolation && decision[i].is_some();
+            let mut used_any = false;
+            for j in 0..d {
+                if act && excluded[j] {
+                    z_used[o + j] = f64::NAN;
+                } else if !z_used[o + j].is_nan() {
+                    used_any = true;
+                }
+            }
+            let sub = &mut rec.subs[i];
+            sub.isolated.push(act && excluded.iter().any(|e| *e));
+            sub.reinstated.push(reinstated);
+            sub.fused.push(used_any);
+            sources += used_any as u32;
+            for (dr, dec) in sub.detectors.iter_mut().zip(&decisions) {
+                dr.statistic.push(dec.statistic);
+                dr.threshold.push(dec.threshold);
+                dr.alarm.push(dec.alarm);
+            }
+        }
+        kf.update_trusted(&z_used, &h, &r)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+        rec.sources.push(sources);
+        rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+    }
+    Ok(rec)
+}
+
+/// Per-component statistics and threshold of a deciding SPRT (validated to be one).
+fn sprt_components(d: &Detector) -> Result<(Vec<f64>, f64)> {
+    match d {
+        Detector::Sprt(s) => Ok((s.component_statistics(), s.threshold())),
+        _ => Err(Error::Invalid(
+            "centralized: the latched and fading policies need an sprt deciding detector".into(),
+        )),
+    }
+}
