@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "memory_available",
+    "run_variants",
     "_restore",
     "LinAlgError",
     "KalmanFilter",
@@ -385,6 +386,12 @@ def memory_available() -> float:
     (/proc/meminfo), the cgroup v2 limit less current use, and the environment variable
     ``NAVFDI_MEMORY_LIMIT`` (bytes); 8 GiB where none can be read. Whole runs refuse (with
     ``MemoryError``) to plan beyond 80 % of it."""
+
+def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict[str, Any]]:
+    """Simulate one run of the first scenario (noise from ``(seed, stream)``) and filter the
+    same measurements with every scenario of ``spec_jsons`` (variants; only ``architecture``,
+    ``federated`` and ``centralized`` may differ), isolation active. One record per variant
+    (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
 
 def validate_scenario(spec_json: str) -> None:
     """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises

@@ -81,13 +81,16 @@ class ScenarioRun:
         Raw record of the run with isolation (arrays from the Rust core).
     baseline : dict or None
         Raw record of the same run without isolation (None if not computed).
+    variant : str
+        Variant name (``"base"`` for a scenario without variants).
     """
 
-    def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None):
+    def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None, variant: str = "base"):
         self.scenario = scenario
         self.seed = seed
         self.record = record
         self.baseline = baseline
+        self.variant = variant
         self.t: np.ndarray = record["t"]
 
     # ---- per sub-filter access -------------------------------------------------------------
@@ -258,6 +261,21 @@ class ScenarioRun:
                 cols[f"error_no_isolation.{c}"] = self.baseline["error"][:, i]
         return pd.DataFrame(cols)
 
+    def errors(self) -> dict[str, float]:
+        """Navigation-error RMS and maximum |error| over the whole run, per component of the
+        master (or centralized) solution: ``{comp}_rms`` and ``{comp}_max`` for ``pos_e,
+        pos_n, pos_u, lat_m`` (m; ``lat_m`` is the latitude error in metres, = ``pos_n``),
+        ``vel_e, vel_n, vel_u`` (m/s) and ``att_e, att_n, att_u`` (rad)."""
+        e = self.record["error"]
+        cols = dict(zip(ERROR_COLUMNS, e.T))
+        cols["lat_m"] = cols["pos_n"]
+        out: dict[str, float] = {}
+        for c in ["pos_e", "pos_n", "pos_u", "lat_m", "vel_e", "vel_n", "vel_u", "att_e", "att_n", "att_u"]:
+            v = cols[c]
+            out[f"{c}_rms"] = float(np.sqrt(np.mean(v**2)))
+            out[f"{c}_max"] = float(np.max(np.abs(v)))
+        return out
+
     def summary(self) -> dict[str, Any]:
         """The scenario as run (user form and SI form), seed, versions, and key results."""
         import numpy
@@ -287,8 +305,105 @@ class ScenarioRun:
         return paths
 
 
-def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolation: bool = True) -> ScenarioRun:
+class VariantRuns:
+    """Result of :func:`run_scenario` for a scenario with ``[[variants]]``: one
+    :class:`ScenarioRun` per variant, all on the same simulated measurements.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario as given (with its variants).
+    seed : int
+        Random seed.
+    runs : dict
+        ``{variant name: ScenarioRun}`` in the scenario's order.
+    """
+
+    def __init__(self, scenario: Scenario, seed: int, runs: dict[str, ScenarioRun]):
+        self.scenario = scenario
+        self.seed = seed
+        self.runs = runs
+
+    def __getitem__(self, name: str) -> ScenarioRun:
+        return self.runs[name]
+
+    def events(self):
+        """:meth:`ScenarioRun.events` of every variant, with a first column ``variant``."""
+        import pandas as pd
+
+        frames = [r.events().assign(variant=name) for name, r in self.runs.items()]
+        df = pd.concat(frames, ignore_index=True)
+        return df[["variant", *[c for c in df.columns if c != "variant"]]]
+
+    def timeseries(self):
+        """:meth:`ScenarioRun.timeseries` of every variant stacked (long format), with a first
+        column ``variant``."""
+        import pandas as pd
+
+        frames = [r.timeseries().assign(variant=name) for name, r in self.runs.items()]
+        df = pd.concat(frames, ignore_index=True)
+        return df[["variant", *[c for c in df.columns if c != "variant"]]]
+
+    def errors(self):
+        """One row per variant: ``variant`` and :meth:`ScenarioRun.errors` (RMS and maximum per
+        component, m, m/s, rad). Returns a pandas DataFrame (``errors.csv``)."""
+        import pandas as pd
+
+        return pd.DataFrame([{"variant": name, **r.errors()} for name, r in self.runs.items()])
+
+    def format_tables(self) -> str:
+        """Per-variant fault tables and the error comparison, as printed by ``navfdi run``."""
+        parts = []
+        for name, r in self.runs.items():
+            parts.append(f"== variant {name} ==\n{r.format_tables()}")
+        err = self.errors()
+        lines = ["navigation error per variant (whole run): RMS / max"]
+        lines.append(f"  {'variant':<14} {'lat [m]':>16} {'east [m]':>16} {'up [m]':>16} {'vel N [m/s]':>16}")
+        for _, row in err.iterrows():
+            lines.append(
+                f"  {row['variant']:<14} {row['lat_m_rms']:>7.3f} / {row['lat_m_max']:<6.2f} {row['pos_e_rms']:>7.3f} / {row['pos_e_max']:<6.2f}"
+                f" {row['pos_u_rms']:>7.3f} / {row['pos_u_max']:<6.2f} {row['vel_n_rms']:>7.4f} / {row['vel_n_max']:<6.3f}"
+            )
+        parts.append("\n".join(lines) + "\n")
+        return "\n".join(parts)
+
+    def summary(self) -> dict[str, Any]:
+        """Scenario, seed, versions and per-variant fault tables and errors."""
+        return {
+            "scenario": self.scenario.raw,
+            "source": self.scenario.source,
+            "seed": self.seed,
+            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
+            "variants": {
+                name: {"scenario_si": r.scenario.core, "faults": [m.__dict__ for m in r.fault_table()], "errors": r.errors()}
+                for name, r in self.runs.items()
+            },
+        }
+
+    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
+        """Write ``events.csv``, ``timeseries.parquet`` (both with a ``variant`` column),
+        ``errors.csv``, ``summary.json`` and per-variant figures (``{variant}_*.png``)."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "events.csv", out / "timeseries.parquet", out / "errors.csv", out / "summary.json"]
+        self.events().to_csv(paths[0], index=False)
+        self.timeseries().to_parquet(paths[1], index=False)
+        self.errors().to_csv(paths[2], index=False)
+        paths[3].write_text(json.dumps(self.summary(), indent=2, default=float), encoding="utf-8")
+        if figures:
+            from navfdi.plots import plot_run, plot_variant_errors
+
+            for name, r in self.runs.items():
+                paths += plot_run(r, out, prefix=f"{name}_")
+            paths += plot_variant_errors(self, out)
+        return paths
+
+
+def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolation: bool = True) -> ScenarioRun | VariantRuns:
     """Simulate and filter one run of a scenario (the loop runs in Rust, GIL released).
+
+    A scenario with ``[[variants]]`` is simulated once and every variant filters the same
+    measurements; the result is then a :class:`VariantRuns`.
 
     Parameters
     ----------
@@ -297,10 +412,19 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     seed : int
         Seed of the run's noise (ChaCha8, stream 0).
     compare_isolation : bool
-        Also filter the same measurements with isolation disabled (for the error comparison).
+        Also filter the same measurements with isolation disabled (for the error comparison;
+        scenarios without variants).
+
+    Returns
+    -------
+    ScenarioRun or VariantRuns
     """
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
         raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
+    if sc.variant_names():
+        variants = sc.variants()
+        recs = _core.run_variants([v.to_json() for _, v in variants], int(seed))
+        return VariantRuns(sc, int(seed), {name: ScenarioRun(v, int(seed), rec, None, name) for (name, v), rec in zip(variants, recs)})
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)

@@ -11,7 +11,7 @@ if TYPE_CHECKING:
     from navfdi.federated import ScenarioRun
 
 
-def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
+def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     """Write PNG figures for a run into ``out``:
 
     * ``detector_{sub}_{det}.png``: statistic (log scale) against threshold, alarm epochs, fault
@@ -51,9 +51,11 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
             ax.set_ylim(1e-3, max(1e2, np.nanmax(stat) * 2))
             ax.set_xlabel("time [s]")
             ax.set_ylabel("statistic")
-            ax.set_title(f"{run.scenario.name}: {sub} sub-filter, detector {d['name']} (seed {run.seed}); faults shaded")
+            what = "sub-filter" if run.scenario.core.get("architecture", "federated") == "federated" else "sensor"
+            var = f", variant {run.variant}" if prefix else ""
+            ax.set_title(f"{run.scenario.name}{var}: {sub} {what}, detector {d['name']} (seed {run.seed}); faults shaded")
             ax.legend(loc="upper left", fontsize=8, ncol=4)
-            p = out / f"detector_{sub}_{d['name']}.png"
+            p = out / f"{prefix}detector_{sub}_{d['name']}.png"
             fig.savefig(p, dpi=110)
             plt.close(fig)
             paths.append(p)
@@ -73,7 +75,7 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
     axes[0].legend(loc="upper left", fontsize=8, ncol=3)
     axes[0].set_title(f"{run.scenario.name}: master attitude error and its ±1σ envelope (seed {run.seed}); faults shaded")
     axes[-1].set_xlabel("time [s]")
-    p = out / "master_attitude_error.png"
+    p = out / f"{prefix}master_attitude_error.png"
     fig.savefig(p, dpi=110)
     plt.close(fig)
     paths.append(p)
@@ -81,11 +83,46 @@ def plot_run(run: ScenarioRun, out: Path) -> list[Path]:
 
 
 def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
-    """Name of the detector whose alarm isolates sub-filter ``sub`` (None if none does)."""
-    for sf in run.scenario.core["federated"]["subfilters"]:
+    """Name of the detector whose alarm isolates (federated) or excludes (centralized) the
+    channel of sensor ``sub`` (None if none does)."""
+    core = run.scenario.core
+    if core.get("architecture", "federated") == "centralized":
+        for cs in core["centralized"]["sensors"]:
+            if cs["sensor"] == sub:
+                return cs.get("decision")
+        return None
+    for sf in core["federated"]["subfilters"]:
         if sf["sensor"] == sub:
             return sf.get("isolation")
     return None
+
+
+def plot_variant_errors(runs, out: Path) -> list[Path]:
+    """``variant_errors.png``: latitude (north), east and up position error per variant over
+    time, with each variant's ±1σ envelope, faults shaded (paper 002's Fig. 3b style)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True, constrained_layout=True)
+    first = next(iter(runs.runs.values()))
+    for ax, (col, label) in zip(axes, [(7, "latitude (north) error [m]"), (6, "east error [m]"), (8, "up error [m]")]):
+        for f in first.scenario.faults():
+            ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+        for gi, (name, r) in enumerate(runs.runs.items()):
+            line = ax.plot(r.t, r.record["error"][:, col], lw=0.9, label=name, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, r.t.size // 25), ms=3)
+            s = r.record["sigma"][:, col]
+            ax.fill_between(r.t, -s, s, color=line[0].get_color(), alpha=0.08, lw=0)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, ncol=len(runs.runs))
+    axes[0].set_title(f"{first.scenario.name}: position error per variant with ±1σ (seed {runs.seed}); faults shaded")
+    axes[-1].set_xlabel("time [s]")
+    p = out / "variant_errors.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return [p]
 
 
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">"]

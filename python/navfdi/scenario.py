@@ -135,9 +135,61 @@ def _unit(v: Any, dim: str, path: str) -> float:
         raise ScenarioError(str(e)) from None
 
 
+def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
+    """The ``detectors`` list of a sub-filter or centralized sensor at path ``p``."""
+    dets = []
+    for j, d in enumerate(_list(value, f"{p}.detectors")):
+        dp = f"{p}.detectors[{j}]"
+        _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
+        kind = _str(_need(d, "kind", dp), f"{dp}.kind")
+        if kind not in ("chi2", "sprt", "joint"):
+            raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt or joint")
+        dets.append(
+            {
+                "name": _name(d.get("name", kind), f"{dp}.name"),
+                "kind": kind,
+                "pf": _number(_need(d, "pf", dp), f"{dp}.pf"),
+                "pm": None if "pm" not in d else _number(d["pm"], f"{dp}.pm"),
+                "variance": None if "variance" not in d else _str(d["variance"], f"{dp}.variance"),
+                "min_samples": None if "min_samples" not in d else _count(d["min_samples"], f"{dp}.min_samples"),
+            }
+        )
+    return dets
+
+
+#: Top-level fields a variant may override: the filter, never what is simulated.
+VARIANT_FIELDS = ("architecture", "federated", "centralized")
+
+
+def _centralized(c: Any) -> dict[str, Any]:
+    _check_keys(c, {"policy", "sensors", "fading", "fading_duration", "confirm"}, "centralized")
+    policy = _str(_need(c, "policy", "centralized"), "centralized.policy")
+    if policy not in ("exclude", "latched", "fading"):
+        raise ScenarioError(f"centralized.policy = {policy!r}: use exclude, latched or fading")
+    sensors = []
+    for i, cs in enumerate(_list(_need(c, "sensors", "centralized"), "centralized.sensors")):
+        p = f"centralized.sensors[{i}]"
+        _check_keys(cs, {"sensor", "detectors", "decision"}, p)
+        dec = cs.get("decision")
+        sensors.append(
+            {
+                "sensor": _str(_need(cs, "sensor", p), f"{p}.sensor"),
+                "detectors": _detectors(cs.get("detectors", []), p),
+                "decision": None if dec is None else _str(dec, f"{p}.decision"),
+            }
+        )
+    return {
+        "policy": policy,
+        "sensors": sensors,
+        "fading": _number(c.get("fading", 1.0), "centralized.fading"),
+        "fading_duration": _unit(c.get("fading_duration", "0 s"), "time", "centralized.fading_duration"),
+        "confirm": _unit(c.get("confirm", "0 s"), "time", "centralized.confirm"),
+    }
+
+
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "federated"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -275,6 +327,19 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         )
     core["faults"] = faults
 
+    arch = _str(raw.get("architecture", "federated"), "architecture")
+    if arch not in ("federated", "centralized"):
+        raise ScenarioError(f"architecture = {arch!r}: use federated or centralized")
+    core["architecture"] = arch
+    _variants(raw)
+    if arch == "centralized":
+        for other in ("federated",):
+            if other in raw:
+                raise ScenarioError(f"{other}: given, but architecture is 'centralized' (remove it, or set architecture = 'federated')")
+        core["centralized"] = _centralized(_need(raw, "centralized", ""))
+        return core
+    if "centralized" in raw:
+        raise ScenarioError("centralized: given, but architecture is 'federated' (set architecture = 'centralized' or remove it)")
     fed = _need(raw, "federated", "")
     _check_keys(fed, {"mode", "master_share", "subfilters", "isolated"}, "federated")
     mode = _str(_need(fed, "mode", "federated"), "federated.mode")
@@ -284,23 +349,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     for i, sf in enumerate(_list(_need(fed, "subfilters", "federated"), "federated.subfilters")):
         p = f"federated.subfilters[{i}]"
         _check_keys(sf, {"sensor", "share", "detectors", "isolation"}, p)
-        dets = []
-        for j, d in enumerate(_list(sf.get("detectors", []), f"{p}.detectors")):
-            dp = f"{p}.detectors[{j}]"
-            _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
-            kind = _str(_need(d, "kind", dp), f"{dp}.kind")
-            if kind not in ("chi2", "sprt", "joint"):
-                raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt or joint")
-            dets.append(
-                {
-                    "name": _name(d.get("name", kind), f"{dp}.name"),
-                    "kind": kind,
-                    "pf": _number(_need(d, "pf", dp), f"{dp}.pf"),
-                    "pm": None if "pm" not in d else _number(d["pm"], f"{dp}.pm"),
-                    "variance": None if "variance" not in d else _str(d["variance"], f"{dp}.variance"),
-                    "min_samples": None if "min_samples" not in d else _count(d["min_samples"], f"{dp}.min_samples"),
-                }
-            )
+        dets = _detectors(sf.get("detectors", []), p)
         iso = sf.get("isolation")
         subs.append(
             {
@@ -354,27 +403,84 @@ class Scenario:
         """Faults in SI: ``id, sensor, components, kind, magnitude, start (s), end (s)``."""
         return [dict(f) for f in self.core["faults"]]
 
-    def with_value(self, path: str, value: Any) -> Scenario:
-        """A copy with the user-level field at ``path`` (e.g. ``"faults[0].magnitude"``)
-        replaced by ``value``, validated anew."""
-        raw = copy.deepcopy(self.raw)
-        target: Any = raw
-        parts = _parse_path(path)
-        for part in parts[:-1]:
+    def variant_names(self) -> list[str]:
+        """Names of the scenario's ``[[variants]]`` (empty without variants)."""
+        return [n for n, _ in _variants(self.raw)]
+
+    def variants(self) -> list[tuple[str, Scenario]]:
+        """``(name, scenario)`` per ``[[variants]]`` entry: the base with the variant's
+        overrides applied (validated), without the ``variants`` table. Without variants:
+        ``[("base", self)]``."""
+        vs = _variants(self.raw)
+        if not vs:
+            return [("base", self)]
+        base_raw = {k: v for k, v in self.raw.items() if k != "variants"}
+        base = from_dict(base_raw, source=self.source)
+        out = []
+        for i, (name, sets) in enumerate(vs):
             try:
-                target = target[part]
-            except (KeyError, IndexError, TypeError):
-                raise ScenarioError(f"{path}: no such field in scenario {self.name!r}") from None
-        last = parts[-1]
-        try:
-            target[last]  # must exist
-        except (KeyError, IndexError, TypeError):
-            raise ScenarioError(f"{path}: no such field in scenario {self.name!r}") from None
-        target[last] = value
+                out.append((name, base.with_values(sets, create=True)))
+            except ScenarioError as e:
+                raise ScenarioError(f"variants[{i}] ({name}): {e}") from None
+        return out
+
+    def with_value(self, path: str, value: Any, create: bool = False) -> Scenario:
+        """A copy with the user-level field at ``path`` (e.g. ``"faults[0].magnitude"``)
+        replaced by ``value``, validated anew. ``create=True`` also allows setting a table key
+        that the scenario does not have yet (used by variants)."""
+        return self.with_values({path: value}, create)
+
+    def with_values(self, values: Mapping[str, Any], create: bool = False) -> Scenario:
+        """:meth:`with_value` for several fields at once, validated once after all are set
+        (so fields that must change together, such as a policy and its detector, can)."""
+        raw = copy.deepcopy(self.raw)
+        for path, value in values.items():
+            _set_path(raw, path, value, create, self.name)
         return from_dict(raw, source=self.source)
 
 
+def _set_path(raw: Any, path: str, value: Any, create: bool, name: str) -> None:
+    target: Any = raw
+    parts = _parse_path(path)
+    for part in parts[:-1]:
+        try:
+            target = target[part]
+        except (KeyError, IndexError, TypeError):
+            raise ScenarioError(f"{path}: no such field in scenario {name!r}") from None
+    last = parts[-1]
+    if not (create and isinstance(target, dict) and isinstance(last, str)):
+        try:
+            target[last]  # must exist
+        except (KeyError, IndexError, TypeError):
+            raise ScenarioError(f"{path}: no such field in scenario {name!r}") from None
+    target[last] = value
+
+
 _PATH = re.compile(r"[A-Za-z_]\w*(\[\d+\])*(\.[A-Za-z_]\w*(\[\d+\])*)*")
+
+
+def _variants(raw: Mapping[str, Any]) -> list[tuple[str, dict[str, Any]]]:
+    """``[[variants]]``: ``(name, {path: value})`` pairs, checked for form (each variant is
+    validated as a whole scenario by :meth:`Scenario.variants`)."""
+    out: list[tuple[str, dict[str, Any]]] = []
+    for i, v in enumerate(_list(raw.get("variants", []), "variants")):
+        p = f"variants[{i}]"
+        _check_keys(v, {"name", "set"}, p)
+        name = _name(_need(v, "name", p), f"{p}.name")
+        if any(name == n for n, _ in out):
+            raise ScenarioError(f"{p}.name = {name!r}: used by an earlier variant")
+        sets = v.get("set", {})
+        if not isinstance(sets, Mapping):
+            raise ScenarioError(f"{p}.set: expected a table of field path = value")
+        for path in sets:
+            parts = _parse_path(str(path))
+            if parts[0] not in VARIANT_FIELDS:
+                raise ScenarioError(
+                    f"{p}.set: {path!r} would change the simulated measurements; variants compare filters on the same "
+                    f"measurements and may only set {', '.join(VARIANT_FIELDS)} fields"
+                )
+        out.append((name, dict(sets)))
+    return out
 
 
 def _parse_path(path: str) -> list[str | int]:

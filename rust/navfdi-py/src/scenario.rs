@@ -118,3 +118,48 @@ pub fn run_scenario<'py>(
     }
     Ok(out)
 }
+
+/// Simulate one run of the first scenario (noise from `(seed, stream)`) and filter it with each
+/// scenario of `spec_jsons` (variants: only the filter may differ), isolation active. Returns
+/// one record per variant, in order; the GIL is released and Ctrl-C stops the run.
+#[pyfunction]
+#[pyo3(signature = (spec_jsons, seed, stream = 0))]
+pub fn run_variants<'py>(
+    py: Python<'py>,
+    spec_jsons: Vec<String>,
+    seed: u64,
+    stream: u64,
+) -> PyResult<Bound<'py, PyList>> {
+    if spec_jsons.is_empty() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "spec_jsons: at least one scenario is required",
+        ));
+    }
+    let specs = spec_jsons
+        .iter()
+        .map(|j| ScenarioSpec::from_json(j))
+        .collect::<navfdi_core::Result<Vec<_>>>()
+        .py()?;
+    let records =
+        crate::interrupt::run(py, move |cancel| -> navfdi_core::Result<Vec<RunRecord>> {
+            let mut specs = specs.into_iter();
+            let Some(first) = specs.next() else {
+                return Ok(Vec::new());
+            };
+            first.check_memory(1.0 + specs.len() as f64)?;
+            let prep = Prepared::new(first)?;
+            cancel.check()?;
+            let sim = simulate(&prep, seed, stream);
+            let mut out = vec![run_architecture(&prep, &sim, true, cancel)?];
+            for spec in specs {
+                let p = prep.for_variant(spec)?;
+                out.push(run_architecture(&p, &sim, true, cancel)?);
+            }
+            Ok(out)
+        })?;
+    let out = PyList::empty(py);
+    for r in records {
+        out.append(record_to_py(py, r)?)?;
+    }
+    Ok(out)
+}

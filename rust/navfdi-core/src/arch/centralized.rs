@@ -54,7 +54,10 @@ pub fn run_centralized(
     let channels = spec.channels();
     let sensor_idx = channel_sensors(prep);
     let varying = varying_h(prep, &sensor_idx);
-    let dims: Vec<usize> = sensor_idx.iter().map(|&si| spec.sensors[si].kind.dim()).collect();
+    let dims: Vec<usize> = sensor_idx
+        .iter()
+        .map(|&si| spec.sensors[si].kind.dim())
+        .collect();
     let offsets: Vec<usize> = dims
         .iter()
         .scan(0, |acc, d| {
@@ -81,13 +84,19 @@ pub fn run_centralized(
                 .map(|d| make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples))
                 .collect::<Result<_>>()?,
         );
-        decision.push(ch.decision.and_then(|n| ch.detectors.iter().position(|d| d.name == n)));
+        decision.push(
+            ch.decision
+                .and_then(|n| ch.detectors.iter().position(|d| d.name == n)),
+        );
     }
     let dt = spec.dt;
     let confirm = (c.confirm / dt).round().max(1.0) as u32;
     let fading_epochs = (c.fading_duration / dt).round() as usize;
     let mut fading_left = 0usize;
-    let mut comps: Vec<Vec<Component>> = dims.iter().map(|&d| vec![Component::default(); d]).collect();
+    let mut comps: Vec<Vec<Component>> = dims
+        .iter()
+        .map(|&d| vec![Component::default(); d])
+        .collect();
     let mut rec = RunRecord::empty(prep);
     let mut z = DVector::from_element(m, f64::NAN);
     let mut z_used = z.clone();
@@ -148,7 +157,8 @@ pub fn run_centralized(
                         let mut new_detection = false;
                         for j in 0..d {
                             let cj = &mut comps[i][j];
-                            let alarmed = stats.get(j).is_some_and(|l| *l >= thr) && decisions[di].alarm;
+                            let alarmed =
+                                stats.get(j).is_some_and(|l| *l >= thr) && decisions[di].alarm;
                             if alarmed {
                                 if !cj.faulty {
                                     new_detection = true;

@@ -199,6 +199,31 @@ impl Prepared {
         })
     }
 
+    /// The same prepared data for a variant of the scenario, which may differ only in its
+    /// filter (`architecture`, `federated`, `centralized`): variants run on the same simulated
+    /// measurements. Anything else differing is an error naming the field.
+    pub fn for_variant(&self, spec: ScenarioSpec) -> Result<Prepared> {
+        spec.validate()?;
+        let base = &self.spec;
+        let same = [
+            ("duration", base.duration == spec.duration),
+            ("dt", base.dt == spec.dt),
+            ("trajectory", base.trajectory == spec.trajectory),
+            ("ins", base.ins == spec.ins),
+            ("sensors", base.sensors == spec.sensors),
+            ("faults", base.faults == spec.faults),
+        ];
+        if let Some((field, _)) = same.iter().find(|(_, eq)| !eq) {
+            return Err(Error::Invalid(format!(
+                "variant {:?}: its {field} differ from the base scenario's; variants may only change the filter (architecture, federated, centralized) so that they run on the same simulated measurements",
+                spec.name
+            )));
+        }
+        let mut out = self.clone();
+        out.spec = spec;
+        Ok(out)
+    }
+
     /// Number of epochs.
     pub fn epochs(&self) -> usize {
         self.t.len()

@@ -759,7 +759,10 @@ impl ScenarioSpec {
             if d.name.is_empty() || detectors[..j].iter().any(|o| o.name == d.name) {
                 return Err(bad(
                     format!("{dp}.name"),
-                    format!("{:?} must be non-empty and unique in the sub-filter", d.name),
+                    format!(
+                        "{:?} must be non-empty and unique in the sub-filter",
+                        d.name
+                    ),
                 ));
             }
             crate::validate::check_probability(&format!("{dp}.pf"), d.pf)
@@ -794,14 +797,21 @@ impl ScenarioSpec {
     fn validate_centralized(&self) -> Result<()> {
         let c = self.centralized()?;
         if c.sensors.is_empty() {
-            return Err(bad("centralized.sensors", "at least one sensor is required"));
+            return Err(bad(
+                "centralized.sensors",
+                "at least one sensor is required",
+            ));
         }
         for (i, cs) in c.sensors.iter().enumerate() {
             let p = format!("centralized.sensors[{i}]");
             if self.sensor_index(&cs.sensor).is_none() {
                 return Err(bad(
                     format!("{p}.sensor"),
-                    format!("{:?} is not a sensor (known: {})", cs.sensor, self.sensor_names()),
+                    format!(
+                        "{:?} is not a sensor (known: {})",
+                        cs.sensor,
+                        self.sensor_names()
+                    ),
                 ));
             }
             if c.sensors[..i].iter().any(|o| o.sensor == cs.sensor) {
@@ -832,7 +842,10 @@ impl ScenarioSpec {
         if !(c.fading >= 1.0 && c.fading.is_finite()) {
             return Err(bad(
                 "centralized.fading",
-                format!("{} must be a finite number >= 1", crate::error::num(c.fading)),
+                format!(
+                    "{} must be a finite number >= 1",
+                    crate::error::num(c.fading)
+                ),
             ));
         }
         non_negative("centralized.fading_duration", c.fading_duration)?;
