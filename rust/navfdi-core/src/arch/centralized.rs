@@ -148,8 +148,8 @@ pub fn run_centralized(
                     }
                     Policy::Latched => {
                         let (stats, thr) = sprt_components(&ch_det[di])?;
-                        for j in 0..d {
-                            excluded[j] = stats.get(j).is_some_and(|l| *l >= thr);
+                        for (j, e) in excluded.iter_mut().enumerate() {
+                            *e = stats.get(j).is_some_and(|l| *l >= thr);
                         }
                     }
                     Policy::Fading => {
