@@ -122,6 +122,37 @@ class ScenarioRun:
             raise ValueError("this run was made without the no-isolation baseline")
         return rec["error"]
 
+    def components(self, subfilter: str) -> list[str]:
+        """Measurement component names of a channel's sensor (e.g. ``pos_e ... vel_u``)."""
+        from navfdi.scenario import SENSOR_COMPONENTS
+
+        kind = next(s["kind"] for s in self.scenario.core["sensors"] if s["name"] == subfilter)
+        return [c for c, _ in SENSOR_COMPONENTS[kind]]
+
+    def mdb_note(self) -> str:
+        """Which λ0 the MDB uses, beside paper 002's 17.872 (METHODS §6); empty without MDB."""
+        core = self.scenario.core
+        if core.get("architecture") != "centralized":
+            return ""
+        lines = []
+        for cs, s in zip(core["centralized"]["sensors"], self.record["subfilters"]):
+            if "mdb" not in s:
+                continue
+            dets = {d["name"]: d for d in cs["detectors"]}
+            det = dets.get(cs.get("decision") or "", cs["detectors"][0] if cs["detectors"] else None)
+            if det is None:
+                continue
+            pf, pm, m = det["pf"], det["pm"] if det["pm"] is not None else det["pf"], s["mdb"].shape[1]
+            lam = _core.noncentrality(pf, pm, m)
+            med = np.nanmedian(s["mdb"], axis=0)
+            comps = ", ".join(f"{c} {v:.3g}" for c, v in zip(self.components(s["sensor"]), med))
+            lines.append(
+                f"MDB on {s['sensor']}: λ0 = {lam:.3f} (used; standard definition, m = {m}, Pf = {pf:g}, Pm = {pm:g}); "
+                f"paper 002 reports λ0 = 17.872, which is m = 6, Pf = 0.1, Pm = 0.05 ({_core.noncentrality(0.1, 0.05, 6):.3f}). "
+                f"Median MDB: {comps}"
+            )
+        return "\n".join(lines)
+
     # ---- tables ----------------------------------------------------------------------------
     def _faults_on(self, sensor: str) -> list[dict[str, Any]]:
         return sorted((f for f in self.scenario.faults() if f["sensor"] == sensor), key=lambda f: f["start"])
@@ -214,6 +245,10 @@ class ScenarioRun:
         lines.append("detected at: first alarm interval overlapping the window (with a large pf often a false alarm);")
         lines.append("lasting from: start of the alarm still raised at the window's last epoch.")
         lines.append("")
+        note = self.mdb_note()
+        if note:
+            lines.append(note)
+            lines.append("")
         if self.baseline is not None:
             lines.append(self._error_summary())
         return "\n".join(lines).rstrip() + "\n"
@@ -241,7 +276,8 @@ class ScenarioRun:
     def timeseries(self):
         """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,
         ``{sub}.isolated``, ``{sub}.fused`` and per detector ``{sub}.{det}.statistic``,
-        ``.threshold``, ``.alarm``; master ``error.{col}``, ``sigma.{col}`` and, without
+        ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
+        component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
         isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m)."""
         import pandas as pd
 
@@ -249,6 +285,9 @@ class ScenarioRun:
         for s in self.record["subfilters"]:
             sub = s["sensor"]
             cols[f"{sub}.statistic"] = s["statistic"]
+            if "mdb" in s:
+                for j, comp in enumerate(self.components(sub)):
+                    cols[f"{sub}.mdb.{comp}"] = s["mdb"][:, j]
             cols[f"{sub}.isolated"] = s["isolated"]
             cols[f"{sub}.fused"] = s["fused"]
             for d in s["detectors"]:

@@ -50,6 +50,8 @@ RUN_COLUMNS = [
     "att_max",
     "pos_rms",
     "pos_max",
+    "lat_rms",
+    "lat_max",
 ]
 
 
@@ -68,6 +70,7 @@ SUMMARY_FIGURES = [
     "wrong_isolations",
     "error_rms",
     "position_error_rms",
+    "latitude_error_rms",
 ]
 
 
@@ -164,6 +167,7 @@ class Campaign:
     backend: str
     series: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
     cells: list[list[tuple[str, str, str, float]]] = field(default_factory=list)
+    variants: list[str] = field(default_factory=list)
 
     def runs_per_point(self) -> list[int]:
         """Finished runs of each sweep point, in point order (all equal ``runs_requested``
@@ -173,8 +177,9 @@ class Campaign:
 
     @property
     def sweep_columns(self) -> list[str]:
-        """Column names of the swept fields."""
-        return list(self.sweep)
+        """Column names of the point keys: ``variant`` (scenarios with variants) and the swept
+        fields."""
+        return (["variant"] if self.variants else []) + list(self.sweep)
 
     def summary(self):
         """One row per sweep point × sub-filter × detector × fault (pandas DataFrame).
@@ -186,7 +191,7 @@ class Campaign:
         faults; Wilson 95 % treating epochs as independent trials, which understates the
         interval for detectors with memory such as the SPRT), ``wrong_isolations`` (per run),
         ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
-        ``position_error_rms`` (m), ``runs_requested`` and ``partial`` (True where the point
+        ``position_error_rms`` (m), ``latitude_error_rms`` (north position, m), ``runs_requested`` and ``partial`` (True where the point
         has fewer finished runs than requested: an interrupted campaign). Fault rows carry NaN
         false-alarm rates; ``none`` rows NaN detection figures. Every point × cell has a row,
         with ``runs = 0`` and NaN figures where an interrupted campaign ran none.
@@ -238,6 +243,7 @@ class Campaign:
                 )
             rec["error_rms"] = float(np.sqrt(np.mean(g["att_rms"].to_numpy() ** 2)))
             rec["position_error_rms"] = float(np.sqrt(np.mean(g["pos_rms"].to_numpy() ** 2)))
+            rec["latitude_error_rms"] = float(np.sqrt(np.mean(g["lat_rms"].to_numpy() ** 2)))
             rows.append(rec)
             seen.add((rec["point"], rec["subfilter"], rec["detector"], rec["fault_id"]))
         for point, cells in enumerate(self.cells):
@@ -340,7 +346,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
         }
         for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations"):
             cols[k] = ch[k].reshape(-1)
-        for k in ("att_rms", "att_max", "pos_rms", "pos_max"):
+        for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max"):
             cols[k] = np.repeat(ch[k], c)
         for path, value in points[point].items():
             cols[path] = [value] * (n * c)
@@ -359,7 +365,7 @@ def _check_campaign_memory(base: Scenario, runs: int, points: int, keep: tuple[i
     """Refuse a campaign whose per-run table and kept series would not fit in memory."""
     core = base.core
     epochs = math.floor(core["duration"] / core["dt"] + 1e-9)
-    subs = core["federated"]["subfilters"]
+    subs = core["centralized"]["sensors"] if core.get("architecture") == "centralized" else core["federated"]["subfilters"]
     faults = core["faults"]
     cells = sum(len(sf["detectors"]) * (1 + sum(f["sensor"] == sf["sensor"] for f in faults)) for sf in subs)
     per_epoch = 160 + sum(20 + 17 * len(sf["detectors"]) for sf in subs)
@@ -395,6 +401,10 @@ def montecarlo(
     progress: bool | None = None,
 ) -> Campaign:
     """Run a Monte-Carlo campaign.
+
+    A scenario with ``[[variants]]`` runs every variant at every sweep point on the same
+    simulated measurements (run ``i`` draws from ``(seed, i)`` whatever the variant); the
+    results carry a ``variant`` column.
 
     Parameters
     ----------
@@ -453,11 +463,14 @@ def montecarlo(
     for k, v in sweep_lists.items():
         if not v:
             raise ScenarioError(f"sweep {k}: no values")
-    points = [dict(zip(sweep_lists, combo)) for combo in itertools.product(*sweep_lists.values())] if sweep_lists else [{}]
+    combos = [dict(zip(sweep_lists, combo)) for combo in itertools.product(*sweep_lists.values())] if sweep_lists else [{}]
+    variant_names = base.variant_names()
+    variant_scenarios = base.variants()  # [("base", base)] without variants
+    points = [({"variant": name} if variant_names else {}) | combo for name, _ in variant_scenarios for combo in combos]
     scenarios = []
-    for pt in points:  # validate every point before running anything
-        sc = base
-        for path, value in pt.items():
+    for (_, vsc), combo in ((v, c) for v in variant_scenarios for c in combos):  # validate every point first
+        sc = vsc
+        for path, value in combo.items():
             try:
                 sc = sc.with_value(path, value)
             except ScenarioError as e:
@@ -520,4 +533,4 @@ def montecarlo(
             bar.close()
     series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
     runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points)
-    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells)
+    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names)

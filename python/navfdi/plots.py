@@ -59,6 +59,32 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
             fig.savefig(p, dpi=110)
             plt.close(fig)
             paths.append(p)
+    for s in run.record["subfilters"]:
+        if "mdb" not in s:
+            continue
+        comps = run.components(s["sensor"])
+        groups = [("position", [j for j, c in enumerate(comps) if c.startswith("pos")], "m"), ("velocity", [j for j, c in enumerate(comps) if c.startswith("vel")], "m/s")]
+        groups = [g for g in groups if g[1]] or [("measurement", list(range(len(comps))), "")]
+        fig, axes = plt.subplots(len(groups), 1, figsize=(9, 3 + 2.5 * len(groups)), sharex=True, constrained_layout=True, squeeze=False)
+        for ax, (label, idx, unit) in zip(axes[:, 0], groups):
+            for f in faults:
+                if f["sensor"] == s["sensor"]:
+                    ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+            for gi, j in enumerate(idx):
+                ax.plot(t, s["mdb"][:, j], lw=1.0, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, t.size // 20), ms=3, label=comps[j])
+            ax.set_ylabel(f"MDB, {label} [{unit}]")
+            ax.grid(alpha=0.3)
+            ax.legend(fontsize=8, ncol=3)
+        import re
+
+        found = re.search(r"λ0 = ([0-9.]+)", run.mdb_note())
+        lam = found.group(1) if found else "?"
+        axes[0, 0].set_title(f"{run.scenario.name}: minimal detectable bias of {s['sensor']} (seed {run.seed}); λ0 = {lam} (standard; paper 002: 17.872)", fontsize=9)
+        axes[-1, 0].set_xlabel("time [s]")
+        p = out / f"{prefix}mdb_{s['sensor']}.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     arcsec = np.degrees(1.0) * 3600
     sigma = run.record["sigma"]

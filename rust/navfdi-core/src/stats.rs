@@ -214,7 +214,13 @@ pub fn mdb(a: &DMatrix<f64>, pf: f64, pm: f64) -> Result<Vec<f64>> {
             got: "(0, 0)".into(),
         });
     }
-    let lambda0 = noncentrality(pf, pm, m)?;
+    mdb_with(a, noncentrality(pf, pm, m)?)
+}
+
+/// [`mdb`] for a given non-centrality `λ0` (for per-epoch use with a cached `λ0`); `a` must
+/// be symmetric positive definite (not checked for symmetry here).
+pub fn mdb_with(a: &DMatrix<f64>, lambda0: f64) -> Result<Vec<f64>> {
+    let m = a.nrows();
     let chol = nalgebra::Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
         name: "A".into(),
         detail: "Cholesky factorisation failed".into(),

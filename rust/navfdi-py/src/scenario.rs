@@ -71,6 +71,10 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         sd.set_item("isolated", to_numpy(py, s.isolated, &[t])?)?;
         sd.set_item("reinstated", to_numpy(py, s.reinstated, &[t])?)?;
         sd.set_item("fused", to_numpy(py, s.fused, &[t])?)?;
+        if !s.mdb.is_empty() && t > 0 {
+            let m = s.mdb.len() / t;
+            sd.set_item("mdb", to_numpy(py, s.mdb, &[t, m])?)?;
+        }
         let dets = PyList::empty(py);
         for dr in s.detectors {
             let dd = PyDict::new(py);

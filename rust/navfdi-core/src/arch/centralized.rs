@@ -89,6 +89,21 @@ pub fn run_centralized(
                 .and_then(|n| ch.detectors.iter().position(|d| d.name == n)),
         );
     }
+    // λ0 for the MDB: the deciding detector's pf and pm (the first detector's without one),
+    // standard definition F_{χ²(d, λ0)}(T_D) = pm (METHODS §6).
+    let lambda0: Vec<f64> = channels
+        .iter()
+        .zip(&dims)
+        .map(|(ch, &d)| {
+            let det = ch
+                .decision
+                .and_then(|n| ch.detectors.iter().find(|x| x.name == n))
+                .or(ch.detectors.first());
+            det.map_or(Ok(f64::NAN), |x| {
+                crate::stats::noncentrality(x.pf, x.pm.unwrap_or(x.pf), d)
+            })
+        })
+        .collect::<Result<_>>()?;
     let dt = spec.dt;
     let confirm = (c.confirm / dt).round().max(1.0) as u32;
     let fading_epochs = (c.fading_duration / dt).round() as usize;
@@ -133,6 +148,13 @@ pub fn run_centralized(
             };
             sub.statistic.push(lambda);
             sub.dof.push(dof as u32);
+            if dof == d && lambda0[i].is_finite() {
+                let v = crate::stats::mdb_with(&ai, lambda0[i])
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                sub.mdb.extend_from_slice(&v);
+            } else {
+                sub.mdb.extend(std::iter::repeat_n(f64::NAN, d));
+            }
             let mut decisions = Vec::with_capacity(ch_det.len());
             for det in ch_det.iter_mut() {
                 decisions.push(det.test(&ri, &ai).map_err(|e| crate::run::at_epoch(k, e))?);

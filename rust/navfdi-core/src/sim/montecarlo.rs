@@ -73,6 +73,10 @@ pub struct RunMetrics {
     pub pos_rms: f64,
     /// Master position error maximum |component| (m).
     pub pos_max: f64,
+    /// Latitude (north position) error RMS (m).
+    pub lat_rms: f64,
+    /// Latitude (north position) error maximum |error| (m).
+    pub lat_max: f64,
     /// Optional full record of the run (kept for chosen runs).
     pub record: Option<RunRecord>,
 }
@@ -194,7 +198,10 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
     }
     let epochs = t.len().max(1) as f64;
     let (mut a2, mut amax, mut p2, mut pmax) = (0.0, 0.0f64, 0.0, 0.0f64);
+    let (mut l2, mut lmax) = (0.0, 0.0f64);
     for row in rec.error.chunks(9) {
+        l2 += row[7] * row[7];
+        lmax = lmax.max(row[7].abs());
         for v in &row[0..3] {
             a2 += v * v;
             amax = amax.max(v.abs());
@@ -211,6 +218,8 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         att_max: amax,
         pos_rms: (p2 / (3.0 * epochs)).sqrt(),
         pos_max: pmax,
+        lat_rms: (l2 / epochs).sqrt(),
+        lat_max: lmax,
         record: None,
     }
 }

@@ -40,6 +40,10 @@ pub struct SubRecord {
     pub fused: Vec<bool>,
     /// Detectors in configuration order.
     pub detectors: Vec<DetectorRecord>,
+    /// Minimal detectable bias per component and epoch (T × m row-major, NaN where a
+    /// component was missing), from the innovation covariance and the deciding detector's
+    /// `pf`, `pm` (METHODS §6); empty where the architecture does not compute it (federated).
+    pub mdb: Vec<f64>,
 }
 
 /// Names of the 9 navigation-error columns of [`RunRecord::error`].
@@ -248,6 +252,7 @@ impl RunRecord {
                             alarm: Vec::with_capacity(epochs),
                         })
                         .collect(),
+                    mdb: Vec::new(),
                 })
                 .collect(),
         }
