@@ -113,7 +113,7 @@ pub fn run_scenario<'py>(
             let sim = simulate(&prep, seed, stream);
             isolation
                 .iter()
-                .map(|&iso| run_architecture(&prep, &sim, iso, cancel))
+                .map(|&iso| run_architecture(&prep, &sim, iso, true, cancel))
                 .collect()
         })?;
     let out = PyList::empty(py);
@@ -154,10 +154,10 @@ pub fn run_variants<'py>(
             let prep = Prepared::new(first)?;
             cancel.check()?;
             let sim = simulate(&prep, seed, stream);
-            let mut out = vec![run_architecture(&prep, &sim, true, cancel)?];
+            let mut out = vec![run_architecture(&prep, &sim, true, true, cancel)?];
             for spec in specs {
                 let p = prep.for_variant(spec)?;
-                out.push(run_architecture(&p, &sim, true, cancel)?);
+                out.push(run_architecture(&p, &sim, true, true, cancel)?);
             }
             Ok(out)
         })?;

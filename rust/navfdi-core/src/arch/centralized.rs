@@ -43,10 +43,14 @@ struct Component {
 
 /// Run the centralized filter over one simulated run. `isolation = false`: the detectors run
 /// and report but the policy never acts (every measurement is used).
+///
+/// `mdb`: also record the minimal detectable bias per epoch (a factorisation and inverse of
+/// each sensor block per epoch; Monte-Carlo runs that keep no series skip it).
 pub fn run_centralized(
     prep: &Prepared,
     sim: &Simulated,
     isolation: bool,
+    mdb: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
     let spec = &prep.spec;
@@ -129,10 +133,13 @@ pub fn run_centralized(
                 h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][k]);
             }
         }
-        // Test before update: the innovation of every available component.
-        let (inn, _) = kf
+        // Test before update: the innovation of every available component, kept so that an
+        // epoch without exclusions applies it without recomputation.
+        let (inn, pending) = kf
             .innovation_pending(&z, &h, &r)
             .map_err(|e| crate::run::at_epoch(k, e))?;
+        let single = channels.len() == 1;
+        let mut any_excluded = false;
         z_used.copy_from(&z);
         let mut sources = 0u32;
         for (i, ch_det) in detectors.iter_mut().enumerate() {
@@ -140,7 +147,9 @@ pub fn run_centralized(
             let ri: DVector<f64> = inn.residual.rows(o, d).into_owned();
             let ai: DMatrix<f64> = inn.covariance.view((o, o), (d, d)).into_owned();
             let sub = &mut rec.subs[i];
-            let (lambda, dof) = if ri.iter().all(|v| v.is_nan()) {
+            let (lambda, dof) = if single {
+                (inn.statistic, inn.dof())
+            } else if ri.iter().all(|v| v.is_nan()) {
                 (f64::NAN, 0)
             } else {
                 crate::detect::ResidualChi2::statistic(&ri, &ai)
@@ -148,16 +157,21 @@ pub fn run_centralized(
             };
             sub.statistic.push(lambda);
             sub.dof.push(dof as u32);
-            if dof == d && lambda0[i].is_finite() {
-                let v = crate::stats::mdb_with(&ai, lambda0[i])
-                    .map_err(|e| crate::run::at_epoch(k, e))?;
-                sub.mdb.extend_from_slice(&v);
-            } else {
-                sub.mdb.extend(std::iter::repeat_n(f64::NAN, d));
+            if mdb {
+                if dof == d && lambda0[i].is_finite() {
+                    let v = crate::stats::mdb_with(&ai, lambda0[i])
+                        .map_err(|e| crate::run::at_epoch(k, e))?;
+                    sub.mdb.extend_from_slice(&v);
+                } else {
+                    sub.mdb.extend(std::iter::repeat_n(f64::NAN, d));
+                }
             }
             let mut decisions = Vec::with_capacity(ch_det.len());
             for det in ch_det.iter_mut() {
-                decisions.push(det.test(&ri, &ai).map_err(|e| crate::run::at_epoch(k, e))?);
+                decisions.push(
+                    det.test_innovation(&ri, &ai, lambda, dof)
+                        .map_err(|e| crate::run::at_epoch(k, e))?,
+                );
             }
             let mut excluded = vec![false; d];
             let mut reinstated = false;
@@ -210,8 +224,9 @@ pub fn run_centralized(
             let act = isolation && decision[i].is_some();
             let mut used_any = false;
             for j in 0..d {
-                if act && excluded[j] {
+                if act && excluded[j] && !z_used[o + j].is_nan() {
                     z_used[o + j] = f64::NAN;
+                    any_excluded = true;
                 } else if !z_used[o + j].is_nan() {
                     used_any = true;
                 }
@@ -227,8 +242,12 @@ pub fn run_centralized(
                 dr.alarm.push(dec.alarm);
             }
         }
-        kf.update_trusted(&z_used, &h, &r)
-            .map_err(|e| crate::run::at_epoch(k, e))?;
+        match (any_excluded, pending) {
+            (false, Some(p)) => kf.apply_pending(p, &r),
+            (false, None) => Ok(()),
+            (true, _) => kf.update_trusted(&z_used, &h, &r).map(|_| ()),
+        }
+        .map_err(|e| crate::run::at_epoch(k, e))?;
         rec.sources.push(sources);
         rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
     }

@@ -235,7 +235,7 @@ pub fn one_run(
 ) -> Result<RunMetrics> {
     cancel.check()?;
     let sim = simulate(prep, seed, run);
-    let rec = run_architecture(prep, &sim, true, cancel).map_err(|e| match e {
+    let rec = run_architecture(prep, &sim, true, keep, cancel).map_err(|e| match e {
         Error::Cancelled => Error::Cancelled,
         e => Error::Invalid(format!("run {run}: {e}")),
     })?;

@@ -279,17 +279,19 @@ impl RunRecord {
 }
 
 /// Run the scenario's architecture over one simulated run (`isolation = false`: detectors
-/// report but never act).
+/// report but never act). `full`: record everything, including quantities only figures and
+/// time series use (the MDB); Monte-Carlo runs that keep no series pass false.
 pub fn run_architecture(
     prep: &Prepared,
     sim: &Simulated,
     isolation: bool,
+    full: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
     match prep.spec.architecture {
         Architecture::Federated => run_federated(prep, sim, isolation, cancel),
         Architecture::Centralized => {
-            crate::arch::centralized::run_centralized(prep, sim, isolation, cancel)
+            crate::arch::centralized::run_centralized(prep, sim, isolation, full, cancel)
         }
     }
 }
