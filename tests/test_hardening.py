@@ -613,7 +613,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 def test_demo_matches_alarms_with_the_rule_of_run_and_montecarlo():
     from navfdi._intervals import AlarmInterval
     from navfdi.demo import FAULTS, _match
-    from navfdi.federated import ScenarioRun
+    from navfdi.runs import ScenarioRun
 
     faults = [{"start": f.start, "end": f.end, "f": f} for f in FAULTS]
     for iv in [AlarmInterval(223.0, 230.0), AlarmInterval(219.0, 221.0), AlarmInterval(10.0, None), AlarmInterval(300.0, 410.0), AlarmInterval(451.0, None)]:

@@ -14,8 +14,9 @@ Statistics
     :func:`mdb`.
 Federated filtering and scenarios
     :class:`FederatedFilter` (per-epoch step API), :func:`load_scenario`, :class:`Scenario`,
-    :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust) returning a
-    :class:`ScenarioRun`; :class:`ScenarioError` names the offending field.
+    :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust, federated
+    or centralized architecture) returning a :class:`ScenarioRun`, or a :class:`VariantRuns`
+    for a scenario with variants; :class:`ScenarioError` names the offending field.
 Monte-Carlo
     :func:`montecarlo` (runs × sweep points in parallel in Rust, or on Dask) returning a
     :class:`Campaign` with per-run metrics, summaries, plots.
@@ -44,7 +45,7 @@ from navfdi._core import (
 )
 from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
-from navfdi.federated import FaultMatch, ScenarioRun, run_scenario
+from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_scenario
 
@@ -66,6 +67,7 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "ScenarioRun",
+    "VariantRuns",
     "__version__",
     "alarm_intervals",
     "bundled_scenarios",

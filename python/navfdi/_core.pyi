@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "memory_available",
+    "match_alarms",
     "run_variants",
     "_restore",
     "LinAlgError",
@@ -392,6 +393,13 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
     same measurements with every scenario of ``spec_jsons`` (variants; only ``architecture``,
     ``federated`` and ``centralized`` may differ), isolation active. One record per variant
     (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
+
+def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """The one event-matching rule (used by ``run``, ``montecarlo`` and ``demo``): alarm
+    intervals of ``alarm`` (times ``t`` (T,), s) and the fault each detects. ``windows``: fault
+    windows ``(start, end)`` (s) sorted by start. An interval belongs to the first fault it
+    overlaps that began after the previous fault ended. Returns ``(start_index, end_index,
+    fault_index)``, each (K,), with -1 for "never ended" and "no fault"."""
 
 def validate_scenario(spec_json: str) -> None:
     """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises

@@ -59,27 +59,30 @@ def alarm_intervals(alarm: ArrayLike, t: ArrayLike | None = None) -> list[AlarmI
 F = TypeVar("F")
 
 
+def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, float]]) -> list[tuple[AlarmInterval, int | None]]:
+    """Alarm intervals with the index (into ``windows``, sorted by start) of the fault each
+    detects, or None: the one matching rule of ``navfdi run``, ``montecarlo`` and ``demo``,
+    computed in Rust (``navfdi._core.match_alarms``; rule: :func:`match_fault`)."""
+    from navfdi import _core
+
+    a = np.asarray(alarm, dtype=bool)
+    times = np.asarray(t, dtype=float)
+    starts, ends, faults = _core.match_alarms(times, a.tolist(), [(float(s), float(e)) for s, e in windows])
+    return [
+        (AlarmInterval(float(times[s]), float(times[e]) if e >= 0 else None), int(f) if f >= 0 else None)
+        for s, e, f in zip(starts, ends, faults)
+    ]
+
+
 def match_fault(interval: AlarmInterval, windows: Sequence[tuple[float, float]], faults: Sequence[F]) -> F | None:
-    """The fault an alarm interval detects: the one rule of ``navfdi run``, ``montecarlo`` (in
-    Rust, kept equal by a test) and ``demo``.
+    """The fault one alarm interval detects (the rule documented in the Rust engine
+    ``navfdi_core::sim::metrics``, evaluated there): the first fault, in start order, whose
+    window ``[start, end]`` the interval overlaps and that began after the previous fault's
+    window ended. ``windows`` are the faults' windows (s) sorted by start, ``faults`` the
+    faults themselves (parallel); the matching one is returned."""
+    from navfdi import _core
 
-    An interval belongs to the first fault (in start order) whose window ``[start, end]`` it
-    overlaps and that began after the previous fault's window ended: an alarm still raised from
-    an earlier fault is not a new detection.
-
-    Parameters
-    ----------
-    interval : AlarmInterval
-        The alarm interval (s).
-    windows : sequence of (start, end)
-        Fault windows (s) of the faults on the tested sensor, sorted by start.
-    faults : sequence
-        The faults themselves, parallel to ``windows``; the matching one is returned.
-    """
-    prev_end = -np.inf
-    end = np.inf if interval.end is None else interval.end
-    for (f_start, f_end), f in zip(windows, faults):
-        if interval.start <= f_end and end > f_start and interval.start >= prev_end:
-            return f
-        prev_end = f_end
-    return None
+    t = np.array([interval.start, interval.start if interval.end is None else interval.end], dtype=float)
+    alarm = [True, interval.end is None]
+    _, _, f = _core.match_alarms(t, alarm, [(float(s), float(e)) for s, e in windows])
+    return faults[int(f[0])] if len(f) and f[0] >= 0 else None

@@ -151,7 +151,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             desc = load_scenario(name).raw.get("description", "")
             print(f"{name:<14} {desc}")
     elif args.command == "run":
-        from navfdi.federated import run_scenario
+        from navfdi.runs import run_scenario
 
         result = run_scenario(args.scenario, seed=args.seed)
         print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}\n")
@@ -186,7 +186,7 @@ def _montecarlo(args: argparse.Namespace) -> int:
         paths = camp.write(args.out)
         import pandas as pd
 
-        from navfdi.federated import ERROR_COLUMNS
+        from navfdi.runs import ERROR_COLUMNS
 
         for (p, r), rec in camp.series.items():
             cols = {"t": rec["t"], **{f"error.{c}": rec["error"][:, i] for i, c in enumerate(ERROR_COLUMNS)}}

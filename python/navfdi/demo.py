@@ -27,7 +27,7 @@ import numpy as np
 
 from navfdi import _core
 from navfdi._filter import FilterRun, run_filter
-from navfdi._intervals import AlarmInterval, alarm_intervals, match_fault
+from navfdi._intervals import AlarmInterval, match_events, match_fault
 
 
 @dataclass(frozen=True)
@@ -137,9 +137,9 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
     ]
     for name, det in detectors.items():
         seq = det.test_sequence(run.residual, run.covariance)
-        intervals = alarm_intervals(seq.alarm, t)
-        for f in FAULTS:
-            mine = [iv for iv in intervals if _match(iv) is f]
+        matched = match_events(seq.alarm, t, [(f.start, f.end) for f in FAULTS])
+        for fi, f in enumerate(FAULTS):
+            mine = [iv for iv, m in matched if m == fi]
             window = f"{f.start:g}-{f.end:g}"
             if not mine:
                 lines.append(f"{name:<8} {f.name:<15} {window:>10} {'missed':>10}")
@@ -150,6 +150,6 @@ def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:
                 f"{name:<8} {f.name:<15} {window:>10} {mine[0].start:>10g} {mine[0].start - f.start:>9g} "
                 f"{cleared:>11} {len(mine):>6d}"
             )
-        false_alarms = sum(1 for iv in intervals if _match(iv) is None)
+        false_alarms = sum(1 for _, m in matched if m is None)
         lines.append(f"{name:<8} {'no fault':<15} {'':>10} {false_alarms:>10d} false alarm interval(s)")
     return "\n".join(lines)

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from navfdi.federated import ScenarioRun
+    from navfdi.runs import ScenarioRun
 
 
 def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:

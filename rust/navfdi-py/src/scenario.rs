@@ -167,3 +167,40 @@ pub fn run_variants<'py>(
     }
     Ok(out)
 }
+
+type Matched<'py> = (
+    Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
+);
+
+/// Alarm intervals of `alarm` (times `t`) and the fault each detects, by the one matching rule
+/// (`navfdi_core::sim::metrics`). `windows`: fault windows `(start, end)` in s, sorted by start.
+/// Returns `(start_index, end_index, fault_index)` arrays; `-1` for "never ended" / "no fault".
+#[pyfunction]
+pub fn match_alarms<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    alarm: Vec<bool>,
+    windows: Vec<(f64, f64)>,
+) -> PyResult<Matched<'py>> {
+    let t = crate::convert::vector("t", t, Some(alarm.len()))?;
+    if windows.windows(2).any(|w| w[1].0 < w[0].0) {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "windows: must be sorted by start",
+        ));
+    }
+    let ev = navfdi_core::sim::metrics::events(t.as_slice(), &alarm, &windows);
+    let n = ev.len();
+    let starts = ev.iter().map(|((s, _), _)| *s as i64).collect();
+    let ends = ev
+        .iter()
+        .map(|((_, e), _)| e.map_or(-1, |e| e as i64))
+        .collect();
+    let faults = ev.iter().map(|(_, f)| f.map_or(-1, |f| f as i64)).collect();
+    Ok((
+        to_numpy(py, starts, &[n])?,
+        to_numpy(py, ends, &[n])?,
+        to_numpy(py, faults, &[n])?,
+    ))
+}

@@ -5,6 +5,7 @@
 //! measurement models), then any number of runs draw their noise from a generator seeded by
 //! `(seed, run index)` ([`noise::simulate`]) and filter it ([`run::run_federated`]).
 
+pub mod metrics;
 pub mod montecarlo;
 pub mod noise;
 pub mod prepare;

@@ -20,6 +20,7 @@
 //! * per run: master attitude error RMS and maximum (rad, all axes) and position error RMS and
 //!   maximum (m, horizontal and vertical together).
 
+use super::metrics::{intervals, match_interval, Interval};
 use super::noise::simulate;
 use super::prepare::Prepared;
 use super::run::{run_architecture, RunRecord};
@@ -107,26 +108,6 @@ pub fn cells(prep: &Prepared) -> Vec<Cell> {
     out
 }
 
-/// Alarm intervals `(start_index, end_index_exclusive_or_None)`.
-fn intervals(alarm: &[bool]) -> Vec<(usize, Option<usize>)> {
-    let mut out = Vec::new();
-    let mut start = None;
-    for (k, &a) in alarm.iter().enumerate() {
-        match (a, start) {
-            (true, None) => start = Some(k),
-            (false, Some(s)) => {
-                out.push((s, Some(k)));
-                start = None;
-            }
-            _ => {}
-        }
-    }
-    if let Some(s) = start {
-        out.push((s, None));
-    }
-    out
-}
-
 /// Reduce one run's record to metrics.
 pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> RunMetrics {
     let spec = &prep.spec;
@@ -152,18 +133,12 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         match c.fault {
             Some(fi) => {
                 let f = &spec.faults[fi];
-                // Previous fault end on the same sensor.
-                let prev_end = faults
-                    .iter()
-                    .filter(|g| g.start < f.start)
-                    .map(|g| g.end)
-                    .fold(f64::NEG_INFINITY, f64::max);
-                let matched: Vec<&(usize, Option<usize>)> = ivs
+                let windows: Vec<(f64, f64)> = faults.iter().map(|g| (g.start, g.end)).collect();
+                let me = faults.iter().position(|g| std::ptr::eq(*g, f));
+                let matched: Vec<&Interval> = ivs
                     .iter()
                     .filter(|(s, e)| {
-                        let ts = t[*s];
-                        let te = e.map_or(f64::INFINITY, |e| t[e]);
-                        ts <= f.end && te > f.start && ts >= prev_end
+                        me.is_some() && match_interval(t[*s], e.map(|e| t[e]), &windows) == me
                     })
                     .collect();
                 if let (Some(first), Some(last)) = (matched.first(), matched.last()) {
@@ -303,16 +278,4 @@ pub fn run_chunk(
             ))
         })?;
     pool.install(work)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn interval_extraction() {
-        let a = [false, true, true, false, true];
-        assert_eq!(intervals(&a), vec![(1, Some(3)), (4, None)]);
-        assert!(intervals(&[false, false]).is_empty());
-    }
 }

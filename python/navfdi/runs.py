@@ -1,0 +1,474 @@
+"""Scenario runs of any architecture (federated, centralized): the whole epoch loop runs in Rust.
+
+:func:`run_scenario` simulates one run (truth and measurements from ``seed``), filters it
+with isolation and, on the same measurements, without isolation, and returns a
+:class:`ScenarioRun` with tables (:meth:`ScenarioRun.events`, :meth:`ScenarioRun.fault_table`,
+:meth:`ScenarioRun.timeseries`) and :meth:`ScenarioRun.write` for the files of ``navfdi run``.
+
+Event matching (``events.csv``, the tables) is the Rust engine that Monte-Carlo campaigns
+use too (``navfdi_core::sim::metrics``): an alarm interval of a detector on a channel belongs
+to a fault on that channel's sensor when it overlaps the fault window ``[start, end]`` and
+began after the end of the previous fault window on the same sensor (an alarm still raised from
+an earlier fault is not a new detection). ``delay = alarm_start − fault_start``, or 0 when a
+false alarm was already raised when the fault began.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navfdi import _core
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, match_fault
+from navfdi.scenario import Scenario, load_scenario
+
+ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
+
+
+@dataclass(frozen=True)
+class FaultMatch:
+    """One detector's result for one fault (a row of :meth:`ScenarioRun.fault_table`).
+
+    Attributes
+    ----------
+    fault_id, subfilter, detector : str
+        What was tested.
+    fault_start, fault_end : float
+        Fault window (s).
+    detected_at : float or None
+        Start of the first matching alarm interval (s); None if missed.
+    cleared_at : float or None
+        End of the last matching interval (s); None if missed or never cleared.
+    delay : float or None
+        Detection delay (s).
+    lasting_from : float or None
+        Start of the alarm interval still raised at the last epoch of the fault window (s):
+        when the detector's alarm became lasting (with a large ``pf`` the first alarm is often
+        a false alarm). None when not in alarm then.
+    note : str
+        E.g. ``"in alarm since 326 s (earlier fault)"`` when a detector never raised a new
+        alarm because it was still in alarm.
+    """
+
+    fault_id: str
+    subfilter: str
+    detector: str
+    fault_start: float
+    fault_end: float
+    detected_at: float | None
+    cleared_at: float | None
+    delay: float | None
+    lasting_from: float | None
+    note: str
+
+
+class ScenarioRun:
+    """Result of :func:`run_scenario`.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario as run.
+    seed : int
+        Random seed.
+    t : ndarray, shape (T,)
+        Epoch times (s).
+    record : dict
+        Raw record of the run with isolation (arrays from the Rust core).
+    baseline : dict or None
+        Raw record of the same run without isolation (None if not computed).
+    variant : str
+        Variant name (``"base"`` for a scenario without variants).
+    """
+
+    def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None, variant: str = "base"):
+        self.scenario = scenario
+        self.seed = seed
+        self.record = record
+        self.baseline = baseline
+        self.variant = variant
+        self.t: np.ndarray = record["t"]
+
+    # ---- per sub-filter access -------------------------------------------------------------
+    def subfilters(self) -> list[str]:
+        """Sub-filter (sensor) names in configuration order."""
+        return [s["sensor"] for s in self.record["subfilters"]]
+
+    def detector(self, subfilter: str, name: str) -> dict[str, np.ndarray]:
+        """Arrays ``statistic, threshold, alarm`` (shape (T,)) of one detector."""
+        for s in self.record["subfilters"]:
+            if s["sensor"] == subfilter:
+                for d in s["detectors"]:
+                    if d["name"] == name:
+                        return d
+        raise KeyError(f"no detector {name!r} on sub-filter {subfilter!r}")
+
+    def isolated(self, subfilter: str) -> np.ndarray:
+        """Isolation flag per epoch of a sub-filter, shape (T,)."""
+        for s in self.record["subfilters"]:
+            if s["sensor"] == subfilter:
+                return s["isolated"]
+        raise KeyError(f"no sub-filter {subfilter!r}")
+
+    def error(self, isolation: bool = True) -> np.ndarray:
+        """Master navigation error ``x_true − x_g``, shape (T, 9): attitude east/north/up (rad),
+        velocity (m/s), position east/north/up (m). ``isolation=False``: the run without."""
+        rec = self.record if isolation else self.baseline
+        if rec is None:
+            raise ValueError("this run was made without the no-isolation baseline")
+        return rec["error"]
+
+    def components(self, subfilter: str) -> list[str]:
+        """Measurement component names of a channel's sensor (e.g. ``pos_e ... vel_u``)."""
+        from navfdi.scenario import SENSOR_COMPONENTS
+
+        kind = next(s["kind"] for s in self.scenario.core["sensors"] if s["name"] == subfilter)
+        return [c for c, _ in SENSOR_COMPONENTS[kind]]
+
+    def mdb_note(self) -> str:
+        """Which λ0 the MDB uses, beside paper 002's 17.872 (METHODS §6); empty without MDB."""
+        core = self.scenario.core
+        if core.get("architecture") != "centralized":
+            return ""
+        lines = []
+        for cs, s in zip(core["centralized"]["sensors"], self.record["subfilters"]):
+            if "mdb" not in s:
+                continue
+            dets = {d["name"]: d for d in cs["detectors"]}
+            det = dets.get(cs.get("decision") or "", cs["detectors"][0] if cs["detectors"] else None)
+            if det is None:
+                continue
+            pf, pm, m = det["pf"], det["pm"] if det["pm"] is not None else det["pf"], s["mdb"].shape[1]
+            lam = _core.noncentrality(pf, pm, m)
+            med = np.nanmedian(s["mdb"], axis=0)
+            comps = ", ".join(f"{c} {v:.3g}" for c, v in zip(self.components(s["sensor"]), med))
+            lines.append(
+                f"MDB on {s['sensor']}: λ0 = {lam:.3f} (used; standard definition, m = {m}, Pf = {pf:g}, Pm = {pm:g}); "
+                f"paper 002 reports λ0 = 17.872, which is m = 6, Pf = 0.1, Pm = 0.05 ({_core.noncentrality(0.1, 0.05, 6):.3f}). "
+                f"Median MDB: {comps}"
+            )
+        return "\n".join(lines)
+
+    # ---- tables ----------------------------------------------------------------------------
+    def _faults_on(self, sensor: str) -> list[dict[str, Any]]:
+        return sorted((f for f in self.scenario.faults() if f["sensor"] == sensor), key=lambda f: f["start"])
+
+    def events(self):
+        """One row per alarm interval: ``subfilter, detector, alarm_start, alarm_end, fault_id,
+        fault_start, fault_end, delay`` (times in s; empty where no fault matches or the alarm
+        never ends). Returns a pandas DataFrame."""
+        import pandas as pd
+
+        rows = []
+        for s in self.record["subfilters"]:
+            faults = self._faults_on(s["sensor"])
+            for d in s["detectors"]:
+                for iv, fi in self._events(d["alarm"], faults):
+                    f = None if fi is None else faults[fi]
+                    rows.append(
+                        {
+                            "subfilter": s["sensor"],
+                            "detector": d["name"],
+                            "alarm_start": iv.start,
+                            "alarm_end": iv.end,
+                            "fault_id": f["id"] if f else None,
+                            "fault_start": f["start"] if f else None,
+                            "fault_end": f["end"] if f else None,
+                            "delay": max(iv.start - f["start"], 0.0) if f else None,
+                        }
+                    )
+        cols = ["subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
+        df = pd.DataFrame(rows, columns=cols)
+        for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
+            df[c] = df[c].astype(float)
+        return df
+
+    def _events(self, alarm: np.ndarray, faults: list[dict[str, Any]]) -> list[tuple[AlarmInterval, int | None]]:
+        """Alarm intervals with the index of the fault each detects (the Rust engine)."""
+        return match_events(alarm, self.t, [(f["start"], f["end"]) for f in faults])
+
+    @staticmethod
+    def _match(iv: AlarmInterval, faults: list[dict[str, Any]]) -> dict[str, Any] | None:
+        return match_fault(iv, [(f["start"], f["end"]) for f in faults], faults)
+
+    def fault_table(self) -> list[FaultMatch]:
+        """Per fault and detector: detected at, cleared at, delay (the paper's Tables 2–4)."""
+        out = []
+        for s in self.record["subfilters"]:
+            faults = self._faults_on(s["sensor"])
+            for fi, f in enumerate(faults):
+                for d in s["detectors"]:
+                    ivs = [iv for iv, m in self._events(d["alarm"], faults) if m == fi]
+                    note = ""
+                    det: float | None
+                    clr: float | None
+                    delay: float | None
+                    if ivs:
+                        det, clr = ivs[0].start, ivs[-1].end
+                        delay = max(det - f["start"], 0.0)
+                        if clr is None:
+                            note = "not cleared by the end of the run"
+                    else:
+                        det = clr = delay = None
+                        k = int(np.searchsorted(self.t, f["start"]))
+                        if k < self.t.size and d["alarm"][k]:
+                            since = [iv.start for iv in alarm_intervals(d["alarm"], self.t) if iv.start <= f["start"] and (iv.end is None or iv.end > f["start"])]
+                            note = f"missed: in alarm since {since[0]:g} s (earlier fault)" if since else "missed"
+                        else:
+                            note = "missed"
+                    lasting = None
+                    last = self.t[self.t < f["end"]]
+                    if last.size:
+                        tl = float(last[-1])
+                        for iv in alarm_intervals(d["alarm"], self.t):
+                            if iv.start <= tl and (iv.end is None or iv.end > tl):
+                                lasting = iv.start
+                    out.append(FaultMatch(f["id"], s["sensor"], d["name"], f["start"], f["end"], det, clr, delay, lasting, note))
+        return out
+
+    def format_tables(self) -> str:
+        """The per-fault tables as printed by ``navfdi run``."""
+        fmt = lambda v: "-" if v is None else f"{v:g}"  # noqa: E731
+        lines = []
+        by_fault: dict[str, list[FaultMatch]] = {}
+        for m in self.fault_table():
+            by_fault.setdefault(m.fault_id, []).append(m)
+        for fid, rows in by_fault.items():
+            r0 = rows[0]
+            lines.append(f"fault {fid} on {r0.subfilter}: {r0.fault_start:g}–{r0.fault_end:g} s")
+            lines.append(f"  {'detector':<10} {'start [s]':>9} {'detected at [s]':>15} {'cleared at [s]':>14} {'delay [s]':>9} {'lasting from [s]':>16}  note")
+            for m in rows:
+                lines.append(
+                    f"  {m.detector:<10} {m.fault_start:>9g} {fmt(m.detected_at):>15} {fmt(m.cleared_at):>14} {fmt(m.delay):>9} {fmt(m.lasting_from):>16}  {m.note}"
+                )
+            lines.append("")
+        lines.append("detected at: first alarm interval overlapping the window (with a large pf often a false alarm);")
+        lines.append("lasting from: start of the alarm still raised at the window's last epoch.")
+        lines.append("")
+        note = self.mdb_note()
+        if note:
+            lines.append(note)
+            lines.append("")
+        if self.baseline is not None:
+            lines.append(self._error_summary())
+        return "\n".join(lines).rstrip() + "\n"
+
+    def attitude_rms(self, t0: float, t1: float, isolation: bool = True) -> float:
+        """RMS of the master attitude error (all three axes) over ``[t0, t1)`` in rad."""
+        e = self.error(isolation)[:, :3]
+        sel = (self.t >= t0) & (self.t < t1)
+        return float(np.sqrt(np.mean(e[sel] ** 2)))
+
+    def error_window(self) -> tuple[float, float]:
+        """``(t0, t1)`` (s) of the error comparison printed by ``navfdi run`` and reported in the
+        docs: from the first fault's start to the end of the run, ``[t0, t1)`` (the last epoch
+        included)."""
+        faults = self.scenario.faults()
+        t0 = min((f["start"] for f in faults), default=float(self.t[0]))
+        return t0, float(self.t[-1]) + 1e-9
+
+    def _error_summary(self) -> str:
+        t0, t1 = self.error_window()
+        a = np.degrees(self.attitude_rms(t0, t1, True)) * 3600
+        b = np.degrees(self.attitude_rms(t0, t1, False)) * 3600
+        return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s (first fault to end of run): {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
+
+    def timeseries(self):
+        """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,
+        ``{sub}.isolated``, ``{sub}.fused`` and per detector ``{sub}.{det}.statistic``,
+        ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
+        component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
+        isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m)."""
+        import pandas as pd
+
+        cols: dict[str, Any] = {"t": self.t}
+        for s in self.record["subfilters"]:
+            sub = s["sensor"]
+            cols[f"{sub}.statistic"] = s["statistic"]
+            if "mdb" in s:
+                for j, comp in enumerate(self.components(sub)):
+                    cols[f"{sub}.mdb.{comp}"] = s["mdb"][:, j]
+            cols[f"{sub}.isolated"] = s["isolated"]
+            cols[f"{sub}.fused"] = s["fused"]
+            for d in s["detectors"]:
+                for k in ("statistic", "threshold", "alarm"):
+                    cols[f"{sub}.{d['name']}.{k}"] = d[k]
+        for i, c in enumerate(ERROR_COLUMNS):
+            cols[f"error.{c}"] = self.record["error"][:, i]
+            cols[f"sigma.{c}"] = self.record["sigma"][:, i]
+            if self.baseline is not None:
+                cols[f"error_no_isolation.{c}"] = self.baseline["error"][:, i]
+        return pd.DataFrame(cols)
+
+    def errors(self) -> dict[str, float]:
+        """Navigation-error RMS and maximum |error| over the whole run, per component of the
+        master (or centralized) solution: ``{comp}_rms`` and ``{comp}_max`` for ``pos_e,
+        pos_n, pos_u, lat_m`` (m; ``lat_m`` is the latitude error in metres, = ``pos_n``),
+        ``vel_e, vel_n, vel_u`` (m/s) and ``att_e, att_n, att_u`` (rad)."""
+        e = self.record["error"]
+        cols = dict(zip(ERROR_COLUMNS, e.T))
+        cols["lat_m"] = cols["pos_n"]
+        out: dict[str, float] = {}
+        for c in ["pos_e", "pos_n", "pos_u", "lat_m", "vel_e", "vel_n", "vel_u", "att_e", "att_n", "att_u"]:
+            v = cols[c]
+            out[f"{c}_rms"] = float(np.sqrt(np.mean(v**2)))
+            out[f"{c}_max"] = float(np.max(np.abs(v)))
+        return out
+
+    def summary(self) -> dict[str, Any]:
+        """The scenario as run (user form and SI form), seed, versions, and key results."""
+        import numpy
+
+        return {
+            "scenario": self.scenario.raw,
+            "scenario_si": self.scenario.core,
+            "source": self.scenario.source,
+            "seed": self.seed,
+            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": numpy.__version__},
+            "faults": [m.__dict__ for m in self.fault_table()],
+        }
+
+    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
+        """Write ``events.csv``, ``timeseries.parquet``, ``summary.json`` and (optionally) PNG
+        figures to directory ``out`` (created if needed). Returns the paths written."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "events.csv", out / "timeseries.parquet", out / "summary.json"]
+        self.events().to_csv(paths[0], index=False)
+        self.timeseries().to_parquet(paths[1], index=False)
+        paths[2].write_text(json.dumps(self.summary(), indent=2, default=float), encoding="utf-8")
+        if figures:
+            from navfdi.plots import plot_run
+
+            paths += plot_run(self, out)
+        return paths
+
+
+class VariantRuns:
+    """Result of :func:`run_scenario` for a scenario with ``[[variants]]``: one
+    :class:`ScenarioRun` per variant, all on the same simulated measurements.
+
+    Attributes
+    ----------
+    scenario : Scenario
+        The scenario as given (with its variants).
+    seed : int
+        Random seed.
+    runs : dict
+        ``{variant name: ScenarioRun}`` in the scenario's order.
+    """
+
+    def __init__(self, scenario: Scenario, seed: int, runs: dict[str, ScenarioRun]):
+        self.scenario = scenario
+        self.seed = seed
+        self.runs = runs
+
+    def __getitem__(self, name: str) -> ScenarioRun:
+        return self.runs[name]
+
+    def events(self):
+        """:meth:`ScenarioRun.events` of every variant, with a first column ``variant``."""
+        import pandas as pd
+
+        frames = [r.events().assign(variant=name) for name, r in self.runs.items()]
+        df = pd.concat(frames, ignore_index=True)
+        return df[["variant", *[c for c in df.columns if c != "variant"]]]
+
+    def timeseries(self):
+        """:meth:`ScenarioRun.timeseries` of every variant stacked (long format), with a first
+        column ``variant``."""
+        import pandas as pd
+
+        frames = [r.timeseries().assign(variant=name) for name, r in self.runs.items()]
+        df = pd.concat(frames, ignore_index=True)
+        return df[["variant", *[c for c in df.columns if c != "variant"]]]
+
+    def errors(self):
+        """One row per variant: ``variant`` and :meth:`ScenarioRun.errors` (RMS and maximum per
+        component, m, m/s, rad). Returns a pandas DataFrame (``errors.csv``)."""
+        import pandas as pd
+
+        return pd.DataFrame([{"variant": name, **r.errors()} for name, r in self.runs.items()])
+
+    def format_tables(self) -> str:
+        """Per-variant fault tables and the error comparison, as printed by ``navfdi run``."""
+        parts = []
+        for name, r in self.runs.items():
+            parts.append(f"== variant {name} ==\n{r.format_tables()}")
+        err = self.errors()
+        lines = ["navigation error per variant (whole run): RMS / max"]
+        lines.append(f"  {'variant':<14} {'lat [m]':>16} {'east [m]':>16} {'up [m]':>16} {'vel N [m/s]':>16}")
+        for _, row in err.iterrows():
+            lines.append(
+                f"  {row['variant']:<14} {row['lat_m_rms']:>7.3f} / {row['lat_m_max']:<6.2f} {row['pos_e_rms']:>7.3f} / {row['pos_e_max']:<6.2f}"
+                f" {row['pos_u_rms']:>7.3f} / {row['pos_u_max']:<6.2f} {row['vel_n_rms']:>7.4f} / {row['vel_n_max']:<6.3f}"
+            )
+        parts.append("\n".join(lines) + "\n")
+        return "\n".join(parts)
+
+    def summary(self) -> dict[str, Any]:
+        """Scenario, seed, versions and per-variant fault tables and errors."""
+        return {
+            "scenario": self.scenario.raw,
+            "source": self.scenario.source,
+            "seed": self.seed,
+            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
+            "variants": {
+                name: {"scenario_si": r.scenario.core, "faults": [m.__dict__ for m in r.fault_table()], "errors": r.errors()}
+                for name, r in self.runs.items()
+            },
+        }
+
+    def write(self, out: str | Path, figures: bool = True) -> list[Path]:
+        """Write ``events.csv``, ``timeseries.parquet`` (both with a ``variant`` column),
+        ``errors.csv``, ``summary.json`` and per-variant figures (``{variant}_*.png``)."""
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        paths = [out / "events.csv", out / "timeseries.parquet", out / "errors.csv", out / "summary.json"]
+        self.events().to_csv(paths[0], index=False)
+        self.timeseries().to_parquet(paths[1], index=False)
+        self.errors().to_csv(paths[2], index=False)
+        paths[3].write_text(json.dumps(self.summary(), indent=2, default=float), encoding="utf-8")
+        if figures:
+            from navfdi.plots import plot_run, plot_variant_errors
+
+            for name, r in self.runs.items():
+                paths += plot_run(r, out, prefix=f"{name}_")
+            paths += plot_variant_errors(self, out)
+        return paths
+
+
+def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolation: bool = True) -> ScenarioRun | VariantRuns:
+    """Simulate and filter one run of a scenario (the loop runs in Rust, GIL released).
+
+    A scenario with ``[[variants]]`` is simulated once and every variant filters the same
+    measurements; the result is then a :class:`VariantRuns`.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A loaded scenario, a bundled name (e.g. ``"yang2013"``) or a TOML path.
+    seed : int
+        Seed of the run's noise (ChaCha8, stream 0).
+    compare_isolation : bool
+        Also filter the same measurements with isolation disabled (for the error comparison;
+        scenarios without variants).
+
+    Returns
+    -------
+    ScenarioRun or VariantRuns
+    """
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
+        raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
+    if sc.variant_names():
+        variants = sc.variants()
+        recs = _core.run_variants([v.to_json() for _, v in variants], int(seed))
+        return VariantRuns(sc, int(seed), {name: ScenarioRun(v, int(seed), rec, None, name) for (name, v), rec in zip(variants, recs)})
+    recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
+    return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
