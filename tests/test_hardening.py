@@ -450,7 +450,7 @@ def test_partial_sweep_reports_runs_per_point(monkeypatch, tmp_path):
 
     mc = sys.modules["navfdi.montecarlo"]
 
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     for path, v in [("faults[0].start", "60 s"), ("faults[0].end", "160 s"), ("faults[1].start", "220 s"), ("faults[1].end", "240 s"), ("duration", "300 s")]:
         sc = sc.with_value(path, v)
     real = mc._chunk
@@ -592,7 +592,7 @@ def test_run_figures_name_the_isolating_detector_and_show_sigma(captured_figures
 
     from navfdi.plots import plot_run
 
-    run = navfdi.run_scenario("yang2013", seed=1)
+    run = navfdi.run_scenario(navfdi.load_scenario("yang2013").base(), seed=1)
     plot_run(run, tmp_path)
     det = captured_figures["detector_cns_sprt.png"]
     labels = det.axes[0].get_legend_handles_labels()[1]

@@ -24,7 +24,7 @@ SLOPES = ["0.05 sigma/s", "0.1 sigma/s", "0.2 sigma/s", "0.5 sigma/s"]
 @pytest.fixture(scope="module")
 def short():
     """yang2013 shortened to 300 s (faults moved) for fast determinism tests."""
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     for path, v in [("faults[0].start", "60 s"), ("faults[0].end", "160 s"), ("faults[1].start", "220 s"), ("faults[1].end", "240 s"), ("duration", "300 s")]:
         sc = sc.with_value(path, v)
     return sc
@@ -97,7 +97,7 @@ def test_rates_that_are_not_pf(calibration):
 
 @pytest.fixture(scope="module")
 def slope_sweep():
-    return navfdi.montecarlo("yang2013", runs=40, seed=2, sweep={"faults[0].magnitude": SLOPES}, progress=False).summary()
+    return navfdi.montecarlo(navfdi.load_scenario("yang2013").base(), runs=40, seed=2, sweep={"faults[0].magnitude": SLOPES}, progress=False).summary()
 
 
 def ramp_delays(summary, det):
@@ -186,11 +186,11 @@ def test_cli_summary_columns(tmp_path):
     s = pd.read_csv(out / "summary.csv")
     for col in ["subfilter", "detector", "fault_id", "pf", "runs", "detection_probability", "delay_mean", "delay_median", "delay_p95", "false_alarm_rate", "false_alarm_ci_low", "false_alarm_ci_high", "error_rms", "faults[1].magnitude"]:
         assert col in s.columns, col
-    assert len(s) == 2 * (3 * 3 + 1)  # points × (CNS 3 detectors × (2 faults + none) + GNSS none)
-    assert set(s["faults[1].magnitude"]) == {"10 sigma", "20 sigma"}
+    assert len(s) == 2 * 2 * (3 * 3 + 1)  # variants × points × (CNS 3 detectors × (2 faults + none) + GNSS none)
+    assert set(s["faults[1].magnitude"]) == {"10 sigma", "20 sigma"} and set(s["variant"]) == {"isolation", "no_isolation"}
     runs = pd.read_parquet(out / "runs.parquet")
     assert len(runs) == 6 * len(s)
-    assert (out / "series_p0_r2.parquet").exists() and (out / "series_p1_r2.parquet").exists()
+    assert all((out / f"series_p{p}_r2.parquet").exists() for p in range(4))
     assert (out / "delay.png").exists() and (out / "rates.png").exists()
     info = json.loads((out / "campaign.json").read_text())
     assert info["seed"] == 0 and info["sweep"] == {"faults[1].magnitude": ["10 sigma", "20 sigma"]} and not info["partial"]
@@ -201,7 +201,7 @@ def test_campaign_metrics_agree_with_single_run_tables(seed):
     """Fault matching exists in Rust (campaign metrics) and in Python (events.csv and the
     per-fault tables of `navfdi run`); run 0 of a campaign with seed S is the same simulation
     as run_scenario(seed=S), so both must report the same detections, delays and clear delays."""
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     single = navfdi.run_scenario(sc, seed=seed, compare_isolation=False)
     runs = navfdi.montecarlo(sc, runs=1, seed=seed, progress=False).runs
     checked = 0

@@ -140,7 +140,7 @@ def test_rust_fixture_matches_bundled_scenario():
 
 def all_kinds_scenario():
     """Every sensor kind, every fault shape, outages, no-reset mode with isolation."""
-    raw = copy.deepcopy(load_scenario("yang2013").raw)
+    raw = copy.deepcopy(load_scenario("yang2013").base().raw)
     raw["duration"] = "400 s"
     raw["sensors"] = [
         {"name": "cns", "kind": "cns", "noise": "6 arcsec", "rate": "1 Hz"},

@@ -18,7 +18,7 @@ SEEDS = range(10)
 
 @pytest.fixture(scope="module")
 def runs():
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     return [navfdi.run_scenario(sc, seed=s) for s in SEEDS]
 
 
@@ -67,7 +67,7 @@ def test_chi2_lasting_alarm_matches_papers_delay(runs):
 def test_joint_lasting_alarm_no_later_than_chi2():
     """Over 30 seeds the joint detector's lasting ramp alarm starts no later than chi-square's
     in most runs (measured: 28 of 30); it is never much later."""
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     diffs = []
     for s in range(30):
         r = navfdi.run_scenario(sc, seed=s, compare_isolation=False)
@@ -79,7 +79,7 @@ def test_joint_lasting_alarm_no_later_than_chi2():
 
 @pytest.mark.xfail(strict=True, reason="not reproduced: the SPRT of METHODS §3 accumulates from the run start, so 300 s of fault-free data dilute the ramp (see docs/yang2013.md)")
 def test_papers_claim_sprt_finds_ramp_well_before_chi2():
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     sprt, chi2 = [], []
     for s in range(30):
         r = navfdi.run_scenario(sc, seed=s, compare_isolation=False)
@@ -100,7 +100,7 @@ def test_isolation_reduces_master_attitude_error(runs):
 
 
 def test_runs_are_deterministic_in_the_seed():
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     a, b, c = navfdi.run_scenario(sc, 5), navfdi.run_scenario(sc, 5), navfdi.run_scenario(sc, 6)
     np.testing.assert_array_equal(a.error(), b.error())
     np.testing.assert_array_equal(a.detector("cns", "joint")["statistic"], b.detector("cns", "joint")["statistic"])
@@ -118,18 +118,42 @@ def test_cli_run_writes_outputs(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "navfdi", "run", "yang2013", "--seed", "3", "--out", str(out)], capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "fault cns-ramp on cns" in proc.stdout and "fault cns-step on cns" in proc.stdout
+    assert "master attitude error RMS over 300–999 s (first fault to end of run), arcsec: isolation" in proc.stdout
     ev = pd.read_csv(out / "events.csv")
-    assert list(ev.columns) == ["subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
-    step = ev[(ev.detector == "joint") & (ev.fault_id == "cns-step")]
+    assert list(ev.columns) == ["variant", "subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
+    assert set(ev.variant) == {"isolation", "no_isolation"}
+    step = ev[(ev.variant == "isolation") & (ev.detector == "joint") & (ev.fault_id == "cns-step")]
     assert len(step) >= 1 and step.delay.min() <= 1
     ts = pd.read_parquet(out / "timeseries.parquet")
-    assert len(ts) == 1000
-    for col in ["t", "cns.joint.statistic", "cns.joint.threshold", "cns.joint.alarm", "cns.isolated", "error.att_e", "error_no_isolation.att_e"]:
+    assert len(ts) == 2 * 1000
+    for col in ["variant", "t", "cns.joint.statistic", "cns.joint.threshold", "cns.joint.alarm", "cns.isolated", "error.att_e", "sigma.att_e"]:
         assert col in ts.columns, col
+    assert not ts[ts.variant == "no_isolation"]["cns.isolated"].any() and ts[ts.variant == "isolation"]["cns.isolated"].any()
+    err = pd.read_csv(out / "errors.csv")
+    assert list(err.variant) == ["isolation", "no_isolation"] and (err.att_e_rms.iloc[0] < err.att_e_rms.iloc[1])
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seed"] == 3 and summary["scenario"]["name"] == "yang2013" and "navfdi" in summary["versions"]
+    assert set(summary["variants"]) == {"isolation", "no_isolation"}
     pngs = sorted(p.name for p in out.glob("*.png"))
-    assert pngs == ["detector_cns_chi2.png", "detector_cns_joint.png", "detector_cns_sprt.png", "master_attitude_error.png"]
+    for v in ("isolation", "no_isolation"):
+        for f in ["detector_cns_chi2.png", "detector_cns_joint.png", "detector_cns_sprt.png", "master_attitude_error.png"]:
+            assert f"{v}_{f}" in pngs
+    assert "variant_errors.png" in pngs
+
+
+def test_with_and_without_isolation_as_variants_keeps_the_numbers():
+    """yang2013's comparison is two variants now; each equals the former run with isolation and
+    its no-isolation baseline, bit for bit."""
+    sc = navfdi.load_scenario("yang2013")
+    assert sc.variant_names() == ["isolation", "no_isolation"]
+    for seed in (0, 4):
+        v = navfdi.run_scenario(sc, seed=seed)
+        old = navfdi.run_scenario(sc.base(), seed=seed, compare_isolation=True)
+        np.testing.assert_array_equal(v["isolation"].record["error"], old.record["error"])
+        np.testing.assert_array_equal(v["no_isolation"].record["error"], old.baseline["error"])
+        for a, b in zip(v["no_isolation"].record["subfilters"], old.baseline["subfilters"]):
+            for da, db in zip(a["detectors"], b["detectors"]):
+                np.testing.assert_array_equal(da["alarm"], db["alarm"])
 
 
 def test_cli_run_reports_bad_scenario(tmp_path):
@@ -149,7 +173,7 @@ def test_cli_run_reports_bad_scenario(tmp_path):
 def test_isolated_update_mode_absorbs_the_ramp():
     """With isolated = "update" (METHODS §5 read literally) the isolated CNS sub-filter absorbs
     the ramp, and its joint alarm outlasts the ramp by minutes instead of clearing at 500 s."""
-    raw = navfdi.load_scenario("yang2013").raw
+    raw = navfdi.load_scenario("yang2013").base().raw
     import copy
 
     raw = copy.deepcopy(raw)

@@ -18,7 +18,7 @@ def lasting(run, det, t_last):
 
 
 def main(n: int = 30) -> None:
-    sc = navfdi.load_scenario("yang2013")
+    sc = navfdi.load_scenario("yang2013").base()
     rows: dict[str, dict[str, list[float]]] = {d: {"first": [], "lasting": [], "clear500": [], "step": [], "clear850": []} for d in ("chi2", "sprt", "joint")}
     ratio = []
     for seed in range(n):

@@ -408,6 +408,11 @@ class VariantRuns:
                 f"  {row['variant']:<14} {row['lat_m_rms']:>7.3f} / {row['lat_m_max']:<6.2f} {row['pos_e_rms']:>7.3f} / {row['pos_e_max']:<6.2f}"
                 f" {row['pos_u_rms']:>7.3f} / {row['pos_u_max']:<6.2f} {row['vel_n_rms']:>7.4f} / {row['vel_n_max']:<6.3f}"
             )
+        first = next(iter(self.runs.values()))
+        t0, t1 = first.error_window()
+        arcsec = np.degrees(1.0) * 3600
+        rms = ", ".join(f"{name} {r.attitude_rms(t0, t1) * arcsec:.2f}" for name, r in self.runs.items())
+        lines.append(f"master attitude error RMS over {t0:g}–{first.t[-1]:g} s (first fault to end of run), arcsec: {rms}")
         parts.append("\n".join(lines) + "\n")
         return "\n".join(parts)
 

@@ -341,7 +341,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     if "centralized" in raw:
         raise ScenarioError("centralized: given, but architecture is 'federated' (set architecture = 'centralized' or remove it)")
     fed = _need(raw, "federated", "")
-    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated"}, "federated")
+    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated", "isolate"}, "federated")
     mode = _str(_need(fed, "mode", "federated"), "federated.mode")
     if mode not in ("reset", "no_reset"):
         raise ScenarioError(f"federated.mode = {mode!r}: use reset or no_reset")
@@ -362,11 +362,15 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     iu = fed.get("isolated", "track")
     if iu not in ("track", "predict", "update"):
         raise ScenarioError(f"federated.isolated = {iu!r}: use track, predict or update")
+    isolate = fed.get("isolate", True)
+    if not isinstance(isolate, bool):
+        raise ScenarioError(f"federated.isolate = {isolate!r}: expected true or false")
     core["federated"] = {
         "mode": mode,
         "master_share": _number(fed.get("master_share", 0.0), "federated.master_share"),
         "subfilters": subs,
         "isolated": iu,
+        "isolate": isolate,
     }
     return core
 
@@ -403,6 +407,12 @@ class Scenario:
         """Faults in SI: ``id, sensor, components, kind, magnitude, start (s), end (s)``."""
         return [dict(f) for f in self.core["faults"]]
 
+    def base(self) -> Scenario:
+        """The scenario without its ``[[variants]]`` (itself when it has none)."""
+        if "variants" not in self.raw:
+            return self
+        return from_dict({k: v for k, v in self.raw.items() if k != "variants"}, source=self.source)
+
     def variant_names(self) -> list[str]:
         """Names of the scenario's ``[[variants]]`` (empty without variants)."""
         return [n for n, _ in _variants(self.raw)]
@@ -414,8 +424,7 @@ class Scenario:
         vs = _variants(self.raw)
         if not vs:
             return [("base", self)]
-        base_raw = {k: v for k, v in self.raw.items() if k != "variants"}
-        base = from_dict(base_raw, source=self.source)
+        base = self.base()
         out = []
         for i, (name, sets) in enumerate(vs):
             try:

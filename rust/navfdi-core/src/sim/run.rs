@@ -289,7 +289,10 @@ pub fn run_architecture(
     cancel: &Cancel,
 ) -> Result<RunRecord> {
     match prep.spec.architecture {
-        Architecture::Federated => run_federated(prep, sim, isolation, cancel),
+        Architecture::Federated => {
+            let isolate = prep.spec.federated.as_ref().is_none_or(|f| f.isolate);
+            run_federated(prep, sim, isolation && isolate, cancel)
+        }
         Architecture::Centralized => {
             crate::arch::centralized::run_centralized(prep, sim, isolation, full, cancel)
         }

@@ -370,6 +370,14 @@ pub struct FederatedSpec {
     /// What an isolated sub-filter does (default: track the global solution).
     #[serde(default)]
     pub isolated: IsolatedMode,
+    /// Isolation active (default). `false`: the detectors run and report but never isolate
+    /// (the "without isolation" comparison, as a variant).
+    #[serde(default = "default_true")]
+    pub isolate: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 /// Behaviour of an isolated sub-filter (it never feeds the master in any mode).
