@@ -271,6 +271,38 @@ mod tests {
     }
 
     #[test]
+    fn reset_component_restarts_only_that_component() {
+        let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
+        let a = DMatrix::identity(2, 2);
+        for _ in 0..3 {
+            s.test(&DVector::from_vec(vec![2.0, 1.0]), &a).unwrap();
+        }
+        s.reset_component(0);
+        s.reset_component(9); // out of range: nothing
+        assert_eq!(s.component_counts(), vec![0, 3]);
+        let d = s.test(&DVector::from_vec(vec![2.0, 1.0]), &a).unwrap();
+        assert_eq!(s.component_statistics()[0], 2.0); // 1·2²/2 after the restart
+        assert!((d.statistic - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn min_samples_gates_the_alarm() {
+        let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known)
+            .unwrap()
+            .with_min_samples(3)
+            .unwrap();
+        let a = DMatrix::identity(1, 1);
+        let big = DVector::from_vec(vec![10.0]);
+        assert!(!s.test(&big, &a).unwrap().alarm);
+        assert!(!s.test(&big, &a).unwrap().alarm);
+        assert!(s.test(&big, &a).unwrap().alarm);
+        assert!(ImprovedSprt::new(0.1, 0.1, SprtVariance::Known)
+            .unwrap()
+            .with_min_samples(0)
+            .is_err());
+    }
+
+    #[test]
     fn dimension_is_fixed() {
         let mut s = ImprovedSprt::new(0.1, 0.1, SprtVariance::Known).unwrap();
         s.test(&DVector::zeros(2), &DMatrix::identity(2, 2))

@@ -802,6 +802,26 @@ impl ScenarioSpec {
         Ok(())
     }
 
+    /// `{p}.sensor` must name a sensor, and not one an earlier entry already uses (`dup`).
+    fn check_sensor_ref(&self, p: &str, sensor: &str, dup: bool, dup_msg: &str) -> Result<()> {
+        if self.sensor_index(sensor).is_none() {
+            return Err(bad(
+                format!("{p}.sensor"),
+                format!(
+                    "{sensor:?} is not a sensor (known: {})",
+                    self.sensor_names()
+                ),
+            ));
+        }
+        if dup {
+            return Err(bad(
+                format!("{p}.sensor"),
+                format!("sensor {sensor:?} {dup_msg}"),
+            ));
+        }
+        Ok(())
+    }
+
     fn validate_centralized(&self) -> Result<()> {
         let c = self.centralized()?;
         if c.sensors.is_empty() {
@@ -812,22 +832,8 @@ impl ScenarioSpec {
         }
         for (i, cs) in c.sensors.iter().enumerate() {
             let p = format!("centralized.sensors[{i}]");
-            if self.sensor_index(&cs.sensor).is_none() {
-                return Err(bad(
-                    format!("{p}.sensor"),
-                    format!(
-                        "{:?} is not a sensor (known: {})",
-                        cs.sensor,
-                        self.sensor_names()
-                    ),
-                ));
-            }
-            if c.sensors[..i].iter().any(|o| o.sensor == cs.sensor) {
-                return Err(bad(
-                    format!("{p}.sensor"),
-                    format!("sensor {:?} is listed twice", cs.sensor),
-                ));
-            }
+            let dup = c.sensors[..i].iter().any(|o| o.sensor == cs.sensor);
+            self.check_sensor_ref(&p, &cs.sensor, dup, "is listed twice")?;
             self.validate_detectors(&p, &cs.detectors)?;
             if let Some(dn) = &cs.decision {
                 let Some(d) = cs.detectors.iter().find(|d| &d.name == dn) else {
@@ -873,22 +879,8 @@ impl ScenarioSpec {
         let mut total = fed.master_share;
         for (i, sf) in fed.subfilters.iter().enumerate() {
             let p = format!("federated.subfilters[{i}]");
-            if self.sensor_index(&sf.sensor).is_none() {
-                return Err(bad(
-                    format!("{p}.sensor"),
-                    format!(
-                        "{:?} is not a sensor (known: {})",
-                        sf.sensor,
-                        self.sensor_names()
-                    ),
-                ));
-            }
-            if fed.subfilters[..i].iter().any(|o| o.sensor == sf.sensor) {
-                return Err(bad(
-                    format!("{p}.sensor"),
-                    format!("sensor {:?} already has a sub-filter", sf.sensor),
-                ));
-            }
+            let dup = fed.subfilters[..i].iter().any(|o| o.sensor == sf.sensor);
+            self.check_sensor_ref(&p, &sf.sensor, dup, "already has a sub-filter")?;
             positive(&format!("{p}.share"), sf.share)?;
             total += sf.share;
             self.validate_detectors(&p, &sf.detectors)?;
