@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import NamedTuple, TypeVar
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -56,13 +56,13 @@ def alarm_intervals(alarm: ArrayLike, t: ArrayLike | None = None) -> list[AlarmI
     return out
 
 
-F = TypeVar("F")
-
-
 def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, float]]) -> list[tuple[AlarmInterval, int | None]]:
     """Alarm intervals with the index (into ``windows``, sorted by start) of the fault each
     detects, or None: the one matching rule of ``navfdi run``, ``montecarlo`` and ``demo``,
-    computed in Rust (``navfdi._core.match_alarms``; rule: :func:`match_fault`)."""
+    computed in Rust (``navfdi._core.match_alarms``). An interval belongs to the first fault,
+    in start order, whose window ``[start, end]`` it overlaps and that began after the
+    previous fault's window ended (an alarm still raised from an earlier fault is not a new
+    detection)."""
     from navfdi import _core
 
     a = np.asarray(alarm, dtype=bool)
@@ -73,16 +73,3 @@ def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, 
         for s, e, f in zip(starts, ends, faults)
     ]
 
-
-def match_fault(interval: AlarmInterval, windows: Sequence[tuple[float, float]], faults: Sequence[F]) -> F | None:
-    """The fault one alarm interval detects (the rule documented in the Rust engine
-    ``navfdi_core::sim::metrics``, evaluated there): the first fault, in start order, whose
-    window ``[start, end]`` the interval overlaps and that began after the previous fault's
-    window ended. ``windows`` are the faults' windows (s) sorted by start, ``faults`` the
-    faults themselves (parallel); the matching one is returned."""
-    from navfdi import _core
-
-    t = np.array([interval.start, interval.start if interval.end is None else interval.end], dtype=float)
-    alarm = [True, interval.end is None]
-    _, _, f = _core.match_alarms(t, alarm, [(float(s), float(e)) for s, e in windows])
-    return faults[int(f[0])] if len(f) and f[0] >= 0 else None

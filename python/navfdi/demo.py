@@ -27,7 +27,7 @@ import numpy as np
 
 from navfdi import _core
 from navfdi._filter import FilterRun, run_filter
-from navfdi._intervals import AlarmInterval, match_events, match_fault
+from navfdi._intervals import match_events
 
 
 @dataclass(frozen=True)
@@ -99,12 +99,6 @@ def simulate(seed: int = 0, duration: float = 600.0) -> tuple[np.ndarray, np.nda
         R=np.eye(3),
     )
     return t, zs, run
-
-
-def _match(iv: AlarmInterval) -> DemoFault | None:
-    """The fault an alarm interval detects, by the rule of ``navfdi run`` and ``montecarlo``
-    (:func:`navfdi._intervals.match_fault`)."""
-    return match_fault(iv, [(f.start, f.end) for f in FAULTS], FAULTS)
 
 
 def report(seed: int = 0, pf: float = 1e-3, pm: float = 1e-3) -> str:

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core
-from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, match_fault
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_events
 from navfdi.scenario import Scenario, load_scenario
 
 ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
@@ -191,10 +191,6 @@ class ScenarioRun:
     def _events(self, alarm: np.ndarray, faults: list[dict[str, Any]]) -> list[tuple[AlarmInterval, int | None]]:
         """Alarm intervals with the index of the fault each detects (the Rust engine)."""
         return match_events(alarm, self.t, [(f["start"], f["end"]) for f in faults])
-
-    @staticmethod
-    def _match(iv: AlarmInterval, faults: list[dict[str, Any]]) -> dict[str, Any] | None:
-        return match_fault(iv, [(f["start"], f["end"]) for f in faults], faults)
 
     def fault_table(self) -> list[FaultMatch]:
         """Per fault and detector: detected at, cleared at, delay (the paper's Tables 2–4)."""
