@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "memory_available",
+    "check_campaign_memory",
     "match_alarms",
     "run_variants",
     "_restore",
@@ -381,6 +382,11 @@ def mdb(A: ArrayLike, pf: float, pm: float) -> NDArray[np.float64]:
 
 def _restore(kind: str, state: str) -> Any:
     """Rebuild a pickled object (called by pickle; not for direct use)."""
+
+def check_campaign_memory(spec_json: str, runs: float, points: float, kept: float, row_bytes: float) -> None:
+    """Raise ``MemoryError`` (saying how much is needed and what to change) when a campaign of
+    ``runs`` runs × ``points`` sweep points, with ``row_bytes`` per row of the per-run table
+    (one row per metric cell) and ``kept`` full series per point, would not fit in memory."""
 
 def memory_available() -> float:
     """Bytes of memory available to this process: the smallest of MemAvailable

@@ -362,31 +362,12 @@ _ROW_BYTES = 400.0
 
 
 def _check_campaign_memory(base: Scenario, runs: int, points: int, keep: tuple[int, ...]) -> None:
-    """Refuse a campaign whose per-run table and kept series would not fit in memory."""
-    core = base.core
-    epochs = math.floor(core["duration"] / core["dt"] + 1e-9)
-    subs = core["centralized"]["sensors"] if core.get("architecture") == "centralized" else core["federated"]["subfilters"]
-    faults = core["faults"]
-    cells = sum(len(sf["detectors"]) * (1 + sum(f["sensor"] == sf["sensor"] for f in faults)) for sf in subs)
-    per_epoch = 160 + sum(20 + 17 * len(sf["detectors"]) for sf in subs)
-    table = float(runs) * points * max(cells, 1) * _ROW_BYTES
-    series = float(len(keep)) * points * epochs * per_epoch
-    need = table + series
-    avail = _core.memory_available()
-    if need > 0.8 * avail:
-        raise ScenarioTooLarge(
-            f"montecarlo: needs about {_human(need)} of memory ({runs} runs × {points} point(s) × {cells} metric cells"
-            f" = {_human(table)} of per-run metrics, {len(keep)} kept series × {points} point(s) × {epochs} epochs = {_human(series)})"
-            f" but {_human(avail)} is available; use fewer runs or sweep points, or keep fewer series"
-        )
-
-
-def _human(b: float) -> str:
-    for unit, size in (("GiB", 2.0**30), ("MiB", 2.0**20)):
-        if b >= size:
-            v = b / size
-            return f"{v:.1e} {unit}" if v >= 1e5 else f"{v:.1f} {unit}"
-    return f"{b / 1024:.1f} KiB"
+    """Refuse a campaign whose per-run table and kept series would not fit in memory (the
+    estimate and the message come from the Rust core)."""
+    try:
+        _core.check_campaign_memory(base.to_json(), float(runs), float(points), float(len(keep)), _ROW_BYTES)
+    except MemoryError as e:
+        raise ScenarioTooLarge(str(e)) from None
 
 
 def montecarlo(

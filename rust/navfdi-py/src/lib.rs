@@ -141,5 +141,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
     m.add_class::<montecarlo::PyPreparedScenario>()?;
+    m.add_function(wrap_pyfunction!(montecarlo::check_campaign_memory, m)?)?;
     Ok(())
 }

@@ -152,3 +152,18 @@ impl PyPreparedScenario {
         Ok(d)
     }
 }
+
+/// Refuse (MemoryError) a campaign of `runs` runs × `points` sweep points whose per-run table
+/// (`row_bytes` per row, one row per metric cell) and `kept` kept series per point would not
+/// fit in memory; checked from the scenario alone, before anything is prepared.
+#[pyfunction]
+pub fn check_campaign_memory(
+    spec_json: &str,
+    runs: f64,
+    points: f64,
+    kept: f64,
+    row_bytes: f64,
+) -> PyResult<()> {
+    let spec = ScenarioSpec::from_json(spec_json).py()?;
+    navfdi_core::sim::montecarlo::check_campaign_memory(&spec, runs, points, kept, row_bytes).py()
+}

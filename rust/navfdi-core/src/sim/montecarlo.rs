@@ -26,6 +26,7 @@ use super::prepare::Prepared;
 use super::run::{run_architecture, RunRecord};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
+use crate::sim::spec::ScenarioSpec;
 use rayon::prelude::*;
 
 /// Seconds after a fault's end excluded from false-alarm counting.
@@ -84,7 +85,11 @@ pub struct RunMetrics {
 
 /// The cells of a scenario, in the order metrics are reported.
 pub fn cells(prep: &Prepared) -> Vec<Cell> {
-    let spec = &prep.spec;
+    spec_cells(&prep.spec)
+}
+
+/// [`cells`] from the scenario alone (no preparation needed).
+pub fn spec_cells(spec: &ScenarioSpec) -> Vec<Cell> {
     let mut out = Vec::new();
     for (si, sf) in spec.channels().iter().enumerate() {
         let faults: Vec<usize> = (0..spec.faults.len())
@@ -219,6 +224,31 @@ pub fn one_run(
         m.record = Some(rec);
     }
     Ok(m)
+}
+
+/// Refuse a campaign whose per-run metric table (`runs × points × cells` rows of `row_bytes`
+/// each, held by the caller) and kept series (`kept × points` full records) would not fit in
+/// memory, before anything is prepared ([`crate::memory::check`]).
+pub fn check_campaign_memory(
+    spec: &ScenarioSpec,
+    runs: f64,
+    points: f64,
+    kept: f64,
+    row_bytes: f64,
+) -> Result<()> {
+    let cells = spec_cells(spec).len().max(1) as f64;
+    let table = runs * points * cells * row_bytes;
+    let series = kept * points * (spec.memory_estimate(1.0) - spec.memory_estimate(0.0));
+    crate::memory::check(
+        "montecarlo",
+        table + series,
+        &format!(
+            "{runs} runs × {points} point(s) × {cells} metric cells = {} of per-run metrics, {kept} kept series × {points} point(s) = {}",
+            crate::memory::human(table),
+            crate::memory::human(series)
+        ),
+        "use fewer runs or sweep points, or keep fewer series",
+    )
 }
 
 /// Runs `start..start + count` on `threads` threads (0: rayon's default), in run order. Runs
