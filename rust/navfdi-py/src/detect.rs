@@ -470,11 +470,9 @@ impl PyImprovedSprt {
     #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
     fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
         let d = ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()?;
-        let inner = match min_samples {
-            None => d,
-            Some(n) => d.with_min_samples(positive_count("min_samples", n)?).py()?,
-        };
-        Ok(PyImprovedSprt { inner })
+        Ok(PyImprovedSprt {
+            inner: with_min_samples(d, min_samples, ImprovedSprt::with_min_samples)?,
+        })
     }
     /// Test one epoch.
     fn test(
@@ -571,11 +569,9 @@ impl PyJointChi2Sprt {
     #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
     fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
         let d = JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()?;
-        let inner = match min_samples {
-            None => d,
-            Some(n) => d.with_min_samples(positive_count("min_samples", n)?).py()?,
-        };
-        Ok(PyJointChi2Sprt { inner })
+        Ok(PyJointChi2Sprt {
+            inner: with_min_samples(d, min_samples, JointChi2Sprt::with_min_samples)?,
+        })
     }
     /// Test one epoch.
     fn test(
@@ -650,6 +646,18 @@ impl PyJointChi2Sprt {
             self.inner.sprt().pm(),
             variance_name(self.inner.sprt().variance())
         )
+    }
+}
+
+/// Apply an optional `min_samples` (validated) with the detector's own setter.
+fn with_min_samples<D>(
+    d: D,
+    min_samples: Option<i64>,
+    set: fn(D, u64) -> navfdi_core::Result<D>,
+) -> PyResult<D> {
+    match min_samples {
+        None => Ok(d),
+        Some(n) => set(d, positive_count("min_samples", n)?).py(),
     }
 }
 
