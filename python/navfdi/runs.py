@@ -197,9 +197,10 @@ class ScenarioRun:
         out = []
         for s in self.record["subfilters"]:
             faults = self._faults_on(s["sensor"])
+            matched = {d["name"]: self._events(d["alarm"], faults) for d in s["detectors"]} if faults else {}
             for fi, f in enumerate(faults):
                 for d in s["detectors"]:
-                    ivs = [iv for iv, m in self._events(d["alarm"], faults) if m == fi]
+                    ivs = [iv for iv, m in matched[d["name"]] if m == fi]
                     note = ""
                     det: float | None
                     clr: float | None
