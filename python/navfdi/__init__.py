@@ -17,6 +17,9 @@ Federated filtering and scenarios
     :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust, federated
     or centralized architecture) returning a :class:`ScenarioRun`, or a :class:`VariantRuns`
     for a scenario with variants; :class:`ScenarioError` names the offending field.
+GNSS
+    the linear :func:`ls_test` and :func:`snapshot_fde` (snapshot least squares with global test + w-test satellite
+    exclusion) returning a :class:`SnapshotFde`; ``architecture = "tight"`` scenarios.
 Monte-Carlo
     :func:`montecarlo` (runs × sweep points in parallel in Rust, or on Dask) returning a
     :class:`Campaign` with per-run metrics, summaries, plots.
@@ -36,11 +39,14 @@ from navfdi._core import (
     KalmanFilter,
     LinAlgError,
     ResidualChi2,
+    SnapshotFde,
     __version__,
     chi2_threshold,
+    ls_test,
     mdb,
     ncx2_cdf,
     noncentrality,
+    snapshot_fde,
     sprt_threshold,
 )
 from navfdi._filter import FilterRun, run_filter
@@ -67,17 +73,20 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "ScenarioRun",
+    "SnapshotFde",
     "VariantRuns",
     "__version__",
     "alarm_intervals",
     "bundled_scenarios",
     "chi2_threshold",
     "load_scenario",
+    "ls_test",
     "mdb",
     "montecarlo",
     "ncx2_cdf",
     "noncentrality",
     "run_filter",
     "run_scenario",
+    "snapshot_fde",
     "sprt_threshold",
 ]

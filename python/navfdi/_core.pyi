@@ -43,6 +43,9 @@ __all__ = [
     "FederatedFilter",
     "FederatedStep",
     "PreparedScenario",
+    "SnapshotFde",
+    "snapshot_fde",
+    "ls_test",
 ]
 
 __version__: str
@@ -541,3 +544,70 @@ class PreparedScenario:
         (s), ``clear_delay`` (s), ``false_alarm_epochs``, ``outside_epochs``,
         ``wrong_isolations`` (count, cells); ``att_rms``, ``att_max`` (rad), ``pos_rms``,
         ``pos_max`` (m) (count,); ``records`` ({run: record} for runs in ``keep``)."""
+
+@final
+class SnapshotFde:
+    """Result of :func:`snapshot_fde` for one epoch (read-only)."""
+
+    @property
+    def position(self) -> NDArray[np.float64] | None:
+        """ECEF position, shape (3,), in m; None when ``status == "no_solution"``."""
+    @property
+    def clock(self) -> float | None:
+        """Receiver clock bias c·δt in m; None without a solution."""
+    @property
+    def statistic(self) -> float:
+        """Global-test statistic ``VᵀD⁻¹V`` of the final satellite set (NaN without a solution)."""
+    @property
+    def threshold(self) -> float:
+        """The ``1 − alpha`` quantile of ``χ²(dof)`` (NaN without a solution)."""
+    @property
+    def dof(self) -> int:
+        """Degrees of freedom ``n − 4`` of the final set (0 without a solution)."""
+    @property
+    def first_test(self) -> tuple[float, float, int]:
+        """``(statistic, threshold, dof)`` of the first global test, on all satellites."""
+    @property
+    def w(self) -> NDArray[np.float64]:
+        """w-test statistic per input satellite, shape (n,), from the final set; NaN for
+        excluded satellites, satellites without redundancy and without a solution."""
+    @property
+    def excluded(self) -> list[int]:
+        """Excluded satellites (indices into the inputs), in exclusion order."""
+    @property
+    def excluded_w(self) -> list[float]:
+        """``|w|`` of each excluded satellite when it was excluded."""
+    @property
+    def status(self) -> str:
+        """``"passed"``, ``"excluded"``, ``"unidentified"`` (the global test fails but no
+        ``|w|`` exceeds ``k``; the solution is kept) or ``"no_solution"``."""
+    @property
+    def reason(self) -> str:
+        """Why the exclusion loop stopped, in words."""
+
+def snapshot_fde(
+    sat_pos: ArrayLike,
+    pseudoranges: ArrayLike,
+    sigma: ArrayLike,
+    alpha: float = 0.05,
+    k: float | None = None,
+    x0: ArrayLike | None = None,
+) -> SnapshotFde:
+    """Snapshot least-squares position and clock from pseudoranges with fault detection and
+    exclusion (global chi-square test + Baarda w-test, iterative exclusion; METHODS §10).
+
+    ``sat_pos`` (n, 3) ECEF in m; ``pseudoranges`` (n,) in m; ``sigma`` (n,) standard deviations
+    in m or a full (n, n) covariance in m²; ``alpha`` false-alarm probability of the global test;
+    ``k`` the w-test critical value (default: the two-sided normal quantile of ``alpha``, 1.96
+    for 0.05); ``x0`` start ``[x, y, z]`` or ``[x, y, z, clock]`` in m (default: the Earth's
+    centre). Fewer than 5 satellites left is ``status == "no_solution"`` (no position, never
+    NaN). Raises ``ValueError`` naming the argument for wrong shapes, non-finite values,
+    non-positive sigma or a covariance that is not symmetric positive definite."""
+
+def ls_test(b: ArrayLike, l: ArrayLike, d: ArrayLike) -> dict[str, Any]:
+    """The linear test of METHODS §10 on ``l = B x + ε``, ``ε ~ N(0, D)``: ``b`` = B (n, u) with
+    n > u, ``l`` (n,), ``d`` = D (n, n) symmetric positive definite or (n,) standard deviations.
+    Returns ``x`` (u,), ``v`` (n,) residuals ``B x̂ − l``, ``dv`` (n, n) their covariance
+    ``D − B(BᵀD⁻¹B)⁻¹Bᵀ``, ``statistic`` ``VᵀD⁻¹V``, ``dof`` ``n − u`` and ``w`` (n,) the general
+    w-test ``e_iᵀD⁻¹V / sqrt(e_iᵀD⁻¹D_VD⁻¹e_i)`` (NaN where an observation has no
+    redundancy). Raises :class:`LinAlgError` when ``BᵀD⁻¹B`` is singular."""

@@ -20,6 +20,7 @@ pub mod cancel;
 pub mod detect;
 pub mod error;
 pub mod fusion;
+pub mod gnss;
 pub mod ins;
 pub mod kalman;
 pub mod linalg;

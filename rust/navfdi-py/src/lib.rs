@@ -8,6 +8,7 @@ mod detect;
 mod errors;
 mod federated;
 mod filter;
+mod gnss;
 mod interrupt;
 mod montecarlo;
 mod pickling;
@@ -141,6 +142,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
     m.add_class::<montecarlo::PyPreparedScenario>()?;
+    m.add_class::<gnss::PySnapshotFde>()?;
+    m.add_function(wrap_pyfunction!(gnss::snapshot_fde, m)?)?;
+    m.add_function(wrap_pyfunction!(gnss::py_ls_test, m)?)?;
     m.add_function(wrap_pyfunction!(montecarlo::check_campaign_memory, m)?)?;
     Ok(())
 }

@@ -1,0 +1,722 @@
+//! Snapshot least squares with fault detection and exclusion (METHODS §10, paper 001).
+//!
+//! Observations `l = B x + ε`, `ε ~ N(0, D)` (linearised at the solution), `u` unknowns:
+//!
+//! * estimate `x̂ = (BᵀD⁻¹B)⁻¹BᵀD⁻¹l`, residuals `V = B x̂ − l`, their covariance
+//!   `D_V = D − B(BᵀD⁻¹B)⁻¹Bᵀ`;
+//! * global test `T = VᵀD⁻¹V ~ χ²(n − u)` against `F⁻¹(1 − α)`;
+//! * when it fails, Baarda's w-test in its general (correlated) form
+//!   `w_i = e_iᵀD⁻¹V / sqrt(e_iᵀD⁻¹D_VD⁻¹e_i)`, which for a diagonal `D` is `v_i / σ_{v_i}`;
+//!   the observation with the largest `|w_i|` above `K` is excluded and everything is
+//!   recomputed, until the global test passes.
+//!
+//! Outcomes ([`FdeStatus`]): `passed` (nothing excluded), `excluded` (passed after excluding
+//! one or more), `unidentified` (the global test fails but no `|w_i|` exceeds `K`: the
+//! solution is kept and flagged), `no_solution` (fewer than `u + 1` observations left, a
+//! singular geometry or no convergence: no position is given, never a NaN one). An
+//! observation with no redundancy (`e_iᵀD⁻¹D_VD⁻¹e_i ≈ 0`) cannot be tested: its `w` is NaN and
+//! it is never excluded.
+//!
+//! Two models: [`PositionModel`] (pseudoranges → ECEF position and clock bias, iterative
+//! Gauss-Newton) and [`RateModel`] (pseudorange rates → ECEF velocity and clock drift, linear).
+//! The exclusion loop [`fde`] is shared.
+
+use crate::error::{Error, Result};
+use crate::stats::chi2_threshold;
+use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// Observation covariance: independent observations with standard deviations σ_i, or a full
+/// symmetric positive-definite matrix.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ObsCov {
+    /// σ per observation (same unit as the observations).
+    Sigma(Vec<f64>),
+    /// Full covariance (n × n).
+    Full(DMatrix<f64>),
+}
+
+impl ObsCov {
+    /// Number of observations it describes.
+    pub fn len(&self) -> usize {
+        match self {
+            ObsCov::Sigma(s) => s.len(),
+            ObsCov::Full(m) => m.nrows(),
+        }
+    }
+
+    /// True when it describes no observation.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Check values: positive finite σ, or a symmetric positive-definite matrix.
+    pub fn validate(&self, name: &str, n: usize) -> Result<()> {
+        match self {
+            ObsCov::Sigma(s) => {
+                if s.len() != n {
+                    return Err(Error::Shape {
+                        name: name.into(),
+                        expected: format!("({n},) or ({n}, {n})"),
+                        got: format!("({},)", s.len()),
+                    });
+                }
+                if let Some((i, v)) = s
+                    .iter()
+                    .enumerate()
+                    .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
+                {
+                    return Err(Error::InvalidParameter {
+                        name: format!("{name}[{i}]"),
+                        value: *v,
+                        requirement: "a standard deviation must be positive and finite".into(),
+                    });
+                }
+                Ok(())
+            }
+            ObsCov::Full(m) => {
+                crate::validate::check_shape(name, m, n, n)?;
+                crate::validate::check_finite_matrix(name, m)?;
+                crate::validate::check_symmetric(name, m)?;
+                if Cholesky::new(m.clone()).is_none() {
+                    return Err(Error::NotPositiveDefinite {
+                        name: name.into(),
+                        detail: "an observation covariance must be positive definite".into(),
+                    });
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// `D⁻¹` restricted to the observations `idx` (the inverse of the sub-matrix).
+    fn inverse_sub(&self, idx: &[usize]) -> Option<DMatrix<f64>> {
+        match self {
+            ObsCov::Sigma(s) => Some(DMatrix::from_diagonal(&DVector::from_iterator(
+                idx.len(),
+                idx.iter().map(|&i| 1.0 / (s[i] * s[i])),
+            ))),
+            ObsCov::Full(m) => {
+                let sub = m.select_rows(idx).select_columns(idx);
+                Cholesky::new(sub).map(|c| c.inverse())
+            }
+        }
+    }
+
+    fn sub(&self, idx: &[usize]) -> DMatrix<f64> {
+        match self {
+            ObsCov::Sigma(s) => DMatrix::from_diagonal(&DVector::from_iterator(
+                idx.len(),
+                idx.iter().map(|&i| s[i] * s[i]),
+            )),
+            ObsCov::Full(m) => m.select_rows(idx).select_columns(idx),
+        }
+    }
+}
+
+/// The two-sided standard-normal quantile `N⁻¹(1 − α/2)` (the default w-test critical value).
+pub fn two_sided_quantile(alpha: f64) -> Result<f64> {
+    crate::validate::check_probability("alpha", alpha)?;
+    let n = Normal::new(0.0, 1.0).map_err(|e| Error::Numerical {
+        context: "normal quantile".into(),
+        detail: e.to_string(),
+    })?;
+    Ok(n.inverse_cdf(1.0 - alpha / 2.0))
+}
+
+/// Settings of the exclusion loop.
+#[derive(Debug, Clone)]
+pub struct FdeConfig {
+    /// False-alarm probability of the global test.
+    pub alpha: f64,
+    /// Critical value of the w-test.
+    pub k: f64,
+    /// Gauss-Newton iterations allowed per solution.
+    pub max_iterations: usize,
+    /// Convergence: step norm below this (m).
+    pub tolerance: f64,
+    thresholds: Vec<std::sync::OnceLock<f64>>,
+}
+
+/// Degrees of freedom whose thresholds are computed once (on first use) and kept.
+const CACHED_DOF: usize = 64;
+
+impl FdeConfig {
+    /// `alpha` ∈ (0, 1); `k` > 0 (default: [`two_sided_quantile`] of `alpha`).
+    pub fn new(alpha: f64, k: Option<f64>) -> Result<Self> {
+        crate::validate::check_probability("alpha", alpha)?;
+        let k = match k {
+            Some(k) => {
+                if !(k > 0.0 && k.is_finite()) {
+                    return Err(Error::InvalidParameter {
+                        name: "k".into(),
+                        value: k,
+                        requirement: "the w-test critical value must be positive and finite".into(),
+                    });
+                }
+                k
+            }
+            None => two_sided_quantile(alpha)?,
+        };
+        let thresholds = (0..CACHED_DOF)
+            .map(|_| std::sync::OnceLock::new())
+            .collect();
+        Ok(FdeConfig {
+            alpha,
+            k,
+            max_iterations: 20,
+            tolerance: 1e-7,
+            thresholds,
+        })
+    }
+
+    /// Global-test threshold `F⁻¹_{χ²(dof)}(1 − α)`.
+    pub fn threshold(&self, dof: usize) -> Result<f64> {
+        match self.thresholds.get(dof.wrapping_sub(1)) {
+            Some(cell) => match cell.get() {
+                Some(t) => Ok(*t),
+                None => {
+                    let t = chi2_threshold(self.alpha, dof)?;
+                    Ok(*cell.get_or_init(|| t))
+                }
+            },
+            None => chi2_threshold(self.alpha, dof),
+        }
+    }
+}
+
+/// How the exclusion loop ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FdeStatus {
+    /// The global test passed with every observation.
+    Passed,
+    /// The global test passed after excluding one or more observations.
+    Excluded,
+    /// The global test fails but no |w| exceeds K; the solution is kept.
+    Unidentified,
+    /// Fewer than u + 1 observations, a singular geometry or no convergence: no solution.
+    NoSolution,
+}
+
+impl FdeStatus {
+    /// Lower-case name (`passed`, `excluded`, `unidentified`, `no_solution`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            FdeStatus::Passed => "passed",
+            FdeStatus::Excluded => "excluded",
+            FdeStatus::Unidentified => "unidentified",
+            FdeStatus::NoSolution => "no_solution",
+        }
+    }
+
+    /// Small integer code (0–3 in the order above), as recorded per epoch.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+}
+
+/// One linear(ised) test: estimate, residuals and statistics (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LsTest {
+    /// Estimated correction x̂ (u).
+    pub x: DVector<f64>,
+    /// Residuals V = B x̂ − l (n).
+    pub v: DVector<f64>,
+    /// Residual covariance D_V (n × n).
+    pub dv: DMatrix<f64>,
+    /// VᵀD⁻¹V.
+    pub statistic: f64,
+    /// w per observation (NaN where the observation has no redundancy).
+    pub w: DVector<f64>,
+}
+
+/// The test of `l = B x + ε`, `D⁻¹` given (`d` is `D`). None when `BᵀD⁻¹B` is singular.
+pub fn ls_test(
+    b: &DMatrix<f64>,
+    l: &DVector<f64>,
+    d: &DMatrix<f64>,
+    dinv: &DMatrix<f64>,
+) -> Option<LsTest> {
+    let f = dinv * b; // D⁻¹B (n × u)
+    let n_mat = b.transpose() * &f;
+    let n_inv = Cholesky::new(n_mat)?.inverse();
+    let x = &n_inv * (f.transpose() * l);
+    let v = b * &x - l;
+    let bn = b * &n_inv; // B N⁻¹ (n × u)
+    let dv = d - &bn * b.transpose();
+    let g = dinv * &v;
+    let statistic = v.dot(&g);
+    let fn_ = &f * &n_inv; // D⁻¹B N⁻¹
+    let n = v.len();
+    let w = DVector::from_fn(n, |i, _| {
+        // e_iᵀ D⁻¹ D_V D⁻¹ e_i = (D⁻¹)_ii − (D⁻¹B N⁻¹ BᵀD⁻¹)_ii
+        let q = dinv[(i, i)] - fn_.row(i).dot(&f.row(i));
+        if q > 1e-12 * dinv[(i, i)] {
+            g[i] / q.sqrt()
+        } else {
+            f64::NAN
+        }
+    });
+    Some(LsTest {
+        x,
+        v,
+        dv,
+        statistic,
+        w,
+    })
+}
+
+/// A measurement model the exclusion loop can solve on any subset of its observations.
+pub trait FdeModel {
+    /// Number of unknowns u.
+    fn unknowns(&self) -> usize;
+    /// Solve on the observations `idx` (with `D⁻¹` of that subset) and return `(B, l)`
+    /// linearised at the solution (so that `x̂ ≈ 0`); None when the geometry is singular or
+    /// the iteration does not converge. The solution is kept in the model.
+    fn solve(
+        &mut self,
+        idx: &[usize],
+        dinv: &DMatrix<f64>,
+        cfg: &FdeConfig,
+    ) -> Option<(DMatrix<f64>, DVector<f64>)>;
+    /// The current solution (u).
+    fn solution(&self) -> DVector<f64>;
+}
+
+/// Result of [`fde`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct FdeOutcome {
+    /// Solution (u), None when there is none.
+    pub solution: Option<DVector<f64>>,
+    /// Global-test statistic of the final set (NaN without a solution).
+    pub statistic: f64,
+    /// Its threshold (NaN without a solution).
+    pub threshold: f64,
+    /// Its degrees of freedom n − u (0 without a solution).
+    pub dof: usize,
+    /// Statistic, threshold and dof of the first global test (all observations); NaN / 0 when
+    /// there were too few observations to test.
+    pub first: (f64, f64, usize),
+    /// w per input observation from the final test (NaN for excluded ones and without a
+    /// solution).
+    pub w: Vec<f64>,
+    /// Excluded observations (indices into the inputs), in exclusion order.
+    pub excluded: Vec<usize>,
+    /// |w| of each excluded observation when it was excluded.
+    pub excluded_w: Vec<f64>,
+    /// How the loop ended.
+    pub status: FdeStatus,
+    /// Why, in words.
+    pub reason: String,
+}
+
+/// The exclusion loop over `n` observations with covariance `cov` (validated by the caller).
+/// `usable[i] = false` leaves an observation out from the start (it is not reported as
+/// excluded).
+pub fn fde<M: FdeModel>(
+    model: &mut M,
+    cov: &ObsCov,
+    usable: &[bool],
+    cfg: &FdeConfig,
+) -> Result<FdeOutcome> {
+    let n = usable.len();
+    let u = model.unknowns();
+    let mut active: Vec<usize> = (0..n).filter(|&i| usable[i]).collect();
+    let mut out = FdeOutcome {
+        solution: None,
+        statistic: f64::NAN,
+        threshold: f64::NAN,
+        dof: 0,
+        first: (f64::NAN, f64::NAN, 0),
+        w: vec![f64::NAN; n],
+        excluded: Vec::new(),
+        excluded_w: Vec::new(),
+        status: FdeStatus::NoSolution,
+        reason: String::new(),
+    };
+    loop {
+        if active.len() < u + 1 {
+            out.reason = format!(
+                "{} observation(s) left; at least u + 1 = {} are needed to solve and test",
+                active.len(),
+                u + 1
+            );
+            return Ok(out.no_solution(n));
+        }
+        let Some(dinv) = cov.inverse_sub(&active) else {
+            out.reason = "the covariance of the remaining observations is singular".into();
+            return Ok(out.no_solution(n));
+        };
+        let Some((b, l)) = model.solve(&active, &dinv, cfg) else {
+            out.reason = "singular geometry or no convergence".into();
+            return Ok(out.no_solution(n));
+        };
+        let d = cov.sub(&active);
+        let Some(test) = ls_test(&b, &l, &d, &dinv) else {
+            out.reason = "singular geometry".into();
+            return Ok(out.no_solution(n));
+        };
+        let dof = active.len() - u;
+        let threshold = cfg.threshold(dof)?;
+        if out.excluded.is_empty() {
+            out.first = (test.statistic, threshold, dof);
+        }
+        out.statistic = test.statistic;
+        out.threshold = threshold;
+        out.dof = dof;
+        out.w = vec![f64::NAN; n];
+        for (j, &i) in active.iter().enumerate() {
+            out.w[i] = test.w[j];
+        }
+        out.solution = Some(model.solution());
+        if test.statistic < threshold {
+            out.status = if out.excluded.is_empty() {
+                out.reason = "global test passed".into();
+                FdeStatus::Passed
+            } else {
+                out.reason = format!(
+                    "global test passed after excluding {} observation(s)",
+                    out.excluded.len()
+                );
+                FdeStatus::Excluded
+            };
+            return Ok(out);
+        }
+        // Largest |w| among the testable observations.
+        let worst = active
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| test.w[*j].is_finite())
+            .max_by(|a, b| test.w[a.0].abs().total_cmp(&test.w[b.0].abs()));
+        match worst {
+            Some((j, &i)) if test.w[j].abs() > cfg.k => {
+                out.excluded.push(i);
+                out.excluded_w.push(test.w[j].abs());
+                active.remove(j);
+            }
+            _ => {
+                out.status = FdeStatus::Unidentified;
+                out.reason = format!(
+                    "global test fails ({:.4} ≥ {:.4}) but no |w| exceeds K = {}",
+                    test.statistic, threshold, cfg.k
+                );
+                return Ok(out);
+            }
+        }
+    }
+}
+
+impl FdeOutcome {
+    fn no_solution(mut self, n: usize) -> Self {
+        self.solution = None;
+        self.statistic = f64::NAN;
+        self.threshold = f64::NAN;
+        self.dof = 0;
+        self.w = vec![f64::NAN; n];
+        self.status = FdeStatus::NoSolution;
+        self
+    }
+}
+
+/// Pseudoranges `ρ_i = |r_s,i − r| + b + ε_i` → ECEF position r (m) and clock bias b (m).
+#[derive(Debug, Clone)]
+pub struct PositionModel<'a> {
+    /// Satellite ECEF positions (m).
+    pub sat: &'a [Vector3<f64>],
+    /// Pseudoranges (m).
+    pub rho: &'a [f64],
+    /// Current estimate `[x, y, z, b]` (start value on entry).
+    pub x: [f64; 4],
+    x0: [f64; 4],
+}
+
+impl<'a> PositionModel<'a> {
+    /// A model starting from `x0 = [x, y, z, b]` (m).
+    pub fn new(sat: &'a [Vector3<f64>], rho: &'a [f64], x0: [f64; 4]) -> Self {
+        PositionModel {
+            sat,
+            rho,
+            x: x0,
+            x0,
+        }
+    }
+
+    fn linearise(&self, idx: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
+        let m = idx.len();
+        let r = Vector3::new(self.x[0], self.x[1], self.x[2]);
+        let mut b = DMatrix::zeros(m, 4);
+        let mut l = DVector::zeros(m);
+        for (j, &i) in idx.iter().enumerate() {
+            let d = self.sat[i] - r;
+            let range = d.norm();
+            for c in 0..3 {
+                b[(j, c)] = -d[c] / range;
+            }
+            b[(j, 3)] = 1.0;
+            l[j] = self.rho[i] - (range + self.x[3]);
+        }
+        (b, l)
+    }
+}
+
+impl FdeModel for PositionModel<'_> {
+    fn unknowns(&self) -> usize {
+        4
+    }
+
+    fn solve(
+        &mut self,
+        idx: &[usize],
+        dinv: &DMatrix<f64>,
+        cfg: &FdeConfig,
+    ) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        // Each subset starts from the caller's start value, so an exclusion does not inherit a
+        // solution pulled by the excluded observation.
+        self.x = self.x0;
+        for _ in 0..cfg.max_iterations {
+            let (b, l) = self.linearise(idx);
+            let f = dinv * &b;
+            let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
+            if !dx.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            for c in 0..4 {
+                self.x[c] += dx[c];
+            }
+            if dx.norm() < cfg.tolerance {
+                return Some(self.linearise(idx));
+            }
+        }
+        None
+    }
+
+    fn solution(&self) -> DVector<f64> {
+        DVector::from_row_slice(&self.x)
+    }
+}
+
+/// Pseudorange rates `ρ̇_i = u_iᵀ(v_s,i − v) + d + ε_i` → ECEF velocity v (m/s) and clock drift
+/// d (m/s), with `u_i` the unit line of sight from the receiver to satellite i.
+#[derive(Debug, Clone)]
+pub struct RateModel<'a> {
+    /// Unit lines of sight (ECEF).
+    pub los: &'a [Vector3<f64>],
+    /// Satellite ECEF velocities (m/s).
+    pub sat_vel: &'a [Vector3<f64>],
+    /// Pseudorange rates (m/s).
+    pub rate: &'a [f64],
+    x: DVector<f64>,
+}
+
+impl<'a> RateModel<'a> {
+    /// A rate model.
+    pub fn new(los: &'a [Vector3<f64>], sat_vel: &'a [Vector3<f64>], rate: &'a [f64]) -> Self {
+        RateModel {
+            los,
+            sat_vel,
+            rate,
+            x: DVector::zeros(4),
+        }
+    }
+}
+
+impl FdeModel for RateModel<'_> {
+    fn unknowns(&self) -> usize {
+        4
+    }
+
+    fn solve(
+        &mut self,
+        idx: &[usize],
+        dinv: &DMatrix<f64>,
+        _cfg: &FdeConfig,
+    ) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        let m = idx.len();
+        let mut b = DMatrix::zeros(m, 4);
+        let mut l = DVector::zeros(m);
+        for (j, &i) in idx.iter().enumerate() {
+            let u = &self.los[i];
+            for c in 0..3 {
+                b[(j, c)] = -u[c];
+            }
+            b[(j, 3)] = 1.0;
+            l[j] = self.rate[i] - u.dot(&self.sat_vel[i]);
+        }
+        let f = dinv * &b;
+        self.x = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
+        if !self.x.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let l0 = &l - &b * &self.x;
+        Some((b, l0))
+    }
+
+    fn solution(&self) -> DVector<f64> {
+        self.x.clone()
+    }
+}
+
+/// Result of [`snapshot_fde`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SnapshotResult {
+    /// ECEF position (m), None when there is no solution.
+    pub position: Option<Vector3<f64>>,
+    /// Receiver clock bias c·δt (m), None when there is no solution.
+    pub clock: Option<f64>,
+    /// The exclusion loop's outcome (statistic, threshold, dof, w, excluded, status, reason).
+    pub fde: FdeOutcome,
+}
+
+/// Snapshot position + clock with FDE from pseudoranges. `sat` (n) ECEF positions (m), `rho`
+/// (n) pseudoranges (m), `cov` σ (m) or a full covariance (m²), `x0` start `[x, y, z, b]`
+/// (default: the Earth's centre and zero clock). Inputs are validated.
+pub fn snapshot_fde(
+    sat: &[Vector3<f64>],
+    rho: &[f64],
+    cov: &ObsCov,
+    cfg: &FdeConfig,
+    x0: Option<[f64; 4]>,
+) -> Result<SnapshotResult> {
+    let n = rho.len();
+    if sat.len() != n {
+        return Err(Error::Shape {
+            name: "sat_pos".into(),
+            expected: format!("({n}, 3) to match pseudoranges ({n},)"),
+            got: format!("({}, 3)", sat.len()),
+        });
+    }
+    if let Some((i, s)) = sat
+        .iter()
+        .enumerate()
+        .find(|(_, s)| !s.iter().all(|v| v.is_finite()))
+    {
+        return Err(Error::NonFinite {
+            name: "sat_pos".into(),
+            index: format!("[{i}]"),
+            value: s
+                .iter()
+                .copied()
+                .find(|v| !v.is_finite())
+                .unwrap_or(f64::NAN),
+        });
+    }
+    if let Some((i, v)) = rho.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            name: "pseudoranges".into(),
+            index: format!("[{i}]"),
+            value: *v,
+        });
+    }
+    cov.validate("sigma", n)?;
+    let x0 = x0.unwrap_or([0.0; 4]);
+    if let Some(v) = x0.iter().find(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            name: "x0".into(),
+            index: "[..]".into(),
+            value: *v,
+        });
+    }
+    let mut model = PositionModel::new(sat, rho, x0);
+    let out = fde(&mut model, cov, &vec![true; n], cfg)?;
+    let (position, clock) = match &out.solution {
+        Some(s) => (Some(Vector3::new(s[0], s[1], s[2])), Some(s[3])),
+        None => (None, None),
+    };
+    Ok(SnapshotResult {
+        position,
+        clock,
+        fde: out,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gnss::constellation::gps;
+    use crate::gnss::geodesy::{elevation_azimuth, lla_to_ecef};
+
+    fn scene(t: f64) -> (Vector3<f64>, Vec<Vector3<f64>>) {
+        let (lat, lon) = (0.6, 1.9);
+        let rx = lla_to_ecef(lat, lon, 50.0);
+        let sats: Vec<_> = gps()
+            .iter()
+            .map(|o| o.ecef(t).0)
+            .filter(|s| elevation_azimuth(&rx, lat, lon, s).0 > 10f64.to_radians())
+            .collect();
+        (rx, sats)
+    }
+
+    #[test]
+    fn exact_ranges_give_the_position_and_pass() {
+        let (rx, sats) = scene(0.0);
+        assert!(sats.len() >= 6, "{}", sats.len());
+        let rho: Vec<f64> = sats.iter().map(|s| (s - rx).norm() + 1234.5).collect();
+        let cfg = FdeConfig::new(0.05, None).unwrap();
+        let r = snapshot_fde(
+            &sats,
+            &rho,
+            &ObsCov::Sigma(vec![3.0; sats.len()]),
+            &cfg,
+            None,
+        )
+        .unwrap();
+        assert_eq!(r.fde.status, FdeStatus::Passed);
+        assert!((r.position.unwrap() - rx).norm() < 1e-3);
+        assert!((r.clock.unwrap() - 1234.5).abs() < 1e-3);
+        assert!(r.fde.statistic < 1e-6);
+        assert_eq!(r.fde.dof, sats.len() - 4);
+    }
+
+    #[test]
+    fn a_large_fault_is_excluded_and_too_few_is_no_solution() {
+        let (rx, sats) = scene(3000.0);
+        let n = sats.len();
+        let mut rho: Vec<f64> = sats.iter().map(|s| (s - rx).norm()).collect();
+        rho[2] += 100.0;
+        let cfg = FdeConfig::new(0.05, None).unwrap();
+        let r = snapshot_fde(&sats, &rho, &ObsCov::Sigma(vec![1.0; n]), &cfg, None).unwrap();
+        assert_eq!(r.fde.excluded, vec![2]);
+        assert_eq!(r.fde.status, FdeStatus::Excluded);
+        assert!(r.fde.w[2].is_nan());
+        let r = snapshot_fde(
+            &sats[..4],
+            &rho[..4],
+            &ObsCov::Sigma(vec![1.0; 4]),
+            &cfg,
+            None,
+        )
+        .unwrap();
+        assert_eq!(r.fde.status, FdeStatus::NoSolution);
+        assert!(r.position.is_none());
+    }
+
+    #[test]
+    fn bad_inputs_are_named() {
+        let cfg = FdeConfig::new(0.05, None).unwrap();
+        let sats = vec![Vector3::new(2e7, 0.0, 0.0); 3];
+        let e =
+            snapshot_fde(&sats, &[1.0, 2.0], &ObsCov::Sigma(vec![1.0; 2]), &cfg, None).unwrap_err();
+        assert!(e.to_string().contains("sat_pos"), "{e}");
+        let e = snapshot_fde(
+            &sats,
+            &[1.0, 2.0, f64::NAN],
+            &ObsCov::Sigma(vec![1.0; 3]),
+            &cfg,
+            None,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("pseudoranges"), "{e}");
+        let e = snapshot_fde(
+            &sats,
+            &[1.0; 3],
+            &ObsCov::Sigma(vec![1.0, -1.0, 1.0]),
+            &cfg,
+            None,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("sigma[1]"), "{e}");
+        assert!(FdeConfig::new(1.5, None).is_err());
+        assert!(FdeConfig::new(0.05, Some(-1.0)).is_err());
+        assert!((two_sided_quantile(0.1).unwrap() - 1.6449).abs() < 1e-4);
+    }
+}

@@ -1,0 +1,228 @@
+//! GNSS bindings: snapshot least squares with fault detection and exclusion.
+
+use crate::convert::{read, to_numpy};
+use crate::errors::IntoPyResult;
+use nalgebra::Vector3;
+use navfdi_core::gnss::snapshot::{self, FdeConfig, ObsCov};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+/// Result of :func:`snapshot_fde` (one epoch).
+#[pyclass(name = "SnapshotFde", module = "navfdi._core", frozen)]
+pub struct PySnapshotFde {
+    inner: snapshot::SnapshotResult,
+}
+
+#[pymethods]
+impl PySnapshotFde {
+    /// ECEF position (3,) in m, or None when there is no solution (``status == "no_solution"``).
+    #[getter]
+    fn position<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        self.inner
+            .position
+            .map(|p| to_numpy(py, vec![p.x, p.y, p.z], &[3]).map(|a| a.into_any()))
+            .transpose()
+    }
+
+    /// Receiver clock bias c·δt in m, or None without a solution.
+    #[getter]
+    fn clock(&self) -> Option<f64> {
+        self.inner.clock
+    }
+
+    /// Global-test statistic VᵀD⁻¹V of the final set of satellites (NaN without a solution).
+    #[getter]
+    fn statistic(&self) -> f64 {
+        self.inner.fde.statistic
+    }
+
+    /// Its threshold: the 1 − alpha quantile of χ²(dof) (NaN without a solution).
+    #[getter]
+    fn threshold(&self) -> f64 {
+        self.inner.fde.threshold
+    }
+
+    /// Degrees of freedom n − 4 of the final set (0 without a solution).
+    #[getter]
+    fn dof(&self) -> usize {
+        self.inner.fde.dof
+    }
+
+    /// ``(statistic, threshold, dof)`` of the first global test, on all satellites.
+    #[getter]
+    fn first_test(&self) -> (f64, f64, usize) {
+        self.inner.fde.first
+    }
+
+    /// w-test statistic per input satellite (n,) from the final set; NaN for excluded
+    /// satellites, satellites without redundancy and without a solution.
+    #[getter]
+    fn w<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.inner.fde.w.len();
+        Ok(to_numpy(py, self.inner.fde.w.clone(), &[n])?.into_any())
+    }
+
+    /// Excluded satellites: indices into the inputs, in exclusion order.
+    #[getter]
+    fn excluded(&self) -> Vec<usize> {
+        self.inner.fde.excluded.clone()
+    }
+
+    /// |w| of each excluded satellite when it was excluded (same order as ``excluded``).
+    #[getter]
+    fn excluded_w(&self) -> Vec<f64> {
+        self.inner.fde.excluded_w.clone()
+    }
+
+    /// ``"passed"``, ``"excluded"``, ``"unidentified"`` (the global test fails but no |w|
+    /// exceeds k) or ``"no_solution"``.
+    #[getter]
+    fn status(&self) -> &'static str {
+        self.inner.fde.status.as_str()
+    }
+
+    /// Why the exclusion loop stopped, in words.
+    #[getter]
+    fn reason(&self) -> String {
+        self.inner.fde.reason.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "SnapshotFde(status={:?}, excluded={:?}, statistic={:.4}, threshold={:.4}, dof={})",
+            self.status(),
+            self.inner.fde.excluded,
+            self.inner.fde.statistic,
+            self.inner.fde.threshold,
+            self.inner.fde.dof
+        )
+    }
+}
+
+/// Snapshot least-squares position and clock from pseudoranges with fault detection and
+/// exclusion (global chi-square test + Baarda w-test, iterative exclusion; METHODS §10).
+///
+/// `sat_pos` (n, 3) ECEF in m; `pseudoranges` (n,) m; `sigma` (n,) standard deviations in m
+/// or a full (n, n) covariance in m²; `alpha` false-alarm probability of the global test;
+/// `k` w-test critical value (default: the two-sided normal quantile of `alpha`);
+/// `x0` start value `[x, y, z]` or `[x, y, z, clock]` in m (default: the Earth's centre).
+#[pyfunction]
+#[pyo3(signature = (sat_pos, pseudoranges, sigma, alpha = 0.05, k = None, x0 = None))]
+pub fn snapshot_fde(
+    py: Python<'_>,
+    sat_pos: &Bound<'_, PyAny>,
+    pseudoranges: &Bound<'_, PyAny>,
+    sigma: &Bound<'_, PyAny>,
+    alpha: f64,
+    k: Option<f64>,
+    x0: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PySnapshotFde> {
+    let sp = read("sat_pos", sat_pos)?;
+    if sp.shape.len() != 2 || sp.shape[1] != 3 {
+        return Err(PyValueError::new_err(format!(
+            "sat_pos: expected shape (n, 3) (ECEF x, y, z in m), got {}",
+            navfdi_core::validate::shape_str(&sp.shape)
+        )));
+    }
+    let n = sp.shape[0];
+    if n == 0 {
+        return Err(PyValueError::new_err("sat_pos: no satellites given"));
+    }
+    let sats: Vec<Vector3<f64>> = sp
+        .data
+        .chunks(3)
+        .map(|c| Vector3::new(c[0], c[1], c[2]))
+        .collect();
+    let rho = crate::convert::vector("pseudoranges", pseudoranges, Some(n))?;
+    let s = read("sigma", sigma)?;
+    let cov = match s.shape.len() {
+        1 if s.shape[0] == n => ObsCov::Sigma(s.data),
+        2 if s.shape == [n, n] => ObsCov::Full(navfdi_core::linalg::from_row_major(n, n, &s.data)),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "sigma: expected shape ({n},) (standard deviations, m) or ({n}, {n}) (covariance, m²), got {}",
+                navfdi_core::validate::shape_str(&s.shape)
+            )))
+        }
+    };
+    let x0 = match x0 {
+        None => None,
+        Some(o) => {
+            let v = read("x0", o)?;
+            match v.data.len() {
+                3 if v.shape.len() == 1 => Some([v.data[0], v.data[1], v.data[2], 0.0]),
+                4 if v.shape.len() == 1 => Some([v.data[0], v.data[1], v.data[2], v.data[3]]),
+                _ => return Err(PyValueError::new_err(format!(
+                    "x0: expected shape (3,) or (4,) ([x, y, z] or [x, y, z, clock] in m), got {}",
+                    navfdi_core::validate::shape_str(&v.shape)
+                ))),
+            }
+        }
+    };
+    let cfg = FdeConfig::new(alpha, k).py()?;
+    let rho = rho.as_slice().to_vec();
+    let inner = py
+        .detach(move || snapshot::snapshot_fde(&sats, &rho, &cov, &cfg, x0))
+        .py()?;
+    Ok(PySnapshotFde { inner })
+}
+
+/// The linear test of METHODS §10 on a given model `l = B x + ε`, `ε ~ N(0, D)`: `B` (n, u),
+/// `l` (n,), `D` (n, n) symmetric positive definite (or (n,) standard deviations). Returns a
+/// dict: ``x`` (u,) estimate, ``v`` (n,) residuals `B x̂ − l`, ``dv`` (n, n) their covariance
+/// `D − B(BᵀD⁻¹B)⁻¹Bᵀ`, ``statistic`` `VᵀD⁻¹V`, ``dof`` n − u and ``w`` (n,) the general w-test
+/// `e_iᵀD⁻¹V / sqrt(e_iᵀD⁻¹D_VD⁻¹e_i)` (NaN where an observation has no redundancy).
+#[pyfunction]
+#[pyo3(name = "ls_test")]
+pub fn py_ls_test<'py>(
+    py: Python<'py>,
+    b: &Bound<'py, PyAny>,
+    l: &Bound<'py, PyAny>,
+    d: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let bm = crate::convert::matrix("B", b)?;
+    let (n, u) = bm.shape();
+    if n <= u || u == 0 {
+        return Err(PyValueError::new_err(format!(
+            "B: expected shape (n, u) with n > u >= 1 (more observations than unknowns), got ({n}, {u})"
+        )));
+    }
+    navfdi_core::validate::check_finite_matrix("B", &bm).py()?;
+    let lv = crate::convert::vector("l", l, Some(n))?;
+    navfdi_core::validate::check_finite_vector("l", &lv).py()?;
+    let s = read("D", d)?;
+    let cov = match s.shape.len() {
+        1 if s.shape[0] == n => ObsCov::Sigma(s.data),
+        2 if s.shape == [n, n] => ObsCov::Full(navfdi_core::linalg::from_row_major(n, n, &s.data)),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "D: expected shape ({n}, {n}) (covariance) or ({n},) (standard deviations), got {}",
+                navfdi_core::validate::shape_str(&s.shape)
+            )))
+        }
+    };
+    cov.validate("D", n).py()?;
+    let dm = match &cov {
+        ObsCov::Sigma(s) => nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
+            n,
+            s.iter().map(|v| v * v),
+        )),
+        ObsCov::Full(m) => m.clone(),
+    };
+    let dinv = nalgebra::Cholesky::new(dm.clone())
+        .map(|c| c.inverse())
+        .ok_or_else(|| PyValueError::new_err("D: not positive definite"))?;
+    let t = snapshot::ls_test(&bm, &lv, &dm, &dinv).ok_or_else(|| {
+        crate::errors::LinAlgError::new_err(
+            "B: BᵀD⁻¹B is singular (the unknowns are not determined by the observations)",
+        )
+    })?;
+    let out = pyo3::types::PyDict::new(py);
+    out.set_item("x", crate::convert::vector_to_numpy(py, &t.x)?)?;
+    out.set_item("v", crate::convert::vector_to_numpy(py, &t.v)?)?;
+    out.set_item("dv", crate::convert::matrix_to_numpy(py, &t.dv)?)?;
+    out.set_item("statistic", t.statistic)?;
+    out.set_item("dof", n - u)?;
+    out.set_item("w", crate::convert::vector_to_numpy(py, &t.w)?)?;
+    Ok(out)
+}
