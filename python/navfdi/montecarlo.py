@@ -46,6 +46,14 @@ RUN_COLUMNS = [
     "false_alarm_epochs",
     "outside_epochs",
     "wrong_isolations",
+    "fde_faulty_epochs",
+    "fde_detected_epochs",
+    "fde_exclusion_epochs",
+    "fde_exact_epochs",
+    "fde_after_epochs",
+    "fde_after_alarm_epochs",
+    "fde_outside_epochs",
+    "fde_false_exclusions",
     "att_rms",
     "att_max",
     "pos_rms",
@@ -54,6 +62,10 @@ RUN_COLUMNS = [
     "lat_max",
 ]
 
+
+#: Satellite-FDE counts per run and cell (tight architecture; zero otherwise), see
+#: ``navfdi_core::sim::metrics::SatFaultMetrics``.
+FDE_COUNTS = [c for c in RUN_COLUMNS if c.startswith("fde_")]
 
 #: Figures of :meth:`Campaign.summary` after the key columns and ``runs``.
 SUMMARY_FIGURES = [
@@ -68,6 +80,10 @@ SUMMARY_FIGURES = [
     "false_alarm_ci_low",
     "false_alarm_ci_high",
     "wrong_isolations",
+    "detection_rate",
+    "identification_rate",
+    "false_exclusion_rate",
+    "after_fault_alarm_rate",
     "error_rms",
     "position_error_rms",
     "latitude_error_rms",
@@ -190,6 +206,13 @@ class Campaign:
         ``false_alarm_rate, false_alarm_ci_low, false_alarm_ci_high`` (per epoch outside the
         faults; Wilson 95 % treating epochs as independent trials, which understates the
         interval for detectors with memory such as the SPRT), ``wrong_isolations`` (per run),
+        satellite FDE (tight architecture, pooled over runs; NaN elsewhere):
+        ``detection_rate`` (faulty epochs with the faulty satellite excluded / faulty epochs
+        with it in view), ``identification_rate`` (epochs with exactly it excluded / epochs
+        with any exclusion in the window), ``false_exclusion_rate`` (satellites excluded per
+        epoch outside faults and their 50-epoch after-windows; ``none`` rows),
+        ``after_fault_alarm_rate`` (epochs with any exclusion among the 50 measured epochs after
+        the fault ends),
         ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
         ``position_error_rms`` (m), ``latitude_error_rms`` (north position, m), ``runs_requested`` and ``partial`` (True where the point
         has fewer finished runs than requested: an interrupted campaign). Fault rows carry NaN
@@ -241,6 +264,12 @@ class Campaign:
                     false_alarm_ci_high=float(hi[0]),
                     wrong_isolations=float(g["wrong_isolations"].mean()),
                 )
+            sums = {k: int(g[k].sum()) for k in FDE_COUNTS}
+            ratio = lambda a, b: a / b if b else math.nan  # noqa: E731
+            rec["detection_rate"] = ratio(sums["fde_detected_epochs"], sums["fde_faulty_epochs"])
+            rec["identification_rate"] = ratio(sums["fde_exact_epochs"], sums["fde_exclusion_epochs"])
+            rec["after_fault_alarm_rate"] = ratio(sums["fde_after_alarm_epochs"], sums["fde_after_epochs"])
+            rec["false_exclusion_rate"] = ratio(sums["fde_false_exclusions"], sums["fde_outside_epochs"])
             rec["error_rms"] = float(np.sqrt(np.mean(g["att_rms"].to_numpy() ** 2)))
             rec["position_error_rms"] = float(np.sqrt(np.mean(g["pos_rms"].to_numpy() ** 2)))
             rec["latitude_error_rms"] = float(np.sqrt(np.mean(g["lat_rms"].to_numpy() ** 2)))
@@ -344,7 +373,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             "fault_id": np.tile(fid, n),
             "pf": np.tile(pf.astype(float), n),
         }
-        for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations"):
+        for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
             cols[k] = ch[k].reshape(-1)
         for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max"):
             cols[k] = np.repeat(ch[k], c)

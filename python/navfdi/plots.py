@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,11 +47,13 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
             if np.any(iso):
                 by = _isolating_detector(run, sub)
                 label = f"{sub} isolated (by {by})" if by else f"{sub} isolated"
+                if run.scenario.core.get("architecture") == "tight":
+                    label = f"a satellite excluded (by {by})" if by else "a satellite excluded"
                 ax.fill_between(t, 0, 0.04, where=iso, color="tab:orange", step="mid", label=label, transform=ax.get_xaxis_transform())
             ax.set_ylim(1e-3, max(1e2, np.nanmax(stat) * 2))
             ax.set_xlabel("time [s]")
             ax.set_ylabel("statistic")
-            what = "sub-filter" if run.scenario.core.get("architecture", "federated") == "federated" else "sensor"
+            what = {"federated": "sub-filter", "tight": "satellites"}.get(run.scenario.core.get("architecture", "federated"), "sensor")
             var = f", variant {run.variant}" if prefix else ""
             ax.set_title(f"{run.scenario.name}{var}: {sub} {what}, detector {d['name']} (seed {run.seed}); faults shaded")
             ax.legend(loc="upper left", fontsize=8, ncol=4)
@@ -112,6 +114,8 @@ def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
     """Name of the detector whose alarm isolates (federated) or excludes (centralized) the
     channel of sensor ``sub`` (None if none does)."""
     core = run.scenario.core
+    if core.get("architecture") == "tight":
+        return None if core["tight"]["fde"] == "none" else f"{core['tight']['fde']} FDE"
     if core.get("architecture", "federated") == "centralized":
         for cs in core["centralized"]["sensors"]:
             if cs["sensor"] == sub:
@@ -262,3 +266,40 @@ def _runs_label(campaign) -> str:
     else:
         text = f"runs per point {', '.join(map(str, per_point))}"
     return text + (", PARTIAL" if campaign.partial else "")
+
+
+def plot_identified_satellites(runs: Any, out: Path) -> list[Path]:
+    """``identified_satellites.png``: per variant of a tight-architecture run, the satellites
+    excluded at each epoch (like paper 001's Fig. 3–8), fault windows shaded and the faulty
+    satellite's row marked. Nothing is written without satellite records."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    items = [(name, r) for name, r in runs.runs.items() if "satellites" in r.record]
+    if not items:
+        return []
+    first = items[0][1]
+    names = first.record["satellites"]["names"]
+    seen = np.flatnonzero(np.any([r.record["satellites"]["in_view"].any(axis=0) for _, r in items], axis=0))
+    row = {j: i for i, j in enumerate(seen)}
+    faults = [f for f in first.scenario.faults() if f.get("satellite")]
+    fig, axes = plt.subplots(len(items), 1, figsize=(9, 1.2 + 2.4 * len(items)), sharex=True, constrained_layout=True, squeeze=False)
+    for ax, (name, r) in zip(axes[:, 0], items):
+        sat = r.record["satellites"]
+        k, j = np.nonzero(sat["excluded"])
+        for f in faults:
+            ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+            if f["satellite"] in names and names.index(f["satellite"]) in row:
+                ax.axhline(row[names.index(f["satellite"])], color="tab:red", lw=0.5, ls=":")
+        ax.scatter(r.t[k], [row[x] for x in j], s=5, color="k")
+        ax.set_yticks(range(len(seen)), [names[x] for x in seen], fontsize=7)
+        ax.set_ylim(-0.5, len(seen) - 0.5)
+        ax.set_ylabel("excluded")
+        ax.set_title(f"{first.scenario.name}, variant {name} (seed {r.seed}): satellites excluded per epoch; faults shaded", fontsize=9)
+    axes[-1, 0].set_xlabel("time [s]")
+    p = out / "identified_satellites.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return [p]

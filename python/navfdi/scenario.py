@@ -37,7 +37,51 @@ SENSOR_COMPONENTS: dict[str, list[tuple[str, str]]] = {
     "gnss_velocity": [("vel_e", "velocity"), ("vel_n", "velocity"), ("vel_u", "velocity")],
     "baro": [("h", "length")],
     "vision": [("pos_e", "length"), ("pos_n", "length"), ("pos_u", "length")],
+    "gnss_ranges": [("pseudorange", "length"), ("rate", "velocity")],
 }
+
+_CLOCK = {"bias": "length", "drift": "velocity", "bias_psd": "length2_per_time", "drift_psd": "length2_per_time3"}
+
+
+def _ranges(r: Any, p: str) -> dict[str, Any]:
+    """The ``ranges`` table of a ``gnss_ranges`` sensor at path ``p``."""
+    _check_keys(r, {"systems", "elevation_mask", "elevation_noise", "epoch", "clock"}, p)
+    systems = []
+    for j, sys_ in enumerate(_list(r.get("systems", ["gps"]), f"{p}.systems")):
+        name = _str(sys_, f"{p}.systems[{j}]")
+        if name not in ("gps", "galileo"):
+            raise ScenarioError(f"{p}.systems[{j}] = {name!r}: use gps or galileo")
+        systems.append(name)
+    en = r.get("elevation_noise", False)
+    if not isinstance(en, bool):
+        raise ScenarioError(f"{p}.elevation_noise = {en!r}: expected true or false")
+    clock = _need(r, "clock", p)
+    _check_keys(clock, set(_CLOCK), f"{p}.clock")
+    return {
+        "systems": systems,
+        "elevation_mask": _unit(_need(r, "elevation_mask", p), "angle", f"{p}.elevation_mask"),
+        "elevation_noise": en,
+        "epoch": _unit(r.get("epoch", "0 s"), "time", f"{p}.epoch"),
+        "clock": {k: _unit(_need(clock, k, f"{p}.clock"), dim, f"{p}.clock.{k}") for k, dim in _CLOCK.items()},
+    }
+
+
+def _tight(t: Any) -> dict[str, Any]:
+    """The ``[tight]`` table."""
+    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates"}, "tight")
+    fde = _str(_need(t, "fde", "tight"), "tight.fde")
+    if fde not in ("ls_precheck", "innovation", "none"):
+        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation or none")
+    rates = t.get("rates", True)
+    if not isinstance(rates, bool):
+        raise ScenarioError(f"tight.rates = {rates!r}: expected true or false")
+    return {
+        "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
+        "fde": fde,
+        "alpha": _number(_need(t, "alpha", "tight"), "tight.alpha"),
+        "k": None if t.get("k") is None else _number(t["k"], "tight.k"),
+        "rates": rates,
+    }
 
 _SEGMENTS: dict[str, dict[str, str]] = {
     "stationary": {"duration": "time"},
@@ -158,7 +202,7 @@ def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
 
 
 #: Top-level fields a variant may override: the filter, never what is simulated.
-VARIANT_FIELDS = ("architecture", "federated", "centralized")
+VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight")
 
 
 def _centralized(c: Any) -> dict[str, Any]:
@@ -189,7 +233,7 @@ def _centralized(c: Any) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -236,7 +280,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     kinds: dict[str, str] = {}
     for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
         p = f"sensors[{i}]"
-        _check_keys(s, {"name", "kind", "noise", "rate", "outages"}, p)
+        _check_keys(s, {"name", "kind", "noise", "rate", "outages", "ranges"}, p)
         name = _name(_need(s, "name", p), f"{p}.name")
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in SENSOR_COMPONENTS:
@@ -261,7 +305,12 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             if len(w) != 2:
                 raise ScenarioError(f"{p}.outages[{j}]: expected [start, end], got {w!r}")
             outages.append([_unit(w[0], "time", f"{p}.outages[{j}][0]"), _unit(w[1], "time", f"{p}.outages[{j}][1]")])
-        sensors.append({"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages})
+        entry: dict[str, Any] = {"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages}
+        if kind == "gnss_ranges":
+            entry["ranges"] = _ranges(_need(s, "ranges", p), f"{p}.ranges")
+        elif "ranges" in s:
+            raise ScenarioError(f"{p}.ranges: only a gnss_ranges sensor has satellites (this one is {kind})")
+        sensors.append(entry)
         noise_si[name] = ns
         kinds[name] = kind
     core["sensors"] = sensors
@@ -269,7 +318,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     faults = []
     for i, f in enumerate(_list(raw.get("faults", []), "faults")):
         p = f"faults[{i}]"
-        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end"}, p)
+        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end", "satellite"}, p)
         sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
         if sensor not in kinds:
             raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(repr(k) for k in kinds)})")
@@ -314,8 +363,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             if base not in UNITS[dim]:
                 raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {dim} (use one of: {', '.join(UNITS[dim])}, or sigma)")
             magnitude = number * UNITS[dim][base]
-        faults.append(
-            {
+        fault: dict[str, Any] = {
                 "id": _name(_need(f, "id", p), f"{p}.id"),
                 "sensor": sensor,
                 "components": idx,
@@ -323,23 +371,26 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
                 "magnitude": magnitude,
                 "start": _unit(_need(f, "start", p), "time", f"{p}.start"),
                 "end": _unit(_need(f, "end", p), "time", f"{p}.end"),
-            }
-        )
+        }
+        if "satellite" in f:
+            fault["satellite"] = _name(f["satellite"], f"{p}.satellite")
+        faults.append(fault)
     core["faults"] = faults
 
     arch = _str(raw.get("architecture", "federated"), "architecture")
-    if arch not in ("federated", "centralized"):
-        raise ScenarioError(f"architecture = {arch!r}: use federated or centralized")
+    if arch not in ("federated", "centralized", "tight"):
+        raise ScenarioError(f"architecture = {arch!r}: use federated, centralized or tight")
     core["architecture"] = arch
     _variants(raw)
+    for other in ("federated", "centralized", "tight"):
+        if other != arch and other in raw:
+            raise ScenarioError(f"{other}: given, but architecture is {arch!r} (remove it, or set architecture = {other!r})")
+    if arch == "tight":
+        core["tight"] = _tight(_need(raw, "tight", ""))
+        return core
     if arch == "centralized":
-        for other in ("federated",):
-            if other in raw:
-                raise ScenarioError(f"{other}: given, but architecture is 'centralized' (remove it, or set architecture = 'federated')")
         core["centralized"] = _centralized(_need(raw, "centralized", ""))
         return core
-    if "centralized" in raw:
-        raise ScenarioError("centralized: given, but architecture is 'federated' (set architecture = 'centralized' or remove it)")
     fed = _need(raw, "federated", "")
     _check_keys(fed, {"mode", "master_share", "subfilters", "isolated", "isolate"}, "federated")
     mode = _str(_need(fed, "mode", "federated"), "federated.mode")

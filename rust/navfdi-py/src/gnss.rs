@@ -152,10 +152,12 @@ pub fn snapshot_fde(
             match v.data.len() {
                 3 if v.shape.len() == 1 => Some([v.data[0], v.data[1], v.data[2], 0.0]),
                 4 if v.shape.len() == 1 => Some([v.data[0], v.data[1], v.data[2], v.data[3]]),
-                _ => return Err(PyValueError::new_err(format!(
+                _ => {
+                    return Err(PyValueError::new_err(format!(
                     "x0: expected shape (3,) or (4,) ([x, y, z] or [x, y, z, clock] in m), got {}",
                     navfdi_core::validate::shape_str(&v.shape)
-                ))),
+                )))
+                }
             }
         }
     };

@@ -118,6 +118,21 @@ impl PyPreparedScenario {
             "wrong_isolations",
             to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?,
         )?;
+        for (key, f) in [
+            (
+                "fde_faulty_epochs",
+                (|m| m.sat.faulty_epochs) as fn(&navfdi_core::sim::montecarlo::CellMetrics) -> u32,
+            ),
+            ("fde_detected_epochs", |m| m.sat.detected_epochs),
+            ("fde_exclusion_epochs", |m| m.sat.exclusion_epochs),
+            ("fde_exact_epochs", |m| m.sat.exact_epochs),
+            ("fde_after_epochs", |m| m.sat.after_epochs),
+            ("fde_after_alarm_epochs", |m| m.sat.after_alarm_epochs),
+            ("fde_outside_epochs", |m| m.sat.outside_epochs),
+            ("fde_false_exclusions", |m| m.sat.false_exclusions),
+        ] {
+            d.set_item(key, to_numpy(py, grid_i(&|m| f(m) as i64), &[n, c])?)?;
+        }
         d.set_item(
             "att_rms",
             to_numpy(py, rows.iter().map(|r| r.att_rms).collect(), &[n])?,

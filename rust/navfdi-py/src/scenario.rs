@@ -88,6 +88,33 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         subs.append(sd)?;
     }
     d.set_item("subfilters", subs)?;
+    if let Some(sr) = rec.sats {
+        let n = sr.names.len();
+        let sd = PyDict::new(py);
+        sd.set_item("names", sr.names)?;
+        sd.set_item("in_view", to_numpy(py, sr.in_view, &[t, n])?)?;
+        sd.set_item("excluded", to_numpy(py, sr.excluded, &[t, n])?)?;
+        sd.set_item("w", to_numpy(py, sr.w, &[t, n])?)?;
+        sd.set_item("status", to_numpy(py, sr.status, &[t])?)?;
+        sd.set_item("status_names", navfdi_core::sim::run::SAT_STATUS.to_vec())?;
+        sd.set_item("used", to_numpy(py, sr.used, &[t])?)?;
+        let ms = PyList::empty(py);
+        for m in sr.metrics {
+            let md = PyDict::new(py);
+            md.set_item("fault", m.fault)?;
+            md.set_item("faulty_epochs", m.faulty_epochs)?;
+            md.set_item("detected_epochs", m.detected_epochs)?;
+            md.set_item("exclusion_epochs", m.exclusion_epochs)?;
+            md.set_item("exact_epochs", m.exact_epochs)?;
+            md.set_item("after_epochs", m.after_epochs)?;
+            md.set_item("after_alarm_epochs", m.after_alarm_epochs)?;
+            md.set_item("outside_epochs", m.outside_epochs)?;
+            md.set_item("false_exclusions", m.false_exclusions)?;
+            ms.append(md)?;
+        }
+        sd.set_item("metrics", ms)?;
+        d.set_item("satellites", sd)?;
+    }
     Ok(d)
 }
 

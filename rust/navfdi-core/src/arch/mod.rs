@@ -5,3 +5,4 @@
 //! [`crate::sim::run::run_federated`].
 
 pub mod centralized;
+pub mod tight;

@@ -10,6 +10,7 @@
 
 pub mod constellation;
 pub mod geodesy;
+pub mod ranges;
 pub mod snapshot;
 
 /// Speed of light in vacuum (m/s).

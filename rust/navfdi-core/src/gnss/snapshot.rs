@@ -312,11 +312,14 @@ pub struct FdeOutcome {
 
 /// The exclusion loop over `n` observations with covariance `cov` (validated by the caller).
 /// `usable[i] = false` leaves an observation out from the start (it is not reported as
-/// excluded).
+/// excluded). `groups[i]` (optional) names the satellite of observation i: excluding an
+/// observation then excludes every observation of its group (its pseudorange and its rate);
+/// `excluded` lists the observation chosen by the w-test.
 pub fn fde<M: FdeModel>(
     model: &mut M,
     cov: &ObsCov,
     usable: &[bool],
+    groups: Option<&[usize]>,
     cfg: &FdeConfig,
 ) -> Result<FdeOutcome> {
     let n = usable.len();
@@ -392,7 +395,12 @@ pub fn fde<M: FdeModel>(
             Some((j, &i)) if test.w[j].abs() > cfg.k => {
                 out.excluded.push(i);
                 out.excluded_w.push(test.w[j].abs());
-                active.remove(j);
+                match groups {
+                    Some(g) => active.retain(|&a| g[a] != g[i]),
+                    None => {
+                        active.remove(j);
+                    }
+                }
             }
             _ => {
                 out.status = FdeStatus::Unidentified;
@@ -556,6 +564,59 @@ impl FdeModel for RateModel<'_> {
     }
 }
 
+/// Pseudoranges and rates of the same m satellites together (observations `0..m`
+/// pseudoranges, `m..2m` rates; u = 8: position, clock bias, velocity, clock drift), so one
+/// global test covers both observables, as the filter's innovation test does. The two blocks
+/// are independent (`D` block-diagonal); each is solved by its own model.
+#[derive(Debug, Clone)]
+pub struct StackedModel<'a> {
+    /// Pseudorange part.
+    pub position: PositionModel<'a>,
+    /// Rate part (lines of sight from the true geometry).
+    pub rate: RateModel<'a>,
+}
+
+impl FdeModel for StackedModel<'_> {
+    fn unknowns(&self) -> usize {
+        8
+    }
+
+    fn solve(
+        &mut self,
+        idx: &[usize],
+        dinv: &DMatrix<f64>,
+        cfg: &FdeConfig,
+    ) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        let m = self.position.rho.len();
+        let split = idx.iter().position(|&i| i >= m).unwrap_or(idx.len());
+        let (ip, ir): (Vec<usize>, Vec<usize>) = (
+            idx[..split].to_vec(),
+            idx[split..].iter().map(|i| i - m).collect(),
+        );
+        if ip.len() < 4 || ir.len() < 4 {
+            return None;
+        }
+        let dp = dinv.view((0, 0), (split, split)).into_owned();
+        let dr = dinv.view((split, split), (ir.len(), ir.len())).into_owned();
+        let (bp, lp) = self.position.solve(&ip, &dp, cfg)?;
+        let (br, lr) = self.rate.solve(&ir, &dr, cfg)?;
+        let mut b = DMatrix::zeros(idx.len(), 8);
+        b.view_mut((0, 0), (split, 4)).copy_from(&bp);
+        b.view_mut((split, 4), (ir.len(), 4)).copy_from(&br);
+        let mut l = DVector::zeros(idx.len());
+        l.rows_mut(0, split).copy_from(&lp);
+        l.rows_mut(split, ir.len()).copy_from(&lr);
+        Some((b, l))
+    }
+
+    fn solution(&self) -> DVector<f64> {
+        let mut x = DVector::zeros(8);
+        x.rows_mut(0, 4).copy_from(&self.position.solution());
+        x.rows_mut(4, 4).copy_from(&self.rate.solution());
+        x
+    }
+}
+
 /// Result of [`snapshot_fde`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SnapshotResult {
@@ -617,7 +678,7 @@ pub fn snapshot_fde(
         });
     }
     let mut model = PositionModel::new(sat, rho, x0);
-    let out = fde(&mut model, cov, &vec![true; n], cfg)?;
+    let out = fde(&mut model, cov, &vec![true; n], None, cfg)?;
     let (position, clock) = match &out.solution {
         Some(s) => (Some(Vector3::new(s[0], s[1], s[2])), Some(s[3])),
         None => (None, None),

@@ -58,6 +58,9 @@ pub struct CellMetrics {
     pub outside_epochs: u32,
     /// Isolation intervals overlapping no fault (`none` cell of the isolating detector).
     pub wrong_isolations: u32,
+    /// Satellite-FDE counts (tight architecture; all zero otherwise): for a fault cell the
+    /// fault's, for the `none` cell the outside epochs' ([`super::metrics::SatFaultMetrics`]).
+    pub sat: super::metrics::SatFaultMetrics,
 }
 
 /// Metrics of one run.
@@ -134,7 +137,13 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             false_alarm_epochs: 0,
             outside_epochs: 0,
             wrong_isolations: 0,
+            sat: Default::default(),
         };
+        if let Some(sr) = &rec.sats {
+            if let Some(sm) = sr.metrics.iter().find(|m| m.fault == c.fault) {
+                m.sat = *sm;
+            }
+        }
         match c.fault {
             Some(fi) => {
                 let f = &spec.faults[fi];

@@ -16,8 +16,14 @@ use rand_distr::{Distribution, StandardNormal};
 pub struct Simulated {
     /// True INS error state per epoch (15).
     pub x_true: Vec<DVector<f64>>,
-    /// Per sensor and epoch: the measurement (NaN when not taken).
+    /// Per sensor and epoch: the measurement (NaN when not taken). For a `gnss_ranges` sensor
+    /// the tight measurement `z = H x + ε + f` of the satellites in view (pseudoranges, then
+    /// rates; empty when not taken).
     pub z: Vec<Vec<DVector<f64>>>,
+    /// Raw observations of the `gnss_ranges` sensor per epoch: pseudoranges (m), then rates
+    /// (m/s) of the satellites in view, sharing the noise of `z` (empty when not taken or
+    /// without such a sensor).
+    pub raw: Vec<DVector<f64>>,
 }
 
 fn normals(rng: &mut ChaCha8Rng, n: usize) -> DVector<f64> {
@@ -38,12 +44,39 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         .iter()
         .map(|_| Vec::with_capacity(epochs))
         .collect();
+    let mut raw = Vec::new();
     for k in 0..epochs {
         if k > 0 {
             let w = &prep.q_factor[k] * normals(&mut rng, n);
             x = &prep.phi[k] * &x + w;
         }
         for (si, s) in prep.spec.sensors.iter().enumerate() {
+            if let Some(rp) = prep.ranges.as_ref().filter(|r| r.sensor == si) {
+                // Two draws per satellite of the constellation, in view or not, so a run's
+                // numbers do not depend on the geometry.
+                let v = normals(&mut rng, 2 * rp.names.len());
+                let ep = &rp.epochs[k];
+                let m = ep.len();
+                if prep.available[si][k] && m > 0 {
+                    let mut zk = &ep.h * &x;
+                    let mut rk = DVector::zeros(2 * m);
+                    for j in 0..m {
+                        let sat = ep.sats[j];
+                        let e_r = ep.sigma[j] * v[2 * sat] + ep.fault[j];
+                        let e_d = ep.sigma_rate[j] * v[2 * sat + 1] + ep.fault[m + j];
+                        zk[j] += e_r;
+                        zk[m + j] += e_d;
+                        rk[j] = ep.range[j] + x[crate::gnss::ranges::CLOCK_BIAS] + e_r;
+                        rk[m + j] = ep.rate[j] + x[crate::gnss::ranges::CLOCK_DRIFT] + e_d;
+                    }
+                    z[si].push(zk);
+                    raw.push(rk);
+                } else {
+                    z[si].push(DVector::zeros(0));
+                    raw.push(DVector::zeros(0));
+                }
+                continue;
+            }
             let m = s.noise.len();
             let v = normals(&mut rng, m);
             if prep.available[si][k] {
@@ -58,5 +91,5 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         }
         x_true.push(x.clone());
     }
-    Simulated { x_true, z }
+    Simulated { x_true, z, raw }
 }

@@ -3,6 +3,7 @@
 use super::spec::{ScenarioSpec, SensorKind};
 use super::trajectory::{generate, TruthEpoch};
 use crate::error::{Error, Result};
+use crate::gnss::ranges::{PreparedRanges, CLOCK_BIAS};
 use crate::ins::{earth, ErrorModel, ATT, N_STATES, POS, VEL};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
@@ -32,11 +33,19 @@ pub struct Prepared {
     /// Per sensor and epoch: a measurement is taken (rate and outages).
     pub available: Vec<Vec<bool>>,
     /// Per sensor and epoch: the fault added to each component (all zero without faults).
+    /// Empty vectors (and empty `h`, `r`) for a `gnss_ranges` sensor, whose per-satellite
+    /// models are in `ranges`.
     pub fault: Vec<Vec<DVector<f64>>>,
+    /// Satellites in view per epoch of the `gnss_ranges` sensor, if any.
+    pub ranges: Option<PreparedRanges>,
 }
 
-/// Measurement matrix of a sensor at a kinematic state.
+/// Measurement matrix of a sensor at a kinematic state (m × 15; a `gnss_ranges` sensor's
+/// matrices depend on the satellites in view and are in [`PreparedRanges`]: 0 × 15 here).
 pub fn measurement_matrix(kind: SensorKind, lat: f64, h: f64) -> DMatrix<f64> {
+    if kind == SensorKind::GnssRanges {
+        return DMatrix::zeros(0, N_STATES);
+    }
     let m = kind.dim();
     let mut hm = DMatrix::zeros(m, N_STATES);
     let rm = earth::r_meridian(lat) + h;
@@ -65,6 +74,7 @@ pub fn measurement_matrix(kind: SensorKind, lat: f64, h: f64) -> DMatrix<f64> {
             }
         }
         SensorKind::Baro => hm[(0, POS + 2)] = 1.0,
+        SensorKind::GnssRanges => {}
     }
     hm
 }
@@ -124,37 +134,89 @@ impl Prepared {
         let truth = generate(&spec.trajectory, dt, epochs);
         check_truth(&truth)?;
         let model = ErrorModel { params: spec.ins };
+        let n = spec.n_states();
+        let clock = spec
+            .sensors
+            .iter()
+            .find_map(|s| s.ranges.as_ref().map(|r| r.clock));
+        // A receiver clock adds bias b (m) and drift d (m/s): b' = b + d·dt, d' = d, with
+        // white-frequency (bias_psd) and random-walk-frequency (drift_psd) noise.
+        let embed = |m15: DMatrix<f64>, clk: [[f64; 2]; 2]| -> DMatrix<f64> {
+            if n == N_STATES {
+                return m15;
+            }
+            let mut m = DMatrix::zeros(n, n);
+            m.view_mut((0, 0), (N_STATES, N_STATES)).copy_from(&m15);
+            for a in 0..2 {
+                for b in 0..2 {
+                    m[(CLOCK_BIAS + a, CLOCK_BIAS + b)] = clk[a][b];
+                }
+            }
+            m
+        };
+        let (sb, sd) = clock.map_or((0.0, 0.0), |c| (c.bias_psd, c.drift_psd));
+        let phi_clk = [[1.0, dt], [0.0, 1.0]];
+        let q_clk = [
+            [sb * dt + sd * dt.powi(3) / 3.0, sd * dt * dt / 2.0],
+            [sd * dt * dt / 2.0, sd * dt],
+        ];
         let mut phi = Vec::with_capacity(epochs);
         let mut q = Vec::with_capacity(epochs);
         let mut q_factor = Vec::with_capacity(epochs);
-        phi.push(DMatrix::identity(N_STATES, N_STATES));
-        q.push(DMatrix::zeros(N_STATES, N_STATES));
-        q_factor.push(DMatrix::zeros(N_STATES, N_STATES));
+        phi.push(DMatrix::identity(n, n));
+        q.push(DMatrix::zeros(n, n));
+        q_factor.push(DMatrix::zeros(n, n));
         for k in 1..epochs {
             // Transition over [t_{k−1}, t_k], linearised at the start of the interval.
             let (p, qd) = model.discretize(&truth[k - 1].kinematics(), dt);
+            let qd = embed(qd, q_clk);
             q_factor.push(psd_factor(&format!("Q[{k}]"), &qd)?);
-            phi.push(p);
+            phi.push(embed(p, phi_clk));
             q.push(qd);
         }
-        let p0 = model.initial_covariance(truth[0].lat, truth[0].h);
+        let p0 = embed(
+            model.initial_covariance(truth[0].lat, truth[0].h),
+            clock.map_or([[0.0; 2]; 2], |c| {
+                [[c.bias * c.bias, 0.0], [0.0, c.drift * c.drift]]
+            }),
+        );
         let p0_factor = psd_factor("P0", &p0)?;
         let t: Vec<f64> = (0..epochs).map(|k| k as f64 * dt).collect();
         let mut h = Vec::new();
         let mut r = Vec::new();
         let mut available = Vec::new();
         let mut fault = Vec::new();
+        let mut ranges = None;
         for (si, s) in spec.sensors.iter().enumerate() {
+            let pad = |m: DMatrix<f64>| -> DMatrix<f64> {
+                if m.ncols() == n {
+                    m
+                } else {
+                    let mut out = DMatrix::zeros(m.nrows(), n);
+                    out.view_mut((0, 0), (m.nrows(), m.ncols())).copy_from(&m);
+                    out
+                }
+            };
+            if let Some(rs) = &s.ranges {
+                let faults: Vec<_> = spec.faults.iter().filter(|f| f.sensor == s.name).collect();
+                ranges = Some(PreparedRanges::new(
+                    si, rs, &s.noise, &truth, &t, n, &faults,
+                ));
+            }
             h.push(
                 truth
                     .iter()
-                    .map(|e| measurement_matrix(s.kind, e.lat, e.h))
+                    .map(|e| pad(measurement_matrix(s.kind, e.lat, e.h)))
                     .collect(),
             );
-            r.push(DMatrix::from_diagonal(&DVector::from_iterator(
-                s.noise.len(),
-                s.noise.iter().map(|n| n * n),
-            )));
+            r.push(if s.ranges.is_some() {
+                DMatrix::zeros(0, 0)
+            } else {
+                DMatrix::from_diagonal(&DVector::from_iterator(
+                    s.noise.len(),
+                    s.noise.iter().map(|n| n * n),
+                ))
+            });
             let period = (1.0 / (s.rate * dt)).round().max(1.0) as usize;
             available.push(
                 (0..epochs)
@@ -163,11 +225,11 @@ impl Prepared {
                     })
                     .collect(),
             );
-            let m = s.kind.dim();
+            let m = if s.ranges.is_some() { 0 } else { s.kind.dim() };
             let faults: Vec<_> = spec
                 .faults
                 .iter()
-                .filter(|f| spec.sensor_index(&f.sensor) == Some(si))
+                .filter(|f| spec.sensor_index(&f.sensor) == Some(si) && m > 0)
                 .collect();
             fault.push(
                 t.iter()
@@ -196,6 +258,7 @@ impl Prepared {
             r,
             available,
             fault,
+            ranges,
         })
     }
 
@@ -215,7 +278,7 @@ impl Prepared {
         ];
         if let Some((field, _)) = same.iter().find(|(_, eq)| !eq) {
             return Err(Error::Invalid(format!(
-                "variant {:?}: its {field} differ from the base scenario's; variants may only change the filter (architecture, federated, centralized) so that they run on the same simulated measurements",
+                "variant {:?}: its {field} differ from the base scenario's; variants may only change the filter (architecture, federated, centralized, tight) so that they run on the same simulated measurements",
                 spec.name
             )));
         }

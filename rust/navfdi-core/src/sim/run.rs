@@ -46,6 +46,39 @@ pub struct SubRecord {
     pub mdb: Vec<f64>,
 }
 
+/// Per-epoch satellite FDE record of a tight filter (S satellites of the constellation).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SatRecord {
+    /// Satellite names (S).
+    pub names: Vec<String>,
+    /// In view (above the elevation mask), T × S row-major.
+    pub in_view: Vec<bool>,
+    /// Excluded this epoch, T × S.
+    pub excluded: Vec<bool>,
+    /// w of the satellite's pseudorange (least squares) or innovation in the last test that
+    /// included it (for an excluded satellite: its |w| when excluded), T × S; NaN when not
+    /// tested.
+    pub w: Vec<f64>,
+    /// FDE outcome per epoch: [`SAT_STATUS`] index.
+    pub status: Vec<u8>,
+    /// Satellites that updated the filter per epoch.
+    pub used: Vec<u32>,
+    /// Satellite-FDE counts per fault on the sensor, then outside faults.
+    pub metrics: Vec<super::metrics::SatFaultMetrics>,
+}
+
+/// Names of the per-epoch FDE outcomes of [`SatRecord::status`]: the four of
+/// [`crate::gnss::snapshot::FdeStatus`], `alarm` (placement `none`: the global test failed,
+/// nothing is excluded) and `no_measurement`.
+pub const SAT_STATUS: [&str; 6] = [
+    "passed",
+    "excluded",
+    "unidentified",
+    "no_solution",
+    "alarm",
+    "no_measurement",
+];
+
 /// Names of the 9 navigation-error columns of [`RunRecord::error`].
 pub const ERROR_COLUMNS: [&str; 9] = [
     "att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u",
@@ -65,6 +98,8 @@ pub struct RunRecord {
     pub sources: Vec<u32>,
     /// Sub-filters in configuration order.
     pub subs: Vec<SubRecord>,
+    /// Satellite FDE (tight architecture).
+    pub sats: Option<SatRecord>,
 }
 
 /// Build a detector from its spec (validated by the scenario). `min_samples` (SPRT and joint)
@@ -216,7 +251,10 @@ pub fn varying_h(prep: &Prepared, sensor_idx: &[usize]) -> Vec<bool> {
         .map(|&si| {
             !matches!(
                 prep.spec.sensors[si].kind,
-                SensorKind::Cns | SensorKind::GnssVelocity | SensorKind::Baro
+                SensorKind::Cns
+                    | SensorKind::GnssVelocity
+                    | SensorKind::Baro
+                    | SensorKind::GnssRanges
             )
         })
         .collect()
@@ -255,6 +293,7 @@ impl RunRecord {
                     mdb: Vec::new(),
                 })
                 .collect(),
+            sats: None,
         }
     }
 
@@ -296,5 +335,6 @@ pub fn run_architecture(
         Architecture::Centralized => {
             crate::arch::centralized::run_centralized(prep, sim, isolation, full, cancel)
         }
+        Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, cancel),
     }
 }

@@ -4,8 +4,10 @@
 //! same spelling as the TOML (`faults[1].sensor`, `federated.subfilters[0].share`, ...).
 
 use crate::error::{Error, Result};
+use crate::gnss::constellation::{self, Orbit, System};
 use crate::ins::InsErrorParams;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// A whole scenario.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -35,6 +37,9 @@ pub struct ScenarioSpec {
     /// Centralized filter configuration (architecture `centralized`).
     #[serde(default)]
     pub centralized: Option<CentralizedSpec>,
+    /// Tightly coupled filter configuration (architecture `tight`).
+    #[serde(default)]
+    pub tight: Option<TightSpec>,
 }
 
 /// Integration architecture of a scenario.
@@ -47,6 +52,90 @@ pub enum Architecture {
     /// One Kalman filter over the INS error state updated by all chosen sensors, detectors
     /// per sensor and a fault-handling policy (paper 002).
     Centralized,
+    /// INS error state plus receiver clock (17 states) updated with the pseudoranges and
+    /// pseudorange rates of the satellites in view, with satellite FDE (paper 001).
+    Tight,
+}
+
+/// Where a tightly coupled filter detects and excludes faulty satellites (paper 001).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FdePlacement {
+    /// No satellite FDE: every satellite in view updates the filter (the innovation global
+    /// test is still recorded).
+    None,
+    /// Paper 001's method 1: snapshot least squares, global test + w-test on the raw
+    /// pseudoranges (and rates) before the filter; excluded satellites do not update it.
+    LsPrecheck,
+    /// Paper 001's method 2: the innovation chi-square test + standardised-innovation w-test
+    /// with iterative exclusion inside the filter.
+    Innovation,
+}
+
+/// Tightly coupled filter configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TightSpec {
+    /// Name of the `gnss_ranges` sensor.
+    pub sensor: String,
+    /// FDE placement.
+    pub fde: FdePlacement,
+    /// False-alarm probability of the global test.
+    pub alpha: f64,
+    /// w-test critical value (None: the two-sided normal quantile of `alpha`).
+    #[serde(default)]
+    pub k: Option<f64>,
+    /// Also update with (and test) the pseudorange rates (default true).
+    #[serde(default = "default_true")]
+    pub rates: bool,
+}
+
+/// Receiver clock model: bias (m) and drift (m/s) as a two-state random process with
+/// white frequency noise (`bias_psd`, m²/s) and random-walk frequency noise (`drift_psd`,
+/// m²/s³); `bias` and `drift` are the initial standard deviations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ClockSpec {
+    /// Initial clock-bias σ (m).
+    pub bias: f64,
+    /// Initial clock-drift σ (m/s).
+    pub drift: f64,
+    /// Spectral density of the bias noise (m²/s).
+    pub bias_psd: f64,
+    /// Spectral density of the drift noise (m²/s³).
+    pub drift_psd: f64,
+}
+
+/// Satellites and receiver clock of a `gnss_ranges` sensor.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangesSpec {
+    /// Satellite systems (nominal Walker constellations, see [`crate::gnss::constellation`]).
+    pub systems: Vec<System>,
+    /// Elevation mask (rad).
+    pub elevation_mask: f64,
+    /// Noise σ grows as `σ / sin(elevation)` when true; constant when false.
+    #[serde(default)]
+    pub elevation_noise: bool,
+    /// Constellation time at the start of the run (s): chooses the geometry.
+    #[serde(default)]
+    pub epoch: f64,
+    /// Receiver clock.
+    pub clock: ClockSpec,
+}
+
+impl RangesSpec {
+    /// The satellites of the configured systems, in order (GPS first).
+    pub fn orbits(&self) -> Vec<Orbit> {
+        let mut out = Vec::new();
+        for s in &self.systems {
+            out.extend(match s {
+                System::Gps => constellation::gps(),
+                System::Galileo => constellation::galileo(),
+            });
+        }
+        out
+    }
 }
 
 /// What a centralized filter does with a detector's alarm (METHODS §7).
@@ -104,13 +193,13 @@ fn default_fading() -> f64 {
 }
 
 /// A detection channel: a sensor tested by detectors, whatever the architecture (a federated
-/// sub-filter, or one sensor of a centralized filter).
-#[derive(Debug, Clone, Copy)]
+/// sub-filter, one sensor of a centralized filter, the satellites of a tight filter).
+#[derive(Debug, Clone)]
 pub struct Channel<'a> {
     /// Sensor name.
     pub sensor: &'a str,
-    /// Detectors.
-    pub detectors: &'a [DetectorSpec],
+    /// Detectors (a tight filter's one detector, `global`, is made from its settings).
+    pub detectors: Cow<'a, [DetectorSpec]>,
     /// Detector whose alarm isolates / excludes (None: none).
     pub decision: Option<&'a str>,
 }
@@ -208,6 +297,9 @@ pub enum SensorKind {
     Baro,
     /// Vision / SLAM position east, north, up (m); 3 components.
     Vision,
+    /// Pseudorange (m) and pseudorange rate (m/s) of every satellite in view (the
+    /// components' noise σ); needs the sensor's `ranges` table and architecture `tight`.
+    GnssRanges,
 }
 
 impl SensorKind {
@@ -216,6 +308,7 @@ impl SensorKind {
         match self {
             SensorKind::Gnss => 6,
             SensorKind::Baro => 1,
+            SensorKind::GnssRanges => 2,
             _ => 3,
         }
     }
@@ -228,6 +321,7 @@ impl SensorKind {
             SensorKind::GnssPosition | SensorKind::Vision => &["pos_e", "pos_n", "pos_u"],
             SensorKind::GnssVelocity => &["vel_e", "vel_n", "vel_u"],
             SensorKind::Baro => &["h"],
+            SensorKind::GnssRanges => &["pseudorange", "rate"],
         }
     }
 }
@@ -247,6 +341,9 @@ pub struct SensorSpec {
     /// Windows `[start, end)` (s) without measurements.
     #[serde(default)]
     pub outages: Vec<[f64; 2]>,
+    /// Satellites and clock (kind `gnss_ranges` only).
+    #[serde(default)]
+    pub ranges: Option<RangesSpec>,
 }
 
 /// Fault shape over its window `[start, end)`.
@@ -279,6 +376,9 @@ pub struct FaultSpec {
     pub start: f64,
     /// Window end (s), exclusive.
     pub end: f64,
+    /// Satellite name (faults on a `gnss_ranges` sensor only), e.g. `G03`.
+    #[serde(default)]
+    pub satellite: Option<String>,
 }
 
 impl FaultSpec {
@@ -394,6 +494,10 @@ pub enum IsolatedMode {
     Update,
 }
 
+/// Name of the one detector of a tight filter's channel: the first global test of each epoch
+/// (least-squares residuals for `ls_precheck`, innovations otherwise).
+pub const TIGHT_DETECTOR: &str = "global";
+
 fn bad(path: impl Into<String>, msg: impl std::fmt::Display) -> Error {
     Error::Invalid(format!("{}: {msg}", path.into()))
 }
@@ -432,7 +536,7 @@ impl ScenarioSpec {
     /// absurd durations cannot overflow.
     pub fn memory_estimate(&self, runs: f64) -> f64 {
         let epochs = (self.duration / self.dt + 1e-9).floor().max(1.0);
-        let n = crate::ins::N_STATES as f64;
+        let n = self.n_states() as f64;
         let mat = |r: f64, c: f64| r * c * 8.0 + 48.0;
         // Prepared: Φ, Q and a factor of Q per epoch, the truth epoch, times; per sensor H,
         // the fault vector and the availability flag.
@@ -440,7 +544,16 @@ impl ScenarioSpec {
         // One run: the true state, measurements; the record: error and sigma (9 each), sources.
         let mut run = mat(n, 1.0) + 2.0 * 9.0 * 8.0 + 4.0;
         for s in &self.sensors {
-            let m = s.kind.dim() as f64;
+            let mut m = s.kind.dim() as f64;
+            if let Some(r) = &s.ranges {
+                // Every satellite could be in view: per satellite and epoch its ECEF position,
+                // velocity, line of sight, range, rate, σ, fault (prepared), raw observations
+                // and the FDE record (run).
+                let sats = r.orbits().len() as f64;
+                m *= sats;
+                prep += sats * (3.0 * 24.0 + 6.0 * 8.0 + 8.0);
+                run += mat(m, 1.0) + sats * (8.0 + 3.0);
+            }
             prep += mat(m, n) + mat(m, 1.0) + 1.0;
             run += mat(m, 1.0);
         }
@@ -458,7 +571,7 @@ impl ScenarioSpec {
                     .iter()
                     .map(|sf| Channel {
                         sensor: &sf.sensor,
-                        detectors: &sf.detectors,
+                        detectors: Cow::Borrowed(&sf.detectors),
                         decision: sf.isolation.as_deref(),
                     })
                     .collect()
@@ -468,11 +581,46 @@ impl ScenarioSpec {
                     .iter()
                     .map(|cs| Channel {
                         sensor: &cs.sensor,
-                        detectors: &cs.detectors,
+                        detectors: Cow::Borrowed(&cs.detectors),
                         decision: cs.decision.as_deref(),
                     })
                     .collect()
             }),
+            Architecture::Tight => self.tight.as_ref().map_or_else(Vec::new, |t| {
+                vec![Channel {
+                    sensor: &t.sensor,
+                    detectors: Cow::Owned(vec![DetectorSpec {
+                        name: TIGHT_DETECTOR.into(),
+                        kind: DetectorKind::Chi2,
+                        pf: t.alpha,
+                        pm: None,
+                        variance: None,
+                        min_samples: None,
+                    }]),
+                    decision: (t.fde != FdePlacement::None).then_some(TIGHT_DETECTOR),
+                }]
+            }),
+        }
+    }
+
+    /// The tight configuration (validated to exist for that architecture).
+    pub fn tight(&self) -> Result<&TightSpec> {
+        self.tight
+            .as_ref()
+            .ok_or_else(|| bad("tight", "missing (architecture = \"tight\")"))
+    }
+
+    /// Number of filter states: 15 (INS error), 17 with a receiver clock (a `gnss_ranges`
+    /// sensor).
+    pub fn n_states(&self) -> usize {
+        if self
+            .sensors
+            .iter()
+            .any(|s| s.kind == SensorKind::GnssRanges)
+        {
+            crate::ins::N_STATES + 2
+        } else {
+            crate::ins::N_STATES
         }
     }
 
@@ -652,6 +800,7 @@ impl ScenarioSpec {
                     ));
                 }
             }
+            self.validate_ranges(&p, s)?;
         }
         for (i, f) in self.faults.iter().enumerate() {
             let p = format!("faults[{i}]");
@@ -706,6 +855,35 @@ impl ScenarioSpec {
             if !f.magnitude.is_finite() {
                 return Err(bad(format!("{p}.magnitude"), "must be finite"));
             }
+            match (&self.sensors[si].ranges, &f.satellite) {
+                (Some(r), Some(sat)) => {
+                    let orbits = r.orbits();
+                    if !orbits.iter().any(|o| &o.name == sat) {
+                        return Err(bad(
+                            format!("{p}.satellite"),
+                            format!(
+                                "{sat:?} is not a satellite of sensor {:?} ({} to {})",
+                                f.sensor,
+                                orbits.first().map_or("", |o| o.name.as_str()),
+                                orbits.last().map_or("", |o| o.name.as_str())
+                            ),
+                        ));
+                    }
+                }
+                (Some(_), None) => {
+                    return Err(bad(
+                        format!("{p}.satellite"),
+                        format!("missing: a fault on the gnss_ranges sensor {:?} names its satellite, e.g. \"G03\"", f.sensor),
+                    ))
+                }
+                (None, Some(_)) => {
+                    return Err(bad(
+                        format!("{p}.satellite"),
+                        format!("only faults on a gnss_ranges sensor name a satellite; {:?} is {:?}", f.sensor, self.sensors[si].kind),
+                    ))
+                }
+                (None, None) => {}
+            }
             if !(f.start.is_finite() && f.end.is_finite() && f.start < f.end) {
                 return Err(bad(
                     p.clone(),
@@ -733,13 +911,46 @@ impl ScenarioSpec {
                         match self.architecture {
                             Architecture::Federated => "sub-filter",
                             Architecture::Centralized => "centralized.sensors entry",
+                            Architecture::Tight => "tight filter (tight.sensor)",
                         },
                         f.sensor
                     ),
                 ));
             }
         }
+        let others: Vec<(&str, bool)> = vec![
+            ("federated", self.federated.is_some()),
+            ("centralized", self.centralized.is_some()),
+            ("tight", self.tight.is_some()),
+        ];
+        let arch = match self.architecture {
+            Architecture::Federated => "federated",
+            Architecture::Centralized => "centralized",
+            Architecture::Tight => "tight",
+        };
+        for (name, given) in others {
+            if given && name != arch {
+                return Err(bad(
+                    name,
+                    format!("given, but architecture is {arch:?} (set architecture = {name:?} or remove it)"),
+                ));
+            }
+        }
+        if arch != "tight" {
+            if let Some((i, _)) = self
+                .sensors
+                .iter()
+                .enumerate()
+                .find(|(_, s)| s.kind == SensorKind::GnssRanges)
+            {
+                return Err(bad(
+                    format!("sensors[{i}].kind"),
+                    format!("gnss_ranges (satellite pseudoranges) needs architecture = \"tight\", not {arch:?}"),
+                ));
+            }
+        }
         match self.architecture {
+            Architecture::Tight => self.validate_tight(),
             Architecture::Federated => {
                 if self.centralized.is_some() {
                     return Err(bad(
@@ -759,6 +970,85 @@ impl ScenarioSpec {
                 self.validate_centralized()
             }
         }
+    }
+
+    fn validate_ranges(&self, p: &str, s: &SensorSpec) -> Result<()> {
+        let Some(r) = &s.ranges else {
+            if s.kind == SensorKind::GnssRanges {
+                return Err(bad(
+                    format!("{p}.ranges"),
+                    "missing: a gnss_ranges sensor needs its satellites and clock (systems, elevation_mask, clock)",
+                ));
+            }
+            return Ok(());
+        };
+        if s.kind != SensorKind::GnssRanges {
+            return Err(bad(
+                format!("{p}.ranges"),
+                format!(
+                    "only a gnss_ranges sensor has satellites; this one is {:?}",
+                    s.kind
+                ),
+            ));
+        }
+        if r.systems.is_empty() {
+            return Err(bad(
+                format!("{p}.ranges.systems"),
+                "at least one system is required",
+            ));
+        }
+        for (j, sys) in r.systems.iter().enumerate() {
+            if r.systems[..j].contains(sys) {
+                return Err(bad(
+                    format!("{p}.ranges.systems[{j}]"),
+                    format!("{sys:?} is listed twice"),
+                ));
+            }
+        }
+        if !(r.elevation_mask >= 0.0 && r.elevation_mask < 80f64.to_radians()) {
+            return Err(bad(
+                format!("{p}.ranges.elevation_mask"),
+                format!(
+                    "{} rad must be in [0°, 80°)",
+                    crate::error::num(r.elevation_mask)
+                ),
+            ));
+        }
+        if !r.epoch.is_finite() {
+            return Err(bad(format!("{p}.ranges.epoch"), "must be finite"));
+        }
+        positive(&format!("{p}.ranges.clock.bias"), r.clock.bias)?;
+        positive(&format!("{p}.ranges.clock.drift"), r.clock.drift)?;
+        non_negative(&format!("{p}.ranges.clock.bias_psd"), r.clock.bias_psd)?;
+        non_negative(&format!("{p}.ranges.clock.drift_psd"), r.clock.drift_psd)?;
+        Ok(())
+    }
+
+    fn validate_tight(&self) -> Result<()> {
+        let t = self.tight()?;
+        self.check_sensor_ref("tight", &t.sensor, false, "")?;
+        let si = self.sensor_index(&t.sensor).unwrap_or(0);
+        if self.sensors[si].kind != SensorKind::GnssRanges {
+            return Err(bad(
+                "tight.sensor",
+                format!(
+                    "{:?} is a {:?} sensor; a tight filter uses a gnss_ranges sensor",
+                    t.sensor, self.sensors[si].kind
+                ),
+            ));
+        }
+        if let Some((i, o)) = self.sensors.iter().enumerate().find(|(i, _)| *i != si) {
+            return Err(bad(
+                format!("sensors[{i}]"),
+                format!("{:?}: a tight filter uses only its gnss_ranges sensor (other sensors are not supported in it yet); remove it", o.name),
+            ));
+        }
+        crate::validate::check_probability("tight.alpha", t.alpha)
+            .map_err(|e| Error::Invalid(e.to_string()))?;
+        if let Some(k) = t.k {
+            positive("tight.k", k)?;
+        }
+        Ok(())
     }
 
     fn validate_detectors(&self, p: &str, detectors: &[DetectorSpec]) -> Result<()> {

@@ -1,0 +1,357 @@
+//! Tightly coupled INS/GNSS with satellite fault detection and exclusion (paper 001,
+//! METHODS §10).
+//!
+//! One Kalman filter over the 15-state INS error model plus receiver clock bias and drift (17
+//! states), updated each epoch with the pseudorange and (optionally) pseudorange-rate
+//! residuals of the satellites in view ([`crate::gnss::ranges`]); the measurement dimension
+//! changes as satellites rise and set. Satellite FDE by placement ([`FdePlacement`]):
+//!
+//! * `ls_precheck` (method 1): before the filter, snapshot least squares on the raw
+//!   pseudoranges (position + clock, start value: the INS position and the filter's clock
+//!   estimate) with the global test and w-test exclusion loop; with rates, the same on the
+//!   pseudorange rates of the remaining satellites (velocity + drift). Excluded satellites
+//!   (either test) update the filter with neither observable. When too few satellites remain
+//!   to test (`no_solution`), the satellites not excluded so far update the filter untested.
+//! * `innovation` (method 2): the innovation `r`, `A = HP⁻Hᵀ + R` of all observations;
+//!   global test `rᵀA⁻¹r ~ χ²(m)` (m observations); when it fails, the general w-test
+//!   `w_i = (A⁻¹r)_i / sqrt((A⁻¹)_ii)` (Teunissen, the paper's ref. 9) per observation; the
+//!   satellite of the largest |w| above K is excluded (both its rows) and the test repeated on
+//!   the remaining rows until it passes (**resolution**: the paper's equations (10)–(14) are
+//!   lost; this is the standard filter form, with the dof = number of innovation components
+//!   rather than n − u).
+//! * `none`: every satellite updates the filter; the innovation global test is recorded.
+//!
+//! Recorded: the channel's one detector `global` (the first global test of the epoch:
+//! statistic, threshold, alarm), `isolated` = some satellite excluded, `fused` = the ranges
+//! updated the filter; and the per-satellite [`SatRecord`] with its FDE counts. With
+//! `isolation = false` the FDE runs and reports but every satellite updates the filter.
+
+use crate::cancel::Cancel;
+use crate::error::{Error, Result};
+use crate::gnss::geodesy::ecef_to_enu;
+use crate::gnss::ranges::CLOCK_BIAS;
+use crate::gnss::snapshot::{
+    fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
+};
+use crate::ins::{earth, POS};
+use crate::kalman::KalmanFilter;
+use crate::sim::metrics::{satellite_metrics, SatFault};
+use crate::sim::noise::Simulated;
+use crate::sim::prepare::Prepared;
+use crate::sim::run::{RunRecord, SatRecord};
+use crate::sim::spec::FdePlacement;
+use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
+
+const NO_MEASUREMENT: u8 = 5;
+const ALARM: u8 = 4;
+
+/// Outcome of one epoch's FDE: excluded satellites (local indices), status, first test, w
+/// per local satellite.
+struct EpochFde {
+    excluded: Vec<usize>,
+    status: FdeStatus,
+    first: (f64, f64, usize),
+    w: Vec<f64>,
+}
+
+/// Run the tight filter over one simulated run (`isolation = false`: FDE reports, never
+/// excludes). `cancel` is checked every epoch.
+pub fn run_tight(
+    prep: &Prepared,
+    sim: &Simulated,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    let spec = &prep.spec;
+    let t = spec.tight()?;
+    let rp = prep
+        .ranges
+        .as_ref()
+        .ok_or_else(|| Error::Invalid("tight: the scenario has no gnss_ranges sensor".into()))?;
+    let si = rp.sensor;
+    let n = spec.n_states();
+    let cfg = FdeConfig::new(t.alpha, t.k)?;
+    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.p0.clone())?;
+    let s_count = rp.names.len();
+    let epochs = prep.epochs();
+    let mut rec = RunRecord::empty(prep);
+    let mut sat = SatRecord {
+        names: rp.names.clone(),
+        in_view: vec![false; epochs * s_count],
+        excluded: vec![false; epochs * s_count],
+        w: vec![f64::NAN; epochs * s_count],
+        status: Vec::with_capacity(epochs),
+        used: Vec::with_capacity(epochs),
+        metrics: Vec::new(),
+    };
+    let mut sig = DVector::zeros(crate::ins::N_STATES);
+    for k in 0..epochs {
+        cancel.check()?;
+        kf.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+        let ep = &rp.epochs[k];
+        let m = ep.len();
+        for &s in &ep.sats {
+            sat.in_view[k * s_count + s] = true;
+        }
+        let sub = &mut rec.subs[0];
+        let det = &mut sub.detectors[0];
+        if !(prep.available[si][k] && m > 0) {
+            sub.statistic.push(f64::NAN);
+            sub.dof.push(0);
+            sub.isolated.push(false);
+            sub.reinstated.push(false);
+            sub.fused.push(false);
+            det.statistic.push(f64::NAN);
+            det.threshold.push(f64::NAN);
+            det.alarm.push(false);
+            sat.status.push(NO_MEASUREMENT);
+            sat.used.push(0);
+            rec.sources.push(0);
+            rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+            continue;
+        }
+        let rows = if t.rates { 2 * m } else { m };
+        let z: DVector<f64> = sim.z[si][k].rows(0, rows).into_owned();
+        let h: DMatrix<f64> = ep.h.rows(0, rows).into_owned();
+        let r = DMatrix::from_diagonal(&DVector::from_iterator(
+            rows,
+            ep.sigma
+                .iter()
+                .map(|s| s * s)
+                .chain(ep.sigma_rate.iter().map(|s| s * s))
+                .take(rows),
+        ));
+        let (out, pending) = match t.fde {
+            FdePlacement::LsPrecheck => (ls_precheck(prep, sim, k, kf.x(), t.rates, &cfg)?, None),
+            FdePlacement::Innovation | FdePlacement::None => {
+                let (inn, pending) = kf
+                    .innovation_pending(&z, &h, &r)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                let out = innovation_fde(
+                    &inn.residual,
+                    &inn.covariance,
+                    m,
+                    t.fde == FdePlacement::Innovation,
+                    &cfg,
+                )?;
+                (out, pending)
+            }
+        };
+        let (stat, thr, dof) = out.first;
+        det.statistic.push(stat);
+        det.threshold.push(thr);
+        det.alarm.push(stat >= thr);
+        sub.statistic.push(stat);
+        sub.dof.push(dof as u32);
+        sub.isolated.push(!out.excluded.is_empty());
+        sub.reinstated.push(false);
+        for (j, &s) in ep.sats.iter().enumerate() {
+            sat.w[k * s_count + s] = out.w[j];
+        }
+        for &j in &out.excluded {
+            sat.excluded[k * s_count + ep.sats[j]] = true;
+        }
+        sat.status
+            .push(if t.fde == FdePlacement::None && stat >= thr {
+                ALARM
+            } else {
+                out.status.code()
+            });
+        let act = isolation && !out.excluded.is_empty();
+        let updated = if act {
+            let mut zu = z.clone();
+            for &j in &out.excluded {
+                zu[j] = f64::NAN;
+                if t.rates {
+                    zu[m + j] = f64::NAN;
+                }
+            }
+            let used = m - out.excluded.len();
+            if used > 0 {
+                kf.update_trusted(&zu, &h, &r)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+            }
+            used
+        } else {
+            match pending {
+                Some(p) => kf.apply_pending(p, &r),
+                None => kf.update_trusted(&z, &h, &r).map(|_| ()),
+            }
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+            m
+        };
+        sub.fused.push(updated > 0);
+        sat.used.push(updated as u32);
+        rec.sources.push(u32::from(updated > 0));
+        rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+    }
+    // Satellite-FDE counts per fault on the sensor.
+    let sensor = &spec.sensors[si].name;
+    let faults: Vec<SatFault> = spec
+        .faults
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| &f.sensor == sensor)
+        .filter_map(|(i, f)| {
+            let s = rp
+                .names
+                .iter()
+                .position(|x| Some(x) == f.satellite.as_ref())?;
+            Some((i, s, f.start, f.end))
+        })
+        .collect();
+    let measured: Vec<bool> = sat.status.iter().map(|&s| s != NO_MEASUREMENT).collect();
+    sat.metrics = satellite_metrics(
+        &rec.t,
+        &measured,
+        &sat.in_view,
+        &sat.excluded,
+        s_count,
+        &faults,
+    );
+    rec.sats = Some(sat);
+    Ok(rec)
+}
+
+/// Method 1: snapshot FDE on the raw pseudoranges (and rates) of epoch `k`.
+fn ls_precheck(
+    prep: &Prepared,
+    sim: &Simulated,
+    k: usize,
+    x_hat: &DVector<f64>,
+    rates: bool,
+    cfg: &FdeConfig,
+) -> Result<EpochFde> {
+    let rp = prep
+        .ranges
+        .as_ref()
+        .ok_or_else(|| Error::Invalid("no ranges".into()))?;
+    let ep = &rp.epochs[k];
+    let m = ep.len();
+    let raw = &sim.raw[k];
+    // Start value: the INS position (truth + the INS error of this run) and the filter's clock
+    // estimate, as a receiver-side implementation would have them.
+    let tr = &prep.truth[k];
+    let x = &sim.x_true[k];
+    let rm = earth::r_meridian(tr.lat) + tr.h;
+    let rn = earth::r_normal(tr.lat) + tr.h;
+    let d_enu = Vector3::new(x[POS + 1] * rn * tr.lat.cos(), x[POS] * rm, x[POS + 2]);
+    let r_ins = ep.rx + ecef_to_enu(tr.lat, tr.lon).transpose() * d_enu;
+    let x0 = [r_ins.x, r_ins.y, r_ins.z, x_hat[CLOCK_BIAS]];
+    let rho = &raw.as_slice()[..m];
+    let model = PositionModel::new(&ep.sat_pos, rho, x0);
+    let out = if rates {
+        let mut stacked = StackedModel {
+            position: model,
+            rate: RateModel::new(&ep.los, &ep.sat_vel, &raw.as_slice()[m..2 * m]),
+        };
+        let sigma: Vec<f64> = ep.sigma.iter().chain(&ep.sigma_rate).copied().collect();
+        let groups: Vec<usize> = (0..2 * m).map(|i| i % m).collect();
+        fde(
+            &mut stacked,
+            &ObsCov::Sigma(sigma),
+            &vec![true; 2 * m],
+            Some(&groups),
+            cfg,
+        )?
+    } else {
+        let mut model = model;
+        fde(
+            &mut model,
+            &ObsCov::Sigma(ep.sigma.clone()),
+            &vec![true; m],
+            None,
+            cfg,
+        )?
+    };
+    // Per satellite: its pseudorange's w (or, excluded, the |w| that excluded it).
+    let mut w: Vec<f64> = out.w[..m].to_vec();
+    let mut excluded = Vec::with_capacity(out.excluded.len());
+    for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
+        excluded.push(i % m);
+        w[i % m] = wi;
+    }
+    let status = out.status;
+    let pr = out;
+    Ok(EpochFde {
+        excluded,
+        status,
+        first: pr.first,
+        w,
+    })
+}
+
+/// Method 2 (`exclude = true`) or the recorded global test only: the innovation test on the
+/// residual `res` and covariance `a` of m satellites (rows `j` and, with rates, `m + j`).
+fn innovation_fde(
+    res: &DVector<f64>,
+    a: &DMatrix<f64>,
+    m: usize,
+    exclude: bool,
+    cfg: &FdeConfig,
+) -> Result<EpochFde> {
+    let rows = res.len();
+    let mut active: Vec<usize> = (0..rows).collect();
+    let mut out = EpochFde {
+        excluded: Vec::new(),
+        status: FdeStatus::Passed,
+        first: (f64::NAN, f64::NAN, 0),
+        w: vec![f64::NAN; m],
+    };
+    let mut w_at_exclusion = vec![f64::NAN; m];
+    loop {
+        if active.is_empty() {
+            out.status = FdeStatus::NoSolution;
+            break;
+        }
+        let ra = res.select_rows(&active);
+        let aa = a.select_rows(&active).select_columns(&active);
+        let chol = Cholesky::new(aa).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance A".into(),
+            detail: "cannot factor the innovation covariance of the satellites in view".into(),
+        })?;
+        let g = chol.solve(&ra);
+        let stat = ra.dot(&g);
+        let thr = cfg.threshold(active.len())?;
+        if out.excluded.is_empty() {
+            out.first = (stat, thr, active.len());
+        }
+        let ainv = chol.inverse();
+        let wrow: Vec<f64> = (0..active.len())
+            .map(|i| g[i] / ainv[(i, i)].sqrt())
+            .collect();
+        out.w = vec![f64::NAN; m];
+        for (i, &row) in active.iter().enumerate() {
+            if row < m {
+                out.w[row] = wrow[i];
+            }
+        }
+        if stat < thr || !exclude {
+            out.status = if out.excluded.is_empty() {
+                FdeStatus::Passed
+            } else {
+                FdeStatus::Excluded
+            };
+            break;
+        }
+        let (wi, wmax) = wrow
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
+            .map(|(i, v)| (i, v.abs()))
+            .unwrap_or((0, 0.0));
+        if !(wmax > cfg.k) {
+            out.status = FdeStatus::Unidentified;
+            break;
+        }
+        let satj = active[wi] % m;
+        out.excluded.push(satj);
+        w_at_exclusion[satj] = wmax;
+        active.retain(|&row| row % m != satj);
+    }
+    for &j in &out.excluded {
+        out.w[j] = w_at_exclusion[j];
+    }
+    Ok(out)
+}

@@ -1,0 +1,122 @@
+"""Tight architecture (paper 001): schema, records, outputs and Monte-Carlo columns."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import navfdi
+from navfdi.scenario import ScenarioError, load_scenario
+
+
+@pytest.fixture(scope="module")
+def raw():
+    return copy.deepcopy(load_scenario("shao2018").base().raw)
+
+
+def bad(raw, match, **changes):
+    r = copy.deepcopy(raw)
+    for path, value in changes.items():
+        target = r
+        parts = path.split("/")
+        for p in parts[:-1]:
+            target = target[int(p)] if p.isdigit() else target[p]
+        last = parts[-1]
+        if value is None:
+            del target[int(last) if last.isdigit() else last]
+        else:
+            target[int(last) if last.isdigit() else last] = value
+    with pytest.raises(ScenarioError, match=match):
+        navfdi.load_scenario(r)
+
+
+def test_schema_errors_name_the_field(raw):
+    bad(raw, r"faults\[0\]\.satellite.*missing", **{"faults/0/satellite": None})
+    bad(raw, r"faults\[0\]\.satellite.*G99.*not a satellite", **{"faults/0/satellite": "G99"})
+    bad(raw, r"sensors\[0\]\.ranges.*missing", **{"sensors/0/ranges": None})
+    bad(raw, r"sensors\[0\]\.ranges\.systems\[0\].*glonass", **{"sensors/0/ranges/systems": ["glonass"]})
+    bad(raw, r"elevation_mask", **{"sensors/0/ranges/elevation_mask": "85 deg"})
+    bad(raw, r"clock\.bias", **{"sensors/0/ranges/clock/bias": "0 m"})
+    bad(raw, r"tight\.fde", **{"tight/fde": "raim"})
+    bad(raw, r"tight\.alpha", **{"tight/alpha": 1.5})
+    bad(raw, r"tight\.k", **{"tight/k": -1.0})
+    bad(raw, r"tight: missing|tight.*missing", **{"tight": None})
+    bad(raw, r"needs architecture = \"tight\"", architecture="centralized", tight=None, centralized={"policy": "exclude", "sensors": [{"sensor": "gnss_ranges"}]})
+    r = copy.deepcopy(raw)
+    r["sensors"].append({"name": "baro", "kind": "baro", "noise": "1 m", "rate": "1 Hz"})
+    with pytest.raises(ScenarioError, match=r"sensors\[1\].*only its gnss_ranges sensor"):
+        navfdi.load_scenario(r)
+    r = copy.deepcopy(raw)
+    r["sensors"][0]["kind"] = "baro"
+    r["sensors"][0]["noise"] = "3 m"
+    with pytest.raises(ScenarioError, match=r"sensors\[0\]\.ranges: only a gnss_ranges"):
+        navfdi.load_scenario(r)
+
+
+def test_record_shapes_and_shared_measurements():
+    res = navfdi.run_scenario("shao2018", seed=3)
+    assert set(res.runs) == {"ls_precheck", "innovation", "none"}
+    recs = {n: r.record for n, r in res.runs.items()}
+    T = res["none"].t.size
+    assert T == 1000
+    for rec in recs.values():
+        sat = rec["satellites"]
+        S = len(sat["names"])
+        assert sat["in_view"].shape == (T, S) == sat["excluded"].shape == sat["w"].shape
+        n = sat["in_view"].sum(axis=1)
+        assert 10 <= n.min() and n.max() <= 11
+        # excluded satellites are in view; used + excluded = in view
+        assert not (sat["excluded"] & ~sat["in_view"]).any()
+        np.testing.assert_array_equal(sat["used"] + sat["excluded"].sum(axis=1), n)
+    # Same satellites in view in every variant (same measurements); none never excludes.
+    np.testing.assert_array_equal(recs["none"]["satellites"]["in_view"], recs["innovation"]["satellites"]["in_view"])
+    assert not recs["none"]["satellites"]["excluded"].any()
+    # Without FDE the faults corrupt the position; with either method it stays at metres.
+    err = res.errors().set_index("variant")
+    assert err.loc["none", "pos_u_max"] > 50
+    assert err.loc["ls_precheck", "pos_u_max"] < 10 and err.loc["innovation", "pos_u_max"] < 10
+    # The innovation global test of the "none" variant is the same statistic as the
+    # "innovation" variant's first test up to the first epoch that excludes anything.
+    a = res["none"].detector("gnss_ranges", "global")["statistic"]
+    b = res["innovation"].detector("gnss_ranges", "global")["statistic"]
+    first = int(np.argmax(recs["innovation"]["satellites"]["excluded"].any(axis=1)))
+    np.testing.assert_array_equal(a[: first + 1], b[: first + 1])
+
+
+def test_outputs(tmp_path):
+    res = navfdi.run_scenario("shao2018", seed=0)
+    paths = res.write(tmp_path)
+    names = {p.name for p in paths}
+    assert {"satellites.csv", "identified_satellites.png", "timeseries.parquet"} <= names
+    sats = pd.read_csv(tmp_path / "satellites.csv")
+    assert set(sats["variant"]) == {"ls_precheck", "innovation", "none"}
+    assert set(sats["fault_id"]) == {"step60", "ramp2", "ramp4", "none"}
+    ts = pd.read_parquet(tmp_path / "timeseries.parquet")
+    for c in ("fde.status", "fde.excluded", "fde.used", "sat.G03.w", "sat.G03.excluded"):
+        assert c in ts.columns
+    g3 = ts[(ts["variant"] == "ls_precheck") & (ts["t"] >= 40) & (ts["t"] < 110)]
+    assert g3["fde.excluded"].str.contains("G03").mean() > 0.9
+    text = res.format_tables()
+    assert "satellite FDE (ls_precheck" in text and "83.33 %" in text
+
+
+def test_montecarlo_summary_has_satellite_columns():
+    c = navfdi.montecarlo("shao2018", runs=4, seed=1)
+    s = c.summary()
+    for col in ("variant", "fault_id", "detection_rate", "identification_rate", "false_exclusion_rate", "after_fault_alarm_rate"):
+        assert col in s.columns
+    rows = s.set_index(["variant", "fault_id"])
+    assert rows.loc[("ls_precheck", "step60"), "detection_rate"] > 0.95
+    assert rows.loc[("none", "step60"), "detection_rate"] == 0
+    assert np.isnan(rows.loc[("ls_precheck", "none"), "detection_rate"])
+    assert 0 <= rows.loc[("ls_precheck", "none"), "false_exclusion_rate"] < 0.2
+    # The same run's counts in Monte-Carlo and in navfdi run (one metrics engine).
+    run = navfdi.run_scenario("shao2018", seed=1)
+    # Monte-Carlo run i uses stream i; run_scenario uses stream 0 = Monte-Carlo run 0.
+    r0 = c.runs[(c.runs["run"] == 0) & (c.runs["variant"] == "ls_precheck") & (c.runs["fault_id"] == "ramp2")]
+    m = next(m for m in run["ls_precheck"].record["satellites"]["metrics"] if m["fault"] == 1)
+    assert int(r0["fde_detected_epochs"].iloc[0]) == m["detected_epochs"]
+    assert int(r0["fde_exact_epochs"].iloc[0]) == m["exact_epochs"]
