@@ -43,6 +43,7 @@ def test_schema_errors_name_the_field(raw):
     bad(raw, r"tight\.fde", **{"tight/fde": "raim"})
     bad(raw, r"tight\.alpha", **{"tight/alpha": 1.5})
     bad(raw, r"tight\.k", **{"tight/k": -1.0})
+    bad(raw, r"tight\.accel_psd", **{"tight/accel_psd": "0 m^2/s^3"})
     bad(raw, r"tight: missing|tight.*missing", **{"tight": None})
     bad(raw, r"needs architecture = \"tight\"", architecture="centralized", tight=None, centralized={"policy": "exclude", "sensors": [{"sensor": "gnss_ranges"}]})
     r = copy.deepcopy(raw)
@@ -58,7 +59,7 @@ def test_schema_errors_name_the_field(raw):
 
 def test_record_shapes_and_shared_measurements():
     res = navfdi.run_scenario("shao2018", seed=3)
-    assert set(res.runs) == {"ls_precheck", "innovation", "none"}
+    assert set(res.runs) == {"ls_precheck", "innovation", "gnss_filter", "none"}
     recs = {n: r.record for n, r in res.runs.items()}
     T = res["none"].t.size
     assert T == 1000
@@ -77,7 +78,8 @@ def test_record_shapes_and_shared_measurements():
     # Without FDE the faults corrupt the position; with either method it stays at metres.
     err = res.errors().set_index("variant")
     assert err.loc["none", "pos_u_max"] > 50
-    assert err.loc["ls_precheck", "pos_u_max"] < 10 and err.loc["innovation", "pos_u_max"] < 10
+    for v in ("ls_precheck", "innovation", "gnss_filter"):
+        assert err.loc[v, "pos_u_max"] < 10, v
     # The innovation global test of the "none" variant is the same statistic as the
     # "innovation" variant's first test up to the first epoch that excludes anything.
     a = res["none"].detector("gnss_ranges", "global")["statistic"]
@@ -92,7 +94,7 @@ def test_outputs(tmp_path):
     names = {p.name for p in paths}
     assert {"satellites.csv", "identified_satellites.png", "timeseries.parquet"} <= names
     sats = pd.read_csv(tmp_path / "satellites.csv")
-    assert set(sats["variant"]) == {"ls_precheck", "innovation", "none"}
+    assert set(sats["variant"]) == {"ls_precheck", "innovation", "gnss_filter", "none"}
     assert set(sats["fault_id"]) == {"step60", "ramp2", "ramp4", "none"}
     ts = pd.read_parquet(tmp_path / "timeseries.parquet")
     for c in ("fde.status", "fde.excluded", "fde.used", "sat.G03.w", "sat.G03.excluded"):
@@ -120,3 +122,19 @@ def test_montecarlo_summary_has_satellite_columns():
     m = next(m for m in run["ls_precheck"].record["satellites"]["metrics"] if m["fault"] == 1)
     assert int(r0["fde_detected_epochs"].iloc[0]) == m["detected_epochs"]
     assert int(r0["fde_exact_epochs"].iloc[0]) == m["exact_epochs"]
+
+
+def test_rust_fixture_matches_bundled_scenario():
+    """benches/shao2018.json (used by the criterion benchmark) is the bundled TOML in SI."""
+    import json
+    from pathlib import Path
+
+    fixture = json.loads((Path(__file__).resolve().parents[1] / "benches" / "shao2018.json").read_text())
+    assert fixture == navfdi.load_scenario("shao2018").base().core
+
+
+def test_results_do_not_depend_on_threads():
+    """A tight campaign gives the same per-run counts with 1 and 2 threads."""
+    a = navfdi.montecarlo("shao2018", runs=4, seed=9, workers=1).runs
+    b = navfdi.montecarlo("shao2018", runs=4, seed=9, workers=2).runs
+    pd.testing.assert_frame_equal(a, b)

@@ -68,10 +68,10 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
 
 def _tight(t: Any) -> dict[str, Any]:
     """The ``[tight]`` table."""
-    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates"}, "tight")
+    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd"}, "tight")
     fde = _str(_need(t, "fde", "tight"), "tight.fde")
-    if fde not in ("ls_precheck", "innovation", "none"):
-        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation or none")
+    if fde not in ("ls_precheck", "innovation", "gnss_filter", "none"):
+        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter or none")
     rates = t.get("rates", True)
     if not isinstance(rates, bool):
         raise ScenarioError(f"tight.rates = {rates!r}: expected true or false")
@@ -81,6 +81,7 @@ def _tight(t: Any) -> dict[str, Any]:
         "alpha": _number(_need(t, "alpha", "tight"), "tight.alpha"),
         "k": None if t.get("k") is None else _number(t["k"], "tight.k"),
         "rates": rates,
+        "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
     }
 
 _SEGMENTS: dict[str, dict[str, str]] = {

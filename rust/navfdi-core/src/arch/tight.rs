@@ -19,6 +19,9 @@
 //!   the remaining rows until it passes (**resolution**: the paper's equations (10)–(14) are
 //!   lost; this is the standard filter form, with the dof = number of innovation components
 //!   rather than n − u).
+//! * `gnss_filter` (method 2 as the paper ran it, "before the INS/GNSS integration"): the same
+//!   innovation test in a GNSS-only position-velocity filter ([`PvFilter`]); satellites it
+//!   excludes update neither filter.
 //! * `none`: every satellite updates the filter; the innovation global test is recorded.
 //!
 //! Recorded: the channel's one detector `global` (the first global test of the epoch:
@@ -29,6 +32,8 @@
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::geodesy::ecef_to_enu;
+use crate::gnss::innovation::{innovation_fde, SatFde};
+use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
 use crate::gnss::snapshot::{
     fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
@@ -40,26 +45,20 @@ use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{RunRecord, SatRecord};
 use crate::sim::spec::FdePlacement;
-use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 const NO_MEASUREMENT: u8 = 5;
 const ALARM: u8 = 4;
 
-/// Outcome of one epoch's FDE: excluded satellites (local indices), status, first test, w
-/// per local satellite.
-struct EpochFde {
-    excluded: Vec<usize>,
-    status: FdeStatus,
-    first: (f64, f64, usize),
-    w: Vec<f64>,
-}
-
 /// Run the tight filter over one simulated run (`isolation = false`: FDE reports, never
-/// excludes). `cancel` is checked every epoch.
+/// excludes). `full`: also compute the innovation w-test of epochs whose global test passes
+/// (for the record; Monte-Carlo runs that keep no series pass false). `cancel` is checked
+/// every epoch.
 pub fn run_tight(
     prep: &Prepared,
     sim: &Simulated,
     isolation: bool,
+    full: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
     let spec = &prep.spec;
@@ -85,10 +84,17 @@ pub fn run_tight(
         metrics: Vec::new(),
     };
     let mut sig = DVector::zeros(crate::ins::N_STATES);
+    let mut pv = match (t.fde, &spec.sensors[si].ranges) {
+        (FdePlacement::GnssFilter, Some(r)) => Some(PvFilter::new(spec.dt, t.accel_psd, &r.clock)),
+        _ => None,
+    };
     for k in 0..epochs {
         cancel.check()?;
         kf.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
             .map_err(|e| crate::run::at_epoch(k, e))?;
+        if let Some(pv) = &mut pv {
+            pv.predict().map_err(|e| crate::run::at_epoch(k, e))?;
+        }
         let ep = &rp.epochs[k];
         let m = ep.len();
         for &s in &ep.sats {
@@ -124,6 +130,33 @@ pub fn run_tight(
         ));
         let (out, pending) = match t.fde {
             FdePlacement::LsPrecheck => (ls_precheck(prep, sim, k, kf.x(), t.rates, &cfg)?, None),
+            FdePlacement::GnssFilter => {
+                let raw = sim.raw[k].as_slice();
+                let pv = pv
+                    .as_mut()
+                    .ok_or_else(|| Error::Invalid("tight: no GNSS filter".into()))?;
+                let out = pv
+                    .step(
+                        &ep.sat_pos,
+                        &ep.sat_vel,
+                        &raw[..m],
+                        &raw[m..2 * m],
+                        &ep.sigma,
+                        &ep.sigma_rate,
+                        t.rates,
+                        &cfg,
+                    )
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                // Before the GNSS filter is initialised (fewer than 5 satellites so far) the
+                // satellites pass untested.
+                let out = out.unwrap_or_else(|| SatFde {
+                    excluded: Vec::new(),
+                    status: FdeStatus::NoSolution,
+                    first: (f64::NAN, f64::NAN, 0),
+                    w: vec![f64::NAN; m],
+                });
+                (out, None)
+            }
             FdePlacement::Innovation | FdePlacement::None => {
                 let (inn, pending) = kf
                     .innovation_pending(&z, &h, &r)
@@ -133,6 +166,8 @@ pub fn run_tight(
                     &inn.covariance,
                     m,
                     t.fde == FdePlacement::Innovation,
+                    Some(inn.statistic),
+                    full,
                     &cfg,
                 )?;
                 (out, pending)
@@ -222,7 +257,7 @@ fn ls_precheck(
     x_hat: &DVector<f64>,
     rates: bool,
     cfg: &FdeConfig,
-) -> Result<EpochFde> {
+) -> Result<SatFde> {
     let rp = prep
         .ranges
         .as_ref()
@@ -274,84 +309,10 @@ fn ls_precheck(
     }
     let status = out.status;
     let pr = out;
-    Ok(EpochFde {
+    Ok(SatFde {
         excluded,
         status,
         first: pr.first,
         w,
     })
-}
-
-/// Method 2 (`exclude = true`) or the recorded global test only: the innovation test on the
-/// residual `res` and covariance `a` of m satellites (rows `j` and, with rates, `m + j`).
-fn innovation_fde(
-    res: &DVector<f64>,
-    a: &DMatrix<f64>,
-    m: usize,
-    exclude: bool,
-    cfg: &FdeConfig,
-) -> Result<EpochFde> {
-    let rows = res.len();
-    let mut active: Vec<usize> = (0..rows).collect();
-    let mut out = EpochFde {
-        excluded: Vec::new(),
-        status: FdeStatus::Passed,
-        first: (f64::NAN, f64::NAN, 0),
-        w: vec![f64::NAN; m],
-    };
-    let mut w_at_exclusion = vec![f64::NAN; m];
-    loop {
-        if active.is_empty() {
-            out.status = FdeStatus::NoSolution;
-            break;
-        }
-        let ra = res.select_rows(&active);
-        let aa = a.select_rows(&active).select_columns(&active);
-        let chol = Cholesky::new(aa).ok_or_else(|| Error::NotPositiveDefinite {
-            name: "innovation covariance A".into(),
-            detail: "cannot factor the innovation covariance of the satellites in view".into(),
-        })?;
-        let g = chol.solve(&ra);
-        let stat = ra.dot(&g);
-        let thr = cfg.threshold(active.len())?;
-        if out.excluded.is_empty() {
-            out.first = (stat, thr, active.len());
-        }
-        let ainv = chol.inverse();
-        let wrow: Vec<f64> = (0..active.len())
-            .map(|i| g[i] / ainv[(i, i)].sqrt())
-            .collect();
-        out.w = vec![f64::NAN; m];
-        for (i, &row) in active.iter().enumerate() {
-            if row < m {
-                out.w[row] = wrow[i];
-            }
-        }
-        if stat < thr || !exclude {
-            out.status = if out.excluded.is_empty() {
-                FdeStatus::Passed
-            } else {
-                FdeStatus::Excluded
-            };
-            break;
-        }
-        let (wi, wmax) = wrow
-            .iter()
-            .enumerate()
-            .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
-            .map(|(i, v)| (i, v.abs()))
-            .unwrap_or((0, 0.0));
-        if !(wmax > cfg.k) {
-            out.status = FdeStatus::Unidentified;
-            break;
-        }
-        let satj = active[wi] % m;
-        out.excluded.push(satj);
-        w_at_exclusion[satj] = wmax;
-        active.retain(|&row| row % m != satj);
-    }
-    for &j in &out.excluded {
-        out.w[j] = w_at_exclusion[j];
-    }
-    Ok(out)
 }

@@ -10,6 +10,8 @@
 
 pub mod constellation;
 pub mod geodesy;
+pub mod innovation;
+pub mod pv_filter;
 pub mod ranges;
 pub mod snapshot;
 

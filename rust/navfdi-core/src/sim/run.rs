@@ -335,6 +335,6 @@ pub fn run_architecture(
         Architecture::Centralized => {
             crate::arch::centralized::run_centralized(prep, sim, isolation, full, cancel)
         }
-        Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, cancel),
+        Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, full, cancel),
     }
 }

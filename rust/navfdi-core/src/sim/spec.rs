@@ -67,9 +67,13 @@ pub enum FdePlacement {
     /// Paper 001's method 1: snapshot least squares, global test + w-test on the raw
     /// pseudoranges (and rates) before the filter; excluded satellites do not update it.
     LsPrecheck,
-    /// Paper 001's method 2: the innovation chi-square test + standardised-innovation w-test
-    /// with iterative exclusion inside the filter.
+    /// Paper 001's method 2 as the issue defines it: the innovation chi-square test +
+    /// standardised-innovation w-test with iterative exclusion inside the tight filter.
     Innovation,
+    /// Paper 001's method 2 as the paper ran it: the same innovation test in a GNSS-only
+    /// position-velocity Kalman filter before the integration filter
+    /// ([`crate::gnss::pv_filter`]); excluded satellites update neither filter.
+    GnssFilter,
 }
 
 /// Tightly coupled filter configuration.
@@ -88,6 +92,14 @@ pub struct TightSpec {
     /// Also update with (and test) the pseudorange rates (default true).
     #[serde(default = "default_true")]
     pub rates: bool,
+    /// White-acceleration spectral density of the GNSS-only filter (`gnss_filter`), m²/s³
+    /// (default 1).
+    #[serde(default = "default_accel_psd")]
+    pub accel_psd: f64,
+}
+
+fn default_accel_psd() -> f64 {
+    1.0
 }
 
 /// Receiver clock model: bias (m) and drift (m/s) as a two-state random process with
@@ -1048,6 +1060,7 @@ impl ScenarioSpec {
         if let Some(k) = t.k {
             positive("tight.k", k)?;
         }
+        positive("tight.accel_psd", t.accel_psd)?;
         Ok(())
     }
 

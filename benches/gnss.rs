@@ -1,0 +1,177 @@
+//! GNSS costs (paper-001 issue's speed targets), criterion:
+//!
+//! * `snapshot_fde_10`: snapshot WLS (position + clock, Gauss-Newton from the previous
+//!   epoch's solution) + global test + w-test, 10 satellites, one epoch, nothing excluded;
+//!   `snapshot_fde_10_exclude`: the same with a 60 m fault on one satellite (one exclusion,
+//!   a second solve and test);
+//! * `tight_epoch_17x20`: one tight-filter epoch with the innovation FDE: predict (17 states),
+//!   innovation of 10 pseudoranges + 10 rates, global test + w-test, update;
+//! * `shao2018_{variant}`: a whole 1000-epoch run of each FDE placement (per epoch: divide by
+//!   1000), on one simulated run.
+//!
+//! Targets: snapshot ≤ 10 µs; tight epoch ≤ 6 µs. The numpy peers run in
+//! `benches/bench_gnss.py` (same machine, same algorithm).
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use nalgebra::{DMatrix, DVector};
+use navfdi_core::cancel::NEVER;
+use navfdi_core::gnss::innovation::innovation_fde;
+use navfdi_core::gnss::snapshot::{snapshot_fde, FdeConfig, ObsCov};
+use navfdi_core::kalman::KalmanFilter;
+use navfdi_core::sim::noise::simulate;
+use navfdi_core::sim::prepare::Prepared;
+use navfdi_core::sim::run::run_architecture;
+use navfdi_core::sim::spec::{FdePlacement, ScenarioSpec};
+use std::hint::black_box;
+
+fn bench(c: &mut Criterion) {
+    let spec = ScenarioSpec::from_json(include_str!("shao2018.json")).expect("valid scenario");
+    let prep = Prepared::new(spec.clone()).expect("prepared");
+    let sim = simulate(&prep, 1, 0);
+    let rp = prep.ranges.as_ref().expect("ranges");
+    let n = spec.n_states();
+    let cfg = FdeConfig::new(0.05, Some(1.6449)).expect("cfg");
+    let r_of = |e: &navfdi_core::gnss::ranges::RangeEpoch| {
+        DMatrix::from_diagonal(&DVector::from_iterator(
+            2 * e.len(),
+            e.sigma.iter().chain(&e.sigma_rate).map(|s| s * s),
+        ))
+    };
+    // The filter of the run up to epoch k − 1, faulty observations left out (as FDE would);
+    // k: the first epoch with exactly 10 satellites, no fault and a passing innovation test
+    // (the common case).
+    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.p0.clone()).expect("kf");
+    let mut k = 0;
+    for j in 0..prep.epochs() {
+        let e = &rp.epochs[j];
+        let rj = r_of(e);
+        if j > 0 && e.len() == 10 && e.fault.iter().all(|f| *f == 0.0) {
+            let mut f = kf.clone();
+            f.predict_trusted(&prep.phi[j], &prep.q[j], 1.0)
+                .expect("predict");
+            let (inn, _) = f
+                .innovation_pending(&sim.z[rp.sensor][j], &e.h, &rj)
+                .expect("innovation");
+            let o = innovation_fde(&inn.residual, &inn.covariance, 10, true, None, true, &cfg)
+                .expect("fde");
+            if o.excluded.is_empty() {
+                k = j;
+                break;
+            }
+        }
+        kf.predict_trusted(&prep.phi[j], &prep.q[j], 1.0)
+            .expect("predict");
+        let mut zj = sim.z[rp.sensor][j].clone();
+        for (i, f) in e.fault.iter().enumerate() {
+            if *f != 0.0 {
+                zj[i] = f64::NAN;
+            }
+        }
+        kf.update_trusted(&zj, &e.h, &rj).expect("update");
+    }
+    assert!(k > 0, "no epoch with 10 satellites and a passing test");
+    eprintln!("benchmark epoch k = {k} (t = {} s)", prep.t[k]);
+    let ep = &rp.epochs[k];
+    let m = ep.len();
+    let rho: Vec<f64> = sim.raw[k].as_slice()[..m].to_vec();
+    let cov = ObsCov::Sigma(ep.sigma.clone());
+    let first = snapshot_fde(&ep.sat_pos, &rho, &cov, &cfg, None).expect("solves");
+    let p = first.position.expect("solution");
+    let x0 = Some([p.x + 3.0, p.y - 2.0, p.z + 1.0, first.clock.unwrap_or(0.0)]);
+    let mut g = c.benchmark_group("gnss");
+    g.bench_function("snapshot_fde_10", |b| {
+        b.iter(|| {
+            snapshot_fde(black_box(&ep.sat_pos), black_box(&rho), &cov, &cfg, x0).expect("ok")
+        })
+    });
+    let mut bad = rho.clone();
+    bad[3] += 60.0;
+    g.bench_function("snapshot_fde_10_exclude", |b| {
+        b.iter(|| {
+            snapshot_fde(black_box(&ep.sat_pos), black_box(&bad), &cov, &cfg, x0).expect("ok")
+        })
+    });
+    // One tight epoch, innovation FDE, from the run's state.
+    let z: DVector<f64> = sim.z[rp.sensor][k].clone();
+    let h: DMatrix<f64> = ep.h.clone();
+    let r = r_of(ep);
+    let state = kf.clone();
+    g.bench_function("tight_epoch_17x20", |b| {
+        b.iter(|| {
+            let mut f = state.clone();
+            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+                .expect("predict");
+            let (inn, pending) = f.innovation_pending(&z, &h, &r).expect("innovation");
+            let out = innovation_fde(
+                &inn.residual,
+                &inn.covariance,
+                m,
+                true,
+                Some(inn.statistic),
+                false,
+                &cfg,
+            )
+            .expect("fde");
+            if let Some(p) = pending {
+                f.apply_pending(p, &r).expect("update");
+            }
+            black_box((f, out))
+        })
+    });
+    g.bench_function("kalman_clone_17", |b| b.iter(|| black_box(state.clone())));
+    let mut s0 = state.clone();
+    s0.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+        .expect("predict");
+    let (inn0, _) = s0
+        .clone()
+        .innovation_pending(&z, &h, &r)
+        .expect("innovation");
+    g.bench_function("part_predict", |b| {
+        b.iter(|| {
+            let mut f = state.clone();
+            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+                .expect("predict");
+            black_box(f)
+        })
+    });
+    g.bench_function("part_innovation", |b| {
+        b.iter(|| {
+            let mut f = s0.clone();
+            black_box(f.innovation_pending(&z, &h, &r).expect("innovation"))
+        })
+    });
+    let o =
+        innovation_fde(&inn0.residual, &inn0.covariance, m, true, None, true, &cfg).expect("fde");
+    eprintln!(
+        "innovation test at k: {:?} {:?} excluded {:?}",
+        o.first, o.status, o.excluded
+    );
+    g.bench_function("part_fde", |b| {
+        b.iter(|| {
+            black_box(
+                innovation_fde(&inn0.residual, &inn0.covariance, m, true, None, true, &cfg)
+                    .expect("fde"),
+            )
+        })
+    });
+    g.sample_size(20);
+    for (name, fde) in [
+        ("ls_precheck", FdePlacement::LsPrecheck),
+        ("innovation", FdePlacement::Innovation),
+        ("gnss_filter", FdePlacement::GnssFilter),
+        ("none", FdePlacement::None),
+    ] {
+        let mut s = spec.clone();
+        if let Some(t) = s.tight.as_mut() {
+            t.fde = fde;
+        }
+        let p = prep.for_variant(s).expect("variant");
+        g.bench_function(format!("shao2018_{name}"), |b| {
+            b.iter(|| run_architecture(&p, &sim, true, false, &NEVER).expect("run"))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,108 @@
+//! Satellite FDE on Kalman-filter innovations (paper 001's method 2): the innovation
+//! chi-square test followed by the general w-test `w_i = (A⁻¹r)_i / sqrt((A⁻¹)_ii)` per
+//! observation (Teunissen 1990, the paper's ref. 9) with iterative exclusion of the satellite
+//! of the largest |w| above K (both its rows: pseudorange `j` and, with rates, `m + j`).
+
+use super::snapshot::{FdeConfig, FdeStatus};
+use crate::error::{Error, Result};
+use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Outcome of one epoch's satellite FDE.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SatFde {
+    /// Excluded satellites (local indices), in exclusion order.
+    pub excluded: Vec<usize>,
+    /// How the loop ended.
+    pub status: FdeStatus,
+    /// Statistic, threshold and dof of the first global test.
+    pub first: (f64, f64, usize),
+    /// w per local satellite (its pseudorange row; for an excluded one its |w| when
+    /// excluded).
+    pub w: Vec<f64>,
+}
+
+/// Method 2 (`exclude = true`) or the recorded global test only: the innovation test on the
+/// residual `res` and covariance `a` of m satellites (rows `j` and, with rates, `m + j`).
+/// `statistic`: `rᵀA⁻¹r` of all rows if already known (the filter computes it); then an
+/// epoch whose test passes needs no factorisation unless `want_w` (w per satellite, for
+/// records; NaN otherwise).
+pub fn innovation_fde(
+    res: &DVector<f64>,
+    a: &DMatrix<f64>,
+    m: usize,
+    exclude: bool,
+    statistic: Option<f64>,
+    want_w: bool,
+    cfg: &FdeConfig,
+) -> Result<SatFde> {
+    let rows = res.len();
+    let mut active: Vec<usize> = (0..rows).collect();
+    let mut out = SatFde {
+        excluded: Vec::new(),
+        status: FdeStatus::Passed,
+        first: (f64::NAN, f64::NAN, 0),
+        w: vec![f64::NAN; m],
+    };
+    let mut w_at_exclusion = vec![f64::NAN; m];
+    if let (Some(stat), false) = (statistic, want_w) {
+        let thr = cfg.threshold(rows)?;
+        if stat < thr || !exclude {
+            out.first = (stat, thr, rows);
+            return Ok(out);
+        }
+    }
+    loop {
+        if active.is_empty() {
+            out.status = FdeStatus::NoSolution;
+            break;
+        }
+        let ra = res.select_rows(&active);
+        let aa = a.select_rows(&active).select_columns(&active);
+        let chol = Cholesky::new(aa).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance A".into(),
+            detail: "cannot factor the innovation covariance of the satellites in view".into(),
+        })?;
+        let g = chol.solve(&ra);
+        let stat = ra.dot(&g);
+        let thr = cfg.threshold(active.len())?;
+        if out.excluded.is_empty() {
+            out.first = (stat, thr, active.len());
+        }
+        let ainv = chol.inverse();
+        let wrow: Vec<f64> = (0..active.len())
+            .map(|i| g[i] / ainv[(i, i)].sqrt())
+            .collect();
+        out.w = vec![f64::NAN; m];
+        for (i, &row) in active.iter().enumerate() {
+            if row < m {
+                out.w[row] = wrow[i];
+            }
+        }
+        if stat < thr || !exclude {
+            out.status = if out.excluded.is_empty() {
+                FdeStatus::Passed
+            } else {
+                FdeStatus::Excluded
+            };
+            break;
+        }
+        let (wi, wmax) = wrow
+            .iter()
+            .enumerate()
+            .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
+            .map(|(i, v)| (i, v.abs()))
+            .unwrap_or((0, 0.0));
+        if !(wmax > cfg.k) {
+            out.status = FdeStatus::Unidentified;
+            break;
+        }
+        let satj = active[wi] % m;
+        out.excluded.push(satj);
+        w_at_exclusion[satj] = wmax;
+        active.retain(|&row| row % m != satj);
+    }
+    for &j in &out.excluded {
+        out.w[j] = w_at_exclusion[j];
+    }
+    Ok(out)
+}
