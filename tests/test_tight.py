@@ -138,3 +138,32 @@ def test_results_do_not_depend_on_threads():
     a = navfdi.montecarlo("shao2018", runs=4, seed=9, workers=1).runs
     b = navfdi.montecarlo("shao2018", runs=4, seed=9, workers=2).runs
     pd.testing.assert_frame_equal(a, b)
+
+
+def test_rate_fault_is_excluded_by_the_stacked_precheck():
+    """A fault on one satellite's pseudorange rate (components = ["rate"]) is caught by the
+    ls_precheck's stacked pseudorange + rate test and by the innovation test."""
+    r = copy.deepcopy(load_scenario("shao2018").raw)
+    r["faults"] = [{"id": "rate", "sensor": "gnss_ranges", "satellite": "G03", "components": ["rate"], "kind": "step", "magnitude": "2 m/s", "start": "100 s", "end": "200 s"}]
+    res = navfdi.run_scenario(navfdi.load_scenario(r), seed=4)
+    for v in ("ls_precheck", "innovation"):
+        tab = res[v].satellite_table().set_index("fault_id")
+        assert tab.loc["rate", "detection_rate"] > 0.99, v
+    assert res["none"].satellite_table().set_index("fault_id").loc["rate", "detection_rate"] == 0
+
+
+def test_elevation_dependent_noise_and_changing_geometry():
+    """elevation_noise = true scales σ by 1/sin(elevation): a low satellite's w-test residuals
+    stay standardised (false-exclusion rate still about α) while its raw residuals grow."""
+    r = copy.deepcopy(load_scenario("shao2018").base().raw)
+    r["faults"] = []
+    r["sensors"][0]["ranges"]["elevation_noise"] = True
+    r["tight"]["fde"] = "ls_precheck"
+    c = navfdi.montecarlo(navfdi.load_scenario(r), runs=10, seed=5)
+    s = c.summary().set_index("fault_id")
+    assert 0.02 < s.loc["none", "false_alarm_rate"] < 0.08
+    # A GPS-only constellation with a low mask sees satellites rise and set within 500 s.
+    r["sensors"][0]["ranges"].update(systems=["gps"], elevation_mask="5 deg", epoch="0 s")
+    run = navfdi.run_scenario(navfdi.load_scenario(r), seed=0)
+    n = run.record["satellites"]["in_view"].sum(axis=1)
+    assert n.min() < n.max()
