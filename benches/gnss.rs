@@ -5,7 +5,11 @@
 //!   `snapshot_fde_10_exclude`: the same with a 60 m fault on one satellite (one exclusion,
 //!   a second solve and test);
 //! * `tight_epoch_17x20`: one tight-filter epoch with the innovation FDE: predict (17 states),
-//!   innovation of 10 pseudoranges + 10 rates, global test + w-test, update;
+//!   innovation of 10 pseudoranges + 10 rates, global test (passing, as in most epochs),
+//!   update, from a copy of the run's filter (`kalman_clone_17`: the copy alone);
+//!   `tight_predict_17`, `tight_innovation_17x20`: its parts; `innovation_fde_with_w_20`: the
+//!   test with the w of every satellite (factorisation and inverse), as recorded by
+//!   `navfdi run`;
 //! * `shao2018_{variant}`: a whole 1000-epoch run of each FDE placement (per epoch: divide by
 //!   1000), on one simulated run.
 //!
@@ -126,7 +130,7 @@ fn bench(c: &mut Criterion) {
         .clone()
         .innovation_pending(&z, &h, &r)
         .expect("innovation");
-    g.bench_function("part_predict", |b| {
+    g.bench_function("tight_predict_17", |b| {
         b.iter(|| {
             let mut f = state.clone();
             f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
@@ -134,7 +138,7 @@ fn bench(c: &mut Criterion) {
             black_box(f)
         })
     });
-    g.bench_function("part_innovation", |b| {
+    g.bench_function("tight_innovation_17x20", |b| {
         b.iter(|| {
             let mut f = s0.clone();
             black_box(f.innovation_pending(&z, &h, &r).expect("innovation"))
@@ -146,7 +150,7 @@ fn bench(c: &mut Criterion) {
         "innovation test at k: {:?} {:?} excluded {:?}",
         o.first, o.status, o.excluded
     );
-    g.bench_function("part_fde", |b| {
+    g.bench_function("innovation_fde_with_w_20", |b| {
         b.iter(|| {
             black_box(
                 innovation_fde(&inn0.residual, &inn0.covariance, m, true, None, true, &cfg)

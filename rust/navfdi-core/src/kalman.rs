@@ -352,9 +352,24 @@ impl KalmanFilter {
         // T = P⁻ − K(HP⁻)
         ws.nn_a.copy_from(&self.p);
         gemm(&mut ws.nn_a, -1.0, &mw.k, &mw.hp, 1.0);
-        // U = THᵀ − KR  (n × k)
+        // U = THᵀ − KR  (n × k); a diagonal R (the usual case) scales K's columns.
         gemm(&mut mw.u, 1.0, &ws.nn_a, &mw.ht, 0.0);
-        gemm(&mut mw.u, -1.0, &mw.k, r, 1.0);
+        if is_diagonal(r) {
+            let n = mw.u.nrows();
+            let ks = mw.k.as_slice();
+            let us = mw.u.as_mut_slice();
+            for j in 0..r.nrows() {
+                let rj = r[(j, j)];
+                for (u, k) in us[j * n..(j + 1) * n]
+                    .iter_mut()
+                    .zip(&ks[j * n..(j + 1) * n])
+                {
+                    *u -= k * rj;
+                }
+            }
+        } else {
+            gemm(&mut mw.u, -1.0, &mw.k, r, 1.0);
+        }
         // P = T − U Kᵀ
         gemm_nt(&mut ws.nn_a, -1.0, &mw.u, &mw.k, 1.0);
         symmetrize_with(&mut ws.nn_a, &mut ws.nn_c);
@@ -454,6 +469,15 @@ pub struct Pending {
     idx: Option<Vec<usize>>,
     res: DVector<f64>,
     chol: Cholesky<f64, Dyn>,
+}
+
+/// True when every off-diagonal element of the square matrix `m` is zero.
+fn is_diagonal(m: &DMatrix<f64>) -> bool {
+    let k = m.nrows();
+    m.as_slice()
+        .iter()
+        .enumerate()
+        .all(|(idx, v)| *v == 0.0 || idx % (k + 1) == 0)
 }
 
 /// Scratch buffers of the update for one measurement dimension k.
