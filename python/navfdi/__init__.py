@@ -8,7 +8,8 @@ Filtering
     :class:`Innovation`, :class:`FilterRun`.
 Detectors
     :class:`ResidualChi2`, :class:`ImprovedSprt`, :class:`JointChi2Sprt` with per-epoch
-    :class:`Decision` and whole-sequence :class:`DetectionRun`; :func:`alarm_intervals`.
+    :class:`Decision` and whole-sequence :class:`DetectionRun`; :func:`alarm_intervals`;
+    the dual-propagator state chi-square test :class:`StateChi2` (:class:`StateDecision`).
 Statistics
     :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
     :func:`mdb`.
@@ -40,6 +41,8 @@ from navfdi._core import (
     LinAlgError,
     ResidualChi2,
     SnapshotFde,
+    StateChi2,
+    StateDecision,
     __version__,
     chi2_threshold,
     ls_test,
@@ -74,6 +77,8 @@ __all__ = [
     "ScenarioError",
     "ScenarioRun",
     "SnapshotFde",
+    "StateChi2",
+    "StateDecision",
     "VariantRuns",
     "__version__",
     "alarm_intervals",

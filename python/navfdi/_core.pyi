@@ -44,6 +44,8 @@ __all__ = [
     "FederatedStep",
     "PreparedScenario",
     "SnapshotFde",
+    "StateChi2",
+    "StateDecision",
     "snapshot_fde",
     "ls_test",
 ]
@@ -611,3 +613,64 @@ def ls_test(b: ArrayLike, l: ArrayLike, d: ArrayLike) -> dict[str, Any]:
     ``D − B(BᵀD⁻¹B)⁻¹Bᵀ``, ``statistic`` ``VᵀD⁻¹V``, ``dof`` ``n − u`` and ``w`` (n,) the general
     w-test ``e_iᵀD⁻¹V / sqrt(e_iᵀD⁻¹D_VD⁻¹e_i)`` (NaN where an observation has no
     redundancy). Raises :class:`LinAlgError` when ``BᵀD⁻¹B`` is singular."""
+
+@final
+class StateDecision:
+    """One epoch's decision of :class:`StateChi2` (read-only)."""
+
+    @property
+    def statistic(self) -> float:
+        """``λ = βᵀV⁻¹β`` (NaN when not tested: propagator too young or V ill-conditioned)."""
+    @property
+    def threshold(self) -> float:
+        """``F⁻¹_{χ²(dof)}(1 − pf)``."""
+    @property
+    def alarm(self) -> bool:
+        """Fault declared this epoch."""
+    @property
+    def dof(self) -> int:
+        """Number of tested states."""
+    @property
+    def propagator(self) -> int | None:
+        """Index (0 or 1) of the propagator tested; None when not tested."""
+    @property
+    def age(self) -> int:
+        """Age in epochs of the tested propagator (0 when not tested)."""
+    @property
+    def ready(self) -> bool:
+        """The age rule is met (a propagator at least ``min_age`` epochs old exists)."""
+    @property
+    def ill_conditioned(self) -> bool:
+        """``V = P_s − P`` could not be factored safely (condition above 1e12 or not positive
+        definite); nothing was tested and no alarm raised."""
+    @property
+    def ratio(self) -> float:
+        """Statistic over threshold (≥ 1 means alarm; NaN when not tested)."""
+
+@final
+class StateChi2:
+    """Dual-propagator state chi-square test (METHODS §8, paper 003).
+
+    Two propagators follow the filter's model without measurements and are reset alternately
+    from the filter's output every ``reset_every`` epochs; each epoch the one reset longer ago,
+    once at least ``min_age`` epochs old (default ``reset_every``), gives
+    ``β = x̂ − x_s``, ``V = P_s − P`` and ``λ = βᵀV⁻¹β ~ χ²(d)`` over the tested ``states``
+    (indices, default all ``n``). Catches faults the filter slowly follows."""
+
+    def __new__(cls, pf: float, n: int, reset_every: int, min_age: int | None = None, states: list[int] | None = None) -> StateChi2: ...
+    def step(self, x: ArrayLike, P: ArrayLike, Phi: ArrayLike, Q: ArrayLike) -> StateDecision:
+        """One epoch: the filter's updated estimate ``x`` (n,) and covariance ``P`` (n, n), and
+        the transition ``Phi`` (n, n) and process noise ``Q`` (n, n, symmetric PSD) from the
+        previous epoch (ignored at the first). Propagate, test, then reset the propagator due at
+        this epoch. Bad input raises ``ValueError`` naming the argument and changes nothing."""
+    @property
+    def threshold(self) -> float:
+        """``F⁻¹_{χ²(len(states))}(1 − pf)``."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability per epoch."""
+    @property
+    def states(self) -> list[int]:
+        """Tested state indices."""
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support."""

@@ -127,6 +127,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<detect::PyResidualChi2>()?;
     m.add_class::<detect::PyImprovedSprt>()?;
     m.add_class::<detect::PyJointChi2Sprt>()?;
+    m.add_class::<detect::PyStateChi2>()?;
+    m.add_class::<detect::PyStateDecision>()?;
     m.add_function(wrap_pyfunction!(chi2_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(sprt_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(noncentrality, m)?)?;

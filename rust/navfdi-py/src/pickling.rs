@@ -44,6 +44,13 @@ pub fn _restore(py: Python<'_>, kind: &str, state: &str) -> PyResult<Py<PyAny>> 
         "ResidualChi2" => Py::new(py, PyResidualChi2::from_inner(load(kind, state)?))?.into_any(),
         "ImprovedSprt" => Py::new(py, PyImprovedSprt::from_inner(load(kind, state)?))?.into_any(),
         "JointChi2Sprt" => Py::new(py, PyJointChi2Sprt::from_inner(load(kind, state)?))?.into_any(),
+        "StateChi2" => {
+            let inner: navfdi_core::detect::StateChi2 = load(kind, state)?;
+            inner
+                .check_consistent()
+                .map_err(|e| PyValueError::new_err(format!("cannot restore a StateChi2: {e}")))?;
+            Py::new(py, crate::detect::PyStateChi2::from_inner(inner))?.into_any()
+        }
         "FederatedFilter" => {
             Py::new(py, PyFederatedFilter::from_inner(load(kind, state)?))?.into_any()
         }

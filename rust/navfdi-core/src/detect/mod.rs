@@ -8,10 +8,12 @@
 pub mod chi2;
 pub mod joint;
 pub mod sprt;
+pub mod state_chi2;
 
 pub use chi2::ResidualChi2;
 pub use joint::{JointChi2Sprt, JointDecision};
 pub use sprt::{ImprovedSprt, SprtVariance};
+pub use state_chi2::{StateChi2, StateDecision};
 
 use crate::error::{Error, Result};
 use crate::validate::{check_symmetric, shape_str};
