@@ -13,6 +13,9 @@ Detectors
 Statistics
     :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
     :func:`mdb`.
+Fusion
+    :class:`WeightedFusion` (inverse-variance fusion of one quantity with a fault matrix,
+    returning :class:`FusedValue`).
 Federated filtering and scenarios
     :class:`FederatedFilter` (per-epoch step API), :func:`load_scenario`, :class:`Scenario`,
     :func:`bundled_scenarios`, :func:`run_scenario` (a whole simulated run in Rust, federated
@@ -34,6 +37,7 @@ from navfdi._core import (
     DetectionRun,
     FederatedFilter,
     FederatedStep,
+    FusedValue,
     ImprovedSprt,
     Innovation,
     JointChi2Sprt,
@@ -43,6 +47,7 @@ from navfdi._core import (
     SnapshotFde,
     StateChi2,
     StateDecision,
+    WeightedFusion,
     __version__,
     chi2_threshold,
     ls_test,
@@ -66,6 +71,7 @@ __all__ = [
     "FaultMatch",
     "FederatedFilter",
     "FederatedStep",
+    "FusedValue",
     "FilterRun",
     "ImprovedSprt",
     "Innovation",
@@ -80,6 +86,7 @@ __all__ = [
     "StateChi2",
     "StateDecision",
     "VariantRuns",
+    "WeightedFusion",
     "__version__",
     "alarm_intervals",
     "bundled_scenarios",

@@ -44,6 +44,8 @@ __all__ = [
     "FederatedStep",
     "PreparedScenario",
     "SnapshotFde",
+    "WeightedFusion",
+    "FusedValue",
     "StateChi2",
     "StateDecision",
     "snapshot_fde",
@@ -672,5 +674,42 @@ class StateChi2:
     @property
     def states(self) -> list[int]:
         """Tested state indices."""
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support."""
+
+@final
+class FusedValue:
+    """One epoch's output of :class:`WeightedFusion` (read-only)."""
+
+    @property
+    def value(self) -> float | None:
+        """Fused value (the sensors' unit); None when no sensor contributed (every M_i = 0 or
+        no value): predict only."""
+    @property
+    def variance(self) -> float:
+        """``1 / Σ w_i M_i`` (NaN when none contributed)."""
+    @property
+    def weights(self) -> NDArray[np.float64]:
+        """Normalised weights per sensor, shape (n,); 0 for sensors that did not contribute."""
+    @property
+    def sigma2(self) -> NDArray[np.float64]:
+        """Estimated σ_i² per sensor, shape (n,): mean square deviation from the prediction
+        over the window, or ``prior_sigma²`` before two samples."""
+
+@final
+class WeightedFusion:
+    """Inverse-variance fusion of one quantity (e.g. altitude, m) over n sensors with a fault
+    matrix (METHODS §9, paper 003): ``y = Σ w_i M_i x_i / Σ w_i M_i``, ``w_i = 1/σ_i²`` with
+    ``σ_i²`` the mean square of sensor i's deviation from the filter's prediction over the last
+    ``window`` samples (``prior_sigma[i]`` before two samples)."""
+
+    def __new__(cls, prior_sigma: list[float], window: int = 20) -> WeightedFusion: ...
+    def step(self, values: ArrayLike, predicted: float, healthy: list[bool]) -> FusedValue:
+        """One epoch: ``values`` (n,) per sensor (NaN: not available), the filter's
+        ``predicted`` value, ``healthy`` (n,) the fault matrix M_i. Bad input raises
+        ``ValueError`` naming the argument and changes nothing."""
+    @property
+    def sensors(self) -> int:
+        """Number of sensors n."""
     def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
         """Pickle support."""

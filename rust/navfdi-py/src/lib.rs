@@ -13,6 +13,7 @@ mod interrupt;
 mod montecarlo;
 mod pickling;
 mod scenario;
+mod weighted;
 
 use crate::errors::IntoPyResult;
 use convert::{matrix, to_numpy};
@@ -129,6 +130,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<detect::PyJointChi2Sprt>()?;
     m.add_class::<detect::PyStateChi2>()?;
     m.add_class::<detect::PyStateDecision>()?;
+    m.add_class::<weighted::PyWeightedFusion>()?;
+    m.add_class::<weighted::PyFused>()?;
     m.add_function(wrap_pyfunction!(chi2_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(sprt_threshold, m)?)?;
     m.add_function(wrap_pyfunction!(noncentrality, m)?)?;

@@ -44,6 +44,13 @@ pub fn _restore(py: Python<'_>, kind: &str, state: &str) -> PyResult<Py<PyAny>> 
         "ResidualChi2" => Py::new(py, PyResidualChi2::from_inner(load(kind, state)?))?.into_any(),
         "ImprovedSprt" => Py::new(py, PyImprovedSprt::from_inner(load(kind, state)?))?.into_any(),
         "JointChi2Sprt" => Py::new(py, PyJointChi2Sprt::from_inner(load(kind, state)?))?.into_any(),
+        "WeightedFusion" => {
+            let inner: navfdi_core::fusion::WeightedFusion = load(kind, state)?;
+            inner.check_consistent().map_err(|e| {
+                PyValueError::new_err(format!("cannot restore a WeightedFusion: {e}"))
+            })?;
+            Py::new(py, crate::weighted::PyWeightedFusion::from_inner(inner))?.into_any()
+        }
         "StateChi2" => {
             let inner: navfdi_core::detect::StateChi2 = load(kind, state)?;
             inner

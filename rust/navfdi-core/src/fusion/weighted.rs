@@ -1,0 +1,184 @@
+//! Weighted fusion of one quantity over several sensors with a fault matrix (METHODS §9,
+//! paper 003): `y = Σ w_i M_i x_i / Σ w_i M_i`, `w_i = 1/σ_i²`, `M_i ∈ {0, 1}` from the
+//! sensors' detectors.
+//!
+//! `σ_i²` is estimated over the last `window` samples of sensor i's deviation from the
+//! filter's predicted value, `d = x_i − ŷ⁻`, as their **mean square** (**resolution**: not the
+//! variance about their mean, so that a biased sensor — a radio altimeter over uneven terrain
+//! — loses weight rather than keeping it); until a sensor has 2 samples its `prior_sigma` is
+//! used. A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
+//! none contributes the output says so (`value = None`) and the caller predicts only. The
+//! fused variance `1 / Σ w_i M_i` assumes independent sensors.
+
+use crate::error::{Error, Result};
+use std::collections::VecDeque;
+
+/// One epoch's fused output.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fused {
+    /// Fused value, None when no sensor contributed.
+    pub value: Option<f64>,
+    /// Its variance `1 / Σ w_i M_i` (NaN when none contributed).
+    pub variance: f64,
+    /// Normalised weights `w_i M_i / Σ w_j M_j` (0 for sensors that did not contribute).
+    pub weights: Vec<f64>,
+    /// Estimated `σ_i²` per sensor used for the weights.
+    pub sigma2: Vec<f64>,
+}
+
+/// Inverse-variance fusion with a fault matrix and windowed variance estimates.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct WeightedFusion {
+    window: usize,
+    prior: Vec<f64>,
+    devs: Vec<VecDeque<f64>>,
+}
+
+impl WeightedFusion {
+    /// `prior_sigma` per sensor (> 0, finite; its length is the number of sensors), `window`
+    /// N ≥ 2 samples.
+    pub fn new(prior_sigma: &[f64], window: usize) -> Result<Self> {
+        if prior_sigma.is_empty() {
+            return Err(Error::Invalid(
+                "prior_sigma: at least one sensor is required".into(),
+            ));
+        }
+        if let Some((i, v)) = prior_sigma
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
+        {
+            return Err(Error::InvalidParameter {
+                name: format!("prior_sigma[{i}]"),
+                value: *v,
+                requirement: "a standard deviation must be positive and finite".into(),
+            });
+        }
+        if !(2..=1_000_000).contains(&window) {
+            return Err(Error::InvalidParameter {
+                name: "window".into(),
+                value: window as f64,
+                requirement: "the variance window must hold 2 to 1 000 000 samples".into(),
+            });
+        }
+        Ok(WeightedFusion {
+            window,
+            prior: prior_sigma.to_vec(),
+            devs: vec![VecDeque::with_capacity(window); prior_sigma.len()],
+        })
+    }
+
+    /// Check that a deserialised object is self-consistent (used when unpickling).
+    pub fn check_consistent(&self) -> Result<()> {
+        let ok = !self.prior.is_empty()
+            && self.devs.len() == self.prior.len()
+            && (2..=1_000_000).contains(&self.window)
+            && self.devs.iter().all(|d| d.len() <= self.window)
+            && self.prior.iter().all(|v| *v > 0.0 && v.is_finite());
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::Invalid("inconsistent weighted-fusion state".into()))
+        }
+    }
+
+    /// Number of sensors.
+    pub fn sensors(&self) -> usize {
+        self.prior.len()
+    }
+
+    /// One epoch: `values` per sensor (NaN: not available), the filter's `predicted` value,
+    /// `healthy` = the fault matrix `M_i`. Inputs are validated; on error nothing changes.
+    pub fn step(&mut self, values: &[f64], predicted: f64, healthy: &[bool]) -> Result<Fused> {
+        let n = self.prior.len();
+        for (name, len) in [("values", values.len()), ("healthy", healthy.len())] {
+            if len != n {
+                return Err(Error::Shape {
+                    name: name.into(),
+                    expected: format!("({n},), one per sensor"),
+                    got: format!("({len},)"),
+                });
+            }
+        }
+        if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| v.is_infinite()) {
+            return Err(Error::NonFinite {
+                name: "values".into(),
+                index: format!("[{i}]"),
+                value: *v,
+            });
+        }
+        if !predicted.is_finite() {
+            return Err(Error::NonFinite {
+                name: "predicted".into(),
+                index: "".into(),
+                value: predicted,
+            });
+        }
+        let mut sigma2 = Vec::with_capacity(n);
+        for ((v, d), prior) in values.iter().zip(self.devs.iter_mut()).zip(&self.prior) {
+            if v.is_finite() {
+                if d.len() == self.window {
+                    d.pop_front();
+                }
+                d.push_back(v - predicted);
+            }
+            sigma2.push(if d.len() >= 2 {
+                (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).max(f64::MIN_POSITIVE)
+            } else {
+                prior * prior
+            });
+        }
+        let mut weights = vec![0.0; n];
+        let (mut sw, mut swx) = (0.0, 0.0);
+        for i in 0..n {
+            if healthy[i] && values[i].is_finite() {
+                let w = 1.0 / sigma2[i];
+                weights[i] = w;
+                sw += w;
+                swx += w * values[i];
+            }
+        }
+        if sw > 0.0 {
+            for w in weights.iter_mut() {
+                *w /= sw;
+            }
+            Ok(Fused {
+                value: Some(swx / sw),
+                variance: 1.0 / sw,
+                weights,
+                sigma2,
+            })
+        } else {
+            Ok(Fused {
+                value: None,
+                variance: f64::NAN,
+                weights,
+                sigma2,
+            })
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fuses_by_inverse_variance_and_reports_none() {
+        let mut f = WeightedFusion::new(&[1.0, 2.0], 3).unwrap();
+        let out = f.step(&[10.0, 13.0], 10.0, &[true, true]).unwrap();
+        // One sample each: priors 1 and 4 → weights 0.8 / 0.2.
+        assert!((out.value.unwrap() - (0.8 * 10.0 + 0.2 * 13.0)).abs() < 1e-12);
+        let out = f.step(&[f64::NAN, 12.0], 10.0, &[true, false]).unwrap();
+        assert_eq!(out.value, None);
+        assert!(f
+            .step(&[1.0], 0.0, &[true, true])
+            .unwrap_err()
+            .to_string()
+            .contains("values"));
+        assert!(WeightedFusion::new(&[1.0, 0.0], 3)
+            .unwrap_err()
+            .to_string()
+            .contains("prior_sigma[1]"));
+    }
+}
