@@ -38,7 +38,26 @@ SENSOR_COMPONENTS: dict[str, list[tuple[str, str]]] = {
     "baro": [("h", "length")],
     "vision": [("pos_e", "length"), ("pos_n", "length"), ("pos_u", "length")],
     "gnss_ranges": [("pseudorange", "length"), ("rate", "velocity")],
+    "radio_altimeter": [("h", "length")],
 }
+
+
+def _terrain(t: Any) -> dict[str, Any]:
+    """The ``[terrain]`` table: ``waves`` of amplitude, wavelength, heading, phase."""
+    _check_keys(t, {"waves"}, "terrain")
+    waves = []
+    for i, w in enumerate(_list(_need(t, "waves", "terrain"), "terrain.waves")):
+        p = f"terrain.waves[{i}]"
+        _check_keys(w, {"amplitude", "wavelength", "heading", "phase"}, p)
+        waves.append(
+            {
+                "amplitude": _unit(_need(w, "amplitude", p), "length", f"{p}.amplitude"),
+                "wavelength": _unit(_need(w, "wavelength", p), "length", f"{p}.wavelength"),
+                "heading": _unit(w.get("heading", "0 deg"), "angle", f"{p}.heading"),
+                "phase": _unit(w.get("phase", "0 deg"), "angle", f"{p}.phase"),
+            }
+        )
+    return {"waves": waves}
 
 _CLOCK = {"bias": "length", "drift": "velocity", "bias_psd": "length2_per_time", "drift_psd": "length2_per_time3"}
 
@@ -234,7 +253,7 @@ def _centralized(c: Any) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -272,6 +291,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         "speed": _unit(tr.get("speed", "0 m/s"), "velocity", "trajectory.speed"),
         "segments": segs,
     }
+    if "terrain" in raw:
+        core["terrain"] = _terrain(raw["terrain"])
     ins = _need(raw, "ins", "")
     _check_keys(ins, set(_INS), "ins")
     core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}

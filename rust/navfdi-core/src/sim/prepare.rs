@@ -73,7 +73,7 @@ pub fn measurement_matrix(kind: SensorKind, lat: f64, h: f64) -> DMatrix<f64> {
                 hm[(i, VEL + i)] = 1.0;
             }
         }
-        SensorKind::Baro => hm[(0, POS + 2)] = 1.0,
+        SensorKind::Baro | SensorKind::RadioAltimeter => hm[(0, POS + 2)] = 1.0,
         SensorKind::GnssRanges => {}
     }
     hm
@@ -231,10 +231,28 @@ impl Prepared {
                 .iter()
                 .filter(|f| spec.sensor_index(&f.sensor) == Some(si) && m > 0)
                 .collect();
+            // A radio altimeter read as altitude over a flat reference errs by the terrain
+            // height under the vehicle.
+            let terrain: Vec<f64> = match (&spec.terrain, s.kind) {
+                (Some(tr), SensorKind::RadioAltimeter) => {
+                    let (lat0, lon0) = (truth[0].lat, truth[0].lon);
+                    let rm = earth::r_meridian(lat0) + truth[0].h;
+                    let rn = (earth::r_normal(lat0) + truth[0].h) * lat0.cos();
+                    truth
+                        .iter()
+                        .map(|e| tr.height((e.lon - lon0) * rn, (e.lat - lat0) * rm))
+                        .collect()
+                }
+                _ => vec![0.0; truth.len()],
+            };
             fault.push(
                 t.iter()
-                    .map(|&tk| {
+                    .zip(&terrain)
+                    .map(|(&tk, &th)| {
                         let mut v = DVector::zeros(m);
+                        if m > 0 {
+                            v[0] += th;
+                        }
                         for f in &faults {
                             for &c in &f.components {
                                 v[c] += f.value(tk);
@@ -275,6 +293,7 @@ impl Prepared {
             ("ins", base.ins == spec.ins),
             ("sensors", base.sensors == spec.sensors),
             ("faults", base.faults == spec.faults),
+            ("terrain", base.terrain == spec.terrain),
         ];
         if let Some((field, _)) = same.iter().find(|(_, eq)| !eq) {
             return Err(Error::Invalid(format!(
@@ -290,5 +309,56 @@ impl Prepared {
     /// Number of epochs.
     pub fn epochs(&self) -> usize {
         self.t.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::spec::{SensorSpec, TerrainSpec, TerrainWave};
+
+    #[test]
+    fn radio_altimeter_error_is_the_terrain_under_the_vehicle() {
+        let mut spec: ScenarioSpec =
+            serde_json::from_str(include_str!("../../../../benches/yang2013.json")).unwrap();
+        spec.duration = 300.0;
+        spec.faults.clear();
+        spec.sensors.push(SensorSpec {
+            name: "ra".into(),
+            kind: SensorKind::RadioAltimeter,
+            noise: vec![0.5],
+            rate: 1.0,
+            outages: vec![],
+            ranges: None,
+        });
+        let wave = TerrainWave {
+            amplitude: 4.0,
+            wavelength: 700.0,
+            heading: 0.4,
+            phase: 0.3,
+        };
+        spec.terrain = Some(TerrainSpec { waves: vec![wave] });
+        let prep = Prepared::new(spec).unwrap();
+        let si = prep.spec.sensor_index("ra").unwrap();
+        let t0 = &prep.truth[0];
+        let mut spread = (f64::INFINITY, f64::NEG_INFINITY);
+        for (k, e) in prep.truth.iter().enumerate() {
+            // Independent local coordinates: ECEF difference rotated to ENU at the start.
+            let d = crate::gnss::geodesy::ecef_to_enu(t0.lat, t0.lon)
+                * (crate::gnss::geodesy::lla_to_ecef(e.lat, e.lon, t0.h)
+                    - crate::gnss::geodesy::lla_to_ecef(t0.lat, t0.lon, t0.h));
+            let want = 4.0
+                * (std::f64::consts::TAU * (d.x * 0.4f64.sin() + d.y * 0.4f64.cos()) / 700.0 + 0.3)
+                    .sin();
+            let got = prep.fault[si][k][0];
+            // navfdi's local frame scales latitude and longitude at the start point; over the
+            // few km flown it differs from the rotated ECEF difference by centimetres at most.
+            assert!((got - want).abs() < 0.05, "k = {k}: {got} vs {want}");
+            spread = (spread.0.min(got), spread.1.max(got));
+        }
+        assert!(
+            spread.1 - spread.0 > 4.0,
+            "the vehicle crosses the waves: {spread:?}"
+        );
     }
 }

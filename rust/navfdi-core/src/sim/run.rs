@@ -254,6 +254,7 @@ pub fn varying_h(prep: &Prepared, sensor_idx: &[usize]) -> Vec<bool> {
                 SensorKind::Cns
                     | SensorKind::GnssVelocity
                     | SensorKind::Baro
+                    | SensorKind::RadioAltimeter
                     | SensorKind::GnssRanges
             )
         })

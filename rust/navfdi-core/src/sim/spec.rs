@@ -40,6 +40,48 @@ pub struct ScenarioSpec {
     /// Tightly coupled filter configuration (architecture `tight`).
     #[serde(default)]
     pub tight: Option<TightSpec>,
+    /// Terrain under the trajectory (radio altimeters); flat when absent.
+    #[serde(default)]
+    pub terrain: Option<TerrainSpec>,
+}
+
+/// One sinusoidal wave of the terrain height field.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainWave {
+    /// Amplitude (m).
+    pub amplitude: f64,
+    /// Wavelength (m).
+    pub wavelength: f64,
+    /// Direction of travel of the wave crests' normal, clockwise from north (rad).
+    pub heading: f64,
+    /// Phase at the trajectory's start point (rad).
+    #[serde(default)]
+    pub phase: f64,
+}
+
+/// Terrain height above the reference surface as a sum of sinusoids over the local east and
+/// north distances (m) from the trajectory's start point (paper 003's "wavy" map):
+/// `T(e, n) = Σ A_i sin(2π (e sin θ_i + n cos θ_i) / λ_i + φ_i)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainSpec {
+    /// The waves.
+    pub waves: Vec<TerrainWave>,
+}
+
+impl TerrainSpec {
+    /// Terrain height (m) at east `e`, north `n` (m) from the start point.
+    pub fn height(&self, e: f64, n: f64) -> f64 {
+        self.waves
+            .iter()
+            .map(|w| {
+                let (s, c) = w.heading.sin_cos();
+                w.amplitude
+                    * (std::f64::consts::TAU * (e * s + n * c) / w.wavelength + w.phase).sin()
+            })
+            .sum()
+    }
 }
 
 /// Integration architecture of a scenario.
@@ -312,6 +354,9 @@ pub enum SensorKind {
     /// Pseudorange (m) and pseudorange rate (m/s) of every satellite in view (the
     /// components' noise σ); needs the sensor's `ranges` table and architecture `tight`.
     GnssRanges,
+    /// Radio altimeter: height above the terrain under the vehicle, used as altitude over a
+    /// flat reference (m); 1 component. Its error includes the terrain height ([`TerrainSpec`]).
+    RadioAltimeter,
 }
 
 impl SensorKind {
@@ -319,7 +364,7 @@ impl SensorKind {
     pub fn dim(self) -> usize {
         match self {
             SensorKind::Gnss => 6,
-            SensorKind::Baro => 1,
+            SensorKind::Baro | SensorKind::RadioAltimeter => 1,
             SensorKind::GnssRanges => 2,
             _ => 3,
         }
@@ -332,7 +377,7 @@ impl SensorKind {
             SensorKind::Gnss => &["pos_e", "pos_n", "pos_u", "vel_e", "vel_n", "vel_u"],
             SensorKind::GnssPosition | SensorKind::Vision => &["pos_e", "pos_n", "pos_u"],
             SensorKind::GnssVelocity => &["vel_e", "vel_n", "vel_u"],
-            SensorKind::Baro => &["h"],
+            SensorKind::Baro | SensorKind::RadioAltimeter => &["h"],
             SensorKind::GnssRanges => &["pseudorange", "rate"],
         }
     }
@@ -719,6 +764,18 @@ impl ScenarioSpec {
             ));
         }
         self.check_kinematics()?;
+        if let Some(t) = &self.terrain {
+            for (i, w) in t.waves.iter().enumerate() {
+                let p = format!("terrain.waves[{i}]");
+                non_negative(&format!("{p}.amplitude"), w.amplitude)?;
+                positive(&format!("{p}.wavelength"), w.wavelength)?;
+                for (f, v) in [("heading", w.heading), ("phase", w.phase)] {
+                    if !v.is_finite() {
+                        return Err(bad(format!("{p}.{f}"), "must be finite"));
+                    }
+                }
+            }
+        }
         for (i, s) in tr.segments.iter().enumerate() {
             let p = format!("trajectory.segments[{i}]");
             positive(&format!("{p}.duration"), s.duration())?;
