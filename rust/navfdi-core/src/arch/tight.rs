@@ -32,7 +32,7 @@
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::geodesy::ecef_to_enu;
-use crate::gnss::innovation::{innovation_fde, SatFde};
+use crate::gnss::innovation::{innovation_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
 use crate::gnss::snapshot::{
@@ -193,29 +193,9 @@ pub fn run_tight(
             } else {
                 out.status.code()
             });
-        let act = isolation && !out.excluded.is_empty();
-        let updated = if act {
-            let mut zu = z.clone();
-            for &j in &out.excluded {
-                zu[j] = f64::NAN;
-                if t.rates {
-                    zu[m + j] = f64::NAN;
-                }
-            }
-            let used = m - out.excluded.len();
-            if used > 0 {
-                kf.update_trusted(&zu, &h, &r)
-                    .map_err(|e| crate::run::at_epoch(k, e))?;
-            }
-            used
-        } else {
-            match pending {
-                Some(p) => kf.apply_pending(p, &r),
-                None => kf.update_trusted(&z, &h, &r).map(|_| ()),
-            }
+        let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
+        let updated = update_without(&mut kf, &z, &h, &r, m, excluded, pending)
             .map_err(|e| crate::run::at_epoch(k, e))?;
-            m
-        };
         sub.fused.push(updated > 0);
         sat.used.push(updated as u32);
         rec.sources.push(u32::from(updated > 0));

@@ -5,7 +5,44 @@
 
 use super::snapshot::{FdeConfig, FdeStatus};
 use crate::error::{Error, Result};
+use crate::kalman::{KalmanFilter, Pending};
 use nalgebra::{Cholesky, DMatrix, DVector};
+
+/// Update `kf` with the satellites not in `excluded` (local indices of m satellites; rows `j`
+/// and, when `z` has 2m rows, `m + j`): the prepared update when nothing is excluded, a
+/// reduced update otherwise, none when every satellite is excluded. Returns the number of
+/// satellites used.
+pub fn update_without(
+    kf: &mut KalmanFilter,
+    z: &DVector<f64>,
+    h: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    m: usize,
+    excluded: &[usize],
+    pending: Option<Pending>,
+) -> Result<usize> {
+    if excluded.is_empty() {
+        match pending {
+            Some(p) => kf.apply_pending(p, r)?,
+            None => {
+                kf.update_trusted(z, h, r)?;
+            }
+        }
+        return Ok(m);
+    }
+    let used = m - excluded.len();
+    if used > 0 {
+        let mut zu = z.clone();
+        for &j in excluded {
+            zu[j] = f64::NAN;
+            if zu.len() > m {
+                zu[m + j] = f64::NAN;
+            }
+        }
+        kf.update_trusted(&zu, h, r)?;
+    }
+    Ok(used)
+}
 
 /// Outcome of one epoch's satellite FDE.
 #[derive(Debug, Clone, PartialEq)]

@@ -9,7 +9,7 @@
 //! least-squares solution (position, clock, velocity, drift), with σ 10 m, 1 m/s, 10 m,
 //! 1 m/s.
 
-use super::innovation::{innovation_fde, SatFde};
+use super::innovation::{innovation_fde, update_without, SatFde};
 use super::snapshot::{fde, FdeConfig, ObsCov, PositionModel, RateModel};
 use crate::error::Result;
 use crate::kalman::KalmanFilter;
@@ -154,20 +154,7 @@ impl PvFilter {
             false,
             cfg,
         )?;
-        if out.excluded.is_empty() {
-            if let Some(p) = pending {
-                kf.apply_pending(p, &rr)?;
-            }
-        } else if out.excluded.len() < m {
-            let mut zu = z.clone();
-            for &j in &out.excluded {
-                zu[j] = f64::NAN;
-                if rates {
-                    zu[m + j] = f64::NAN;
-                }
-            }
-            kf.update_trusted(&zu, &h, &rr)?;
-        }
+        update_without(kf, &z, &h, &rr, m, &out.excluded, pending)?;
         Ok(Some(out))
     }
 
