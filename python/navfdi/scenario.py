@@ -85,6 +85,84 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
     }
 
 
+def _waypoints(tr: Mapping[str, Any], duration: float) -> dict[str, Any]:
+    """``[trajectory]`` given as ``waypoints`` ``[[east, north, up], ...]`` (with units) in a
+    local ENU frame around ``latitude``, ``longitude``, ``height`` (the reference point), flown
+    at ground ``speed`` with turns at ``turn_rate`` (default 30 deg/s) → the segment form:
+    start at the first waypoint heading for the second at ``speed``; at each intermediate
+    waypoint a level coordinated turn centred on it (radius r = speed / turn_rate, passing
+    r·(1/cos(Δψ/2) − 1) from it); straight level, climb or descent segments between the turns
+    (height changes happen on the straights, so the height at each waypoint is exact); a stop
+    at 1 m/s² (or less) ending on the last waypoint, then rest until the end of the run
+    (``duration``, s). Local distances use
+    the radii of curvature at the reference."""
+    _check_keys(tr, {"latitude", "longitude", "height", "waypoints", "speed", "turn_rate"}, "trajectory")
+    lat0 = _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude")
+    lon0 = _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude")
+    h0 = _unit(_need(tr, "height", "trajectory"), "length", "trajectory.height")
+    speed = _unit(_need(tr, "speed", "trajectory"), "velocity", "trajectory.speed")
+    if not speed > 0:
+        raise ScenarioError(f"trajectory.speed = {tr['speed']!r}: waypoints are flown at a positive ground speed")
+    rate = _unit(tr.get("turn_rate", "30 deg/s"), "angular_rate", "trajectory.turn_rate")
+    if not rate > 0:
+        raise ScenarioError(f"trajectory.turn_rate = {tr.get('turn_rate')!r}: must be positive")
+    pts = []
+    for i, w in enumerate(_list(_need(tr, "waypoints", "trajectory"), "trajectory.waypoints")):
+        w = _list(w, f"trajectory.waypoints[{i}]")
+        if len(w) != 3:
+            raise ScenarioError(f"trajectory.waypoints[{i}] = {w!r}: expected [east, north, up] with units")
+        pts.append([_unit(v, "length", f"trajectory.waypoints[{i}][{j}]") for j, v in enumerate(w)])
+    if len(pts) < 2:
+        raise ScenarioError("trajectory.waypoints: at least two waypoints are required")
+    a, f = 6378137.0, 1 / 298.257223563
+    e2 = f * (2 - f)
+    s2 = math.sin(lat0) ** 2
+    rm = a * (1 - e2) / (1 - e2 * s2) ** 1.5 + h0
+    rn = (a / math.sqrt(1 - e2 * s2) + h0) * math.cos(lat0)
+    legs = []
+    for i in range(len(pts) - 1):
+        de, dn, du = (pts[i + 1][j] - pts[i][j] for j in range(3))
+        horiz = math.hypot(de, dn)
+        if horiz < 1e-6:
+            raise ScenarioError(f"trajectory.waypoints[{i + 1}]: same horizontal position as waypoint {i}; a leg needs a horizontal length")
+        legs.append((horiz, math.atan2(de, dn), du))
+    # Turns are centred on the waypoints: each starts `lead` = r·tan(|Δψ|/2) before it (r =
+    # speed / turn_rate) and the leg after it starts `lead` after it; the stop ends on the last.
+    radius = speed / rate
+    dpsi = [0.0] + [(legs[i][1] - legs[i - 1][1] + math.pi) % (2 * math.pi) - math.pi for i in range(1, len(legs))] + [0.0]
+    lead = [radius * math.tan(abs(d) / 2) for d in dpsi]
+    decel = min(1.0, speed)
+    stop = speed * speed / (2 * decel)
+    segs: list[dict[str, str]] = []
+    for i, (horiz, _, du) in enumerate(legs):
+        if i > 0 and abs(dpsi[i]) > 1e-9:
+            segs.append({"kind": "turn", "duration": f"{abs(dpsi[i]) / rate!r} s", "rate": f"{math.copysign(rate, dpsi[i])!r} rad/s"})
+        straight = horiz - lead[i] - lead[i + 1] - (stop if i == len(legs) - 1 else 0.0)
+        if straight <= 1e-6:
+            raise ScenarioError(
+                f"trajectory.waypoints[{i + 1}]: the leg from waypoint {i} ({horiz:.3g} m) is too short for the turns "
+                f"(radius speed / turn_rate = {radius:.3g} m) and the stop; lower the speed or raise turn_rate"
+            )
+        dur = straight / speed
+        if abs(du) < 1e-9:
+            segs.append({"kind": "level", "duration": f"{dur!r} s"})
+        else:
+            segs.append({"kind": "climb" if du > 0 else "descent", "duration": f"{dur!r} s", "rate": f"{abs(du) / dur!r} m/s"})
+    segs.append({"kind": "accelerate", "duration": f"{speed / decel!r} s", "acceleration": f"{-decel!r} m/s2"})
+    first = legs[0][1]
+    flown = sum(float(sg["duration"].split()[0]) for sg in segs)
+    segs.append({"kind": "stationary", "duration": f"{max(duration - flown, 1.0)!r} s"})
+    e0, n0, u0 = pts[0]
+    return {
+        "latitude": f"{lat0 + n0 / rm!r} rad",
+        "longitude": f"{lon0 + e0 / rn!r} rad",
+        "height": f"{h0 + u0!r} m",
+        "heading": f"{first!r} rad",
+        "speed": f"{speed!r} m/s",
+        "segments": segs,
+    }
+
+
 def _tight(t: Any) -> dict[str, Any]:
     """The ``[tight]`` table."""
     _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd"}, "tight")
@@ -260,6 +338,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         "dt": _unit(_need(raw, "dt", ""), "time", "dt"),
     }
     tr = _need(raw, "trajectory", "")
+    if isinstance(tr, Mapping) and "waypoints" in tr:
+        tr = _waypoints(tr, core["duration"])
     _check_keys(tr, {"latitude", "longitude", "height", "heading", "speed", "segments"}, "trajectory")
     segs = []
     for i, s in enumerate(_list(_need(tr, "segments", "trajectory"), "trajectory.segments")):
