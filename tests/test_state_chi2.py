@@ -137,3 +137,58 @@ def test_pickle_and_copy_continue_exactly():
             e = other.step(xs[k], np.eye(4) * 0.5, Phi, Q)
             assert (e.statistic == d.statistic or (np.isnan(e.statistic) and np.isnan(d.statistic))) and e.alarm == d.alarm
     assert out  # the helper ran
+
+
+def state_scenario(faults=True, **state):
+    raw = copy.deepcopy(navfdi.load_scenario("gao_fading").base().raw)
+    if not faults:
+        raw["faults"] = []
+    raw["state_chi2"] = {"pf": 0.05, "reset_every": "60 s", "min_age": "30 s", "states": ["vel_e", "vel_n", "vel_u", "lat", "lon", "h"], **state}
+    return navfdi.load_scenario(raw)
+
+
+def test_scenario_state_test_false_alarm_rate_is_pf():
+    """[state_chi2] on the centralized INS/GNSS filter of gao_fading without faults: one sample
+    per reset period (older propagator at 1.5 periods) over 40 runs, inside a 99 % binomial
+    interval of pf."""
+    sc = state_scenario(faults=False)
+    alarms = samples = 0
+    idx = np.arange(90, 1500, 60)
+    for seed in range(40):
+        st = navfdi.run_scenario(sc, seed=seed, compare_isolation=False).record["state_chi2"]
+        ok = st["ready"][idx] & ~st["ill_conditioned"][idx]
+        samples += int(ok.sum())
+        alarms += int(st["alarm"][idx][ok].sum())
+    lo, hi = stats.binom.interval(0.99, samples, 0.05)
+    assert samples > 800 and lo <= alarms <= hi, (alarms, samples)
+
+
+def test_scenario_state_test_is_recorded_and_matched_to_faults(tmp_path):
+    res = navfdi.run_scenario(state_scenario(), seed=1, compare_isolation=False)
+    st = res.record["state_chi2"]
+    assert st["states"] == [3, 4, 5, 6, 7, 8] and st["statistic"].shape == res.t.shape
+    ev = res.events()
+    mine = ev[ev["detector"] == "state_chi2"]
+    assert (mine["subfilter"] == "navigation").all()
+    assert "lat-step" in set(mine["fault_id"].dropna())
+    ts = res.timeseries()
+    assert {"state_chi2.statistic", "state_chi2.alarm", "state_chi2.ready"} <= set(ts.columns)
+    names = {p.name for p in res.write(tmp_path)}
+    assert "detector_navigation_state_chi2.png" in names
+
+
+@pytest.mark.parametrize(
+    "state, match",
+    [
+        (dict(pf=2.0), r"state_chi2\.pf"),
+        (dict(min_age="90 s"), r"state_chi2\.min_age"),
+        (dict(reset_every="0.5 s"), r"state_chi2\.reset_every"),
+        (dict(states=["clock_bias"]), r"state_chi2\.states\[0\].*out of range"),
+        (dict(states=["lat", "lat"]), r"state_chi2\.states\[1\]"),
+        (dict(states=["altitude"]), r"state_chi2\.states\[0\] = 'altitude': not a state"),
+        (dict(every="1 s"), r"state_chi2: unknown field"),
+    ],
+)
+def test_scenario_state_config_errors_name_the_field(state, match):
+    with pytest.raises(navfdi.ScenarioError, match=match):
+        state_scenario(**state)

@@ -16,6 +16,8 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
 
     * ``detector_{sub}_{det}.png``: statistic (log scale) against threshold, alarm epochs, fault
       windows shaded, for every detector of every sub-filter with faults;
+    * ``detector_navigation_state_chi2.png``: the state chi-square test of the navigation
+      solution (scenarios with ``[state_chi2]``);
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
       isolation.
 
@@ -61,6 +63,25 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
             fig.savefig(p, dpi=110)
             plt.close(fig)
             paths.append(p)
+    st = run.record.get("state_chi2")
+    if st is not None:
+        fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
+        for f in faults:
+            ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.12, lw=0)
+        stat = np.where(np.isfinite(st["statistic"]), np.maximum(st["statistic"], 1e-6), np.nan)
+        ax.semilogy(t, stat, lw=0.8, color="tab:blue", label="statistic")
+        ax.semilogy(t, st["threshold"], lw=1.0, color="k", ls="--", label="threshold")
+        al = st["alarm"].astype(bool)
+        ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("λ = βᵀV⁻¹β")
+        var = f", variant {run.variant}" if prefix else ""
+        ax.set_title(f"{run.scenario.name}{var}: state chi-square of the navigation solution (seed {run.seed}); faults shaded")
+        ax.legend(loc="upper left", fontsize=8, ncol=3)
+        p = out / f"{prefix}detector_navigation_state_chi2.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     for s in run.record["subfilters"]:
         if "mdb" not in s:
             continue

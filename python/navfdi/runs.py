@@ -217,7 +217,8 @@ class ScenarioRun:
     def events(self):
         """One row per alarm interval: ``subfilter, detector, alarm_start, alarm_end, fault_id,
         fault_start, fault_end, delay`` (times in s; empty where no fault matches or the alarm
-        never ends). Returns a pandas DataFrame."""
+        never ends); the state chi-square test (``[state_chi2]``) as subfilter ``navigation``,
+        detector ``state_chi2``, matched to every fault. Returns a pandas DataFrame."""
         import pandas as pd
 
         rows = []
@@ -238,6 +239,24 @@ class ScenarioRun:
                             "delay": max(iv.start - f["start"], 0.0) if f else None,
                         }
                     )
+        st = self.record.get("state_chi2")
+        if st is not None:
+            # The state test watches the whole navigation solution: matched to every fault.
+            allf = sorted(self.scenario.faults(), key=lambda f: f["start"])
+            for iv, fi in self._events(st["alarm"], allf):
+                f = None if fi is None else allf[fi]
+                rows.append(
+                    {
+                        "subfilter": "navigation",
+                        "detector": "state_chi2",
+                        "alarm_start": iv.start,
+                        "alarm_end": iv.end,
+                        "fault_id": f["id"] if f else None,
+                        "fault_start": f["start"] if f else None,
+                        "fault_end": f["end"] if f else None,
+                        "delay": max(iv.start - f["start"], 0.0) if f else None,
+                    }
+                )
         cols = ["subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
         df = pd.DataFrame(rows, columns=cols)
         for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
@@ -340,7 +359,8 @@ class ScenarioRun:
         ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
         component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
         isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m).
-        Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
+        With ``[state_chi2]``: ``state_chi2.statistic, .threshold, .alarm, .ready,
+        .ill_conditioned``. Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
         no_measurement), ``fde.used`` (satellites updating the filter), ``fde.excluded``
         (comma-separated names) and per satellite ever in view ``sat.{name}.in_view``,
         ``.excluded`` and ``.w`` (w-test statistic of its pseudorange, NaN when not tested)."""
@@ -358,6 +378,10 @@ class ScenarioRun:
             for d in s["detectors"]:
                 for k in ("statistic", "threshold", "alarm"):
                     cols[f"{sub}.{d['name']}.{k}"] = d[k]
+        st = self.record.get("state_chi2")
+        if st is not None:
+            for k in ("statistic", "threshold", "alarm", "ready", "ill_conditioned"):
+                cols[f"state_chi2.{k}"] = st[k]
         sat = self.record.get("satellites")
         if sat is not None:
             names = sat["names"]

@@ -300,7 +300,30 @@ def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
 
 
 #: Top-level fields a variant may override: the filter, never what is simulated.
-VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight")
+VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "state_chi2")
+
+#: Names of the filter states, in order (15 INS error states; 17 with a receiver clock).
+STATE_NAMES = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "lat", "lon", "h", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "clock_bias", "clock_drift"]
+
+
+def _state_chi2(sc: Any) -> dict[str, Any]:
+    """The ``[state_chi2]`` table: pf, reset_every, min_age (times), states (names)."""
+    _check_keys(sc, {"pf", "reset_every", "min_age", "states"}, "state_chi2")
+    reset = _unit(_need(sc, "reset_every", "state_chi2"), "time", "state_chi2.reset_every")
+    states = None
+    if "states" in sc:
+        states = []
+        for i, name in enumerate(_list(sc["states"], "state_chi2.states")):
+            name = _str(name, f"state_chi2.states[{i}]")
+            if name not in STATE_NAMES:
+                raise ScenarioError(f"state_chi2.states[{i}] = {name!r}: not a state (use {', '.join(STATE_NAMES)})")
+            states.append(STATE_NAMES.index(name))
+    return {
+        "pf": _number(_need(sc, "pf", "state_chi2"), "state_chi2.pf"),
+        "reset_every": reset,
+        "min_age": _unit(sc.get("min_age", f"{reset!r} s"), "time", "state_chi2.min_age"),
+        "states": states,
+    }
 
 
 def _centralized(c: Any) -> dict[str, Any]:
@@ -331,7 +354,7 @@ def _centralized(c: Any) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "state_chi2", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -373,6 +396,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     }
     if "terrain" in raw:
         core["terrain"] = _terrain(raw["terrain"])
+    if "state_chi2" in raw:
+        core["state_chi2"] = _state_chi2(raw["state_chi2"])
     ins = _need(raw, "ins", "")
     _check_keys(ins, set(_INS), "ins")
     core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}

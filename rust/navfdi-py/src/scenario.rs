@@ -88,6 +88,17 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         subs.append(sd)?;
     }
     d.set_item("subfilters", subs)?;
+    if let Some(st) = rec.state {
+        let sd = PyDict::new(py);
+        sd.set_item("states", st.detector.states().to_vec())?;
+        sd.set_item("pf", st.detector.pf())?;
+        sd.set_item("statistic", to_numpy(py, st.statistic, &[t])?)?;
+        sd.set_item("threshold", to_numpy(py, st.threshold, &[t])?)?;
+        sd.set_item("alarm", to_numpy(py, st.alarm, &[t])?)?;
+        sd.set_item("ready", to_numpy(py, st.ready, &[t])?)?;
+        sd.set_item("ill_conditioned", to_numpy(py, st.ill_conditioned, &[t])?)?;
+        d.set_item("state_chi2", sd)?;
+    }
     if let Some(sr) = rec.sats {
         let n = sr.names.len();
         let sd = PyDict::new(py);

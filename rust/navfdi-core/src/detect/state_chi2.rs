@@ -23,7 +23,7 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 pub const MAX_CONDITION: f64 = 1e12;
 
 /// One propagator.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 struct Propagator {
     x: DVector<f64>,
     p: DMatrix<f64>,
@@ -53,7 +53,7 @@ pub struct StateDecision {
 }
 
 /// Dual-propagator state chi-square detector.
-#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StateChi2 {
     pf: f64,
     threshold: f64,

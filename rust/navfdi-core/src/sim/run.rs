@@ -100,6 +100,26 @@ pub struct RunRecord {
     pub subs: Vec<SubRecord>,
     /// Satellite FDE (tight architecture).
     pub sats: Option<SatRecord>,
+    /// State chi-square test of the navigation solution (scenario `state_chi2`).
+    pub state: Option<StateRecord>,
+}
+
+/// Per-epoch record of the state chi-square test of the navigation solution, with the
+/// detector that steps it (in [`RunRecord::push_navigation`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateRecord {
+    /// The detector.
+    pub detector: crate::detect::StateChi2,
+    /// Statistic per epoch (NaN when not tested).
+    pub statistic: Vec<f64>,
+    /// Threshold per epoch.
+    pub threshold: Vec<f64>,
+    /// Alarm per epoch.
+    pub alarm: Vec<bool>,
+    /// Age rule met per epoch.
+    pub ready: Vec<bool>,
+    /// V ill-conditioned (not tested) per epoch.
+    pub ill_conditioned: Vec<bool>,
 }
 
 /// Build a detector from its spec (validated by the scenario). `min_samples` (SPRT and joint)
@@ -295,10 +315,25 @@ impl RunRecord {
                 })
                 .collect(),
             sats: None,
+            // Parameters validated by the scenario, so the detector can always be built.
+            state: prep.spec.state_chi2.as_ref().and_then(|sc| {
+                let (r, a) = sc.epochs(prep.spec.dt);
+                crate::detect::StateChi2::new(sc.pf, prep.spec.n_states(), r, a, sc.states.clone())
+                    .ok()
+                    .map(|detector| StateRecord {
+                        detector,
+                        statistic: Vec::with_capacity(epochs),
+                        threshold: Vec::with_capacity(epochs),
+                        alarm: Vec::with_capacity(epochs),
+                        ready: Vec::with_capacity(epochs),
+                        ill_conditioned: Vec::with_capacity(epochs),
+                    })
+            }),
         }
     }
 
-    /// Append epoch `k`'s navigation error `x_true − x` and 1σ from `p`.
+    /// Append epoch `k`'s navigation error `x_true − x` and 1σ from `p`, and step the state
+    /// chi-square test (if configured) on `x`, `p` with the epoch's Φ and Q.
     pub fn push_navigation(
         &mut self,
         prep: &Prepared,
@@ -308,6 +343,14 @@ impl RunRecord {
         p: &nalgebra::DMatrix<f64>,
         sig: &mut DVector<f64>,
     ) {
+        if let Some(st) = self.state.as_mut() {
+            let d = st.detector.step_trusted(x, p, &prep.phi[k], &prep.q[k]);
+            st.statistic.push(d.statistic);
+            st.threshold.push(d.threshold);
+            st.alarm.push(d.alarm);
+            st.ready.push(d.ready);
+            st.ill_conditioned.push(d.ill_conditioned);
+        }
         let tr = &prep.truth[k];
         let e = &sim.x_true[k] - x;
         to_nav(&e, tr.lat, tr.h, &mut self.error);

@@ -43,6 +43,34 @@ pub struct ScenarioSpec {
     /// Terrain under the trajectory (radio altimeters); flat when absent.
     #[serde(default)]
     pub terrain: Option<TerrainSpec>,
+    /// Dual-propagator state chi-square test on the navigation solution (any architecture).
+    #[serde(default)]
+    pub state_chi2: Option<StateChi2Spec>,
+}
+
+/// The state chi-square test of the navigation solution (METHODS §8), run beside the
+/// architecture's detectors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StateChi2Spec {
+    /// False-alarm probability per epoch.
+    pub pf: f64,
+    /// Seconds between resets of each propagator (they alternate, half a period apart).
+    pub reset_every: f64,
+    /// Seconds a propagator must have run before it is tested (≤ `reset_every`).
+    pub min_age: f64,
+    /// Tested state indices (None: all).
+    #[serde(default)]
+    pub states: Option<Vec<usize>>,
+}
+
+impl StateChi2Spec {
+    /// `(reset_every, min_age)` in epochs of `dt`.
+    pub fn epochs(&self, dt: f64) -> (u64, u64) {
+        let r = (self.reset_every / dt).round().max(1.0) as u64;
+        let a = (self.min_age / dt).round().max(1.0) as u64;
+        (r, a.min(r))
+    }
 }
 
 /// One sinusoidal wave of the terrain height field.
@@ -1016,6 +1044,44 @@ impl ScenarioSpec {
                     format!("sensors[{i}].kind"),
                     format!("gnss_ranges (satellite pseudoranges) needs architecture = \"tight\", not {arch:?}"),
                 ));
+            }
+        }
+        if let Some(sc) = &self.state_chi2 {
+            crate::validate::check_probability("state_chi2.pf", sc.pf)
+                .map_err(|e| Error::Invalid(e.to_string()))?;
+            positive("state_chi2.reset_every", sc.reset_every)?;
+            positive("state_chi2.min_age", sc.min_age)?;
+            if sc.reset_every < self.dt {
+                return Err(bad(
+                    "state_chi2.reset_every",
+                    format!(
+                        "{} s is shorter than one filter period dt = {} s",
+                        sc.reset_every, self.dt
+                    ),
+                ));
+            }
+            if sc.min_age > sc.reset_every {
+                return Err(bad("state_chi2.min_age", format!("{} s exceeds reset_every = {} s (the older propagator is at least reset_every old once both run)", sc.min_age, sc.reset_every)));
+            }
+            let n = self.n_states();
+            if let Some(st) = &sc.states {
+                if st.is_empty() {
+                    return Err(bad("state_chi2.states", "at least one state is required"));
+                }
+                for (i, &s) in st.iter().enumerate() {
+                    if s >= n {
+                        return Err(bad(
+                            format!("state_chi2.states[{i}]"),
+                            format!("index {s} out of range for {n} states"),
+                        ));
+                    }
+                    if st[..i].contains(&s) {
+                        return Err(bad(
+                            format!("state_chi2.states[{i}]"),
+                            format!("state {s} is listed twice"),
+                        ));
+                    }
+                }
             }
         }
         match self.architecture {
