@@ -38,13 +38,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
             continue
         for d in s["detectors"]:
             fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
-            for f in mine:
-                ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.12, lw=0)
-            stat = np.where(np.isfinite(d["statistic"]), np.maximum(d["statistic"], 1e-6), np.nan)
-            ax.semilogy(t, stat, lw=0.8, color="tab:blue", label="statistic")
-            ax.semilogy(t, d["threshold"], lw=1.0, color="k", ls="--", label="threshold")
-            al = d["alarm"].astype(bool)
-            ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
+            stat = _statistic_axes(ax, t, d, mine)
             iso = run.isolated(sub)
             if np.any(iso):
                 by = _isolating_detector(run, sub)
@@ -66,13 +60,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     st = run.record.get("state_chi2")
     if st is not None:
         fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
-        for f in faults:
-            ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.12, lw=0)
-        stat = np.where(np.isfinite(st["statistic"]), np.maximum(st["statistic"], 1e-6), np.nan)
-        ax.semilogy(t, stat, lw=0.8, color="tab:blue", label="statistic")
-        ax.semilogy(t, st["threshold"], lw=1.0, color="k", ls="--", label="threshold")
-        al = st["alarm"].astype(bool)
-        ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
+        _statistic_axes(ax, t, st, faults)
         ax.set_xlabel("time [s]")
         ax.set_ylabel("λ = βᵀV⁻¹β")
         var = f", variant {run.variant}" if prefix else ""
@@ -129,6 +117,19 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def _statistic_axes(ax: Any, t: np.ndarray, d: dict[str, Any], faults: list[dict[str, Any]]) -> np.ndarray:
+    """Shade the fault windows and draw a detector's statistic (log scale, floored at 1e-6),
+    threshold and alarm epochs; returns the plotted statistic."""
+    for f in faults:
+        ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.12, lw=0)
+    stat = np.where(np.isfinite(d["statistic"]), np.maximum(d["statistic"], 1e-6), np.nan)
+    ax.semilogy(t, stat, lw=0.8, color="tab:blue", label="statistic")
+    ax.semilogy(t, d["threshold"], lw=1.0, color="k", ls="--", label="threshold")
+    al = d["alarm"].astype(bool)
+    ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
+    return stat
 
 
 def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:

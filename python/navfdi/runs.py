@@ -222,33 +222,13 @@ class ScenarioRun:
         import pandas as pd
 
         rows = []
-        for s in self.record["subfilters"]:
-            faults = self._faults_on(s["sensor"])
-            for d in s["detectors"]:
-                for iv, fi in self._events(d["alarm"], faults):
-                    f = None if fi is None else faults[fi]
-                    rows.append(
-                        {
-                            "subfilter": s["sensor"],
-                            "detector": d["name"],
-                            "alarm_start": iv.start,
-                            "alarm_end": iv.end,
-                            "fault_id": f["id"] if f else None,
-                            "fault_start": f["start"] if f else None,
-                            "fault_end": f["end"] if f else None,
-                            "delay": max(iv.start - f["start"], 0.0) if f else None,
-                        }
-                    )
-        st = self.record.get("state_chi2")
-        if st is not None:
-            # The state test watches the whole navigation solution: matched to every fault.
-            allf = sorted(self.scenario.faults(), key=lambda f: f["start"])
-            for iv, fi in self._events(st["alarm"], allf):
-                f = None if fi is None else allf[fi]
+        def add(channel: str, detector: str, alarm: np.ndarray, faults: list[dict[str, Any]]) -> None:
+            for iv, fi in self._events(alarm, faults):
+                f = None if fi is None else faults[fi]
                 rows.append(
                     {
-                        "subfilter": "navigation",
-                        "detector": "state_chi2",
+                        "subfilter": channel,
+                        "detector": detector,
                         "alarm_start": iv.start,
                         "alarm_end": iv.end,
                         "fault_id": f["id"] if f else None,
@@ -257,6 +237,15 @@ class ScenarioRun:
                         "delay": max(iv.start - f["start"], 0.0) if f else None,
                     }
                 )
+
+        for s in self.record["subfilters"]:
+            faults = self._faults_on(s["sensor"])
+            for d in s["detectors"]:
+                add(s["sensor"], d["name"], d["alarm"], faults)
+        st = self.record.get("state_chi2")
+        if st is not None:
+            # The state test watches the whole navigation solution: matched to every fault.
+            add("navigation", "state_chi2", st["alarm"], sorted(self.scenario.faults(), key=lambda f: f["start"]))
         cols = ["subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
         df = pd.DataFrame(rows, columns=cols)
         for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
