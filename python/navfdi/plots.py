@@ -16,6 +16,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
 
     * ``detector_{sub}_{det}.png``: statistic (log scale) against threshold, alarm epochs, fault
       windows shaded, for every detector of every sub-filter with faults;
+    * ``modes.png``: the navigation mode per epoch (scenarios with ``[modes]``);
     * ``detector_navigation_state_chi2.png``: the state chi-square test of the navigation
       solution (scenarios with ``[state_chi2]``);
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
@@ -57,6 +58,19 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
             fig.savefig(p, dpi=110)
             plt.close(fig)
             paths.append(p)
+    if "mode" in run.record:
+        fig, ax = plt.subplots(figsize=(9, 2.4), constrained_layout=True)
+        ax.step(t, run.record["mode"], where="post", color="k", lw=1.0)
+        ax.set_yticks([1, 2, 3], ["q1", "q2", "q3"])
+        ax.set_ylim(0.5, 3.5)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("mode")
+        var = f", variant {run.variant}" if prefix else ""
+        ax.set_title(f"{run.scenario.name}{var}: navigation mode (seed {run.seed})")
+        p = out / f"{prefix}modes.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     st = run.record.get("state_chi2")
     if st is not None:
         fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)

@@ -348,8 +348,8 @@ class ScenarioRun:
         ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
         component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
         isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m).
-        With ``[state_chi2]``: ``state_chi2.statistic, .threshold, .alarm, .ready,
-        .ill_conditioned``. Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
+        With ``[modes]``: ``mode`` (``q1``, ``q2``, ``q3``). With ``[state_chi2]``:
+        ``state_chi2.statistic, .threshold, .alarm, .ready, .ill_conditioned``. Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
         no_measurement), ``fde.used`` (satellites updating the filter), ``fde.excluded``
         (comma-separated names) and per satellite ever in view ``sat.{name}.in_view``,
         ``.excluded`` and ``.w`` (w-test statistic of its pseudorange, NaN when not tested)."""
@@ -367,6 +367,8 @@ class ScenarioRun:
             for d in s["detectors"]:
                 for k in ("statistic", "threshold", "alarm"):
                     cols[f"{sub}.{d['name']}.{k}"] = d[k]
+        if "mode" in self.record:
+            cols["mode"] = np.array(["", "q1", "q2", "q3"], dtype=object)[self.record["mode"]]
         st = self.record.get("state_chi2")
         if st is not None:
             for k in ("statistic", "threshold", "alarm", "ready", "ill_conditioned"):

@@ -306,6 +306,22 @@ VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "state_ch
 STATE_NAMES = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "lat", "lon", "h", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "clock_bias", "clock_drift"]
 
 
+def _modes(m: Any) -> dict[str, Any]:
+    """The ``[modes]`` table: gnss (sensor), target [east, north], radius, q1, q2, q3."""
+    _check_keys(m, {"gnss", "target", "radius", "q1", "q2", "q3"}, "modes")
+    target = _list(_need(m, "target", "modes"), "modes.target")
+    if len(target) != 2:
+        raise ScenarioError(f"modes.target = {target!r}: expected [east, north] with units")
+    out: dict[str, Any] = {
+        "gnss": _str(_need(m, "gnss", "modes"), "modes.gnss"),
+        "target": [_unit(v, "length", f"modes.target[{i}]") for i, v in enumerate(target)],
+        "radius": _unit(_need(m, "radius", "modes"), "length", "modes.radius"),
+    }
+    for q in ("q1", "q2", "q3"):
+        out[q] = [_str(v, f"modes.{q}[{i}]") for i, v in enumerate(_list(_need(m, q, "modes"), f"modes.{q}"))]
+    return out
+
+
 def _state_chi2(sc: Any) -> dict[str, Any]:
     """The ``[state_chi2]`` table: pf, reset_every, min_age (times), states (names)."""
     _check_keys(sc, {"pf", "reset_every", "min_age", "states"}, "state_chi2")
@@ -354,7 +370,7 @@ def _centralized(c: Any) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "state_chi2", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "state_chi2", "modes", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -398,6 +414,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         core["terrain"] = _terrain(raw["terrain"])
     if "state_chi2" in raw:
         core["state_chi2"] = _state_chi2(raw["state_chi2"])
+    if "modes" in raw:
+        core["modes"] = _modes(raw["modes"])
     ins = _need(raw, "ins", "")
     _check_keys(ins, set(_INS), "ins")
     core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}

@@ -88,6 +88,9 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         subs.append(sd)?;
     }
     d.set_item("subfilters", subs)?;
+    if !rec.mode.is_empty() {
+        d.set_item("mode", to_numpy(py, rec.mode, &[t])?)?;
+    }
     if let Some(st) = rec.state {
         let sd = PyDict::new(py);
         sd.set_item("states", st.detector.states().to_vec())?;

@@ -38,6 +38,22 @@ pub struct Prepared {
     pub fault: Vec<Vec<DVector<f64>>>,
     /// Satellites in view per epoch of the `gnss_ranges` sensor, if any.
     pub ranges: Option<PreparedRanges>,
+    /// Navigation mode per epoch (1, 2, 3 for q1, q2, q3; empty without `modes`).
+    pub mode: Vec<u8>,
+}
+
+/// East and north (m) of each truth epoch from the first, with the radii of curvature at the
+/// start point (the local frame of terrain, waypoints and targets).
+pub fn local_en(truth: &[TruthEpoch]) -> Vec<(f64, f64)> {
+    let Some(t0) = truth.first() else {
+        return Vec::new();
+    };
+    let rm = earth::r_meridian(t0.lat) + t0.h;
+    let rn = (earth::r_normal(t0.lat) + t0.h) * t0.lat.cos();
+    truth
+        .iter()
+        .map(|e| ((e.lon - t0.lon) * rn, (e.lat - t0.lat) * rm))
+        .collect()
 }
 
 /// Measurement matrix of a sensor at a kinematic state (m × 15; a `gnss_ranges` sensor's
@@ -184,7 +200,7 @@ impl Prepared {
         let t: Vec<f64> = (0..epochs).map(|k| k as f64 * dt).collect();
         let mut h = Vec::new();
         let mut r = Vec::new();
-        let mut available = Vec::new();
+        let mut available: Vec<Vec<bool>> = Vec::new();
         let mut fault = Vec::new();
         let mut ranges = None;
         for (si, s) in spec.sensors.iter().enumerate() {
@@ -234,15 +250,10 @@ impl Prepared {
             // A radio altimeter read as altitude over a flat reference errs by the terrain
             // height under the vehicle.
             let terrain: Vec<f64> = match (&spec.terrain, s.kind) {
-                (Some(tr), SensorKind::RadioAltimeter) => {
-                    let (lat0, lon0) = (truth[0].lat, truth[0].lon);
-                    let rm = earth::r_meridian(lat0) + truth[0].h;
-                    let rn = (earth::r_normal(lat0) + truth[0].h) * lat0.cos();
-                    truth
-                        .iter()
-                        .map(|e| tr.height((e.lon - lon0) * rn, (e.lat - lat0) * rm))
-                        .collect()
-                }
+                (Some(tr), SensorKind::RadioAltimeter) => local_en(&truth)
+                    .iter()
+                    .map(|&(e, n)| tr.height(e, n))
+                    .collect(),
                 _ => vec![0.0; truth.len()],
             };
             fault.push(
@@ -263,6 +274,31 @@ impl Prepared {
                     .collect(),
             );
         }
+        // Navigation modes: a sensor outside the active mode takes no measurement.
+        let mut mode = Vec::new();
+        if let Some(ms) = &spec.modes {
+            let gnss = spec.sensor_index(&ms.gnss).unwrap_or(0);
+            let outages = &spec.sensors[gnss].outages;
+            let en = local_en(&truth);
+            for k in 0..epochs {
+                let (e, n) = en[k];
+                let near = (e - ms.target[0]).hypot(n - ms.target[1]) <= ms.radius;
+                let gnss_ok = !outages.iter().any(|w| t[k] >= w[0] && t[k] < w[1]);
+                let (q, list) = if near {
+                    (3, &ms.q3)
+                } else if gnss_ok {
+                    (1, &ms.q1)
+                } else {
+                    (2, &ms.q2)
+                };
+                mode.push(q);
+                for (si, s) in spec.sensors.iter().enumerate() {
+                    if !list.contains(&s.name) {
+                        available[si][k] = false;
+                    }
+                }
+            }
+        }
         Ok(Prepared {
             spec,
             t,
@@ -277,6 +313,7 @@ impl Prepared {
             available,
             fault,
             ranges,
+            mode,
         })
     }
 
@@ -294,6 +331,7 @@ impl Prepared {
             ("sensors", base.sensors == spec.sensors),
             ("faults", base.faults == spec.faults),
             ("terrain", base.terrain == spec.terrain),
+            ("modes", base.modes == spec.modes),
         ];
         if let Some((field, _)) = same.iter().find(|(_, eq)| !eq) {
             return Err(Error::Invalid(format!(

@@ -102,6 +102,8 @@ pub struct RunRecord {
     pub sats: Option<SatRecord>,
     /// State chi-square test of the navigation solution (scenario `state_chi2`).
     pub state: Option<StateRecord>,
+    /// Navigation mode per epoch (1, 2, 3; empty without `modes`).
+    pub mode: Vec<u8>,
 }
 
 /// Per-epoch record of the state chi-square test of the navigation solution, with the
@@ -315,6 +317,7 @@ impl RunRecord {
                 })
                 .collect(),
             sats: None,
+            mode: prep.mode.clone(),
             // Parameters validated by the scenario, so the detector can always be built.
             state: prep.spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(prep.spec.dt);

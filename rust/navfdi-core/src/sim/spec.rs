@@ -46,6 +46,30 @@ pub struct ScenarioSpec {
     /// Dual-propagator state chi-square test on the navigation solution (any architecture).
     #[serde(default)]
     pub state_chi2: Option<StateChi2Spec>,
+    /// Navigation modes (paper 003): which sensors feed the filter, epoch by epoch.
+    #[serde(default)]
+    pub modes: Option<ModesSpec>,
+}
+
+/// Navigation modes (METHODS §9, paper 003): `q3` within `radius` of the `target` point,
+/// otherwise `q1` while the `gnss` sensor is outside its outages, `q2` during them. A sensor not
+/// in the active mode gives no measurement that epoch (it neither feeds the filter nor is
+/// tested).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModesSpec {
+    /// Sensor whose outages mean "GNSS unavailable".
+    pub gnss: String,
+    /// Target point: east, north (m) from the trajectory's start point.
+    pub target: [f64; 2],
+    /// Radius around the target (m).
+    pub radius: f64,
+    /// Sensors of mode q1 (GNSS available, away from the target).
+    pub q1: Vec<String>,
+    /// Sensors of mode q2 (GNSS unavailable, away from the target).
+    pub q2: Vec<String>,
+    /// Sensors of mode q3 (near the target).
+    pub q3: Vec<String>,
 }
 
 /// The state chi-square test of the navigation solution (METHODS §8), run beside the
@@ -1044,6 +1068,41 @@ impl ScenarioSpec {
                     format!("sensors[{i}].kind"),
                     format!("gnss_ranges (satellite pseudoranges) needs architecture = \"tight\", not {arch:?}"),
                 ));
+            }
+        }
+        if let Some(m) = &self.modes {
+            if self.sensor_index(&m.gnss).is_none() {
+                return Err(bad(
+                    "modes.gnss",
+                    format!(
+                        "{:?} is not a sensor (known: {})",
+                        m.gnss,
+                        self.sensor_names()
+                    ),
+                ));
+            }
+            positive("modes.radius", m.radius)?;
+            if !(m.target[0].is_finite() && m.target[1].is_finite()) {
+                return Err(bad("modes.target", "must be finite"));
+            }
+            for (q, list) in [("q1", &m.q1), ("q2", &m.q2), ("q3", &m.q3)] {
+                if list.is_empty() {
+                    return Err(bad(format!("modes.{q}"), "at least one sensor is required"));
+                }
+                for (i, name) in list.iter().enumerate() {
+                    if self.sensor_index(name).is_none() {
+                        return Err(bad(
+                            format!("modes.{q}[{i}]"),
+                            format!("{name:?} is not a sensor (known: {})", self.sensor_names()),
+                        ));
+                    }
+                    if list[..i].contains(name) {
+                        return Err(bad(
+                            format!("modes.{q}[{i}]"),
+                            format!("{name:?} is listed twice"),
+                        ));
+                    }
+                }
             }
         }
         if let Some(sc) = &self.state_chi2 {
