@@ -303,12 +303,13 @@ class Campaign:
             head += "  [PARTIAL: interrupted]"
         lines = [head, ""]
         cols = [*self.sweep_columns, "subfilter", "detector", "fault_id", "pf", "runs"]
-        hdr = "".join(f"{c[-22:]:>24}" if c in self.sweep_columns else f"{c:>10}" for c in cols)
+        width = {c: 24 if c in self.sweep_columns else max(10, 2 + max((len(str(v)) for v in s[c]), default=0)) for c in cols}
+        hdr = "".join(f"{c[-22:]:>{width[c]}}" for c in cols)
         hdr += f"{'P(det) [95% CI]':>22}{'delay mean/med/p95 [s]':>26}{'false alarms/epoch [95% CI]':>34}{'att RMS [arcsec]':>18}"
         lines.append(hdr)
         arcsec = math.degrees(1) * 3600
         for _, r in s.iterrows():
-            line = "".join(f"{str(r[c]):>24}" if c in self.sweep_columns else f"{str(r[c]):>10}" for c in cols)
+            line = "".join(f"{str(r[c]):>{width[c]}}" for c in cols)
             if r["runs"] == 0:
                 lines.append(line + "   (no finished runs)")
                 continue
@@ -321,6 +322,17 @@ class Campaign:
                 line += f"{r['false_alarm_rate']:>14.5f} [{r['false_alarm_ci_low']:.5f},{r['false_alarm_ci_high']:.5f}]"
             line += f"{r['error_rms'] * arcsec:>18.2f}"
             lines.append(line)
+        fde = s[s["detection_rate"].notna() | s["false_exclusion_rate"].notna()] if len(s) else s
+        if len(fde):
+            pct = lambda v: "-" if v != v else f"{100 * v:.2f} %"  # noqa: E731
+            lines += ["", "satellite FDE (pooled over runs):"]
+            keys = [*self.sweep_columns, "fault_id"]
+            lines.append("".join(f"{c[-22:]:>24}" if c in self.sweep_columns else f"{c:>10}" for c in keys) + f"{'detection':>12}{'identification':>16}{'after-fault alarms':>20}{'false excl./epoch':>19}")
+            for _, r in fde.iterrows():
+                line = "".join(f"{str(r[c]):>24}" if c in self.sweep_columns else f"{str(r[c]):>10}" for c in keys)
+                fe = r["false_exclusion_rate"]
+                line += f"{pct(r['detection_rate']):>12}{pct(r['identification_rate']):>16}{pct(r['after_fault_alarm_rate']):>20}{'-' if fe != fe else format(fe, '.4f'):>19}"
+                lines.append(line)
         return "\n".join(lines) + "\n"
 
     def campaign_info(self) -> dict[str, Any]:
