@@ -367,6 +367,8 @@ class ScenarioRun:
             for d in s["detectors"]:
                 for k in ("statistic", "threshold", "alarm"):
                     cols[f"{sub}.{d['name']}.{k}"] = d[k]
+        if "fused_alt" in self.record:
+            cols["fused_alt.error"] = self.record["fused_alt"]
         if "mode" in self.record:
             cols["mode"] = np.array(["", "q1", "q2", "q3"], dtype=object)[self.record["mode"]]
         st = self.record.get("state_chi2")
@@ -396,7 +398,10 @@ class ScenarioRun:
         """Navigation-error RMS and maximum |error| over the whole run, per component of the
         master (or centralized) solution: ``{comp}_rms`` and ``{comp}_max`` for ``pos_e,
         pos_n, pos_u, lat_m`` (m; ``lat_m`` is the latitude error in metres, = ``pos_n``),
-        ``vel_e, vel_n, vel_u`` (m/s) and ``att_e, att_n, att_u`` (rad)."""
+        ``vel_e, vel_n, vel_u`` (m/s) and ``att_e, att_n, att_u`` (rad); with altitude fusion
+        also ``fused_alt_rms``, ``fused_alt_max`` (m, error of the fused altitude measurement
+        over the epochs it existed) and ``fused_alt_predict_only`` (fraction of epochs in which
+        no sensor contributed)."""
         e = self.record["error"]
         cols = dict(zip(ERROR_COLUMNS, e.T))
         cols["lat_m"] = cols["pos_n"]
@@ -405,6 +410,12 @@ class ScenarioRun:
             v = cols[c]
             out[f"{c}_rms"] = float(np.sqrt(np.mean(v**2)))
             out[f"{c}_max"] = float(np.max(np.abs(v)))
+        if "fused_alt" in self.record:
+            f = self.record["fused_alt"]
+            ok = np.isfinite(f)
+            out["fused_alt_rms"] = float(np.sqrt(np.mean(f[ok] ** 2))) if ok.any() else float("nan")
+            out["fused_alt_max"] = float(np.max(np.abs(f[ok]))) if ok.any() else float("nan")
+            out["fused_alt_predict_only"] = float(1.0 - ok.mean())
         return out
 
     def summary(self) -> dict[str, Any]:

@@ -343,7 +343,7 @@ def _state_chi2(sc: Any) -> dict[str, Any]:
 
 
 def _centralized(c: Any) -> dict[str, Any]:
-    _check_keys(c, {"policy", "sensors", "fading", "fading_duration", "confirm"}, "centralized")
+    _check_keys(c, {"policy", "sensors", "fading", "fading_duration", "confirm", "altitude_fusion", "isolate"}, "centralized")
     policy = _str(_need(c, "policy", "centralized"), "centralized.policy")
     if policy not in ("exclude", "latched", "fading"):
         raise ScenarioError(f"centralized.policy = {policy!r}: use exclude, latched or fading")
@@ -359,12 +359,33 @@ def _centralized(c: Any) -> dict[str, Any]:
                 "decision": None if dec is None else _str(dec, f"{p}.decision"),
             }
         )
-    return {
+    out = {
         "policy": policy,
         "sensors": sensors,
         "fading": _number(c.get("fading", 1.0), "centralized.fading"),
         "fading_duration": _unit(c.get("fading_duration", "0 s"), "time", "centralized.fading_duration"),
         "confirm": _unit(c.get("confirm", "0 s"), "time", "centralized.confirm"),
+    }
+    if "altitude_fusion" in c:
+        out["altitude_fusion"] = _altitude_fusion(c["altitude_fusion"])
+    if "isolate" in c:
+        out["isolate"] = _bool(c["isolate"], "centralized.isolate")
+    return out
+
+
+def _bool(v: Any, path: str) -> bool:
+    if not isinstance(v, bool):
+        raise ScenarioError(f"{path} = {v!r}: expected true or false")
+    return v
+
+
+def _altitude_fusion(a: Any) -> dict[str, Any]:
+    """``centralized.altitude_fusion``: sensors (names), samples (window N)."""
+    p = "centralized.altitude_fusion"
+    _check_keys(a, {"sensors", "samples"}, p)
+    return {
+        "sensors": [_str(v, f"{p}.sensors[{i}]") for i, v in enumerate(_list(_need(a, "sensors", p), f"{p}.sensors"))],
+        "samples": _count(a.get("samples", 20), f"{p}.samples"),
     }
 
 

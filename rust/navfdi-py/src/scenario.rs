@@ -88,6 +88,9 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         subs.append(sd)?;
     }
     d.set_item("subfilters", subs)?;
+    if !rec.fused_alt.is_empty() {
+        d.set_item("fused_alt", to_numpy(py, rec.fused_alt, &[t])?)?;
+    }
     if !rec.mode.is_empty() {
         d.set_item("mode", to_numpy(py, rec.mode, &[t])?)?;
     }

@@ -71,8 +71,37 @@ pub fn run_centralized(
         })
         .collect();
     let m: usize = dims.iter().sum();
-    let mut h = DMatrix::zeros(m, N_STATES);
-    let mut r = DMatrix::zeros(m, m);
+    // Altitude fusion: the fused sensors' height rows (stack indices), their priors σ, and one
+    // extra row at the end of the stack for the fused altitude (always NaN in `z`, so the
+    // detectors never see it).
+    let fusion = c.altitude_fusion.as_ref().map(|af| {
+        let rows: Vec<(usize, usize)> = af
+            .sensors
+            .iter()
+            .filter_map(|name| {
+                let i = channels.iter().position(|ch| ch.sensor == name.as_str())?;
+                let si = sensor_idx[i];
+                let j = spec.sensors[si].kind.height_component()?;
+                Some((i, offsets[i] + j))
+            })
+            .collect();
+        let prior: Vec<f64> = rows
+            .iter()
+            .map(|&(i, row)| spec.sensors[sensor_idx[i]].noise[row - offsets[i]])
+            .collect();
+        (rows, prior, af.samples)
+    });
+    let extra = usize::from(fusion.is_some());
+    let mut fuser = match &fusion {
+        Some((_, prior, n)) => Some(crate::fusion::WeightedFusion::new(prior, *n)?),
+        None => None,
+    };
+    let mut h = DMatrix::zeros(m + extra, N_STATES);
+    let mut r = DMatrix::zeros(m + extra, m + extra);
+    if extra == 1 {
+        h[(m, crate::ins::POS + 2)] = 1.0;
+        r[(m, m)] = 1.0;
+    }
     for (i, &si) in sensor_idx.iter().enumerate() {
         let (o, d) = (offsets[i], dims[i]);
         h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][0]);
@@ -117,7 +146,7 @@ pub fn run_centralized(
         .map(|&d| vec![Component::default(); d])
         .collect();
     let mut rec = RunRecord::empty(prep);
-    let mut z = DVector::from_element(m, f64::NAN);
+    let mut z = DVector::from_element(m + extra, f64::NAN);
     let mut z_used = z.clone();
     let mut sig = DVector::zeros(N_STATES);
     for k in 0..spec.epochs() {
@@ -241,6 +270,29 @@ pub fn run_centralized(
                 dr.threshold.push(dec.threshold);
                 dr.alarm.push(dec.alarm);
             }
+        }
+        if let (Some((rows, _, _)), Some(fu)) = (&fusion, fuser.as_mut()) {
+            // Fault matrix: a sensor's height counts when its row survived the policy.
+            let values: Vec<f64> = rows.iter().map(|&(_, row)| z[row]).collect();
+            let healthy: Vec<bool> = rows.iter().map(|&(_, row)| !z_used[row].is_nan()).collect();
+            let predicted = h.row(m).dot(&kf.x().transpose());
+            let out = fu
+                .step(&values, predicted, &healthy)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            for &(_, row) in rows {
+                z_used[row] = f64::NAN;
+            }
+            // Fused-altitude error against the true height error (the measurement's error).
+            let truth = sim.x_true[k][crate::ins::POS + 2];
+            match out.value {
+                Some(v) => {
+                    z_used[m] = v;
+                    r[(m, m)] = out.variance;
+                    rec.fused_alt.push(v - truth);
+                }
+                None => rec.fused_alt.push(f64::NAN),
+            }
+            any_excluded = true;
         }
         match (any_excluded, pending) {
             (false, Some(p)) => kf.apply_pending(p, &r),

@@ -104,6 +104,9 @@ pub struct RunRecord {
     pub state: Option<StateRecord>,
     /// Navigation mode per epoch (1, 2, 3; empty without `modes`).
     pub mode: Vec<u8>,
+    /// Error of the fused altitude measurement per epoch (m; NaN when no sensor contributed:
+    /// the filter predicted only in height); empty without altitude fusion.
+    pub fused_alt: Vec<f64>,
 }
 
 /// Per-epoch record of the state chi-square test of the navigation solution, with the
@@ -318,6 +321,7 @@ impl RunRecord {
                 .collect(),
             sats: None,
             mode: prep.mode.clone(),
+            fused_alt: Vec::new(),
             // Parameters validated by the scenario, so the detector can always be built.
             state: prep.spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(prep.spec.dt);
@@ -380,7 +384,8 @@ pub fn run_architecture(
             run_federated(prep, sim, isolation && isolate, cancel)
         }
         Architecture::Centralized => {
-            crate::arch::centralized::run_centralized(prep, sim, isolation, full, cancel)
+            let isolate = prep.spec.centralized.as_ref().is_none_or(|c| c.isolate);
+            crate::arch::centralized::run_centralized(prep, sim, isolation && isolate, full, cancel)
         }
         Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, full, cancel),
     }

@@ -292,6 +292,41 @@ pub struct CentralizedSpec {
     /// declared over (policy `fading`).
     #[serde(default)]
     pub confirm: f64,
+    /// Altitude from several sensors fused with a fault matrix into one measurement (paper
+    /// 003); None: each sensor updates the filter with its own height.
+    #[serde(default)]
+    pub altitude_fusion: Option<AltitudeFusionSpec>,
+    /// The policy acts (default). `false`: detectors run and report but never exclude (every
+    /// fault-matrix entry 1: the "without isolation" comparison, as a variant).
+    #[serde(default = "default_true")]
+    pub isolate: bool,
+}
+
+/// Weighted altitude fusion with a fault matrix inside a centralized filter (METHODS §9): the
+/// height components of `sensors` do not update the filter themselves; their inverse-variance
+/// fusion over the sensors whose deciding detector does not exclude them (`M_i = 1`) does,
+/// as one measurement with variance `1 / Σ w_i M_i`. When every `M_i` is 0 (or no sensor
+/// measured) the filter predicts only in height.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AltitudeFusionSpec {
+    /// Sensors whose height is fused (each with a height component: gnss, gnss_position,
+    /// vision, baro, radio_altimeter), at least two.
+    pub sensors: Vec<String>,
+    /// Samples N of each sensor's deviation from the predicted height in its variance
+    /// estimate.
+    pub samples: usize,
+}
+
+impl SensorKind {
+    /// Index of the height component (up position or altitude), if the sensor has one.
+    pub fn height_component(self) -> Option<usize> {
+        match self {
+            SensorKind::Gnss | SensorKind::GnssPosition | SensorKind::Vision => Some(2),
+            SensorKind::Baro | SensorKind::RadioAltimeter => Some(0),
+            _ => None,
+        }
+    }
 }
 
 fn default_fading() -> f64 {
@@ -1348,6 +1383,36 @@ impl ScenarioSpec {
             ));
         }
         non_negative("centralized.fading_duration", c.fading_duration)?;
+        if let Some(af) = &c.altitude_fusion {
+            if af.sensors.len() < 2 {
+                return Err(bad(
+                    "centralized.altitude_fusion.sensors",
+                    "at least two sensors are fused",
+                ));
+            }
+            for (i, name) in af.sensors.iter().enumerate() {
+                let p = format!("centralized.altitude_fusion.sensors[{i}]");
+                if !c.sensors.iter().any(|cs| &cs.sensor == name) {
+                    return Err(bad(
+                        p,
+                        format!("{name:?} is not one of centralized.sensors"),
+                    ));
+                }
+                if af.sensors[..i].contains(name) {
+                    return Err(bad(p, format!("{name:?} is listed twice")));
+                }
+                let kind = self.sensors[self.sensor_index(name).unwrap_or(0)].kind;
+                if kind.height_component().is_none() {
+                    return Err(bad(p, format!("{name:?} ({kind:?}) measures no height")));
+                }
+            }
+            if !(2..=1_000_000).contains(&af.samples) {
+                return Err(bad(
+                    "centralized.altitude_fusion.samples",
+                    format!("{} must be in 2 ..= 1000000", af.samples),
+                ));
+            }
+        }
         non_negative("centralized.confirm", c.confirm)?;
         Ok(())
     }
