@@ -234,3 +234,11 @@ def test_layouts_read_in_logical_order():
     for r in (b, c):
         np.testing.assert_array_equal(a.position, r.position)
         np.testing.assert_array_equal(a.w, r.w)
+
+
+def test_enormous_problems_are_refused_before_allocating():
+    n = 300_000  # n × n work matrices: terabytes
+    with pytest.raises(MemoryError, match="observations"):
+        navfdi.snapshot_fde(np.ones((n, 3)), np.zeros(n), np.ones(n))
+    with pytest.raises(MemoryError, match="observations"):
+        navfdi.ls_test(np.ones((n, 4)), np.zeros(n), np.ones(n))

@@ -192,3 +192,11 @@ def test_scenario_state_test_is_recorded_and_matched_to_faults(tmp_path):
 def test_scenario_state_config_errors_name_the_field(state, match):
     with pytest.raises(navfdi.ScenarioError, match=match):
         state_scenario(**state)
+
+
+def test_enormous_state_is_refused_before_allocating():
+    with pytest.raises(MemoryError, match="states"):
+        navfdi.StateChi2(0.01, 1_000_000, 10)
+    # A huge variance window costs nothing until filled.
+    f = navfdi.WeightedFusion([1.0] * 1000, window=1_000_000)
+    assert f.step(np.ones(1000), 1.0, [True] * 1000).value == pytest.approx(1.0)

@@ -606,7 +606,8 @@ def snapshot_fde(
     for 0.05); ``x0`` start ``[x, y, z]`` or ``[x, y, z, clock]`` in m (default: the Earth's
     centre). Fewer than 5 satellites left is ``status == "no_solution"`` (no position, never
     NaN). Raises ``ValueError`` naming the argument for wrong shapes, non-finite values,
-    non-positive sigma or a covariance that is not symmetric positive definite."""
+    non-positive sigma or a covariance that is not symmetric positive definite; ``MemoryError``
+    when the n × n work matrices would not fit in memory."""
 
 def ls_test(b: ArrayLike, l: ArrayLike, d: ArrayLike) -> dict[str, Any]:
     """The linear test of METHODS §10 on ``l = B x + ε``, ``ε ~ N(0, D)``: ``b`` = B (n, u) with

@@ -189,6 +189,7 @@ pub fn py_ls_test<'py>(
             "B: expected shape (n, u) with n > u >= 1 (more observations than unknowns), got ({n}, {u})"
         )));
     }
+    navfdi_core::gnss::snapshot::check_size("ls_test", n).py()?;
     navfdi_core::validate::check_finite_matrix("B", &bm).py()?;
     let lv = crate::convert::vector("l", l, Some(n))?;
     navfdi_core::validate::check_finite_vector("l", &lv).py()?;

@@ -99,6 +99,12 @@ impl StateChi2 {
                 ),
             });
         }
+        crate::memory::check(
+            "StateChi2",
+            6.0 * (n as f64).powi(2) * 8.0,
+            &format!("two propagators of {n} states with their n × n covariances"),
+            "use fewer states",
+        )?;
         let states = states.unwrap_or_else(|| (0..n).collect());
         if states.is_empty() {
             return Err(Error::Invalid(

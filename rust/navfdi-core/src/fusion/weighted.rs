@@ -64,7 +64,8 @@ impl WeightedFusion {
         Ok(WeightedFusion {
             window,
             prior: prior_sigma.to_vec(),
-            devs: vec![VecDeque::with_capacity(window); prior_sigma.len()],
+            // Grown as samples arrive (a large window costs memory only once filled).
+            devs: vec![VecDeque::new(); prior_sigma.len()],
         })
     }
 

@@ -617,6 +617,18 @@ impl FdeModel for StackedModel<'_> {
     }
 }
 
+/// Refuse (`MemoryError` in Python) a least-squares problem of `n` observations whose n × n
+/// work matrices (about six: D, D⁻¹, D_V and temporaries) would not fit in memory.
+pub fn check_size(what: &str, n: usize) -> Result<()> {
+    let n = n as f64;
+    crate::memory::check(
+        what,
+        6.0 * n * n * 8.0,
+        &format!("{n} observations need n × n work matrices"),
+        "give fewer observations per epoch",
+    )
+}
+
 /// Result of [`snapshot_fde`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SnapshotResult {
@@ -668,6 +680,7 @@ pub fn snapshot_fde(
             value: *v,
         });
     }
+    check_size("snapshot_fde", n)?;
     cov.validate("sigma", n)?;
     let x0 = x0.unwrap_or([0.0; 4]);
     if let Some(v) = x0.iter().find(|v| !v.is_finite()) {
