@@ -135,3 +135,21 @@ def test_accepts_lists_and_integer_arrays():
     inn = kf.update([1, 2], np.eye(2, dtype=int), [[1, 0], [0, 1]])
     assert inn.residual.dtype == np.float64
     np.testing.assert_allclose(kf.x, [0.5, 1.0])
+
+
+def test_predict_rechecks_a_q_that_changed():
+    """An identical Q is checked once; any change (even in place) is checked again."""
+    kf = navfdi.KalmanFilter(np.zeros(3), np.eye(3))
+    Q = np.eye(3) * 0.1
+    kf.predict(np.eye(3), Q)
+    kf.predict(np.eye(3), Q)
+    Q[0, 1] = 5.0  # mutated in place: no longer symmetric
+    before = kf.P.copy()
+    with pytest.raises(ValueError, match="Q"):
+        kf.predict(np.eye(3), Q)
+    np.testing.assert_array_equal(kf.P, before)
+    Qn = np.eye(3) * 0.1
+    Qn[0, 0] = -1.0
+    with pytest.raises(ValueError, match="Q"):
+        kf.predict(np.eye(3), Qn)
+    kf.predict(np.eye(3), np.eye(3) * 0.1)

@@ -78,6 +78,10 @@ pub struct KalmanFilter {
     p: DMatrix<f64>,
     ws: Workspace,
     mws: Option<MWork>,
+    /// The last `Q` that passed [`KalmanFilter::predict`]'s covariance check: an identical `Q`
+    /// (element by element) is not checked again (the symmetric-PSD check dominates the cost
+    /// of a checked predict for large n). Never serialised.
+    validated_q: Option<DMatrix<f64>>,
 }
 
 /// The serialised form of a [`KalmanFilter`].
@@ -122,6 +126,7 @@ impl KalmanFilter {
             p,
             ws: Workspace::new(n),
             mws: None,
+            validated_q: None,
         })
     }
 
@@ -175,9 +180,30 @@ impl KalmanFilter {
     ///
     /// `phi`: n × n transition matrix; `q`: n × n process-noise covariance already mapped to the
     /// state (ΓQΓᵀ), symmetric PSD; `fading`: factor `S ≥ 1` (1 for the ordinary filter).
+    ///
+    /// `Q` is checked (symmetric, PSD) unless it equals, element by element, the last `Q` that
+    /// passed the check.
     pub fn predict(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
-        self.check_predict(phi, q, fading)?;
-        self.predict_trusted(phi, q, fading)
+        let n = self.dim();
+        check_shape("Phi", phi, n, n)?;
+        check_finite_matrix("Phi", phi)?;
+        check_shape("Q", q, n, n)?;
+        let known = self
+            .validated_q
+            .as_ref()
+            .is_some_and(|v| v.as_slice() == q.as_slice());
+        if !known {
+            check_covariance("Q", q)?;
+        }
+        check_fading(fading)?;
+        self.predict_trusted(phi, q, fading)?;
+        if !known {
+            match self.validated_q.as_mut() {
+                Some(v) if v.shape() == q.shape() => v.copy_from(q),
+                _ => self.validated_q = Some(q.clone()),
+            }
+        }
+        Ok(())
     }
 
     /// [`KalmanFilter::predict`] without input validation, for loops whose inputs were validated
