@@ -71,9 +71,7 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
         if name not in ("gps", "galileo"):
             raise ScenarioError(f"{p}.systems[{j}] = {name!r}: use gps or galileo")
         systems.append(name)
-    en = r.get("elevation_noise", False)
-    if not isinstance(en, bool):
-        raise ScenarioError(f"{p}.elevation_noise = {en!r}: expected true or false")
+    en = _bool(r.get("elevation_noise", False), f"{p}.elevation_noise")
     clock = _need(r, "clock", p)
     _check_keys(clock, set(_CLOCK), f"{p}.clock")
     return {
@@ -169,9 +167,7 @@ def _tight(t: Any) -> dict[str, Any]:
     fde = _str(_need(t, "fde", "tight"), "tight.fde")
     if fde not in ("ls_precheck", "innovation", "gnss_filter", "none"):
         raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter or none")
-    rates = t.get("rates", True)
-    if not isinstance(rates, bool):
-        raise ScenarioError(f"tight.rates = {rates!r}: expected true or false")
+    rates = _bool(t.get("rates", True), "tight.rates")
     return {
         "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
         "fde": fde,
@@ -267,6 +263,13 @@ def _number(v: Any, path: str) -> float:
 def _count(v: Any, path: str) -> int:
     if isinstance(v, bool) or not isinstance(v, int) or v < 1:
         raise ScenarioError(f"{path} = {v!r}: expected an integer >= 1")
+    return v
+
+
+def _bool(v: Any, path: str) -> bool:
+    """A TOML boolean; anything else names the field."""
+    if not isinstance(v, bool):
+        raise ScenarioError(f"{path} = {v!r}: expected true or false")
     return v
 
 
@@ -371,12 +374,6 @@ def _centralized(c: Any) -> dict[str, Any]:
     if "isolate" in c:
         out["isolate"] = _bool(c["isolate"], "centralized.isolate")
     return out
-
-
-def _bool(v: Any, path: str) -> bool:
-    if not isinstance(v, bool):
-        raise ScenarioError(f"{path} = {v!r}: expected true or false")
-    return v
 
 
 def _altitude_fusion(a: Any) -> dict[str, Any]:
@@ -579,9 +576,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     iu = fed.get("isolated", "track")
     if iu not in ("track", "predict", "update"):
         raise ScenarioError(f"federated.isolated = {iu!r}: use track, predict or update")
-    isolate = fed.get("isolate", True)
-    if not isinstance(isolate, bool):
-        raise ScenarioError(f"federated.isolate = {isolate!r}: expected true or false")
+    isolate = _bool(fed.get("isolate", True), "federated.isolate")
     core["federated"] = {
         "mode": mode,
         "master_share": _number(fed.get("master_share", 0.0), "federated.master_share"),

@@ -168,11 +168,24 @@ impl KalmanFilter {
 
     /// Validate the arguments of [`KalmanFilter::predict`] without changing anything.
     pub fn check_predict(&self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
+        self.check_predict_with(phi, q, fading, false)
+    }
+
+    /// [`KalmanFilter::check_predict`], skipping the covariance check of `Q` when `q_known`.
+    fn check_predict_with(
+        &self,
+        phi: &DMatrix<f64>,
+        q: &DMatrix<f64>,
+        fading: f64,
+        q_known: bool,
+    ) -> Result<()> {
         let n = self.dim();
         check_shape("Phi", phi, n, n)?;
         check_finite_matrix("Phi", phi)?;
         check_shape("Q", q, n, n)?;
-        check_covariance("Q", q)?;
+        if !q_known {
+            check_covariance("Q", q)?;
+        }
         check_fading(fading)
     }
 
@@ -184,18 +197,11 @@ impl KalmanFilter {
     /// `Q` is checked (symmetric, PSD) unless it equals, element by element, the last `Q` that
     /// passed the check.
     pub fn predict(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>, fading: f64) -> Result<()> {
-        let n = self.dim();
-        check_shape("Phi", phi, n, n)?;
-        check_finite_matrix("Phi", phi)?;
-        check_shape("Q", q, n, n)?;
         let known = self
             .validated_q
             .as_ref()
-            .is_some_and(|v| v.as_slice() == q.as_slice());
-        if !known {
-            check_covariance("Q", q)?;
-        }
-        check_fading(fading)?;
+            .is_some_and(|v| v.shape() == q.shape() && v.as_slice() == q.as_slice());
+        self.check_predict_with(phi, q, fading, known)?;
         self.predict_trusted(phi, q, fading)?;
         if !known {
             match self.validated_q.as_mut() {

@@ -280,19 +280,16 @@ fn ls_precheck(
             cfg,
         )?
     };
-    // Per satellite: its pseudorange's w (or, excluded, the |w| that excluded it).
+    // Per satellite: its pseudorange's w (or, excluded, the |w| that excluded it); an
+    // excluded rate row (index m + j) names satellite j.
     let mut w: Vec<f64> = out.w[..m].to_vec();
-    let mut excluded = Vec::with_capacity(out.excluded.len());
     for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
-        excluded.push(i % m);
         w[i % m] = wi;
     }
-    let status = out.status;
-    let pr = out;
     Ok(SatFde {
-        excluded,
-        status,
-        first: pr.first,
+        excluded: out.excluded.iter().map(|i| i % m).collect(),
+        status: out.status,
+        first: out.first,
         w,
     })
 }

@@ -1,6 +1,6 @@
 //! WGS-84 geodesy: geodetic ⇄ ECEF, the local east-north-up frame, elevation and azimuth.
 
-use crate::ins::earth::{r_normal, A, E2};
+use crate::ins::earth::{r_normal, E2};
 use nalgebra::{Matrix3, Vector3};
 
 /// ECEF position (m) of geodetic latitude `lat`, longitude `lon` (rad) and height `h` (m).
@@ -55,12 +55,10 @@ pub fn elevation_azimuth(rx: &Vector3<f64>, lat: f64, lon: f64, sat: &Vector3<f6
     (d.z.atan2(horiz), d.x.atan2(d.y))
 }
 
-/// Semi-major axis check helper: the WGS-84 equatorial radius (m).
-pub const EQUATORIAL_RADIUS: f64 = A;
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ins::earth::A;
 
     #[test]
     fn round_trip_and_frames() {
@@ -81,7 +79,7 @@ mod tests {
             let (el, _) = elevation_azimuth(&r, lat, lon, &up);
             assert!((el - std::f64::consts::FRAC_PI_2).abs() < 1e-9);
         }
-        assert!((lla_to_ecef(0.0, 0.0, 0.0).x - EQUATORIAL_RADIUS).abs() < 1e-9);
+        assert!((lla_to_ecef(0.0, 0.0, 0.0).x - A).abs() < 1e-9);
         // A point due north on the surface has azimuth 0, due east π/2.
         let r = lla_to_ecef(0.5, 0.5, 0.0);
         let (_, az) = elevation_azimuth(&r, 0.5, 0.5, &lla_to_ecef(0.5001, 0.5, 0.0));

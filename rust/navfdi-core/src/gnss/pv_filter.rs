@@ -83,7 +83,7 @@ impl PvFilter {
                 None,
                 cfg,
             )?;
-            let Some(x) = pos.solution else {
+            let Some(x) = pos.solution.as_ref() else {
                 return Ok(None);
             };
             let r = Vector3::new(x[0], x[1], x[2]);
@@ -105,15 +105,11 @@ impl PvFilter {
             self.kf = Some(KalmanFilter::new(x0, p0)?);
             let mut excluded = pos.excluded.clone();
             excluded.extend(vel.excluded.iter().copied());
-            let mut w = pos.w.clone();
-            for (&j, &wj) in pos.excluded.iter().zip(&pos.excluded_w) {
-                w[j] = wj;
-            }
             return Ok(Some(SatFde {
                 excluded,
                 status: pos.status,
                 first: pos.first,
-                w,
+                w: pos.w_with_excluded(),
             }));
         };
         let x = kf.x().clone();

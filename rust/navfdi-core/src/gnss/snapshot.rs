@@ -415,6 +415,16 @@ pub fn fde<M: FdeModel>(
 }
 
 impl FdeOutcome {
+    /// `w` with each excluded observation's |w| at its exclusion in place of NaN (what a
+    /// per-satellite record shows).
+    pub fn w_with_excluded(&self) -> Vec<f64> {
+        let mut w = self.w.clone();
+        for (&i, &wi) in self.excluded.iter().zip(&self.excluded_w) {
+            w[i] = wi;
+        }
+        w
+    }
+
     fn no_solution(mut self, n: usize) -> Self {
         self.solution = None;
         self.statistic = f64::NAN;

@@ -1180,24 +1180,8 @@ impl ScenarioSpec {
         }
         match self.architecture {
             Architecture::Tight => self.validate_tight(),
-            Architecture::Federated => {
-                if self.centralized.is_some() {
-                    return Err(bad(
-                        "centralized",
-                        "given, but architecture is \"federated\" (set architecture = \"centralized\" or remove it)",
-                    ));
-                }
-                self.validate_federated()
-            }
-            Architecture::Centralized => {
-                if self.federated.is_some() {
-                    return Err(bad(
-                        "federated",
-                        "given, but architecture is \"centralized\" (set architecture = \"federated\" or remove it)",
-                    ));
-                }
-                self.validate_centralized()
-            }
+            Architecture::Federated => self.validate_federated(),
+            Architecture::Centralized => self.validate_centralized(),
         }
     }
 
