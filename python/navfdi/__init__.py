@@ -24,6 +24,9 @@ Federated filtering and scenarios
 GNSS
     the linear :func:`ls_test` and :func:`snapshot_fde` (snapshot least squares with global test + w-test satellite
     exclusion) returning a :class:`SnapshotFde`; ``architecture = "tight"`` scenarios.
+    Real data: :func:`read_rinex` (RINEX 3 observation/navigation files as tables),
+    :func:`gnss_solve` (single-point positioning with FDE, injected faults) returning a
+    :class:`GnssSolution`; :class:`GnssFault`; :class:`FileFormatError` for bad files.
 Monte-Carlo
     :func:`montecarlo` (runs × sweep points in parallel in Rust, or on Dask) returning a
     :class:`Campaign` with per-run metrics, summaries, plots.
@@ -37,6 +40,7 @@ from navfdi._core import (
     DetectionRun,
     FederatedFilter,
     FederatedStep,
+    FileFormatError,
     FusedValue,
     ImprovedSprt,
     Innovation,
@@ -62,6 +66,7 @@ from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_scenario
+from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 
 __all__ = [
     "AlarmInterval",
@@ -69,10 +74,13 @@ __all__ = [
     "Decision",
     "DetectionRun",
     "FaultMatch",
+    "FileFormatError",
     "FederatedFilter",
     "FederatedStep",
     "FusedValue",
     "FilterRun",
+    "GnssFault",
+    "GnssSolution",
     "ImprovedSprt",
     "Innovation",
     "JointChi2Sprt",
@@ -91,12 +99,14 @@ __all__ = [
     "alarm_intervals",
     "bundled_scenarios",
     "chi2_threshold",
+    "gnss_solve",
     "load_scenario",
     "ls_test",
     "mdb",
     "montecarlo",
     "ncx2_cdf",
     "noncentrality",
+    "read_rinex",
     "run_filter",
     "run_scenario",
     "snapshot_fde",

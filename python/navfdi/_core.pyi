@@ -24,6 +24,10 @@ __all__ = [
     "run_variants",
     "_restore",
     "LinAlgError",
+    "FileFormatError",
+    "read_rinex_obs",
+    "read_rinex_nav",
+    "GnssRun",
     "KalmanFilter",
     "Innovation",
     "run_filter",
@@ -57,6 +61,10 @@ __version__: str
 class LinAlgError(ValueError):
     """Numerical linear-algebra failure (a matrix that must be positive definite is not, or a
     result is not finite). A subclass of ``ValueError``."""
+
+class FileFormatError(ValueError):
+    """A data file (RINEX) is malformed, truncated or of the wrong kind; the message names the
+    file, the line when known, and what was expected. A subclass of ``ValueError``."""
 
 @final
 class Innovation:
@@ -714,3 +722,66 @@ class WeightedFusion:
         """Number of sensors n."""
     def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
         """Pickle support."""
+
+def read_rinex_obs(path: str) -> dict[str, Any]:
+    """Read a RINEX 3 observation file (plain or .gz) into columns: ``epoch`` (uint32),
+    ``time`` (GPS seconds since 1980-01-06, float64), ``sat`` (uint32 code into
+    ``satellites``), ``code`` (uint32 code into ``observables``), ``value`` (float64), each
+    (n,); ``satellites``, ``observables`` (list[str]); ``epoch_times`` (GPS s) and ``flags``
+    (per epoch); ``dropped`` observation types (e.g. ``G:X1``); ``version``; ``receiver``;
+    ``approx_position`` ([x, y, z] m or None). Malformed files raise :class:`FileFormatError`."""
+
+def read_rinex_nav(path: str) -> dict[str, Any]:
+    """Read a RINEX 3 navigation file into columns, one row per GPS/Galileo/BeiDou/QZSS
+    ephemeris: ``satellite`` (list[str]); ``toc``, ``toe`` (GPS s); ``af0`` s, ``af1`` s/s,
+    ``af2`` s/s²; ``sqrt_a`` √m; ``e``; ``i0``, ``omega0``, ``omega``, ``m0`` rad; ``delta_n``,
+    ``idot``, ``omega_dot`` rad/s; ``tgd`` s; ``health``; ``accuracy`` m; ``iod`` (float64
+    arrays); ``unhealthy``, ``fnav`` (list[bool]); ``klobuchar`` (8 floats or None);
+    ``records`` (records per system letter); ``version``."""
+
+@final
+class GnssRun:
+    """Single-point positioning with FDE over a RINEX observation file, solved in chunks of
+    epochs. Internal: use :func:`navfdi.gnss_solve`."""
+
+    def __new__(
+        cls,
+        obs_path: str,
+        nav_path: str,
+        systems: list[str],
+        mask_deg: float,
+        alpha: float,
+        k: float | None,
+        exclude: bool,
+        noise: tuple[float, float],
+        weighting: str,
+        ionosphere: bool,
+        troposphere: bool,
+        faults: list[tuple[str, str, float, float, float]],
+        codes: dict[str, str],
+        factors: dict[str, float],
+    ) -> GnssRun: ...
+    @property
+    def n_epochs(self) -> int:
+        """Number of epochs in the observation file."""
+    @property
+    def done(self) -> int:
+        """Epochs solved so far."""
+    def advance(self, n: int) -> int:
+        """Solve up to ``n`` more epochs (GIL released; Ctrl-C stops within one epoch and
+        keeps the epochs before this call); returns how many were solved."""
+    def epoch_table(self) -> dict[str, Any]:
+        """Per-epoch columns (n_epochs_solved,): ``time`` GPS s; ``x, y, z`` ECEF m (NaN without
+        a solution); ``clock_G/E/C/J`` m; ``dof``, ``statistic``, ``threshold``,
+        ``first_statistic``, ``first_threshold``, ``first_dof``, ``used`` (float64);
+        ``excluded``, ``faulty`` (space-separated names), ``status``, ``reason`` (list[str])."""
+    def satellite_table(self) -> dict[str, Any]:
+        """Per epoch and satellite columns: ``epoch``; ``satellite`` (list[str]);
+        ``elevation``, ``azimuth`` deg; ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault``
+        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``status`` (list[str])."""
+    @property
+    def dropped(self) -> list[str]:
+        """Observation types dropped while reading (e.g. ``G:X1``)."""
+    @property
+    def receiver(self) -> str:
+        """Receiver type from the observation header."""

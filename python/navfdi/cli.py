@@ -110,6 +110,22 @@ def main(argv: list[str] | None = None) -> int:
     mc.add_argument("--out", default=None, help="directory for runs.parquet, summary.csv, campaign.json and plots")
     mc.add_argument("--keep-series", type=_keep_series, default=[], metavar="RUN,...", help="run indices whose time series to keep (written as series_pPOINT_rRUN.parquet)")
     mc.add_argument("--chunk-size", type=_positive, default=None, help="runs per chunk (default 16)")
+    gn = sub.add_parser("gnss", help="single-point positioning with satellite FDE on a RINEX 3 observation file")
+    gn.add_argument("obs", help="RINEX 3 observation file (plain or .gz)")
+    gn.add_argument("nav", help="RINEX 3 navigation file with the broadcast ephemerides")
+    gn.add_argument("--systems", default="G", help="systems to use: G (GPS), E (Galileo), C (BeiDou), J (QZSS), e.g. G,E (default G)")
+    gn.add_argument("--mask", default="10 deg", help="elevation mask, e.g. '10 deg' (default 10 deg)")
+    gn.add_argument("--alpha", type=float, default=0.01, help="false-alarm probability of the global test (default 0.01)")
+    gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
+    gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
+    gn.add_argument("--weighting", choices=["elevation", "rtklib"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2)")
+    gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
+    gn.add_argument("--fault", action="append", default=[], metavar="SAT:SHAPE:SIZE:START:END", help="inject a fault, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s (times from the first epoch; repeatable)")
+    truth = gn.add_mutually_exclusive_group()
+    truth.add_argument("--truth", default=None, metavar="LAT,LON,H", help="reference position (deg, deg, m) for the error statistics")
+    truth.add_argument("--truth-file", default=None, metavar="FILE", help="file whose first line is 'LAT LON H' (deg, deg, m)")
+    gn.add_argument("--out", default=None, help="directory for solution.csv, satellites.parquet, summary.json and figures")
+    gn.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     args = parser.parse_args(argv)
     _one_line_warnings()
     try:
@@ -161,6 +177,43 @@ def _dispatch(args: argparse.Namespace) -> int:
             print(f"\nwrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
     elif args.command == "montecarlo":
         return _montecarlo(args)
+    elif args.command == "gnss":
+        return _gnss(args)
+    return 0
+
+
+def _gnss(args: argparse.Namespace) -> int:
+    from navfdi import units
+    from navfdi.gnss import GnssFault, gnss_solve, read_truth_file
+
+    mask = units.parse(args.mask if " " in args.mask.strip() else f"{args.mask} deg", "angle", "--mask")
+    faults = [GnssFault.parse(f) for f in args.fault]
+    truth = read_truth_file(args.truth_file) if args.truth_file else args.truth
+    factors = {}
+    for item in args.noise_factor:
+        sys_, _, val = item.partition("=")
+        try:
+            factors[sys_.strip().upper()] = float(val)
+        except ValueError:
+            raise ValueError(f"--noise-factor {item!r}: expected SYS=FACTOR, e.g. C=3") from None
+    sol = gnss_solve(
+        args.obs,
+        args.nav,
+        systems=args.systems,
+        mask_deg=mask * 180 / 3.141592653589793,
+        alpha=args.alpha,
+        k=args.k,
+        exclude=not args.no_exclusion,
+        weighting=args.weighting,
+        faults=faults,
+        noise_factors=factors,
+        truth=truth,
+        progress=sys.stderr.isatty(),
+    )
+    print(sol.format_summary(), end="")
+    if args.out:
+        paths = sol.write(args.out, figures=not args.no_figures)
+        print(f"wrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
     return 0
 
 

@@ -78,6 +78,13 @@ pub enum Error {
     /// and which inputs to change.
     #[error("{0}")]
     TooLarge(String),
+    /// A data file is malformed, truncated or of the wrong kind; the message names the file,
+    /// the line when known, and what was expected.
+    #[error("{0}")]
+    Format(String),
+    /// A file could not be read (not found, no permission); the message names it.
+    #[error("{0}")]
+    Io(String),
     /// A numerical procedure failed to produce a finite result.
     #[error("numerical failure in {context}: {detail}")]
     Numerical {

@@ -3,12 +3,13 @@
 //! `NotPositiveDefinite` and `Numerical` (numerical failures during a computation) become
 //! `navfdi.LinAlgError`, a subclass of `ValueError`; `TooLarge` (a computation refused before
 //! allocating more memory than is available) is a `MemoryError` whose message says how much
-//! is needed and what to change; `Cancelled` is a `KeyboardInterrupt`; every other variant is
+//! is needed and what to change; `Format` (a malformed data file) is
+//! `navfdi.FileFormatError`, a subclass of `ValueError`; `Io` is an `OSError`; `Cancelled` is a `KeyboardInterrupt`; every other variant is
 //! a `ValueError`.
 //! The message is the core error's message, which names the argument and the problem.
 
 use navfdi_core::Error;
-use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyValueError};
+use pyo3::exceptions::{PyKeyboardInterrupt, PyMemoryError, PyOSError, PyValueError};
 use pyo3::{create_exception, PyErr};
 
 create_exception!(
@@ -16,6 +17,13 @@ create_exception!(
     LinAlgError,
     PyValueError,
     "A numerical linear-algebra failure: a matrix that must be positive definite is not, or a result is not finite. Subclass of ValueError."
+);
+
+create_exception!(
+    navfdi._core,
+    FileFormatError,
+    PyValueError,
+    "A data file (RINEX) is malformed, truncated or of the wrong kind; the message names the file, the line when known, and what was expected. Subclass of ValueError."
 );
 
 /// Convert a core error into a Python exception.
@@ -26,6 +34,8 @@ pub fn to_py(e: Error) -> PyErr {
         }
         Error::Cancelled => PyKeyboardInterrupt::new_err("cancelled"),
         Error::TooLarge(_) => PyMemoryError::new_err(e.to_string()),
+        Error::Format(_) => FileFormatError::new_err(e.to_string()),
+        Error::Io(_) => PyOSError::new_err(e.to_string()),
         _ => PyValueError::new_err(e.to_string()),
     }
 }

@@ -12,6 +12,7 @@ mod gnss;
 mod interrupt;
 mod montecarlo;
 mod pickling;
+mod rinex;
 mod scenario;
 mod weighted;
 
@@ -120,6 +121,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     load_numpy_api(m.py())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("LinAlgError", m.py().get_type::<errors::LinAlgError>())?;
+    m.add(
+        "FileFormatError",
+        m.py().get_type::<errors::FileFormatError>(),
+    )?;
     m.add_class::<filter::PyKalmanFilter>()?;
     m.add_class::<filter::PyInnovation>()?;
     m.add_function(wrap_pyfunction!(filter::run_filter, m)?)?;
@@ -150,6 +155,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<gnss::PySnapshotFde>()?;
     m.add_function(wrap_pyfunction!(gnss::snapshot_fde, m)?)?;
     m.add_function(wrap_pyfunction!(gnss::py_ls_test, m)?)?;
+    m.add_function(wrap_pyfunction!(rinex::read_rinex_obs, m)?)?;
+    m.add_function(wrap_pyfunction!(rinex::read_rinex_nav, m)?)?;
+    m.add_class::<rinex::PyGnssRun>()?;
     m.add_function(wrap_pyfunction!(montecarlo::check_campaign_memory, m)?)?;
     Ok(())
 }

@@ -4,16 +4,24 @@
 //! * [`geodesy`]: WGS-84 geodetic ⇄ ECEF, local ENU frame, elevation and azimuth.
 //! * [`constellation`]: nominal circular-orbit constellations (GPS and Galileo as Walker
 //!   patterns), satellite positions and velocities in ECEF.
+//! * [`rinex`]: RINEX 3 observation and navigation files (read with the `rinex` crate).
+//! * [`broadcast`]: GPS time, broadcast-ephemeris satellite positions and clocks, selection.
+//! * [`atmosphere`]: Klobuchar ionosphere and Saastamoinen troposphere.
+//! * [`spp`]: single-point positioning with satellite FDE on real pseudoranges.
 //! * [`snapshot`]: iterative weighted least squares for position and clock from
 //!   pseudoranges, and the global test + Baarda w-test exclusion loop (also used on
 //!   pseudorange rates for velocity and clock drift).
 
+pub mod atmosphere;
+pub mod broadcast;
 pub mod constellation;
 pub mod geodesy;
 pub mod innovation;
 pub mod pv_filter;
 pub mod ranges;
+pub mod rinex;
 pub mod snapshot;
+pub mod spp;
 
 /// Speed of light in vacuum (m/s).
 pub const C: f64 = 299_792_458.0;

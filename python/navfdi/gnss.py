@@ -1,0 +1,498 @@
+"""Real GNSS data: RINEX reading, single-point positioning and satellite FDE.
+
+:func:`read_rinex` reads a RINEX 3 observation or navigation file (plain or ``.gz``) into a
+pandas table; :func:`gnss_solve` solves every epoch of an observation file with the broadcast
+ephemerides of a navigation file, runs the global test + w-test exclusion (METHODS §10) on
+each, optionally with faults injected into chosen satellites' pseudoranges, and returns a
+:class:`GnssSolution` (tables, summary, outputs). Reading and solving run in Rust
+(``navfdi._core``); this module converts units, builds tables and scores.
+
+Times are GPST. ``time`` columns are pandas timestamps in GPST (no leap seconds applied);
+``gps_seconds`` are seconds since 1980-01-06 00:00:00 GPST.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+import pandas as pd
+
+from navfdi import _core
+
+GPS_EPOCH = pd.Timestamp("1980-01-06")
+_A = 6_378_137.0
+_E2 = (1 / 298.257223563) * (2 - 1 / 298.257223563)
+
+
+def gps_time(seconds: np.ndarray) -> pd.DatetimeIndex:
+    """GPS seconds since 1980-01-06 (n,) → GPST timestamps (n,), to the nanosecond."""
+    ns = np.round(np.asarray(seconds, dtype=float) * 1e9).astype("int64")
+    return pd.DatetimeIndex(GPS_EPOCH + pd.to_timedelta(ns, unit="ns"))
+
+
+def lla_to_ecef(lat_deg: float, lon_deg: float, height: float) -> np.ndarray:
+    """WGS-84 geodetic latitude, longitude (deg) and ellipsoidal height (m) → ECEF (3,) m."""
+    lat, lon = math.radians(lat_deg), math.radians(lon_deg)
+    n = _A / math.sqrt(1 - _E2 * math.sin(lat) ** 2)
+    return np.array([(n + height) * math.cos(lat) * math.cos(lon), (n + height) * math.cos(lat) * math.sin(lon), (n * (1 - _E2) + height) * math.sin(lat)])
+
+
+def ecef_to_lla(xyz: np.ndarray) -> np.ndarray:
+    """ECEF (n, 3) m → geodetic latitude, longitude (deg) and height (m) (n, 3); NaN rows stay NaN."""
+    xyz = np.atleast_2d(np.asarray(xyz, dtype=float))
+    x, y, z = xyz[:, 0], xyz[:, 1], xyz[:, 2]
+    p = np.hypot(x, y)
+    lon = np.arctan2(y, x)
+    lat = np.arctan2(z, p * (1 - _E2))
+    h = np.zeros_like(p)
+    for _ in range(10):
+        n = _A / np.sqrt(1 - _E2 * np.sin(lat) ** 2)
+        h = p / np.cos(lat) - n
+        lat = np.arctan2(z, p * (1 - _E2 * n / (n + h)))
+    return np.column_stack([np.degrees(lat), np.degrees(lon), h])
+
+
+def enu_rotation(lat_deg: float, lon_deg: float) -> np.ndarray:
+    """Rotation (3, 3) from ECEF to east-north-up at a geodetic latitude, longitude (deg)."""
+    la, lo = math.radians(lat_deg), math.radians(lon_deg)
+    sl, cl, so, co = math.sin(la), math.cos(la), math.sin(lo), math.cos(lo)
+    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
+
+
+def _kind(path: str) -> str:
+    with open(path, "rb") as f:
+        head = f.read(2)
+    opener: Any = gzip.open if head == b"\x1f\x8b" else open
+    try:
+        with opener(path, "rb") as f:
+            first = f.readline(200).decode("ascii", "replace")
+    except (OSError, EOFError) as e:
+        raise _core.FileFormatError(f"{path}: cannot read it ({e})") from None
+    return first[20:21] if len(first) > 20 else ""
+
+
+def read_rinex(path: str | os.PathLike[str]) -> pd.DataFrame:
+    """Read a RINEX 3 observation or navigation file (plain or ``.gz``) with the ``rinex`` crate.
+
+    Observation files give a long table, one row per epoch, satellite and observable:
+    ``time`` (GPST timestamp), ``epoch`` (int), ``satellite`` (category, ``G05``),
+    ``observable`` (category, ``C1C``), ``value`` (float64: m, cycles, Hz or dB-Hz).
+    Navigation files give one row per GPS/Galileo/BeiDou/QZSS ephemeris (``satellite``,
+    ``toc``, ``toe`` as GPST timestamps, the clock and Keplerian elements in s and rad, ``tgd``
+    s, ``health``, ``unhealthy``, ``accuracy`` m, ``fnav``, ``iod``). Header facts are in
+    ``df.attrs`` (``kind``, ``version``; observation: ``receiver``, ``dropped`` observation
+    types, ``approx_position``, ``flags``; navigation: ``klobuchar``, ``records``).
+
+    Raises ``FileNotFoundError`` for a missing file and :class:`navfdi.FileFormatError` (a
+    ``ValueError``) naming the line for malformed, truncated or unsupported files.
+    """
+    p = os.fspath(path)
+    if not os.path.isfile(p):
+        raise FileNotFoundError(2, "no such file", p)
+    kind = _kind(p)
+    if kind == "N":
+        d = _core.read_rinex_nav(p)
+        cols = {k: v for k, v in d.items() if k not in ("klobuchar", "records", "version")}
+        df = pd.DataFrame(cols)
+        df["toc"] = gps_time(df["toc"].to_numpy())
+        df["toe"] = gps_time(df["toe"].to_numpy())
+        df["health"] = df["health"].astype("int64")
+        df.attrs.update(kind="navigation", version=d["version"], klobuchar=d["klobuchar"], records=d["records"])
+        return df
+    d = _core.read_rinex_obs(p)
+    sats = pd.Categorical.from_codes(d["sat"].astype("int64"), categories=d["satellites"]) if len(d["satellites"]) else pd.Categorical([])
+    obs = pd.Categorical.from_codes(d["code"].astype("int64"), categories=d["observables"]) if len(d["observables"]) else pd.Categorical([])
+    df = pd.DataFrame({"time": gps_time(d["time"]), "epoch": d["epoch"].astype("int64"), "satellite": sats, "observable": obs, "value": d["value"]})
+    df.attrs.update(kind="observation", version=d["version"], receiver=d["receiver"], dropped=list(d["dropped"]), approx_position=d["approx_position"], flags=d["flags"].tolist())
+    return df
+
+
+_FAULT = re.compile(r"^\s*([A-Za-z]\d{1,2})\s*:\s*(step|ramp|quadratic)\s*:\s*([^:]+):\s*([^:]+):\s*([^:]+)$")
+_MAG_UNITS = {"step": {"m": 1.0, "cm": 0.01}, "ramp": {"m/s": 1.0, "cm/s": 0.01}, "quadratic": {"m/s2": 1.0, "m/s^2": 1.0}}
+
+
+@dataclass(frozen=True)
+class GnssFault:
+    """A fault added to one satellite's pseudoranges from ``start`` to ``end`` (s after the
+    first epoch; ``end`` exclusive): ``step`` ``magnitude`` m, ``ramp`` m/s, ``quadratic`` m/s²."""
+
+    satellite: str
+    shape: str
+    magnitude: float
+    start: float
+    end: float
+
+    @staticmethod
+    def parse(text: str) -> GnssFault:
+        """Parse ``SAT:SHAPE:SIZE:START:END``, e.g. ``G13:step:20m:100s:200s`` or
+        ``G29:ramp:0.5m/s:100s:300s`` (quadratic sizes in ``m/s2``; times in s, min or h;
+        ``END`` may be ``end`` for the end of the file)."""
+        m = _FAULT.match(text)
+        if not m:
+            raise ValueError(f"--fault {text!r}: expected SAT:SHAPE:SIZE:START:END, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s")
+        sat, shape, size, start, end = m.groups()
+        mag = _with_unit(size, _MAG_UNITS[shape], f"--fault {text!r}: size")
+        t_units = {"s": 1.0, "min": 60.0, "h": 3600.0}
+        t0 = _with_unit(start, t_units, f"--fault {text!r}: start")
+        t1 = math.inf if end.strip() == "end" else _with_unit(end, t_units, f"--fault {text!r}: end")
+        if not (0 <= t0 < t1):
+            raise ValueError(f"--fault {text!r}: needs 0 <= start < end")
+        return GnssFault(sat.upper() if len(sat) == 3 else f"{sat[0].upper()}{int(sat[1:]):02d}", shape, mag, t0, t1)
+
+
+def _with_unit(text: str, units: dict[str, float], what: str) -> float:
+    m = re.fullmatch(r"\s*([-+0-9.eE]+)\s*([A-Za-z/^0-9]+)\s*", text)
+    if not m or m.group(2) not in units:
+        raise ValueError(f"{what} {text.strip()!r}: expected a number with a unit ({', '.join(units)})")
+    try:
+        v = float(m.group(1))
+    except ValueError:
+        raise ValueError(f"{what} {text.strip()!r}: {m.group(1)!r} is not a number") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{what} {text.strip()!r}: must be finite")
+    return v * units[m.group(2)]
+
+
+def parse_truth(text: str) -> np.ndarray:
+    """``LAT,LON,H`` (deg, deg, m; commas or spaces) → ECEF (3,) m."""
+    parts = [p for p in re.split(r"[,\s]+", text.strip()) if p]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise ValueError(f"truth {text!r}: expected LAT,LON,H in deg, deg, m") from None
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals) or abs(vals[0]) > 90 or abs(vals[1]) > 360 or abs(vals[2]) > 1e5:
+        raise ValueError(f"truth {text!r}: expected LAT,LON,H with |LAT| <= 90 deg, |LON| <= 360 deg, |H| <= 100 km")
+    return lla_to_ecef(*vals)
+
+
+def read_truth_file(path: str | os.PathLike[str]) -> np.ndarray:
+    """A file whose first non-comment line is ``LAT LON H`` (deg, deg, m) → ECEF (3,) m."""
+    with open(path, encoding="utf-8") as f:
+        for line in f:
+            if line.strip() and not line.lstrip().startswith(("#", "%")):
+                return parse_truth(line)
+    raise ValueError(f"--truth-file {os.fspath(path)}: no 'LAT LON H' line found")
+
+
+@dataclass
+class GnssSolution:
+    """Result of :func:`gnss_solve`.
+
+    ``solution``: one row per epoch (``time`` GPST ISO 8601, ``gps_seconds``, ``x, y, z`` ECEF
+    m, ``lat, lon`` deg, ``height`` m, ``dof``, ``statistic``, ``threshold`` of the final test,
+    ``first_statistic``, ``first_threshold``, ``first_dof`` of the test on all satellites,
+    ``excluded`` (space-separated names), ``status`` (``passed``, ``excluded``,
+    ``unidentified``, ``no_solution``), ``used``, ``faulty`` (satellites with an injected
+    fault), ``clock_G`` … (m), and with a truth ``east, north, up`` errors in m).
+    ``satellites``: per epoch and satellite (``epoch``, ``time``, ``satellite``, ``elevation``,
+    ``azimuth`` deg, ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault`` m, ``w``,
+    ``sat_x, sat_y, sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s),
+    ``status``). ``truth``: ECEF (3,) m or None. ``config``: the settings.
+    """
+
+    solution: pd.DataFrame
+    satellites: pd.DataFrame
+    truth: np.ndarray | None
+    config: dict[str, Any]
+    faults: list[GnssFault] = field(default_factory=list)
+
+    def summary(self) -> dict[str, Any]:
+        """Counts and rates: epochs solved, horizontal/vertical RMS and maxima against the truth
+        (m), exclusions per satellite, false exclusions per clean epoch against α, and per
+        injected fault the epochs it was active, the share in which exactly that satellite
+        was excluded, and the first epoch (s after the fault's start) at which the global test
+        failed and at which the satellite was excluded."""
+        sol, sats = self.solution, self.satellites
+        solved = sol["status"] != "no_solution"
+        out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"]}
+        if self.truth is not None and solved.any():
+            e, n, u = (sol.loc[solved, c].to_numpy() for c in ("east", "north", "up"))
+            out["horizontal_rms"] = float(np.sqrt(np.mean(e**2 + n**2)))
+            out["vertical_rms"] = float(np.sqrt(np.mean(u**2)))
+            out["horizontal_max"] = float(np.max(np.hypot(e, n)))
+            out["vertical_max"] = float(np.max(np.abs(u)))
+        excl = sats[sats["status"] == "excluded"]
+        out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
+        clean = solved & (sol["faulty"] == "")
+        fa = clean & (sol["excluded"] != "")
+        gf = clean & (sol["first_statistic"] >= sol["first_threshold"])
+        out["clean_epochs"] = int(clean.sum())
+        out["false_exclusion_epochs"] = int(fa.sum())
+        out["false_exclusion_rate"] = float(fa.sum() / clean.sum()) if clean.any() else math.nan
+        out["global_alarm_rate_clean"] = float(gf.sum() / clean.sum()) if clean.any() else math.nan
+        t = sol["gps_seconds"].to_numpy()
+        tau = t - t[0] if len(t) else t
+        per_fault = []
+        for f in self.faults:
+            active = (tau >= f.start) & (tau < f.end)
+            rows = sats[(sats["satellite"] == f.satellite) & sats["epoch"].isin(np.flatnonzero(active))]
+            tested = rows[rows["status"].isin(["used", "excluded"])]
+            epochs_tested = tested["epoch"].to_numpy()
+            exact = [set(sol["excluded"].iat[i].split()) == {f.satellite} for i in epochs_tested]
+            hit = [f.satellite in sol["excluded"].iat[i].split() for i in epochs_tested]
+            alarm = [bool(sol["first_statistic"].iat[i] >= sol["first_threshold"].iat[i]) for i in epochs_tested]
+            first_alarm = next((float(tau[i] - f.start) for i, a in zip(epochs_tested, alarm) if a), math.nan)
+            first_excl = next((float(tau[i] - f.start) for i, h in zip(epochs_tested, hit) if h), math.nan)
+            others = [sorted(set(sol["excluded"].iat[i].split()) - {f.satellite}) for i in epochs_tested]
+            per_fault.append(
+                {
+                    "fault": f"{f.satellite}:{f.shape}:{f.magnitude:g}:{f.start:g}:{f.end:g}",
+                    "satellite": f.satellite,
+                    "epochs": int(len(epochs_tested)),
+                    "excluded_exactly": int(sum(exact)),
+                    "excluded_rate": float(np.mean(exact)) if exact else math.nan,
+                    "other_exclusions": int(sum(len(o) for o in others)),
+                    "first_alarm_after": first_alarm,
+                    "first_exclusion_after": first_excl,
+                }
+            )
+        out["faults"] = per_fault
+        return out
+
+    def format_summary(self) -> str:
+        """The summary as printed by ``navfdi gnss``."""
+        s = self.summary()
+        lines = [f"epochs {s['epochs']}, solved {s['solved']} ({', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
+        if "horizontal_rms" in s:
+            lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
+        ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
+        lines.append(f"exclusions per satellite: {ex}")
+        lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
+        for f in s["faults"]:
+            lines.append(
+                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start; other satellites excluded {f['other_exclusions']} times"
+            )
+        return "\n".join(lines) + "\n"
+
+    def write(self, out: str | os.PathLike[str], figures: bool = True) -> list[Path]:
+        """Write ``solution.csv``, ``satellites.parquet``, ``summary.json`` and (``figures``)
+        ``errors.png``, ``statistic.png``, ``exclusions.png`` into ``out`` (created)."""
+        d = Path(out)
+        d.mkdir(parents=True, exist_ok=True)
+        paths = [d / "solution.csv", d / "satellites.parquet", d / "summary.json"]
+        self.solution.to_csv(paths[0], index=False, float_format="%.10g")
+        sats = self.satellites.copy()
+        sats["satellite"] = sats["satellite"].astype(str)
+        sats.to_parquet(paths[1], index=False)
+        paths[2].write_text(json.dumps({"summary": self.summary(), "config": self.config}, indent=2, default=_json_default) + "\n")
+        if figures:
+            paths += _plot(self, d)
+        return paths
+
+
+def _json_default(o: Any) -> Any:
+    if isinstance(o, (np.floating, np.integer)):
+        return o.item()
+    return str(o)
+
+
+def gnss_solve(
+    obs: str | os.PathLike[str],
+    nav: str | os.PathLike[str],
+    *,
+    systems: Sequence[str] | str = "G",
+    mask_deg: float = 10.0,
+    alpha: float = 0.01,
+    k: float | None = None,
+    exclude: bool = True,
+    noise: tuple[float, float] = (0.3, 0.3),
+    weighting: str = "elevation",
+    ionosphere: bool = True,
+    troposphere: bool = True,
+    faults: Iterable[GnssFault | str] = (),
+    codes: dict[str, str] | None = None,
+    noise_factors: dict[str, float] | None = None,
+    truth: np.ndarray | Sequence[float] | str | None = None,
+    progress: bool = False,
+    chunk: int = 500,
+) -> GnssSolution:
+    """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
+
+    Parameters
+    ----------
+    obs, nav : path
+        Observation and navigation files (RINEX 3, plain or ``.gz``).
+    systems : str or sequence of str
+        Letters of the systems to use: ``G`` GPS, ``E`` Galileo, ``C`` BeiDou, ``J`` QZSS
+        (``"G,E"`` or ``["G", "E"]``); one receiver clock per system.
+    mask_deg : float
+        Elevation mask (deg).
+    alpha, k : float
+        False-alarm probability of the global χ² test and the w-test critical value
+        (default: the two-sided normal quantile of ``alpha``).
+    exclude : bool
+        Run the exclusion loop (False: weighted least squares, test reported only).
+    noise : (a, b)
+        Code noise (m): ``σ² = a² + b²/sin² el`` (``weighting="elevation"``), or RTKLIB's
+        ``pntpos`` variance with these a, b (``weighting="rtklib"``).
+    ionosphere, troposphere : bool
+        Apply the broadcast Klobuchar and the Saastamoinen models.
+    faults : GnssFault or str
+        Faults to inject (``"G13:step:20m:100s:200s"``; times from the first epoch).
+    codes : dict
+        Pseudorange code per system letter (defaults ``C1C``; BeiDou ``C2I``).
+    noise_factors : dict
+        Factor on σ per system letter (default 1), e.g. ``{"C": 3.0}`` where a system's
+        broadcast biases exceed the code noise.
+    truth : (3,) ECEF m, ``"LAT,LON,H"`` or None
+        Reference position; adds ``east, north, up`` error columns and RMS to the summary.
+    progress : bool
+        Show a tqdm progress bar.
+    chunk : int
+        Epochs solved per call into Rust (progress granularity).
+    """
+    if isinstance(systems, str):
+        systems = [s for s in re.split(r"[,\s]+", systems.strip()) if s]
+    systems = [s.upper() for s in systems]
+    if not systems:
+        raise ValueError("systems: give at least one of G, E, C, J")
+    for p, name in ((obs, "obs"), (nav, "nav")):
+        if not os.path.isfile(os.fspath(p)):
+            raise FileNotFoundError(2, f"{name}: no such file", os.fspath(p))
+    parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f) for f in faults]
+    if not (isinstance(mask_deg, (int, float)) and math.isfinite(mask_deg) and 0 <= mask_deg < 90):
+        raise ValueError(f"mask: {mask_deg} deg; the elevation mask must be in [0, 90) deg")
+    if chunk < 1:
+        raise ValueError(f"chunk = {chunk}: must be >= 1")
+    if isinstance(truth, str):
+        truth = parse_truth(truth)
+    t_ecef = None if truth is None else np.asarray(truth, dtype=float).reshape(-1)
+    if t_ecef is not None and (t_ecef.shape != (3,) or not np.all(np.isfinite(t_ecef))):
+        raise ValueError("truth: expected ECEF (3,) in m or 'LAT,LON,H'")
+    run = _core.GnssRun(
+        os.fspath(obs),
+        os.fspath(nav),
+        systems,
+        float(mask_deg),
+        float(alpha),
+        None if k is None else float(k),
+        bool(exclude),
+        (float(noise[0]), float(noise[1])),
+        weighting,
+        bool(ionosphere),
+        bool(troposphere),
+        [(f.satellite, f.shape, f.magnitude, f.start, min(f.end, 1e15)) for f in parsed],
+        dict(codes or {}),
+        {str(k).upper(): float(v) for k, v in (noise_factors or {}).items()},
+    )
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=run.n_epochs, unit="epoch", desc="gnss")
+    try:
+        while run.done < run.n_epochs:
+            n = run.advance(chunk)
+            if bar is not None:
+                bar.update(n)
+    finally:
+        if bar is not None:
+            bar.close()
+    ep = run.epoch_table()
+    sol = pd.DataFrame({"time": gps_time(ep["time"]).strftime("%Y-%m-%dT%H:%M:%S.%f").str[:-3], "gps_seconds": ep["time"]})
+    xyz = np.column_stack([ep["x"], ep["y"], ep["z"]])
+    lla = ecef_to_lla(xyz) if len(xyz) else np.zeros((0, 3))
+    for c, col in (("x", 0), ("y", 1), ("z", 2)):
+        sol[c] = xyz[:, col]
+    sol["lat"], sol["lon"], sol["height"] = lla[:, 0], lla[:, 1], lla[:, 2]
+    for c in ("dof", "statistic", "threshold", "first_statistic", "first_threshold", "first_dof"):
+        sol[c] = ep[c]
+    sol["dof"] = sol["dof"].astype("int64")
+    sol["first_dof"] = sol["first_dof"].astype("int64")
+    sol["excluded"] = ep["excluded"]
+    sol["status"] = ep["status"]
+    sol["used"] = ep["used"].astype("int64")
+    sol["faulty"] = ep["faulty"]
+    for s in ("G", "E", "C", "J"):
+        if s in systems:
+            sol[f"clock_{s}"] = ep[f"clock_{s}"]
+    if t_ecef is not None:
+        t_lla = ecef_to_lla(t_ecef[None, :])[0]
+        enu = (xyz - t_ecef) @ enu_rotation(t_lla[0], t_lla[1]).T
+        sol["east"], sol["north"], sol["up"] = enu[:, 0], enu[:, 1], enu[:, 2]
+    sol["reason"] = ep["reason"]
+    st = run.satellite_table()
+    sats = pd.DataFrame(st)
+    sats["epoch"] = sats["epoch"].astype("int64")
+    sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
+    sats["satellite"] = sats["satellite"].astype("category")
+    config = {
+        "obs": os.fspath(obs),
+        "nav": os.fspath(nav),
+        "systems": systems,
+        "mask_deg": float(mask_deg),
+        "alpha": float(alpha),
+        "k": k,
+        "exclude": bool(exclude),
+        "noise": list(noise),
+        "weighting": weighting,
+        "ionosphere": bool(ionosphere),
+        "troposphere": bool(troposphere),
+        "codes": dict(codes or {}),
+        "noise_factors": dict(noise_factors or {}),
+        "faults": [f.__dict__ for f in parsed],
+        "dropped_observation_types": run.dropped,
+        "receiver": run.receiver,
+    }
+    return GnssSolution(sol, sats, t_ecef, config, parsed)
+
+
+def _plot(s: GnssSolution, d: Path) -> list[Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sol, sats = s.solution, s.satellites
+    t = sol["gps_seconds"].to_numpy()
+    tau = t - t[0] if len(t) else t
+    paths = []
+    if s.truth is not None:
+        fig, ax = plt.subplots(figsize=(9, 4))
+        for c in ("east", "north", "up"):
+            ax.plot(tau, sol[c], label=c, lw=1)
+        _shade_faults(ax, s.faults)
+        ax.set(xlabel="time since first epoch (s)", ylabel="error (m)", title="Position error against the truth")
+        ax.legend()
+        ax.grid(alpha=0.3)
+        paths.append(d / "errors.png")
+        fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+        plt.close(fig)
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.semilogy(tau, sol["first_statistic"], lw=1, label="global test, all satellites")
+    ax.semilogy(tau, sol["first_threshold"], "k--", lw=1, label="threshold")
+    _shade_faults(ax, s.faults)
+    ax.set(xlabel="time since first epoch (s)", ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    paths.append(d / "statistic.png")
+    fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(9, 4))
+    names = sorted(str(n) for n in sats["satellite"].unique())
+    pos = {n: i for i, n in enumerate(names)}
+    used = sats[sats["status"] == "used"]
+    ex = sats[sats["status"] == "excluded"]
+    ax.scatter(tau[used["epoch"]], [pos[str(n)] for n in used["satellite"]], s=2, c="0.75", label="used")
+    ax.scatter(tau[ex["epoch"]], [pos[str(n)] for n in ex["satellite"]], s=8, c="C3", label="excluded")
+    _shade_faults(ax, s.faults)
+    ax.set_yticks(range(len(names)), names, fontsize=7)
+    ax.set(xlabel="time since first epoch (s)", title="Satellites used and excluded per epoch")
+    ax.legend(loc="upper right")
+    paths.append(d / "exclusions.png")
+    fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return paths
+
+
+def _shade_faults(ax: Any, faults: list[GnssFault]) -> None:
+    for f in faults:
+        ax.axvspan(f.start, min(f.end, ax.get_xlim()[1]), color="C1", alpha=0.12)

@@ -1,0 +1,797 @@
+//! RINEX 3 observation and navigation files, read with the `rinex` crate.
+//!
+//! The crate parses; this module guards it and converts its records into [`ObsData`] and
+//! [`NavData`]. Three guards work around what the crate (0.24) does with real files:
+//!
+//! 1. **Header normalisation.** Its header parser silently drops observation types it does not
+//!    know, such as Septentrio's `X1` (receiver channel) pseudo-observable, which shifts every
+//!    following column by one (C1C would then hold the channel number). Before parsing, every
+//!    such code in `SYS / # / OBS TYPES` is renamed to a placeholder the parser keeps
+//!    (`WZ0`, `WZ1`, …, a "power" type no real file uses); those columns are then dropped.
+//! 2. **Structure check with line numbers.** The crate accepts a truncated file (it returns the
+//!    epochs before the cut) and some malformed ones without an error, and its errors carry no
+//!    line numbers. A pass over the text checks the header (`RINEX VERSION / TYPE`, version
+//!    3.xx, `END OF HEADER`), each epoch line, the satellite lines each announces, the field
+//!    count against the header and that every field is a number; navigation records must
+//!    have their continuation lines. Failures name the file, the line and what was expected.
+//! 3. **Health and clocks are interpreted here**: its `sv_healthy()` reports every Galileo
+//!    record unhealthy, and its clock correction returns nothing before t_oc; see
+//!    [`super::broadcast`].
+
+use super::atmosphere::Klobuchar;
+use super::broadcast::{Ephemeris, GpsTime, Sat, Sys};
+use crate::error::{Error, Result};
+use nalgebra::Vector3;
+use rinex::navigation::NavMessageType;
+use rinex::prelude::{Constellation, Rinex, TimeScale};
+use std::collections::{BTreeMap, HashMap};
+use std::io::BufReader;
+
+/// One observation: satellite, observable index into [`ObsData::codes`], value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Obs {
+    /// Satellite.
+    pub sat: Sat,
+    /// Index into [`ObsData::codes`] (e.g. `C1C`).
+    pub code: u16,
+    /// Value (m for pseudoranges, cycles for phase, Hz for Doppler, dB-Hz for C/N0).
+    pub value: f64,
+}
+
+/// One observation epoch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObsEpoch {
+    /// Receiver time tag (GPST).
+    pub time: GpsTime,
+    /// Epoch flag (0 OK, 1 power failure before this epoch).
+    pub flag: u8,
+    /// Observations, satellite by satellite.
+    pub obs: Vec<Obs>,
+}
+
+/// An observation file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObsData {
+    /// RINEX version (`3.04`).
+    pub version: String,
+    /// Observable names, indexed by [`Obs::code`].
+    pub codes: Vec<String>,
+    /// Header observation types per system letter, as in the file (placeholders excluded).
+    pub header_codes: BTreeMap<char, Vec<String>>,
+    /// Observation types that were dropped (e.g. `G:X1`).
+    pub dropped_codes: Vec<String>,
+    /// `APPROX POSITION XYZ` (m), if present and non-zero.
+    pub approx_position: Option<Vector3<f64>>,
+    /// Receiver type from `REC # / TYPE / VERS`.
+    pub receiver: String,
+    /// Epochs with flag 0 or 1, in time order.
+    pub epochs: Vec<ObsEpoch>,
+}
+
+impl ObsData {
+    /// Index of an observable name, if any observation uses it.
+    pub fn code_index(&self, name: &str) -> Option<u16> {
+        self.codes.iter().position(|c| c == name).map(|i| i as u16)
+    }
+}
+
+/// A navigation file: ephemerides per satellite and the GPS Klobuchar coefficients.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NavData {
+    /// RINEX version.
+    pub version: String,
+    /// Ephemerides per satellite (systems GPS, Galileo, BeiDou, QZSS).
+    pub ephemerides: BTreeMap<Sat, Vec<Ephemeris>>,
+    /// GPS Klobuchar `[α₀..α₃, β₀..β₃]` from the header, if present.
+    pub klobuchar: Option<Klobuchar>,
+    /// Records per system letter as read (all systems, incl. those not positioned).
+    pub records: BTreeMap<char, usize>,
+    /// Records skipped because a required orbit field is missing.
+    pub incomplete: usize,
+}
+
+fn format_err(path: &str, line: Option<usize>, what: impl std::fmt::Display) -> Error {
+    Error::Format(match line {
+        Some(l) => format!("{path}, line {l}: {what}"),
+        None => format!("{path}: {what}"),
+    })
+}
+
+/// Label of a header line (columns 61–80), trimmed.
+fn label(line: &str) -> &str {
+    line.get(60..).map(str::trim).unwrap_or("")
+}
+
+/// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
+/// corrupt gzip, not text, Hatanaka-compressed).
+pub fn read_text(path: &str) -> Result<String> {
+    let mut bytes = std::fs::read(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        use std::io::Read;
+        let mut out = Vec::new();
+        flate2::read::MultiGzDecoder::new(bytes.as_slice())
+            .read_to_end(&mut out)
+            .map_err(|e| format_err(path, None, format!("corrupt or truncated gzip data: {e}")))?;
+        bytes = out;
+    }
+    if bytes.is_empty() {
+        return Err(format_err(path, None, "the file is empty"));
+    }
+    if bytes.starts_with(b"1.0                 COMPACT RINEX")
+        || bytes.starts_with(b"3.0                 COMPACT RINEX")
+    {
+        return Err(format_err(
+            path,
+            Some(1),
+            "Hatanaka-compressed (Compact RINEX); expand it first with CRX2RNX",
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        format_err(
+            path,
+            None,
+            format!(
+                "not a text file (invalid UTF-8 at byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+/// Check the first header line: version 3.xx and the file type letter `kind` (`O` or `N`).
+fn check_version(path: &str, text: &str, kind: char) -> Result<String> {
+    let first = text.lines().next().unwrap_or("");
+    if label(first) != "RINEX VERSION / TYPE" {
+        return Err(format_err(
+            path,
+            Some(1),
+            "expected the 'RINEX VERSION / TYPE' header line: not a RINEX file",
+        ));
+    }
+    let version = first.get(..9).unwrap_or("").trim().to_string();
+    let major = version.split('.').next().unwrap_or("");
+    if major != "3" {
+        return Err(format_err(
+            path,
+            Some(1),
+            format!("RINEX version '{version}' is not supported (only 3.xx); convert the file to RINEX 3 (e.g. gfzrnx or RTKLIB convbin)"),
+        ));
+    }
+    let t = first
+        .get(20..21)
+        .unwrap_or(" ")
+        .chars()
+        .next()
+        .unwrap_or(' ');
+    if t != kind {
+        let what = match t {
+            'O' => "an observation file",
+            'N' => "a navigation file",
+            'M' => "a meteorological file",
+            _ => "a file of another kind",
+        };
+        let want = if kind == 'O' {
+            "an observation file (type O)"
+        } else {
+            "a navigation file (type N)"
+        };
+        return Err(format_err(
+            path,
+            Some(1),
+            format!("this is {what} (type '{t}'); expected {want}"),
+        ));
+    }
+    Ok(version)
+}
+
+/// Index of the line after `END OF HEADER` (0-based), or an error.
+fn header_end(path: &str, lines: &[&str]) -> Result<usize> {
+    lines
+        .iter()
+        .position(|l| label(l) == "END OF HEADER")
+        .map(|i| i + 1)
+        .ok_or_else(|| {
+            format_err(
+                path,
+                Some(lines.len()),
+                "no 'END OF HEADER' line: the header is truncated or the file is not RINEX",
+            )
+        })
+}
+
+/// Normalised header text, placeholder → original type names, type counts per system.
+type Normalised = (String, HashMap<String, String>, HashMap<char, usize>);
+
+/// Rename unknown observation types in `SYS / # / OBS TYPES` (see the module docs); returns
+/// the new text, the placeholder → original names and the header's type counts per system.
+fn normalise_obs_header(path: &str, lines: &[&str], end: usize) -> Result<Normalised> {
+    let mut out = String::with_capacity(lines.iter().map(|l| l.len() + 1).sum());
+    let mut renamed = HashMap::new();
+    let mut counts = HashMap::new();
+    let mut current = ' ';
+    let mut k = 0usize;
+    for (i, line) in lines.iter().enumerate() {
+        if i < end && label(line) == "SYS / # / OBS TYPES" {
+            let mut l: Vec<u8> = line.as_bytes().to_vec();
+            let sys = line.chars().next().unwrap_or(' ');
+            if sys != ' ' {
+                current = sys;
+                let n: usize = line.get(3..6).unwrap_or("").trim().parse().map_err(|_| {
+                    format_err(
+                        path,
+                        Some(i + 1),
+                        "SYS / # / OBS TYPES: the number of types (columns 4–6) is not an integer",
+                    )
+                })?;
+                counts.insert(current, n);
+            }
+            for f in 0..13 {
+                let (a, b) = (7 + 4 * f, 10 + 4 * f);
+                let Some(code) = line.get(a..b) else { break };
+                let code = code.trim();
+                if code.is_empty() {
+                    continue;
+                }
+                let first = code.chars().next().unwrap_or(' ');
+                if !matches!(first, 'C' | 'L' | 'D' | 'S') {
+                    let ph = format!("WZ{}", char::from_digit((k % 36) as u32, 36).unwrap_or('0'));
+                    k += 1;
+                    renamed.insert(format!("{current}:{ph}"), format!("{current}:{code}"));
+                    l[a..b].copy_from_slice(ph.as_bytes());
+                }
+            }
+            out.push_str(std::str::from_utf8(&l).unwrap_or(line));
+        } else {
+            out.push_str(line);
+        }
+        out.push('\n');
+    }
+    Ok((out, renamed, counts))
+}
+
+/// The structure check of an observation body (see the module docs). Returns the number of
+/// epochs with flag 0 or 1.
+fn check_obs_body(
+    path: &str,
+    lines: &[&str],
+    start: usize,
+    counts: &HashMap<char, usize>,
+) -> Result<usize> {
+    let mut i = start;
+    let mut epochs = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.trim().is_empty() {
+            i += 1;
+            continue;
+        }
+        if !line.starts_with('>') {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!(
+                    "expected an epoch line starting with '>', found '{}'",
+                    line.trim_end()
+                ),
+            ));
+        }
+        let flag = line.get(31..32).unwrap_or("").trim();
+        let n: usize = line.get(32..35).unwrap_or("").trim().parse().map_err(|_| {
+            format_err(
+                path,
+                Some(i + 1),
+                "epoch line: the number of satellites (columns 33–35) is missing or not an integer",
+            )
+        })?;
+        let fields: Vec<&str> = line.get(1..29).unwrap_or("").split_whitespace().collect();
+        if fields.len() != 6 || fields.iter().any(|f| f.parse::<f64>().is_err()) {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                "epoch line: expected 'year month day hour minute second' in columns 3–29",
+            ));
+        }
+        let epoch_line = i + 1;
+        i += 1;
+        match flag {
+            "0" | "1" => {
+                epochs += 1;
+                for j in 0..n {
+                    let Some(sl) = lines.get(i) else {
+                        return Err(format_err(
+                            path,
+                            Some(lines.len()),
+                            format!("the file ends inside the epoch of line {epoch_line}: {n} satellite lines announced, {j} found (truncated file?)"),
+                        ));
+                    };
+                    let sys = sl.chars().next().unwrap_or(' ');
+                    let prn_ok = sl
+                        .get(1..3)
+                        .map(|p| p.trim().parse::<u8>().is_ok())
+                        .unwrap_or(false);
+                    if !prn_ok || !sys.is_ascii_alphabetic() {
+                        return Err(format_err(
+                            path,
+                            Some(i + 1),
+                            format!("expected satellite line {} of {n} of the epoch of line {epoch_line} (e.g. 'G05 …'), found '{}'", j + 1, sl.trim_end()),
+                        ));
+                    }
+                    let nobs = counts.get(&sys).copied().ok_or_else(|| {
+                        format_err(path, Some(i + 1), format!("satellite system '{sys}' has no 'SYS / # / OBS TYPES' line in the header"))
+                    })?;
+                    let body = sl.get(3..).unwrap_or("");
+                    let nf = body.len().div_ceil(16);
+                    if nf > nobs {
+                        return Err(format_err(
+                            path,
+                            Some(i + 1),
+                            format!("{nf} observation fields, but the header lists {nobs} types for system '{sys}'"),
+                        ));
+                    }
+                    for f in 0..nf {
+                        let a = 3 + 16 * f;
+                        let v = sl.get(a..(a + 14).min(sl.len())).unwrap_or("").trim();
+                        if !v.is_empty() && v.parse::<f64>().is_err() {
+                            return Err(format_err(
+                                path,
+                                Some(i + 1),
+                                format!("column {}: '{v}' is not a number", a + 1),
+                            ));
+                        }
+                    }
+                    i += 1;
+                }
+            }
+            "2" | "3" | "4" | "5" | "6" => {
+                if i + n > lines.len() {
+                    return Err(format_err(
+                        path,
+                        Some(lines.len()),
+                        format!("the file ends inside the event of line {epoch_line} ({n} lines announced)"),
+                    ));
+                }
+                i += n;
+            }
+            _ => {
+                return Err(format_err(
+                    path,
+                    Some(epoch_line),
+                    format!("epoch flag '{flag}' (column 32) is not 0–6"),
+                ))
+            }
+        }
+    }
+    if epochs == 0 {
+        return Err(format_err(
+            path,
+            None,
+            "no observation epochs after the header",
+        ));
+    }
+    Ok(epochs)
+}
+
+fn to_sat(sv: &rinex::prelude::SV) -> Option<Sat> {
+    Sat::parse(&format!("{sv}"))
+}
+
+fn gpst(e: &rinex::prelude::Epoch, scale: TimeScale) -> GpsTime {
+    let (w, ns) = e.to_time_scale(scale).to_time_of_week();
+    GpsTime::new(w as i64, ns as f64 * 1e-9)
+}
+
+/// Read a RINEX 3 observation file (`path` for messages, `text` its content).
+pub fn parse_obs(path: &str, text: &str) -> Result<ObsData> {
+    let version = check_version(path, text, 'O')?;
+    let lines: Vec<&str> = text.lines().collect();
+    let end = header_end(path, &lines)?;
+    let (normalised, renamed, counts) = normalise_obs_header(path, &lines, end)?;
+    if counts.is_empty() {
+        return Err(format_err(
+            path,
+            None,
+            "the header has no 'SYS / # / OBS TYPES' lines",
+        ));
+    }
+    if !lines[..end].iter().any(|l| label(l) == "TIME OF FIRST OBS") {
+        return Err(format_err(
+            path,
+            None,
+            "the header has no 'TIME OF FIRST OBS' line (RINEX 3 requires it: it names the time system)",
+        ));
+    }
+    let expected = check_obs_body(path, &lines, end, &counts)?;
+    let rnx = Rinex::parse(&mut BufReader::new(normalised.as_bytes()))
+        .map_err(|e| format_err(path, None, format!("the RINEX parser failed: {e}")))?;
+    let mut codes: Vec<String> = Vec::new();
+    let mut code_ix: HashMap<String, u16> = HashMap::new();
+    let mut epochs = Vec::new();
+    for (key, o) in rnx.observations_iter() {
+        let flag = key.flag as u8;
+        if flag > 1 {
+            continue;
+        }
+        let time = gpst(&key.epoch, TimeScale::GPST);
+        let mut obs = Vec::with_capacity(o.signals.len());
+        for s in &o.signals {
+            let name = s.observable.to_string();
+            if name.starts_with("WZ") {
+                continue;
+            }
+            let Some(sat) = to_sat(&s.sv) else { continue };
+            let code = match code_ix.get(&name) {
+                Some(&c) => c,
+                None => {
+                    codes.push(name.clone());
+                    let c = (codes.len() - 1) as u16;
+                    code_ix.insert(name, c);
+                    c
+                }
+            };
+            obs.push(Obs {
+                sat,
+                code,
+                value: s.value,
+            });
+        }
+        epochs.push(ObsEpoch { time, flag, obs });
+    }
+    if epochs.len() != expected {
+        return Err(format_err(
+            path,
+            None,
+            format!("{expected} epochs in the file but the RINEX parser returned {}; the file may be malformed", epochs.len()),
+        ));
+    }
+    let mut header_codes = BTreeMap::new();
+    if let Some(h) = rnx.header.obs.as_ref() {
+        for (c, v) in &h.codes {
+            let letter = format!("{c:x}").chars().next().unwrap_or('?');
+            let names: Vec<String> = v
+                .iter()
+                .map(|o| o.to_string())
+                .filter(|n| !n.starts_with("WZ"))
+                .collect();
+            header_codes.insert(letter, names);
+        }
+    }
+    let mut dropped: Vec<String> = renamed.into_values().collect();
+    dropped.sort();
+    let approx_position = rnx
+        .header
+        .rx_position
+        .map(|(x, y, z)| Vector3::new(x, y, z))
+        .filter(|p| p.norm() > 1.0);
+    let receiver = rnx
+        .header
+        .rcvr
+        .as_ref()
+        .map(|r| r.model.clone())
+        .unwrap_or_default();
+    Ok(ObsData {
+        version,
+        codes,
+        header_codes,
+        dropped_codes: dropped,
+        approx_position,
+        receiver,
+        epochs,
+    })
+}
+
+/// Continuation lines of a navigation record of system `sys` (RINEX 3.04), or None to accept
+/// 3–7 (systems not positioned, whose layout changed between 3.0x revisions).
+fn nav_lines(sys: char) -> Option<usize> {
+    match sys {
+        'G' | 'E' | 'C' | 'J' | 'I' => Some(7),
+        _ => None,
+    }
+}
+
+fn check_nav_body(path: &str, lines: &[&str], start: usize) -> Result<usize> {
+    let mut i = start;
+    let mut records = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.trim().is_empty() {
+            i += 1;
+            continue;
+        }
+        let sys = line.chars().next().unwrap_or(' ');
+        let prn_ok = line
+            .get(1..3)
+            .map(|p| p.trim().parse::<u8>().is_ok())
+            .unwrap_or(false);
+        if !sys.is_ascii_alphabetic() || !prn_ok {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!("expected the first line of a navigation record (e.g. 'G05 2024 06 24 …'), found '{}'", line.trim_end()),
+            ));
+        }
+        let first = i + 1;
+        i += 1;
+        let mut k = 0;
+        while i < lines.len() && lines[i].starts_with("    ") && !lines[i].trim().is_empty() {
+            k += 1;
+            i += 1;
+        }
+        let ok = match nav_lines(sys) {
+            Some(n) => k == n,
+            None => (3..=7).contains(&k),
+        };
+        if !ok {
+            let want = nav_lines(sys).map_or("3–7".to_string(), |n| n.to_string());
+            let at_end = i >= lines.len();
+            return Err(format_err(
+                path,
+                Some(first),
+                format!(
+                    "the record of {} has {k} continuation lines, expected {want}{}",
+                    line.get(..3).unwrap_or("").trim(),
+                    if at_end { " (truncated file?)" } else { "" }
+                ),
+            ));
+        }
+        records += 1;
+    }
+    Ok(records)
+}
+
+fn orbit(e: &rinex::navigation::Ephemeris, key: &str) -> Option<f64> {
+    e.orbits
+        .get(key)
+        .map(|o| o.as_f64())
+        .filter(|v| v.is_finite())
+}
+
+/// RTKLIB's URA table (m): a broadcast accuracy is rounded up to the next entry.
+const URA: [f64; 15] = [
+    2.4, 3.4, 4.85, 6.85, 9.65, 13.65, 24.0, 48.0, 96.0, 192.0, 384.0, 768.0, 1536.0, 3072.0,
+    6144.0,
+];
+
+fn ura_round_up(v: f64) -> f64 {
+    if !(v >= 0.0) {
+        return f64::NAN;
+    }
+    URA.iter().copied().find(|&u| u >= v).unwrap_or(6144.0)
+}
+
+/// Read a RINEX 3 navigation file.
+pub fn parse_nav(path: &str, text: &str) -> Result<NavData> {
+    let version = check_version(path, text, 'N')?;
+    let lines: Vec<&str> = text.lines().collect();
+    let end = header_end(path, &lines)?;
+    let expected = check_nav_body(path, &lines, end)?;
+    if expected == 0 {
+        return Err(format_err(
+            path,
+            None,
+            "no navigation records after the header",
+        ));
+    }
+    let rnx = Rinex::parse(&mut BufReader::new(text.as_bytes()))
+        .map_err(|e| format_err(path, None, format!("the RINEX parser failed: {e}")))?;
+    let klobuchar = rnx
+        .header
+        .ionod_corrections
+        .get(&Constellation::GPS)
+        .and_then(|m| m.as_klobuchar())
+        .map(|k| {
+            [
+                k.alpha.0, k.alpha.1, k.alpha.2, k.alpha.3, k.beta.0, k.beta.1, k.beta.2, k.beta.3,
+            ]
+        });
+    let mut ephemerides: BTreeMap<Sat, Vec<Ephemeris>> = BTreeMap::new();
+    let mut records: BTreeMap<char, usize> = BTreeMap::new();
+    let mut incomplete = 0;
+    for (key, e) in rnx.nav_ephemeris_frames_iter() {
+        let Some(sat) = to_sat(&key.sv) else { continue };
+        *records.entry(sat.letter).or_default() += 1;
+        if !Sys::POSITIONING.contains(&sat.sys) {
+            continue;
+        }
+        let scale = if sat.sys == Sys::BeiDou {
+            TimeScale::BDT
+        } else {
+            TimeScale::GPST
+        };
+        let toc = gpst(&key.epoch, TimeScale::GPST);
+        let toc_sys = gpst(&key.epoch, scale);
+        let fields = [
+            "sqrta", "e", "i0", "omega0", "omega", "m0", "deltaN", "idot", "omegaDot", "cuc",
+            "cus", "crc", "crs", "cic", "cis", "toe",
+        ];
+        let vals: Option<Vec<f64>> = fields.iter().map(|f| orbit(e, f)).collect();
+        let Some(v) = vals else {
+            incomplete += 1;
+            continue;
+        };
+        let toe_sow = v[15];
+        let mut d = toe_sow - toc_sys.sow;
+        d -= (d / super::broadcast::WEEK).round() * super::broadcast::WEEK;
+        let toe = toc.add(d);
+        let fnav = key.msgtype == NavMessageType::FNAV;
+        let health = orbit(e, "health").unwrap_or(0.0) as u32;
+        let (tgd, unhealthy, accuracy, iod) = match sat.sys {
+            Sys::Gps => (
+                orbit(e, "tgd").unwrap_or(0.0),
+                health != 0,
+                ura_round_up(orbit(e, "accuracy").unwrap_or(f64::NAN)),
+                orbit(e, "iode").unwrap_or(f64::NAN),
+            ),
+            Sys::Qzss => (
+                orbit(e, "tgd").unwrap_or(0.0),
+                health & !1 != 0,
+                ura_round_up(orbit(e, "accuracy").unwrap_or(f64::NAN)),
+                orbit(e, "iode").unwrap_or(f64::NAN),
+            ),
+            Sys::Galileo => {
+                let (bgd, bits) = if fnav {
+                    ("bgdE5aE1", 0x38)
+                } else {
+                    ("bgdE5bE1", 0x07)
+                };
+                let sisa = orbit(e, "sisa").unwrap_or(f64::NAN);
+                (
+                    orbit(e, bgd).unwrap_or(0.0),
+                    health & bits != 0,
+                    if sisa > 0.0 && sisa < 1e3 {
+                        sisa
+                    } else {
+                        500.0
+                    },
+                    orbit(e, "iodnav").unwrap_or(f64::NAN),
+                )
+            }
+            Sys::BeiDou => (
+                orbit(e, "tgd1b1b3").unwrap_or(0.0),
+                health & 1 != 0,
+                ura_round_up(orbit(e, "accuracy").unwrap_or(f64::NAN)),
+                orbit(e, "aode").unwrap_or(f64::NAN),
+            ),
+            _ => continue,
+        };
+        let (a0, a1, a2) = e.sv_clock();
+        ephemerides.entry(sat).or_default().push(Ephemeris {
+            sat,
+            toc,
+            toe,
+            toe_sow,
+            af: [a0, a1, a2],
+            sqrt_a: v[0],
+            e: v[1],
+            i0: v[2],
+            omega0: v[3],
+            omega: v[4],
+            m0: v[5],
+            delta_n: v[6],
+            idot: v[7],
+            omega_dot: v[8],
+            harmonics: [v[9], v[10], v[11], v[12], v[13], v[14]],
+            tgd,
+            health,
+            unhealthy,
+            accuracy,
+            fnav,
+            iod,
+        });
+    }
+    let read: usize = records.values().sum();
+    if read == 0 {
+        return Err(format_err(
+            path,
+            None,
+            format!("{expected} records in the file but the RINEX parser returned no ephemeris"),
+        ));
+    }
+    Ok(NavData {
+        version,
+        ephemerides,
+        klobuchar,
+        records,
+        incomplete,
+    })
+}
+
+/// Read and parse an observation file from disk.
+pub fn read_obs(path: &str) -> Result<ObsData> {
+    parse_obs(path, &read_text(path)?)
+}
+
+/// Read and parse a navigation file from disk.
+pub fn read_nav(path: &str) -> Result<NavData> {
+    parse_nav(path, &read_text(path)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const OBS: &str =
+        "     3.04           OBSERVATION DATA    M                   RINEX VERSION / TYPE
+G    5 X1  C1C L1C D1C S1C                                  SYS / # / OBS TYPES
+  2024     6    24     8    20    0.0000000     GPS         TIME OF FIRST OBS
+                                                            END OF HEADER
+> 2024 06 24 08 20  0.0000000  0  2
+G05          5.000  20590792.555 108205345.409     -1234.500          46.938
+G13          6.000  21590792.555 113205345.409      -234.500          48.100
+";
+
+    #[test]
+    fn x1_is_dropped_and_columns_stay_aligned() {
+        let d = parse_obs("t.obs", OBS).unwrap();
+        assert_eq!(d.dropped_codes, vec!["G:X1".to_string()]);
+        let c1c = d.code_index("C1C").unwrap();
+        let s1c = d.code_index("S1C").unwrap();
+        let e = &d.epochs[0];
+        assert_eq!(e.time, GpsTime::new(2320, 116_400.0));
+        let v: Vec<f64> = e
+            .obs
+            .iter()
+            .filter(|o| o.code == c1c)
+            .map(|o| o.value)
+            .collect();
+        assert_eq!(v, vec![20_590_792.555, 21_590_792.555]);
+        let s: Vec<f64> = e
+            .obs
+            .iter()
+            .filter(|o| o.code == s1c)
+            .map(|o| o.value)
+            .collect();
+        assert_eq!(s, vec![46.938, 48.1]);
+    }
+
+    #[test]
+    fn structure_errors_name_the_line() {
+        let cut = &OBS[..OBS.rfind("G13").unwrap()];
+        let e = parse_obs("t.obs", cut).unwrap_err().to_string();
+        assert!(e.contains("t.obs, line 6") && e.contains("1 found"), "{e}");
+        let bad = OBS.replace("20590792.555", "2059O792.555");
+        let e = parse_obs("t.obs", &bad).unwrap_err().to_string();
+        assert!(e.contains("line 6") && e.contains("not a number"), "{e}");
+        let no_time = OBS.replace("TIME OF FIRST OBS", "COMMENT          ");
+        let e = parse_obs("t.obs", &no_time).unwrap_err().to_string();
+        assert!(e.contains("TIME OF FIRST OBS"), "{e}");
+        let e = parse_obs("t.obs", &OBS.replace("3.04", "2.11"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("'2.11' is not supported"), "{e}");
+        let e = parse_obs("t.obs", &OBS.replace("END OF HEADER", "END OF HEADXX"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("END OF HEADER"), "{e}");
+        let e = parse_nav("t.nav", OBS).unwrap_err().to_string();
+        assert!(
+            e.contains("observation file") && e.contains("expected a navigation file"),
+            "{e}"
+        );
+        let extra = OBS.replace("          46.938", "          46.938          12.000");
+        let e = parse_obs("t.obs", &extra).unwrap_err().to_string();
+        assert!(
+            e.contains("6 observation fields") && e.contains("lists 5"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn gzip_and_missing_files() {
+        use std::io::Write;
+        let dir = std::env::temp_dir().join(format!("navfdi-rnx-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("t.obs.gz");
+        let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+        enc.write_all(OBS.as_bytes()).unwrap();
+        let bytes = enc.finish().unwrap();
+        std::fs::write(&p, &bytes).unwrap();
+        let d = read_obs(p.to_str().unwrap()).unwrap();
+        assert_eq!(d.epochs.len(), 1);
+        std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+        let e = read_obs(p.to_str().unwrap()).unwrap_err().to_string();
+        assert!(e.contains("gzip"), "{e}");
+        let e = read_obs(dir.join("none.obs").to_str().unwrap()).unwrap_err();
+        assert!(matches!(e, Error::Io(_)));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

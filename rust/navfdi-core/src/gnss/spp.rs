@@ -1,0 +1,788 @@
+//! Single-point positioning (SPP) with satellite fault detection and exclusion on real
+//! pseudoranges (RINEX), epoch by epoch.
+//!
+//! Per epoch and satellite with a pseudorange ρ of the chosen code (first band: GPS/QZSS/
+//! Galileo `C1x`, BeiDou `C2x`):
+//!
+//! * ephemeris: [`broadcast::select`] (nearest healthy t_oe within the system's maximum age;
+//!   Galileo I/NAV first); none → `no_ephemeris`, only unhealthy ones → `unhealthy`;
+//! * transmission time `t_rx − ρ/c − δt_s`, satellite position at that time, satellite clock
+//!   δt_s with the relativistic term, group delay: `ρ_c = ρ + c δt_s − c TGD`;
+//! * model `ρ_c = |r_s − r| + ω_e (x_s y − y_s x)/c + c δt_r,sys + I + T + ε`: Earth rotation
+//!   during the signal's travel (Sagnac term), one receiver clock per system (columns in the
+//!   order GPS, Galileo, BeiDou, QZSS, only systems present), Klobuchar ionosphere `I` scaled
+//!   from L1 by `(f_L1/f)²`, Saastamoinen troposphere `T` (relative humidity 0.7) — both
+//!   recomputed at each Gauss-Newton iterate, as RTKLIB's `pntpos` does;
+//! * variance (RTKLIB's `pntpos` model, so solutions compare): `σ² = a² + b²/sin el + URA² +
+//!   0.3² + (0.5 I)² + (0.3 / (sin el + 0.1))²` with `a = b = 0.3 m` by default;
+//!   (the default is the measurement noise only, `σ² = a² + b²/sin² el`; see [`Weighting`]),
+//!   times a per-system factor;
+//! * elevation mask applied at the start position (the previous epoch's solution, or for the
+//!   first epoch an uncorrected least-squares fix from the Earth's centre);
+//! * the exclusion loop [`snapshot::fde`] (global χ² test + w-test, METHODS §10) on every
+//!   epoch, or plain weighted least squares when exclusion is off.
+//!
+//! Injected faults ([`InjectedFault`]) are added to the chosen satellites' pseudoranges before
+//! all of this, so detectors are scored on real noise with known faults.
+
+use super::atmosphere::{klobuchar, saastamoinen, Klobuchar};
+use super::broadcast::{select, EphProblem, GpsTime, Sat, Sys};
+use super::geodesy::{ecef_to_lla, elevation_azimuth};
+use super::rinex::{NavData, ObsData};
+use super::snapshot::{fde, FdeConfig, FdeModel, FdeOutcome, FdeStatus, ObsCov};
+use super::C;
+use crate::cancel::Cancel;
+use crate::error::{Error, Result};
+use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
+
+/// Earth rotation rate used for the Sagnac term (rad/s, WGS-84).
+const OMEGA_E: f64 = 7.292_115_146_7e-5;
+/// GPS L1 frequency (Hz).
+const F_L1: f64 = 1_575.42e6;
+
+/// Carrier frequency (Hz) of a first-band code of `sys` (`C1C` → L1/E1, `C2I` → B1I).
+fn frequency(sys: Sys, code: &str) -> Option<f64> {
+    let band = code.chars().nth(1)?;
+    match (sys, band) {
+        (Sys::Gps | Sys::Qzss | Sys::Galileo, '1') => Some(F_L1),
+        (Sys::BeiDou, '2') => Some(1_561.098e6),
+        _ => None,
+    }
+}
+
+/// The shape of an injected fault.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FaultShape {
+    /// Constant offset (m).
+    Step,
+    /// Offset growing at a constant rate (m/s) from the start.
+    Ramp,
+    /// Offset `a (t − start)²` (a in m/s²).
+    Quadratic,
+}
+
+/// A fault added to one satellite's pseudoranges over `[start, end)` (s from the first epoch).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InjectedFault {
+    /// Satellite.
+    pub sat: Sat,
+    /// Shape.
+    pub shape: FaultShape,
+    /// Size: m (step), m/s (ramp), m/s² (quadratic).
+    pub magnitude: f64,
+    /// Start (s after the first epoch, inclusive).
+    pub start: f64,
+    /// End (s after the first epoch, exclusive).
+    pub end: f64,
+}
+
+impl InjectedFault {
+    /// Offset (m) at `tau` seconds after the first epoch (0 outside the window).
+    pub fn offset(&self, tau: f64) -> f64 {
+        if tau < self.start || tau >= self.end {
+            return 0.0;
+        }
+        let d = tau - self.start;
+        match self.shape {
+            FaultShape::Step => self.magnitude,
+            FaultShape::Ramp => self.magnitude * d,
+            FaultShape::Quadratic => self.magnitude * d * d,
+        }
+    }
+
+    /// Check the numbers (finite magnitude, 0 ≤ start < end).
+    pub fn validate(&self) -> Result<()> {
+        if !self.magnitude.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: format!("fault on {}: magnitude", self.sat.name()),
+                value: self.magnitude,
+                requirement: "must be finite".into(),
+            });
+        }
+        if !(self.start >= 0.0 && self.end > self.start && self.start.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "fault on {}: the window {}–{} s must satisfy 0 ≤ start < end",
+                self.sat.name(),
+                self.start,
+                self.end
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Settings of a single-point solution.
+#[derive(Debug, Clone)]
+pub struct SppConfig {
+    /// Systems used (others are read and skipped).
+    pub systems: Vec<Sys>,
+    /// Pseudorange code per system (`C1C`, `C2I`, …).
+    pub codes: Vec<(Sys, String)>,
+    /// Elevation mask (rad).
+    pub mask: f64,
+    /// Exclusion-loop settings (α, K).
+    pub fde: FdeConfig,
+    /// Run the exclusion loop (false: weighted least squares with the global test reported).
+    pub exclude: bool,
+    /// Code noise `a`, `b` (m) of the variance model.
+    pub noise: (f64, f64),
+    /// Variance model.
+    pub weighting: Weighting,
+    /// Per-system factor on σ (RTKLIB's EFACT), default 1 for every system.
+    pub factors: Vec<(Sys, f64)>,
+    /// Apply the Klobuchar ionosphere.
+    pub ionosphere: bool,
+    /// Apply the Saastamoinen troposphere.
+    pub troposphere: bool,
+}
+
+impl SppConfig {
+    /// Defaults: GPS `C1C`, 10° mask, the given FDE settings, RTKLIB noise, both models.
+    pub fn new(fde: FdeConfig) -> Self {
+        SppConfig {
+            systems: vec![Sys::Gps],
+            codes: vec![
+                (Sys::Gps, "C1C".into()),
+                (Sys::Galileo, "C1C".into()),
+                (Sys::BeiDou, "C2I".into()),
+                (Sys::Qzss, "C1C".into()),
+            ],
+            mask: 10f64.to_radians(),
+            fde,
+            exclude: true,
+            noise: (0.3, 0.3),
+            weighting: Weighting::Elevation,
+            factors: Vec::new(),
+            ionosphere: true,
+            troposphere: true,
+        }
+    }
+
+    /// Check systems, codes, mask and noise.
+    pub fn validate(&self) -> Result<()> {
+        if self.systems.is_empty() {
+            return Err(Error::Invalid(
+                "systems: at least one system is needed".into(),
+            ));
+        }
+        for s in &self.systems {
+            if !Sys::POSITIONING.contains(s) {
+                return Err(Error::Invalid(format!(
+                    "systems: {} cannot be positioned (GPS 'G', Galileo 'E', BeiDou 'C', QZSS 'J' can)",
+                    s.name()
+                )));
+            }
+            let code = self.code(*s).ok_or_else(|| {
+                Error::Invalid(format!("codes: no pseudorange code given for {}", s.name()))
+            })?;
+            if !code.starts_with('C') || code.len() != 3 || frequency(*s, code).is_none() {
+                return Err(Error::Invalid(format!(
+                    "codes: '{code}' for {} is not supported; single-frequency first-band pseudoranges only (GPS/Galileo/QZSS 'C1x', BeiDou 'C2x'), as the broadcast group delays refer to them",
+                    s.name()
+                )));
+            }
+        }
+        if !(self.mask >= 0.0 && self.mask < std::f64::consts::FRAC_PI_2) {
+            return Err(Error::InvalidParameter {
+                name: "mask".into(),
+                value: self.mask.to_degrees(),
+                requirement: "the elevation mask must be in [0, 90) degrees".into(),
+            });
+        }
+        for (name, v) in [("noise a", self.noise.0), ("noise b", self.noise.1)] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(Error::InvalidParameter {
+                    name: name.into(),
+                    value: v,
+                    requirement: "must be finite and ≥ 0 (m)".into(),
+                });
+            }
+        }
+        for (sys, f) in &self.factors {
+            if !(*f > 0.0 && f.is_finite()) {
+                return Err(Error::InvalidParameter {
+                    name: format!("noise factor of {}", sys.name()),
+                    value: *f,
+                    requirement: "must be positive and finite".into(),
+                });
+            }
+        }
+        if self.noise.0 == 0.0 && self.noise.1 == 0.0 {
+            return Err(Error::Invalid(
+                "noise: a and b are both 0; the code noise must be positive".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    fn code(&self, s: Sys) -> Option<&str> {
+        self.codes
+            .iter()
+            .find(|(c, _)| *c == s)
+            .map(|(_, n)| n.as_str())
+    }
+}
+
+/// Pseudorange variance model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Weighting {
+    /// `σ² = a² + b²/sin² el`: the measurement noise only, so the χ² and w tests are scaled
+    /// by what the residuals scatter by.
+    Elevation,
+    /// RTKLIB `pntpos`: `σ² = a² + b²/sin el + URA² + 0.3² + (0.5 I)² + (0.3/(sin el + 0.1))²`,
+    /// which adds bounds on the broadcast-model errors (ephemeris, ionosphere, troposphere);
+    /// positions compare with RTKLIB, tests are far from their nominal α (the model errors are
+    /// common to all satellites and mostly absorbed by the clock).
+    Rtklib,
+}
+
+/// What happened to a satellite at an epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SatStatus {
+    /// Used in the final solution.
+    Used,
+    /// Excluded by the w-test.
+    Excluded,
+    /// Below the elevation mask.
+    BelowMask,
+    /// No ephemeris within the maximum age.
+    NoEphemeris,
+    /// Only unhealthy ephemerides.
+    Unhealthy,
+    /// No solution at this epoch (satellite above the mask with an ephemeris).
+    Unsolved,
+}
+
+impl SatStatus {
+    /// Lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SatStatus::Used => "used",
+            SatStatus::Excluded => "excluded",
+            SatStatus::BelowMask => "below_mask",
+            SatStatus::NoEphemeris => "no_ephemeris",
+            SatStatus::Unhealthy => "unhealthy",
+            SatStatus::Unsolved => "unsolved",
+        }
+    }
+}
+
+/// One satellite at one epoch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SatRow {
+    /// Epoch index.
+    pub epoch: usize,
+    /// Satellite.
+    pub sat: Sat,
+    /// Elevation and azimuth (rad; NaN without ephemeris or start position).
+    pub elevation: f64,
+    /// Azimuth (rad, clockwise from north).
+    pub azimuth: f64,
+    /// Corrected pseudorange minus the model at the final solution (m; NaN without one).
+    pub residual: f64,
+    /// w of the final test (|w| at exclusion for excluded satellites; NaN when untested).
+    pub w: f64,
+    /// σ used (m; NaN when not used).
+    pub sigma: f64,
+    /// Ionospheric and tropospheric delays at the final solution (m).
+    pub iono: f64,
+    /// Tropospheric delay (m).
+    pub tropo: f64,
+    /// Injected fault (m; 0 when none).
+    pub fault: f64,
+    /// Satellite ECEF position at transmission (m; NaN without an ephemeris).
+    pub sat_pos: Vector3<f64>,
+    /// Satellite clock offset incl. the relativistic term (s; NaN without an ephemeris).
+    pub sat_clock: f64,
+    /// Status.
+    pub status: SatStatus,
+}
+
+/// One epoch's solution.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EpochSolution {
+    /// Receiver time (GPST).
+    pub time: GpsTime,
+    /// ECEF position (m), None without a solution.
+    pub position: Option<Vector3<f64>>,
+    /// Receiver clock per system (m), for the systems of this epoch's solution.
+    pub clocks: Vec<(Sys, f64)>,
+    /// The exclusion loop's outcome.
+    pub fde: FdeOutcome,
+    /// Satellites excluded, in exclusion order.
+    pub excluded: Vec<Sat>,
+    /// Satellites with an injected fault at this epoch.
+    pub faulty: Vec<Sat>,
+    /// Satellites used in the final solution.
+    pub used: usize,
+}
+
+/// Everything a run produces.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SppRun {
+    /// Per epoch.
+    pub epochs: Vec<EpochSolution>,
+    /// Per epoch and satellite.
+    pub sats: Vec<SatRow>,
+}
+
+/// The measurement model of one epoch (see the module docs).
+struct SppModel<'a> {
+    sat: &'a [Vector3<f64>],
+    rho: &'a [f64],
+    col: &'a [usize],
+    iono_scale: &'a [f64],
+    n_clk: usize,
+    klob: Option<&'a Klobuchar>,
+    sow: f64,
+    trop: bool,
+    x: Vec<f64>,
+    x0: Vec<f64>,
+}
+
+impl SppModel<'_> {
+    /// Predicted ρ_c, unit vector to the satellite and (I, T, el, az) at the current x.
+    fn predict(&self, i: usize) -> (f64, Vector3<f64>, [f64; 4]) {
+        let r = Vector3::new(self.x[0], self.x[1], self.x[2]);
+        let s = self.sat[i];
+        let d = s - r;
+        let range = d.norm();
+        let geo = range + OMEGA_E * (s.x * r.y - s.y * r.x) / C;
+        let mut extra = [0.0, 0.0, f64::NAN, f64::NAN];
+        if r.norm() > 6.0e6 {
+            let (lat, lon, h) = ecef_to_lla(&r);
+            let (el, az) = elevation_azimuth(&r, lat, lon, &s);
+            extra[2] = el;
+            extra[3] = az;
+            if let Some(k) = self.klob {
+                extra[0] = klobuchar(k, self.sow, lat, lon, h, az, el) * self.iono_scale[i];
+            }
+            if self.trop {
+                extra[1] = saastamoinen(lat, h, el, 0.7);
+            }
+        }
+        let pred = geo + self.x[3 + self.col[i]] + extra[0] + extra[1];
+        (pred, d / range, extra)
+    }
+
+    fn linearise(&self, idx: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
+        let u = 3 + self.n_clk;
+        let mut b = DMatrix::zeros(idx.len(), u);
+        let mut l = DVector::zeros(idx.len());
+        for (j, &i) in idx.iter().enumerate() {
+            let (pred, e, _) = self.predict(i);
+            for c in 0..3 {
+                b[(j, c)] = -e[c];
+            }
+            b[(j, 3 + self.col[i])] = 1.0;
+            l[j] = self.rho[i] - pred;
+        }
+        (b, l)
+    }
+}
+
+impl FdeModel for SppModel<'_> {
+    fn unknowns(&self) -> usize {
+        3 + self.n_clk
+    }
+
+    fn solve(
+        &mut self,
+        idx: &[usize],
+        dinv: &DMatrix<f64>,
+        cfg: &FdeConfig,
+    ) -> Option<(DMatrix<f64>, DVector<f64>)> {
+        self.x.clone_from(&self.x0);
+        for _ in 0..cfg.max_iterations {
+            let (b, l) = self.linearise(idx);
+            let f = dinv * &b;
+            let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
+            if !dx.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+            for (x, d) in self.x.iter_mut().zip(dx.iter()) {
+                *x += d;
+            }
+            if dx.norm() < 1e-4 {
+                return Some(self.linearise(idx));
+            }
+        }
+        None
+    }
+
+    fn solution(&self) -> DVector<f64> {
+        DVector::from_vec(self.x.clone())
+    }
+}
+
+/// A solution's position (ECEF, m) and clocks per system (m).
+type LastFix = (Vector3<f64>, Vec<(Sys, f64)>);
+
+/// Carries the last solution from one chunk of epochs to the next.
+#[derive(Debug, Clone, Default)]
+pub struct SppState {
+    last: Option<LastFix>,
+}
+
+struct Candidate {
+    sat: Sat,
+    pos: Vector3<f64>,
+    rho_c: f64,
+    ura: f64,
+    iono_scale: f64,
+    row: usize,
+}
+
+/// Solve epochs `range` of `obs` with `nav`, appending to `out`. `t0` is the first epoch's
+/// time (faults count from it); `state` carries the start position across calls.
+#[allow(clippy::too_many_arguments)]
+pub fn solve(
+    obs: &ObsData,
+    nav: &NavData,
+    cfg: &SppConfig,
+    faults: &[InjectedFault],
+    range: std::ops::Range<usize>,
+    state: &mut SppState,
+    out: &mut SppRun,
+    cancel: &Cancel,
+) -> Result<()> {
+    cfg.validate()?;
+    for f in faults {
+        f.validate()?;
+    }
+    let Some(first) = obs.epochs.first() else {
+        return Ok(());
+    };
+    let t0 = first.time;
+    let codes: Vec<(Sys, Option<u16>, f64)> = cfg
+        .systems
+        .iter()
+        .map(|&s| {
+            let code = cfg.code(s).unwrap_or("C1C");
+            let f = frequency(s, code).unwrap_or(F_L1);
+            (s, obs.code_index(code), (F_L1 / f).powi(2))
+        })
+        .collect();
+    let klob = if cfg.ionosphere {
+        Some(nav.klobuchar.unwrap_or([0.0; 8]))
+    } else {
+        None
+    };
+    let range = range.start.min(obs.epochs.len())..range.end.min(obs.epochs.len());
+    for ei in range {
+        cancel.check()?;
+        let ep = &obs.epochs[ei];
+        let tau = ep.time.diff(&t0);
+        let mut cands: Vec<Candidate> = Vec::new();
+        let mut faulty = Vec::new();
+        for o in &ep.obs {
+            let Some(&(_, _, scale)) = codes
+                .iter()
+                .find(|(s, c, _)| *s == o.sat.sys && *c == Some(o.code))
+            else {
+                continue;
+            };
+            if !(o.value > 1e6 && o.value < 1e8) {
+                continue; // blank / zero / nonsense pseudorange
+            }
+            let fault: f64 = faults
+                .iter()
+                .filter(|f| f.sat == o.sat)
+                .map(|f| f.offset(tau))
+                .sum();
+            if faults
+                .iter()
+                .any(|f| f.sat == o.sat && tau >= f.start && tau < f.end)
+            {
+                faulty.push(o.sat);
+            }
+            let rho = o.value + fault;
+            let row = out.sats.len();
+            let mut sr = SatRow {
+                epoch: ei,
+                sat: o.sat,
+                elevation: f64::NAN,
+                azimuth: f64::NAN,
+                residual: f64::NAN,
+                w: f64::NAN,
+                sigma: f64::NAN,
+                iono: f64::NAN,
+                tropo: f64::NAN,
+                fault,
+                sat_pos: Vector3::repeat(f64::NAN),
+                sat_clock: f64::NAN,
+                status: SatStatus::Unsolved,
+            };
+            let ephs = nav
+                .ephemerides
+                .get(&o.sat)
+                .map(Vec::as_slice)
+                .unwrap_or(&[]);
+            match select(ephs, &ep.time) {
+                Err(p) => {
+                    sr.status = match p {
+                        EphProblem::Missing => SatStatus::NoEphemeris,
+                        EphProblem::Unhealthy => SatStatus::Unhealthy,
+                    };
+                    out.sats.push(sr);
+                }
+                Ok(eph) => {
+                    let ttx = eph.transmission_time(&ep.time, rho);
+                    let st = eph.state(&ttx);
+                    sr.sat_pos = st.pos;
+                    sr.sat_clock = st.clock;
+                    out.sats.push(sr);
+                    cands.push(Candidate {
+                        sat: o.sat,
+                        pos: st.pos,
+                        rho_c: rho + C * st.clock - C * eph.tgd,
+                        ura: eph.accuracy,
+                        iono_scale: scale,
+                        row,
+                    });
+                }
+            }
+        }
+        let sol = solve_epoch(cfg, klob.as_ref(), ep.time, &cands, state, out)?;
+        let mut sol = sol;
+        sol.faulty = faulty;
+        out.epochs.push(sol);
+    }
+    Ok(())
+}
+
+fn solve_epoch(
+    cfg: &SppConfig,
+    klob: Option<&Klobuchar>,
+    time: GpsTime,
+    cands: &[Candidate],
+    state: &mut SppState,
+    out: &mut SppRun,
+) -> Result<EpochSolution> {
+    let n = cands.len();
+    let sat: Vec<Vector3<f64>> = cands.iter().map(|c| c.pos).collect();
+    let rho: Vec<f64> = cands.iter().map(|c| c.rho_c).collect();
+    let iono_scale: Vec<f64> = cands.iter().map(|c| c.iono_scale).collect();
+    let mut empty = EpochSolution {
+        time,
+        position: None,
+        clocks: Vec::new(),
+        fde: FdeOutcome {
+            solution: None,
+            statistic: f64::NAN,
+            threshold: f64::NAN,
+            dof: 0,
+            first: (f64::NAN, f64::NAN, 0),
+            w: vec![f64::NAN; n],
+            excluded: Vec::new(),
+            excluded_w: Vec::new(),
+            status: FdeStatus::NoSolution,
+            reason: String::new(),
+        },
+        excluded: Vec::new(),
+        faulty: Vec::new(),
+        used: 0,
+    };
+    // Systems present → clock columns.
+    let systems: Vec<Sys> = Sys::POSITIONING
+        .iter()
+        .copied()
+        .filter(|s| cands.iter().any(|c| c.sat.sys == *s))
+        .collect();
+    let col: Vec<usize> = cands
+        .iter()
+        .map(|c| systems.iter().position(|s| *s == c.sat.sys).unwrap_or(0))
+        .collect();
+    let u = 3 + systems.len();
+    // Start position: the last solution, else an uncorrected fix from the Earth's centre.
+    let mut x0 = vec![0.0; u];
+    match &state.last {
+        Some((p, clocks)) => {
+            x0[..3].copy_from_slice(p.as_slice());
+            for (j, s) in systems.iter().enumerate() {
+                x0[3 + j] = clocks.iter().find(|(c, _)| c == s).map_or(0.0, |c| c.1);
+            }
+        }
+        None => {
+            if n < u {
+                empty.fde.reason = format!(
+                    "{n} satellites with ephemerides; at least {u} are needed for a first fix"
+                );
+                return Ok(empty);
+            }
+            let mut coarse = SppModel {
+                sat: &sat,
+                rho: &rho,
+                col: &col,
+                iono_scale: &iono_scale,
+                n_clk: systems.len(),
+                klob: None,
+                sow: time.sow,
+                trop: false,
+                x: x0.clone(),
+                x0: x0.clone(),
+            };
+            let idx: Vec<usize> = (0..n).collect();
+            let fc = FdeConfig::new(cfg.fde.alpha, Some(cfg.fde.k))?;
+            match coarse.solve(&idx, &DMatrix::identity(n, n), &fc) {
+                Some(_) => x0.clone_from(&coarse.x),
+                None => {
+                    empty.fde.reason = "no first fix (singular geometry or no convergence)".into();
+                    return Ok(empty);
+                }
+            }
+        }
+    }
+    // Elevation mask and weights at the start position.
+    let r0 = Vector3::new(x0[0], x0[1], x0[2]);
+    let (lat, lon, h) = ecef_to_lla(&r0);
+    let mut usable = vec![false; n];
+    let mut sigma = vec![1.0; n];
+    for (i, c) in cands.iter().enumerate() {
+        let (el, az) = elevation_azimuth(&r0, lat, lon, &c.pos);
+        let row = &mut out.sats[c.row];
+        row.elevation = el;
+        row.azimuth = az;
+        if el < cfg.mask {
+            row.status = SatStatus::BelowMask;
+            continue;
+        }
+        usable[i] = true;
+        let s = el.sin();
+        let iono = klob.map_or(0.0, |k| {
+            klobuchar(k, time.sow, lat, lon, h, az, el) * c.iono_scale
+        });
+        let (a, b) = cfg.noise;
+        let ura = if c.ura.is_finite() { c.ura } else { 0.0 };
+        let var = match cfg.weighting {
+            Weighting::Elevation => a * a + b * b / (s * s),
+            Weighting::Rtklib => {
+                let mut v = a * a + b * b / s + ura * ura + 0.09 + (0.5 * iono).powi(2);
+                if cfg.troposphere {
+                    v += (0.3 / (s + 0.1)).powi(2);
+                }
+                v
+            }
+        };
+        let factor = cfg
+            .factors
+            .iter()
+            .find(|(s, _)| *s == c.sat.sys)
+            .map_or(1.0, |f| f.1);
+        sigma[i] = factor * var.sqrt();
+        row.sigma = sigma[i];
+    }
+    // Keep only systems with a usable satellite.
+    let systems: Vec<Sys> = systems
+        .into_iter()
+        .filter(|s| (0..n).any(|i| usable[i] && cands[i].sat.sys == *s))
+        .collect();
+    let col: Vec<usize> = cands
+        .iter()
+        .map(|c| systems.iter().position(|s| *s == c.sat.sys).unwrap_or(0))
+        .collect();
+    let old_x0 = x0.clone();
+    let mut x0 = vec![0.0; 3 + systems.len()];
+    x0[..3].copy_from_slice(&old_x0[..3]);
+    for (j, s) in systems.iter().enumerate() {
+        x0[3 + j] = state
+            .last
+            .as_ref()
+            .and_then(|(_, c)| c.iter().find(|(cs, _)| cs == s).map(|c| c.1))
+            .unwrap_or(0.0);
+    }
+    let mut model = SppModel {
+        sat: &sat,
+        rho: &rho,
+        col: &col,
+        iono_scale: &iono_scale,
+        n_clk: systems.len(),
+        klob,
+        sow: time.sow,
+        trop: cfg.troposphere,
+        x: x0.clone(),
+        x0,
+    };
+    let cov = ObsCov::Sigma(sigma);
+    let outcome = if cfg.exclude {
+        fde(&mut model, &cov, &usable, None, &cfg.fde)?
+    } else {
+        let no_excl = FdeConfig::new(cfg.fde.alpha, Some(f64::MAX))?;
+        fde(&mut model, &cov, &usable, None, &no_excl)?
+    };
+    let mut sol = empty;
+    sol.excluded = outcome.excluded.iter().map(|&i| cands[i].sat).collect();
+    if let Some(x) = &outcome.solution {
+        model.x = x.iter().copied().collect();
+        let p = Vector3::new(x[0], x[1], x[2]);
+        let clocks: Vec<(Sys, f64)> = systems
+            .iter()
+            .enumerate()
+            .map(|(j, s)| (*s, x[3 + j]))
+            .collect();
+        let w = outcome.w_with_excluded();
+        for (i, c) in cands.iter().enumerate() {
+            let row = &mut out.sats[c.row];
+            if !usable[i] {
+                continue;
+            }
+            let (pred, _, extra) = model.predict(i);
+            row.residual = rho[i] - pred;
+            row.iono = extra[0];
+            row.tropo = extra[1];
+            row.w = w[i];
+            row.status = if outcome.excluded.contains(&i) {
+                SatStatus::Excluded
+            } else {
+                SatStatus::Used
+            };
+        }
+        sol.used = (0..n)
+            .filter(|&i| usable[i] && !outcome.excluded.contains(&i))
+            .count();
+        sol.position = Some(p);
+        sol.clocks = clocks.clone();
+        state.last = Some((p, clocks));
+    }
+    sol.fde = outcome;
+    Ok(sol)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fault_offsets_and_windows() {
+        let sat = Sat::parse("G13").unwrap();
+        let f = InjectedFault {
+            sat,
+            shape: FaultShape::Ramp,
+            magnitude: 0.5,
+            start: 100.0,
+            end: 300.0,
+        };
+        assert_eq!(f.offset(99.0), 0.0);
+        assert_eq!(f.offset(100.0), 0.0);
+        assert!((f.offset(110.0) - 5.0).abs() < 1e-12);
+        assert_eq!(f.offset(300.0), 0.0);
+        let q = InjectedFault {
+            shape: FaultShape::Quadratic,
+            ..f
+        };
+        assert!((q.offset(110.0) - 50.0).abs() < 1e-12);
+        let bad = InjectedFault { end: 50.0, ..f };
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn codes_outside_the_first_band_are_refused() {
+        let mut cfg = SppConfig::new(FdeConfig::new(0.01, None).unwrap());
+        cfg.codes[0].1 = "C5Q".into();
+        let e = cfg.validate().unwrap_err().to_string();
+        assert!(e.contains("C5Q"), "{e}");
+        cfg.codes[0].1 = "C1C".into();
+        cfg.systems = vec![Sys::Glonass];
+        assert!(cfg.validate().is_err());
+    }
+}

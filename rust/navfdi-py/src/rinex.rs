@@ -1,0 +1,464 @@
+//! RINEX reading and single-point positioning with FDE on real data: conversion only.
+
+use crate::convert::to_numpy;
+use crate::errors::IntoPyResult;
+use navfdi_core::gnss::broadcast::{Sat, Sys};
+use navfdi_core::gnss::rinex::{self, NavData, ObsData};
+use navfdi_core::gnss::snapshot::FdeConfig;
+use navfdi_core::gnss::spp::{
+    self, FaultShape, InjectedFault, SppConfig, SppRun, SppState, Weighting,
+};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::collections::BTreeMap;
+
+fn sat_names(sats: impl Iterator<Item = Sat>) -> (Vec<u32>, Vec<String>) {
+    let mut table: BTreeMap<Sat, u32> = BTreeMap::new();
+    let ids: Vec<Sat> = sats.collect();
+    for s in &ids {
+        let n = table.len() as u32;
+        table.entry(*s).or_insert(n);
+    }
+    let mut names = vec![String::new(); table.len()];
+    for (s, i) in &table {
+        names[*i as usize] = s.name();
+    }
+    (ids.iter().map(|s| table[s]).collect(), names)
+}
+
+/// Read a RINEX 3 observation file (plain or .gz) into columns: ``epoch`` (int, index of the
+/// epoch), ``time`` (GPS seconds since 1980-01-06, GPST), ``sat`` (int code into
+/// ``satellites``), ``code`` (int code into ``observables``), ``value`` (float64); plus
+/// ``satellites``, ``observables``, ``flags`` (per epoch), ``epoch_times``, ``dropped``
+/// (observation types dropped, e.g. ``G:X1``), ``version``, ``receiver``,
+/// ``approx_position`` (3 floats or None).
+#[pyfunction]
+pub fn read_rinex_obs<'py>(py: Python<'py>, path: String) -> PyResult<Bound<'py, PyDict>> {
+    let data = crate::interrupt::run(py, move |_| rinex::read_obs(&path))?;
+    obs_dict(py, &data)
+}
+
+fn obs_dict<'py>(py: Python<'py>, data: &ObsData) -> PyResult<Bound<'py, PyDict>> {
+    let n: usize = data.epochs.iter().map(|e| e.obs.len()).sum();
+    let mut epoch = Vec::with_capacity(n);
+    let mut time = Vec::with_capacity(n);
+    let mut code = Vec::with_capacity(n);
+    let mut value = Vec::with_capacity(n);
+    for (i, e) in data.epochs.iter().enumerate() {
+        let t = e.time.seconds();
+        for o in &e.obs {
+            epoch.push(i as u32);
+            time.push(t);
+            code.push(o.code as u32);
+            value.push(o.value);
+        }
+    }
+    let (sat, satellites) = sat_names(data.epochs.iter().flat_map(|e| e.obs.iter().map(|o| o.sat)));
+    let d = PyDict::new(py);
+    d.set_item("epoch", to_numpy(py, epoch, &[n])?)?;
+    d.set_item("time", to_numpy(py, time, &[n])?)?;
+    d.set_item("sat", to_numpy(py, sat, &[n])?)?;
+    d.set_item("code", to_numpy(py, code, &[n])?)?;
+    d.set_item("value", to_numpy(py, value, &[n])?)?;
+    d.set_item("satellites", satellites)?;
+    d.set_item("observables", data.codes.clone())?;
+    let ne = data.epochs.len();
+    d.set_item(
+        "epoch_times",
+        to_numpy(
+            py,
+            data.epochs.iter().map(|e| e.time.seconds()).collect(),
+            &[ne],
+        )?,
+    )?;
+    d.set_item(
+        "flags",
+        to_numpy(
+            py,
+            data.epochs.iter().map(|e| e.flag as u32).collect(),
+            &[ne],
+        )?,
+    )?;
+    d.set_item("dropped", data.dropped_codes.clone())?;
+    d.set_item("version", data.version.clone())?;
+    d.set_item("receiver", data.receiver.clone())?;
+    d.set_item(
+        "approx_position",
+        data.approx_position.map(|p| vec![p.x, p.y, p.z]),
+    )?;
+    Ok(d)
+}
+
+/// Read a RINEX 3 navigation file (plain or .gz): one row per GPS/Galileo/BeiDou/QZSS
+/// ephemeris as columns (``satellite`` str; ``toc``, ``toe`` GPS seconds; ``af0`` s, ``af1``
+/// s/s, ``af2`` s/s²; ``sqrt_a`` √m; ``e``; ``i0``, ``omega0``, ``omega``, ``m0`` rad;
+/// ``delta_n``, ``idot``, ``omega_dot`` rad/s; ``tgd`` s; ``health`` int; ``unhealthy``
+/// bool; ``accuracy`` m; ``fnav`` bool; ``iod``), plus ``klobuchar`` (8 floats or None),
+/// ``records`` (records per system letter, all systems) and ``version``.
+#[pyfunction]
+pub fn read_rinex_nav<'py>(py: Python<'py>, path: String) -> PyResult<Bound<'py, PyDict>> {
+    let nav = crate::interrupt::run(py, move |_| rinex::read_nav(&path))?;
+    let ephs: Vec<_> = nav.ephemerides.values().flatten().collect();
+    let n = ephs.len();
+    let d = PyDict::new(py);
+    d.set_item(
+        "satellite",
+        ephs.iter().map(|e| e.sat.name()).collect::<Vec<_>>(),
+    )?;
+    let col = |f: &dyn Fn(&navfdi_core::gnss::broadcast::Ephemeris) -> f64| -> Vec<f64> {
+        ephs.iter().map(|e| f(e)).collect()
+    };
+    let cols: [(&str, Vec<f64>); 18] = [
+        ("toc", col(&|e| e.toc.seconds())),
+        ("toe", col(&|e| e.toe.seconds())),
+        ("af0", col(&|e| e.af[0])),
+        ("af1", col(&|e| e.af[1])),
+        ("af2", col(&|e| e.af[2])),
+        ("sqrt_a", col(&|e| e.sqrt_a)),
+        ("e", col(&|e| e.e)),
+        ("i0", col(&|e| e.i0)),
+        ("omega0", col(&|e| e.omega0)),
+        ("omega", col(&|e| e.omega)),
+        ("m0", col(&|e| e.m0)),
+        ("delta_n", col(&|e| e.delta_n)),
+        ("idot", col(&|e| e.idot)),
+        ("omega_dot", col(&|e| e.omega_dot)),
+        ("tgd", col(&|e| e.tgd)),
+        ("health", col(&|e| e.health as f64)),
+        ("accuracy", col(&|e| e.accuracy)),
+        ("iod", col(&|e| e.iod)),
+    ];
+    for (name, v) in cols {
+        d.set_item(name, to_numpy(py, v, &[n])?)?;
+    }
+    d.set_item(
+        "unhealthy",
+        ephs.iter().map(|e| e.unhealthy).collect::<Vec<_>>(),
+    )?;
+    d.set_item("fnav", ephs.iter().map(|e| e.fnav).collect::<Vec<_>>())?;
+    d.set_item("klobuchar", nav.klobuchar.map(|k| k.to_vec()))?;
+    d.set_item(
+        "records",
+        nav.records
+            .iter()
+            .map(|(k, v)| (k.to_string(), *v))
+            .collect::<BTreeMap<_, _>>(),
+    )?;
+    d.set_item("version", nav.version.clone())?;
+    Ok(d)
+}
+
+/// A single-point solution with FDE over a RINEX observation file, solved in chunks of
+/// epochs (so a caller can show progress). Internal: use ``navfdi.gnss_solve``.
+#[pyclass(name = "GnssRun", module = "navfdi._core")]
+pub struct PyGnssRun {
+    obs: ObsData,
+    nav: NavData,
+    cfg: SppConfig,
+    faults: Vec<InjectedFault>,
+    state: SppState,
+    out: SppRun,
+    next: usize,
+}
+
+fn parse_sys(s: &str) -> PyResult<Sys> {
+    let mut ch = s.trim().chars();
+    match (ch.next().and_then(Sys::from_letter), ch.next()) {
+        (Some(sys), None) if Sys::POSITIONING.contains(&sys) => Ok(sys),
+        _ => Err(PyValueError::new_err(format!(
+            "systems: '{s}' is not a system that can be positioned; use G (GPS), E (Galileo), C (BeiDou) or J (QZSS)"
+        ))),
+    }
+}
+
+#[pymethods]
+impl PyGnssRun {
+    /// Read `obs_path` and `nav_path` and set up the solution. `systems` letters (G, E, C,
+    /// J); `mask_deg` elevation mask (deg); `alpha`, `k` of the tests; `exclude` runs the
+    /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"`` or ``"rtklib"``;
+    /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
+    /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
+    /// per-system σ factors.
+    #[new]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        obs_path: String,
+        nav_path: String,
+        systems: Vec<String>,
+        mask_deg: f64,
+        alpha: f64,
+        k: Option<f64>,
+        exclude: bool,
+        noise: (f64, f64),
+        weighting: &str,
+        ionosphere: bool,
+        troposphere: bool,
+        faults: Vec<(String, String, f64, f64, f64)>,
+        codes: BTreeMap<String, String>,
+        factors: BTreeMap<String, f64>,
+    ) -> PyResult<Self> {
+        let mut cfg = SppConfig::new(FdeConfig::new(alpha, k).py()?);
+        cfg.systems = systems
+            .iter()
+            .map(|s| parse_sys(s))
+            .collect::<PyResult<_>>()?;
+        for (letter, code) in &codes {
+            let sys = parse_sys(letter)?;
+            match cfg.codes.iter_mut().find(|(s, _)| *s == sys) {
+                Some(c) => c.1 = code.clone(),
+                None => cfg.codes.push((sys, code.clone())),
+            }
+        }
+        for (letter, f) in &factors {
+            cfg.factors.push((parse_sys(letter)?, *f));
+        }
+        if !mask_deg.is_finite() {
+            return Err(PyValueError::new_err(format!(
+                "mask: {mask_deg} is not a finite elevation (deg)"
+            )));
+        }
+        cfg.mask = mask_deg.to_radians();
+        cfg.exclude = exclude;
+        cfg.noise = noise;
+        cfg.weighting = match weighting {
+            "elevation" => Weighting::Elevation,
+            "rtklib" => Weighting::Rtklib,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "weighting: '{other}' is not 'elevation' or 'rtklib'"
+                )))
+            }
+        };
+        cfg.ionosphere = ionosphere;
+        cfg.troposphere = troposphere;
+        cfg.validate().py()?;
+        let faults = faults
+            .into_iter()
+            .map(|(sat, shape, magnitude, start, end)| {
+                let s = Sat::parse(&sat)
+                    .filter(|s| Sys::POSITIONING.contains(&s.sys))
+                    .ok_or_else(|| {
+                        PyValueError::new_err(format!(
+                            "fault: '{sat}' is not a satellite name such as G13 (GPS, Galileo, BeiDou or QZSS)"
+                        ))
+                    })?;
+                let shape = match shape.as_str() {
+                    "step" => FaultShape::Step,
+                    "ramp" => FaultShape::Ramp,
+                    "quadratic" => FaultShape::Quadratic,
+                    o => {
+                        return Err(PyValueError::new_err(format!(
+                            "fault on {sat}: shape '{o}' is not step, ramp or quadratic"
+                        )))
+                    }
+                };
+                let f = InjectedFault {
+                    sat: s,
+                    shape,
+                    magnitude,
+                    start,
+                    end,
+                };
+                f.validate().py()?;
+                Ok(f)
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let (obs, nav) = crate::interrupt::run(py, move |_| {
+            let nav = rinex::read_nav(&nav_path)?;
+            let obs = rinex::read_obs(&obs_path)?;
+            Ok((obs, nav))
+        })?;
+        for s in &cfg.systems {
+            if !nav.ephemerides.keys().any(|k| k.sys == *s) {
+                return Err(navfdi_core::Error::Format(format!(
+                    "the navigation file has no {} ephemerides, but {} was asked for (systems)",
+                    s.name(),
+                    s.name()
+                )))
+                .py();
+            }
+        }
+        Ok(PyGnssRun {
+            obs,
+            nav,
+            cfg,
+            faults,
+            state: SppState::default(),
+            out: SppRun::default(),
+            next: 0,
+        })
+    }
+
+    /// Number of epochs in the observation file.
+    #[getter]
+    fn n_epochs(&self) -> usize {
+        self.obs.epochs.len()
+    }
+
+    /// Epochs solved so far.
+    #[getter]
+    fn done(&self) -> usize {
+        self.next
+    }
+
+    /// Solve up to `n` more epochs (GIL released, Ctrl-C stops within one epoch); returns how
+    /// many were solved.
+    fn advance(&mut self, py: Python<'_>, n: usize) -> PyResult<usize> {
+        let start = self.next;
+        let end = start.saturating_add(n).min(self.obs.epochs.len());
+        let (obs, nav, cfg, faults) = (&self.obs, &self.nav, &self.cfg, &self.faults);
+        let mut state = self.state.clone();
+        let mut out = std::mem::take(&mut self.out);
+        let res = crate::interrupt::run(py, |cancel| {
+            spp::solve(
+                obs,
+                nav,
+                cfg,
+                faults,
+                start..end,
+                &mut state,
+                &mut out,
+                cancel,
+            )
+        });
+        // On an error (e.g. Ctrl-C) the epochs of this chunk are dropped so that the run
+        // stays consistent: everything before `start` is kept.
+        if res.is_err() {
+            out.epochs.truncate(start);
+            out.sats.retain(|r| r.epoch < start);
+            self.out = out;
+            res?;
+            return Ok(0);
+        }
+        self.out = out;
+        self.state = state;
+        self.next = end;
+        Ok(end - start)
+    }
+
+    /// Per-epoch columns of the epochs solved so far: ``time`` (GPS s), ``x, y, z`` (ECEF m,
+    /// NaN without a solution), ``status`` (str), ``dof``, ``statistic``, ``threshold``,
+    /// ``first_statistic``, ``first_threshold``, ``first_dof``, ``excluded`` (space-separated
+    /// names), ``faulty`` (names with an injected fault), ``used`` (int), ``reason`` (str),
+    /// ``clock_G``/``clock_E``/``clock_C``/``clock_J`` (m, NaN when the system is not solved).
+    fn epoch_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let e = &self.out.epochs;
+        let n = e.len();
+        let d = PyDict::new(py);
+        let f = |g: &dyn Fn(&spp::EpochSolution) -> f64| -> Vec<f64> { e.iter().map(g).collect() };
+        d.set_item("time", to_numpy(py, f(&|s| s.time.seconds()), &[n])?)?;
+        for (c, name) in ["x", "y", "z"].iter().enumerate() {
+            d.set_item(
+                *name,
+                to_numpy(py, f(&|s| s.position.map_or(f64::NAN, |p| p[c])), &[n])?,
+            )?;
+        }
+        for sys in Sys::POSITIONING {
+            d.set_item(
+                format!("clock_{}", sys.letter()),
+                to_numpy(
+                    py,
+                    f(&|s| {
+                        s.clocks
+                            .iter()
+                            .find(|(c, _)| *c == sys)
+                            .map_or(f64::NAN, |c| c.1)
+                    }),
+                    &[n],
+                )?,
+            )?;
+        }
+        d.set_item("dof", to_numpy(py, f(&|s| s.fde.dof as f64), &[n])?)?;
+        d.set_item("statistic", to_numpy(py, f(&|s| s.fde.statistic), &[n])?)?;
+        d.set_item("threshold", to_numpy(py, f(&|s| s.fde.threshold), &[n])?)?;
+        d.set_item(
+            "first_statistic",
+            to_numpy(py, f(&|s| s.fde.first.0), &[n])?,
+        )?;
+        d.set_item(
+            "first_threshold",
+            to_numpy(py, f(&|s| s.fde.first.1), &[n])?,
+        )?;
+        d.set_item(
+            "first_dof",
+            to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
+        )?;
+        d.set_item("used", to_numpy(py, f(&|s| s.used as f64), &[n])?)?;
+        let names = |v: &[Sat]| v.iter().map(Sat::name).collect::<Vec<_>>().join(" ");
+        d.set_item(
+            "excluded",
+            e.iter().map(|s| names(&s.excluded)).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "faulty",
+            e.iter().map(|s| names(&s.faulty)).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "status",
+            e.iter().map(|s| s.fde.status.as_str()).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "reason",
+            e.iter().map(|s| s.fde.reason.clone()).collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// Per epoch and satellite columns of the epochs solved so far: ``epoch`` (int),
+    /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``,
+    /// ``sigma`` (m), ``iono``, ``tropo`` (m), ``fault`` (injected, m), ``sat_x, sat_y,
+    /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``status`` (``used``,
+    /// ``excluded``, ``below_mask``, ``no_ephemeris``, ``unhealthy``, ``unsolved``).
+    fn satellite_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let r = &self.out.sats;
+        let n = r.len();
+        let d = PyDict::new(py);
+        let f = |g: &dyn Fn(&spp::SatRow) -> f64| -> Vec<f64> { r.iter().map(g).collect() };
+        d.set_item(
+            "epoch",
+            to_numpy(py, r.iter().map(|x| x.epoch as u32).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "satellite",
+            r.iter().map(|x| x.sat.name()).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "elevation",
+            to_numpy(py, f(&|x| x.elevation.to_degrees()), &[n])?,
+        )?;
+        d.set_item(
+            "azimuth",
+            to_numpy(py, f(&|x| x.azimuth.to_degrees()), &[n])?,
+        )?;
+        d.set_item("residual", to_numpy(py, f(&|x| x.residual), &[n])?)?;
+        d.set_item("w", to_numpy(py, f(&|x| x.w), &[n])?)?;
+        d.set_item("sigma", to_numpy(py, f(&|x| x.sigma), &[n])?)?;
+        d.set_item("iono", to_numpy(py, f(&|x| x.iono), &[n])?)?;
+        d.set_item("tropo", to_numpy(py, f(&|x| x.tropo), &[n])?)?;
+        d.set_item("fault", to_numpy(py, f(&|x| x.fault), &[n])?)?;
+        for (c, name) in ["sat_x", "sat_y", "sat_z"].iter().enumerate() {
+            d.set_item(*name, to_numpy(py, f(&|x| x.sat_pos[c]), &[n])?)?;
+        }
+        d.set_item("sat_clock", to_numpy(py, f(&|x| x.sat_clock), &[n])?)?;
+        d.set_item(
+            "status",
+            r.iter().map(|x| x.status.as_str()).collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// Observation types dropped while reading (e.g. ``G:X1``).
+    #[getter]
+    fn dropped(&self) -> Vec<String> {
+        self.obs.dropped_codes.clone()
+    }
+
+    /// Receiver type from the observation header.
+    #[getter]
+    fn receiver(&self) -> String {
+        self.obs.receiver.clone()
+    }
+}
