@@ -760,6 +760,8 @@ class GnssRun:
         faults: list[tuple[str, str, float, float, float]],
         codes: dict[str, str],
         factors: dict[str, float],
+        sprt: tuple[float, float],
+        cusum: tuple[float, float, float, int, float],
     ) -> GnssRun: ...
     @property
     def n_epochs(self) -> int:
@@ -778,7 +780,8 @@ class GnssRun:
     def satellite_table(self) -> dict[str, Any]:
         """Per epoch and satellite columns: ``epoch``; ``satellite`` (list[str]);
         ``elevation``, ``azimuth`` deg; ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault``
-        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``status`` (list[str])."""
+        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``sprt``, ``cusum`` (sequential
+        statistics); ``sprt_alarm``, ``cusum_alarm`` (list[bool]); ``status`` (list[str])."""
     @property
     def dropped(self) -> list[str]:
         """Observation types dropped while reading (e.g. ``G:X1``)."""

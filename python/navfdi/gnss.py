@@ -206,10 +206,11 @@ class GnssSolution:
 
     def summary(self) -> dict[str, Any]:
         """Counts and rates: epochs solved, horizontal/vertical RMS and maxima against the truth
-        (m), exclusions per satellite, false exclusions per clean epoch against α, and per
-        injected fault the epochs it was active, the share in which exactly that satellite
-        was excluded, and the first epoch (s after the fault's start) at which the global test
-        failed and at which the satellite was excluded."""
+        (m), exclusions per satellite, false exclusions per clean epoch against α, the
+        sequential detectors' alarms per clean satellite-epoch, and per injected fault the
+        epochs it was active, the share in which exactly that satellite was excluded, and the
+        first epoch (s after the fault's start) at which the global test failed, the satellite
+        was excluded, and its SPRT and rate CUSUM alarmed."""
         sol, sats = self.solution, self.satellites
         solved = sol["status"] != "no_solution"
         out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"]}
@@ -230,6 +231,16 @@ class GnssSolution:
         out["global_alarm_rate_clean"] = float(gf.sum() / clean.sum()) if clean.any() else math.nan
         t = sol["gps_seconds"].to_numpy()
         tau = t - t[0] if len(t) else t
+        tested_rows = sats[sats["status"].isin(["used", "excluded"])]
+        fault_rows = np.zeros(len(tested_rows), bool)
+        for f in self.faults:
+            active_ep = np.flatnonzero((tau >= f.start) & (tau < f.end))
+            fault_rows |= ((tested_rows["satellite"] == f.satellite) & tested_rows["epoch"].isin(active_ep)).to_numpy()
+        clean_rows = tested_rows[~fault_rows]
+        out["clean_satellite_epochs"] = int(len(clean_rows))
+        for det in ("sprt", "cusum"):
+            a = clean_rows[f"{det}_alarm"]
+            out[f"{det}_false_alarm_rate"] = float(a.mean()) if len(a) else math.nan
         per_fault = []
         for f in self.faults:
             active = (tau >= f.start) & (tau < f.end)
@@ -242,6 +253,14 @@ class GnssSolution:
             first_alarm = next((float(tau[i] - f.start) for i, a in zip(epochs_tested, alarm) if a), math.nan)
             first_excl = next((float(tau[i] - f.start) for i, h in zip(epochs_tested, hit) if h), math.nan)
             others = [sorted(set(sol["excluded"].iat[i].split()) - {f.satellite}) for i in epochs_tested]
+            seq = {}
+            sat_rows = sats[sats["satellite"] == f.satellite].set_index("epoch")
+            for det in ("sprt", "cusum"):
+                # First alarm onset (not an alarm already on when the fault starts).
+                al = sat_rows[f"{det}_alarm"].reindex(range(len(sol)), fill_value=False).to_numpy()
+                onset = al & ~np.concatenate([[False], al[:-1]])
+                hits = [i for i in epochs_tested if onset[i]]
+                seq[f"first_{det}_after"] = float(tau[hits[0]] - f.start) if hits else math.nan
             per_fault.append(
                 {
                     "fault": f"{f.satellite}:{f.shape}:{f.magnitude:g}:{f.start:g}:{f.end:g}",
@@ -252,6 +271,7 @@ class GnssSolution:
                     "other_exclusions": int(sum(len(o) for o in others)),
                     "first_alarm_after": first_alarm,
                     "first_exclusion_after": first_excl,
+                    **seq,
                 }
             )
         out["faults"] = per_fault
@@ -265,10 +285,11 @@ class GnssSolution:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
         lines.append(f"exclusions per satellite: {ex}")
+        lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
         for f in s["faults"]:
             lines.append(
-                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start; other satellites excluded {f['other_exclusions']} times"
+                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
             )
         return "\n".join(lines) + "\n"
 
@@ -310,6 +331,8 @@ def gnss_solve(
     faults: Iterable[GnssFault | str] = (),
     codes: dict[str, str] | None = None,
     noise_factors: dict[str, float] | None = None,
+    sprt: tuple[float, float] = (1e-3, 1e-3),
+    cusum: tuple[float, float, float, int, float] = (1.0, 5.0, 60.0, 20, 0.02),
     truth: np.ndarray | Sequence[float] | str | None = None,
     progress: bool = False,
     chunk: int = 500,
@@ -342,6 +365,12 @@ def gnss_solve(
     noise_factors : dict
         Factor on σ per system letter (default 1), e.g. ``{"C": 3.0}`` where a system's
         broadcast biases exceed the code noise.
+    sprt : (P_f, P_m)
+        Improved SPRT on each satellite's normalised residual stream (known variance).
+    cusum : (drift, threshold, tau, warmup, floor)
+        Rate CUSUM on each satellite's residual changes: drift ν and threshold h in units of
+        the changes' running RMS, its time constant (epochs), epochs without alarm after a
+        restart, RMS floor (m). See ``navfdi_core::gnss::sequential``.
     truth : (3,) ECEF m, ``"LAT,LON,H"`` or None
         Reference position; adds ``east, north, up`` error columns and RMS to the summary.
     progress : bool
@@ -382,6 +411,8 @@ def gnss_solve(
         [(f.satellite, f.shape, f.magnitude, f.start, min(f.end, 1e15)) for f in parsed],
         dict(codes or {}),
         {str(k).upper(): float(v) for k, v in (noise_factors or {}).items()},
+        (float(sprt[0]), float(sprt[1])),
+        (float(cusum[0]), float(cusum[1]), float(cusum[2]), int(cusum[3]), float(cusum[4])),
     )
     bar = None
     if progress:
@@ -438,6 +469,8 @@ def gnss_solve(
         "troposphere": bool(troposphere),
         "codes": dict(codes or {}),
         "noise_factors": dict(noise_factors or {}),
+        "sprt": list(sprt),
+        "cusum": list(cusum),
         "faults": [f.__dict__ for f in parsed],
         "dropped_observation_types": run.dropped,
         "receiver": run.receiver,
@@ -486,7 +519,7 @@ def _plot(s: GnssSolution, d: Path) -> list[Path]:
     _shade_faults(ax, s.faults)
     ax.set_yticks(range(len(names)), names, fontsize=7)
     ax.set(xlabel="time since first epoch (s)", title="Satellites used and excluded per epoch")
-    ax.legend(loc="upper right")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
     paths.append(d / "exclusions.png")
     fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
     plt.close(fig)

@@ -179,9 +179,10 @@ impl PyGnssRun {
     /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"`` or ``"rtklib"``;
     /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
     /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
-    /// per-system σ factors.
+    /// per-system σ factors; `sprt` (P_f, P_m) and `cusum` (drift, threshold, tau epochs,
+    /// warm-up epochs, floor m) of the sequential detectors.
     #[new]
-    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors))]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, cusum))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -199,6 +200,8 @@ impl PyGnssRun {
         faults: Vec<(String, String, f64, f64, f64)>,
         codes: BTreeMap<String, String>,
         factors: BTreeMap<String, f64>,
+        sprt: (f64, f64),
+        cusum: (f64, f64, f64, usize, f64),
     ) -> PyResult<Self> {
         let mut cfg = SppConfig::new(FdeConfig::new(alpha, k).py()?);
         cfg.systems = systems
@@ -231,6 +234,16 @@ impl PyGnssRun {
                     "weighting: '{other}' is not 'elevation' or 'rtklib'"
                 )))
             }
+        };
+        cfg.sequential = navfdi_core::gnss::sequential::SeqConfig {
+            sprt,
+            cusum: navfdi_core::gnss::sequential::CusumConfig {
+                drift: cusum.0,
+                threshold: cusum.1,
+                tau: cusum.2,
+                warmup: cusum.3,
+                floor: cusum.4,
+            },
         };
         cfg.ionosphere = ionosphere;
         cfg.troposphere = troposphere;
@@ -410,7 +423,8 @@ impl PyGnssRun {
     /// Per epoch and satellite columns of the epochs solved so far: ``epoch`` (int),
     /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``,
     /// ``sigma`` (m), ``iono``, ``tropo`` (m), ``fault`` (injected, m), ``sat_x, sat_y,
-    /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``status`` (``used``,
+    /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``cusum``
+    /// (sequential statistics), ``sprt_alarm``, ``cusum_alarm`` (bool), ``status`` (``used``,
     /// ``excluded``, ``below_mask``, ``no_ephemeris``, ``unhealthy``, ``unsolved``).
     fn satellite_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.out.sats;
@@ -443,6 +457,16 @@ impl PyGnssRun {
             d.set_item(*name, to_numpy(py, f(&|x| x.sat_pos[c]), &[n])?)?;
         }
         d.set_item("sat_clock", to_numpy(py, f(&|x| x.sat_clock), &[n])?)?;
+        d.set_item("sprt", to_numpy(py, f(&|x| x.seq.sprt), &[n])?)?;
+        d.set_item("cusum", to_numpy(py, f(&|x| x.seq.cusum), &[n])?)?;
+        d.set_item(
+            "sprt_alarm",
+            r.iter().map(|x| x.seq.sprt_alarm).collect::<Vec<_>>(),
+        )?;
+        d.set_item(
+            "cusum_alarm",
+            r.iter().map(|x| x.seq.cusum_alarm).collect::<Vec<_>>(),
+        )?;
         d.set_item(
             "status",
             r.iter().map(|x| x.status.as_str()).collect::<Vec<_>>(),

@@ -7,6 +7,7 @@
 //! * [`rinex`]: RINEX 3 observation and navigation files (read with the `rinex` crate).
 //! * [`broadcast`]: GPS time, broadcast-ephemeris satellite positions and clocks, selection.
 //! * [`atmosphere`]: Klobuchar ionosphere and Saastamoinen troposphere.
+//! * [`sequential`]: SPRT and rate CUSUM on each satellite's residual stream.
 //! * [`spp`]: single-point positioning with satellite FDE on real pseudoranges.
 //! * [`snapshot`]: iterative weighted least squares for position and clock from
 //!   pseudoranges, and the global test + Baarda w-test exclusion loop (also used on
@@ -20,6 +21,7 @@ pub mod innovation;
 pub mod pv_filter;
 pub mod ranges;
 pub mod rinex;
+pub mod sequential;
 pub mod snapshot;
 pub mod spp;
 

@@ -29,11 +29,13 @@ use super::atmosphere::{klobuchar, saastamoinen, Klobuchar};
 use super::broadcast::{select, EphProblem, GpsTime, Sat, Sys};
 use super::geodesy::{ecef_to_lla, elevation_azimuth};
 use super::rinex::{NavData, ObsData};
+use super::sequential::{SatDetectors, SeqConfig, SeqOutput};
 use super::snapshot::{fde, FdeConfig, FdeModel, FdeOutcome, FdeStatus, ObsCov};
 use super::C;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
+use std::collections::BTreeMap;
 
 /// Earth rotation rate used for the Sagnac term (rad/s, WGS-84).
 const OMEGA_E: f64 = 7.292_115_146_7e-5;
@@ -130,6 +132,8 @@ pub struct SppConfig {
     pub weighting: Weighting,
     /// Per-system factor on σ (RTKLIB's EFACT), default 1 for every system.
     pub factors: Vec<(Sys, f64)>,
+    /// Sequential detectors on each satellite's residual stream.
+    pub sequential: SeqConfig,
     /// Apply the Klobuchar ionosphere.
     pub ionosphere: bool,
     /// Apply the Saastamoinen troposphere.
@@ -153,6 +157,7 @@ impl SppConfig {
             noise: (0.3, 0.3),
             weighting: Weighting::Elevation,
             factors: Vec::new(),
+            sequential: SeqConfig::default(),
             ionosphere: true,
             troposphere: true,
         }
@@ -207,6 +212,7 @@ impl SppConfig {
                 });
             }
         }
+        self.sequential.validate()?;
         if self.noise.0 == 0.0 && self.noise.1 == 0.0 {
             return Err(Error::Invalid(
                 "noise: a and b are both 0; the code noise must be positive".into(),
@@ -294,6 +300,9 @@ pub struct SatRow {
     pub sat_pos: Vector3<f64>,
     /// Satellite clock offset incl. the relativistic term (s; NaN without an ephemeris).
     pub sat_clock: f64,
+    /// Sequential detectors on this satellite's residual stream (NaN statistics without a
+    /// residual).
+    pub seq: SeqOutput,
     /// Status.
     pub status: SatStatus,
 }
@@ -422,6 +431,7 @@ type LastFix = (Vector3<f64>, Vec<(Sys, f64)>);
 #[derive(Debug, Clone, Default)]
 pub struct SppState {
     last: Option<LastFix>,
+    detectors: BTreeMap<Sat, SatDetectors>,
 }
 
 struct Candidate {
@@ -511,6 +521,7 @@ pub fn solve(
                 fault,
                 sat_pos: Vector3::repeat(f64::NAN),
                 sat_clock: f64::NAN,
+                seq: SeqOutput::NONE,
                 status: SatStatus::Unsolved,
             };
             let ephs = nav
@@ -543,12 +554,34 @@ pub fn solve(
                 }
             }
         }
-        let sol = solve_epoch(cfg, klob.as_ref(), ep.time, &cands, state, out)?;
-        let mut sol = sol;
+        let first_row = out.sats.len() - ep_rows(&out.sats, ei);
+        let mut sol = solve_epoch(cfg, klob.as_ref(), ep.time, &cands, state, out)?;
         sol.faulty = faulty;
         out.epochs.push(sol);
+        // Sequential detectors: satellites with a residual step theirs; the others restart.
+        let mut seen = Vec::new();
+        for row in &mut out.sats[first_row..] {
+            if !row.residual.is_finite() || !(row.sigma > 0.0) {
+                continue;
+            }
+            let det = match state.detectors.get_mut(&row.sat) {
+                Some(d) => d,
+                None => state
+                    .detectors
+                    .entry(row.sat)
+                    .or_insert(SatDetectors::new(&cfg.sequential)?),
+            };
+            row.seq = det.step(row.residual, row.sigma, &cfg.sequential);
+            seen.push(row.sat);
+        }
+        state.detectors.retain(|s, _| seen.contains(s));
     }
     Ok(())
+}
+
+/// Number of trailing rows of `sats` that belong to epoch `ei`.
+fn ep_rows(sats: &[SatRow], ei: usize) -> usize {
+    sats.iter().rev().take_while(|r| r.epoch == ei).count()
 }
 
 fn solve_epoch(
