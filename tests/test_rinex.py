@@ -157,7 +157,7 @@ def test_a_ramp_is_flagged_within_15_epochs_and_earlier_by_a_sequential_detector
         f = sol.summary()["faults"][0]
         assert f["first_alarm_after"] <= 15, (sat, f)
         assert f["first_exclusion_after"] >= f["first_alarm_after"]
-        best_sequential = np.nanmin([f["first_sprt_after"], f["first_cusum_after"]])
+        best_sequential = np.nanmin([f["first_sprt_after"], f["first_aime_after"], f["first_cusum_after"]])
         assert best_sequential < f["first_alarm_after"], (sat, f)
 
 
@@ -169,7 +169,7 @@ def test_sequential_detectors_on_clean_data(gps):
     assert 0 <= s["cusum_false_alarm_rate"] < s["sprt_false_alarm_rate"]
     rows = gps.satellites
     tested = rows[rows["status"].isin(["used", "excluded"])]
-    assert tested["cusum"].notna().all() and tested["sprt"].notna().all()
+    assert tested["cusum"].notna().all() and tested["sprt"].notna().all() and tested["aime"].notna().all()
     assert rows.loc[~rows["status"].isin(["used", "excluded"]), "cusum"].isna().all()
 
 

@@ -8,7 +8,7 @@ Filtering
     :class:`Innovation`, :class:`FilterRun`.
 Detectors
     :class:`ResidualChi2`, :class:`ImprovedSprt`, :class:`JointChi2Sprt` with per-epoch
-    :class:`Decision` and whole-sequence :class:`DetectionRun`; :func:`alarm_intervals`;
+    :class:`Decision` and whole-sequence :class:`DetectionRun`; the windowed :class:`Aime`; :func:`alarm_intervals`;
     the dual-propagator state chi-square test :class:`StateChi2` (:class:`StateDecision`).
 Statistics
     :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
@@ -36,6 +36,7 @@ Errors
 """
 
 from navfdi._core import (
+    Aime,
     Decision,
     DetectionRun,
     FederatedFilter,
@@ -69,6 +70,7 @@ from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_sce
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 
 __all__ = [
+    "Aime",
     "AlarmInterval",
     "Campaign",
     "Decision",

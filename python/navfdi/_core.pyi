@@ -34,6 +34,7 @@ __all__ = [
     "Decision",
     "DetectionRun",
     "ResidualChi2",
+    "Aime",
     "ImprovedSprt",
     "JointChi2Sprt",
     "chi2_threshold",
@@ -278,6 +279,50 @@ class ResidualChi2:
     @property
     def pf(self) -> float:
         """False-alarm probability per epoch."""
+    @property
+    def alarm(self) -> bool:
+        """Last alarm state."""
+
+@final
+class Aime:
+    """AIME (paper 004, METHODS §11): over the last ``window`` epochs,
+    ``r̄ = (Σ A_j⁻¹)⁻¹ Σ A_j⁻¹ r_j``, ``Ā = (Σ A_j⁻¹)⁻¹``, statistic ``r̄ᵀĀ⁻¹r̄ ~ χ²(m)``; alarm
+    when it reaches ``F⁻¹_{χ²(m)}(1 - pf)``. Sliding sums in O(m²) per epoch, recomputed exactly
+    every ``window`` epochs (no drift). NaN components add no information; an epoch without
+    any component leaves the window unchanged.
+
+    Parameters
+    ----------
+    pf : float
+        False-alarm probability per epoch, in (0, 1).
+    window : int
+        Window length N in epochs (1 … 1 000 000).
+    """
+
+    def __new__(cls, pf: float, window: int) -> Aime: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
+    def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
+        """Test one epoch: ``residual`` shape (m,) (m; NaN = unavailable), ``covariance`` shape
+        (m, m) (m²), positive definite on the available components. The dimension m must stay
+        the same until :meth:`reset`. Bad input raises ``ValueError`` / :class:`LinAlgError`
+        and leaves the detector unchanged."""
+    def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
+        """Test every epoch of ``residuals`` (T, m) with ``covariances`` (T, m, m) in Rust, with
+        the GIL released; on an error (naming the epoch) the detector is unchanged."""
+    def reset(self) -> None:
+        """Empty the window (the dimension may then change)."""
+    def threshold(self, dof: int | None = None) -> float:
+        """Threshold ``F⁻¹_{χ²(dof)}(1 - pf)`` for ``dof >= 1`` components."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability per epoch."""
+    @property
+    def window(self) -> int:
+        """Window length N (epochs)."""
+    @property
+    def filled(self) -> int:
+        """Epochs currently in the window (≤ N)."""
     @property
     def alarm(self) -> bool:
         """Last alarm state."""
@@ -761,6 +806,7 @@ class GnssRun:
         codes: dict[str, str],
         factors: dict[str, float],
         sprt: tuple[float, float],
+        aime: tuple[float, int],
         cusum: tuple[float, float, float, int, float],
     ) -> GnssRun: ...
     @property
@@ -780,8 +826,8 @@ class GnssRun:
     def satellite_table(self) -> dict[str, Any]:
         """Per epoch and satellite columns: ``epoch``; ``satellite`` (list[str]);
         ``elevation``, ``azimuth`` deg; ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault``
-        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``sprt``, ``cusum`` (sequential
-        statistics); ``sprt_alarm``, ``cusum_alarm`` (list[bool]); ``status`` (list[str])."""
+        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``sprt``, ``aime``, ``cusum``
+        (sequential statistics); ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm`` (list[bool]); ``status`` (list[str])."""
     @property
     def dropped(self) -> list[str]:
         """Observation types dropped while reading (e.g. ``G:X1``)."""

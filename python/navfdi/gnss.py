@@ -210,7 +210,7 @@ class GnssSolution:
         sequential detectors' alarms per clean satellite-epoch, and per injected fault the
         epochs it was active, the share in which exactly that satellite was excluded, and the
         first epoch (s after the fault's start) at which the global test failed, the satellite
-        was excluded, and its SPRT and rate CUSUM alarmed."""
+        was excluded, and its SPRT, AIME and rate CUSUM alarmed (alarm onsets)."""
         sol, sats = self.solution, self.satellites
         solved = sol["status"] != "no_solution"
         out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"]}
@@ -238,7 +238,7 @@ class GnssSolution:
             fault_rows |= ((tested_rows["satellite"] == f.satellite) & tested_rows["epoch"].isin(active_ep)).to_numpy()
         clean_rows = tested_rows[~fault_rows]
         out["clean_satellite_epochs"] = int(len(clean_rows))
-        for det in ("sprt", "cusum"):
+        for det in ("sprt", "aime", "cusum"):
             a = clean_rows[f"{det}_alarm"]
             out[f"{det}_false_alarm_rate"] = float(a.mean()) if len(a) else math.nan
         per_fault = []
@@ -255,7 +255,7 @@ class GnssSolution:
             others = [sorted(set(sol["excluded"].iat[i].split()) - {f.satellite}) for i in epochs_tested]
             seq = {}
             sat_rows = sats[sats["satellite"] == f.satellite].set_index("epoch")
-            for det in ("sprt", "cusum"):
+            for det in ("sprt", "aime", "cusum"):
                 # First alarm onset (not an alarm already on when the fault starts).
                 al = sat_rows[f"{det}_alarm"].reindex(range(len(sol)), fill_value=False).to_numpy()
                 onset = al & ~np.concatenate([[False], al[:-1]])
@@ -285,11 +285,11 @@ class GnssSolution:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
         lines.append(f"exclusions per satellite: {ex}")
-        lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
+        lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
         for f in s["faults"]:
             lines.append(
-                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
+                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, AIME {f['first_aime_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
             )
         return "\n".join(lines) + "\n"
 
@@ -332,6 +332,7 @@ def gnss_solve(
     codes: dict[str, str] | None = None,
     noise_factors: dict[str, float] | None = None,
     sprt: tuple[float, float] = (1e-3, 1e-3),
+    aime: tuple[float, int] = (1e-3, 10),
     cusum: tuple[float, float, float, int, float] = (1.0, 5.0, 60.0, 20, 0.02),
     truth: np.ndarray | Sequence[float] | str | None = None,
     progress: bool = False,
@@ -367,6 +368,8 @@ def gnss_solve(
         broadcast biases exceed the code noise.
     sprt : (P_f, P_m)
         Improved SPRT on each satellite's normalised residual stream (known variance).
+    aime : (P_f, window)
+        AIME (:class:`navfdi.Aime`) on each satellite's normalised residual stream.
     cusum : (drift, threshold, tau, warmup, floor)
         Rate CUSUM on each satellite's residual changes: drift ν and threshold h in units of
         the changes' running RMS, its time constant (epochs), epochs without alarm after a
@@ -412,6 +415,7 @@ def gnss_solve(
         dict(codes or {}),
         {str(k).upper(): float(v) for k, v in (noise_factors or {}).items()},
         (float(sprt[0]), float(sprt[1])),
+        (float(aime[0]), int(aime[1])),
         (float(cusum[0]), float(cusum[1]), float(cusum[2]), int(cusum[3]), float(cusum[4])),
     )
     bar = None
@@ -470,6 +474,7 @@ def gnss_solve(
         "codes": dict(codes or {}),
         "noise_factors": dict(noise_factors or {}),
         "sprt": list(sprt),
+        "aime": list(aime),
         "cusum": list(cusum),
         "faults": [f.__dict__ for f in parsed],
         "dropped_observation_types": run.dropped,

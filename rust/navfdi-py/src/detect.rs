@@ -4,7 +4,9 @@
 use crate::convert::{matrix, read, to_numpy, vector};
 use crate::errors::IntoPyResult;
 use nalgebra::{DMatrix, DVector};
-use navfdi_core::detect::{Decision, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
+use navfdi_core::detect::{
+    Aime, Decision, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance,
+};
 use navfdi_core::run::at_epoch;
 use numpy::{IxDyn, PyArray};
 use pyo3::exceptions::PyValueError;
@@ -372,6 +374,108 @@ fn joint_step(
         chi2: Some(j.chi2),
         reset: j.reset,
     })
+}
+
+fn aime_step(d: &mut Aime, r: &DVector<f64>, a: &DMatrix<f64>) -> navfdi_core::Result<Report> {
+    Ok(Report {
+        decision: d.test(r, a)?,
+        components: None,
+        chi2: None,
+        reset: false,
+    })
+}
+
+/// AIME detector (paper 004): chi-square test of the information-weighted mean innovation
+/// over a sliding window.
+#[pyclass(name = "Aime", module = "navfdi._core")]
+pub struct PyAime {
+    inner: Aime,
+}
+
+impl PyAime {
+    /// Wrap a core object (used when unpickling).
+    pub fn from_inner(inner: Aime) -> Self {
+        PyAime { inner }
+    }
+}
+
+#[pymethods]
+impl PyAime {
+    #[new]
+    #[pyo3(signature = (pf, window))]
+    fn new(pf: f64, window: i64) -> PyResult<Self> {
+        if window < 1 {
+            return Err(PyValueError::new_err(format!(
+                "window = {window}: the AIME window must be at least 1 epoch"
+            )));
+        }
+        Ok(PyAime {
+            inner: Aime::new(pf, window as usize).py()?,
+        })
+    }
+    /// Test one epoch.
+    fn test(
+        &mut self,
+        residual: &Bound<'_, PyAny>,
+        covariance: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDecision> {
+        test_one(&mut self.inner, residual, covariance, aime_step)
+    }
+    /// Test a whole sequence in Rust.
+    fn test_sequence(
+        &mut self,
+        py: Python<'_>,
+        residuals: &Bound<'_, PyAny>,
+        covariances: &Bound<'_, PyAny>,
+    ) -> PyResult<PyDetectionRun> {
+        run_sequence(py, &mut self.inner, residuals, covariances, aime_step)
+    }
+    /// Empty the window.
+    fn reset(&mut self) {
+        self.inner.reset()
+    }
+    /// Threshold for `dof` components.
+    #[pyo3(signature = (dof = None))]
+    fn threshold(&mut self, dof: Option<i64>) -> PyResult<f64> {
+        let dof = dof.ok_or_else(|| {
+            PyValueError::new_err(
+                "dof: the AIME threshold depends on the number of residual components; give dof",
+            )
+        })?;
+        let dof = positive_dof(dof)?;
+        self.inner.threshold(dof).py()
+    }
+    /// False-alarm probability per epoch.
+    #[getter]
+    fn pf(&self) -> f64 {
+        self.inner.pf()
+    }
+    /// Window length N (epochs).
+    #[getter]
+    fn window(&self) -> usize {
+        self.inner.window()
+    }
+    /// Epochs currently in the window.
+    #[getter]
+    fn filled(&self) -> usize {
+        self.inner.len()
+    }
+    /// Last alarm state.
+    #[getter]
+    fn alarm(&self) -> bool {
+        self.inner.alarm()
+    }
+    /// Pickle support: ``(navfdi._core._restore, ("Aime", state))``.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, String))> {
+        crate::pickling::reduce(py, "Aime", crate::pickling::state("Aime", &self.inner)?)
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Aime(pf={}, window={})",
+            self.inner.pf(),
+            self.inner.window()
+        )
+    }
 }
 
 /// Residual chi-square detector.

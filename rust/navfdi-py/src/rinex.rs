@@ -179,10 +179,10 @@ impl PyGnssRun {
     /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"`` or ``"rtklib"``;
     /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
     /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
-    /// per-system σ factors; `sprt` (P_f, P_m) and `cusum` (drift, threshold, tau epochs,
+    /// per-system σ factors; `sprt` (P_f, P_m), `aime` (P_f, window epochs) and `cusum` (drift, threshold, tau epochs,
     /// warm-up epochs, floor m) of the sequential detectors.
     #[new]
-    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, cusum))]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -201,6 +201,7 @@ impl PyGnssRun {
         codes: BTreeMap<String, String>,
         factors: BTreeMap<String, f64>,
         sprt: (f64, f64),
+        aime: (f64, usize),
         cusum: (f64, f64, f64, usize, f64),
     ) -> PyResult<Self> {
         let mut cfg = SppConfig::new(FdeConfig::new(alpha, k).py()?);
@@ -237,6 +238,7 @@ impl PyGnssRun {
         };
         cfg.sequential = navfdi_core::gnss::sequential::SeqConfig {
             sprt,
+            aime,
             cusum: navfdi_core::gnss::sequential::CusumConfig {
                 drift: cusum.0,
                 threshold: cusum.1,
@@ -423,8 +425,9 @@ impl PyGnssRun {
     /// Per epoch and satellite columns of the epochs solved so far: ``epoch`` (int),
     /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``,
     /// ``sigma`` (m), ``iono``, ``tropo`` (m), ``fault`` (injected, m), ``sat_x, sat_y,
-    /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``cusum``
-    /// (sequential statistics), ``sprt_alarm``, ``cusum_alarm`` (bool), ``status`` (``used``,
+    /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``aime``,
+    /// ``cusum`` (sequential statistics), ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm``
+    /// (bool), ``status`` (``used``,
     /// ``excluded``, ``below_mask``, ``no_ephemeris``, ``unhealthy``, ``unsolved``).
     fn satellite_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.out.sats;
@@ -459,6 +462,11 @@ impl PyGnssRun {
         d.set_item("sat_clock", to_numpy(py, f(&|x| x.sat_clock), &[n])?)?;
         d.set_item("sprt", to_numpy(py, f(&|x| x.seq.sprt), &[n])?)?;
         d.set_item("cusum", to_numpy(py, f(&|x| x.seq.cusum), &[n])?)?;
+        d.set_item("aime", to_numpy(py, f(&|x| x.seq.aime), &[n])?)?;
+        d.set_item(
+            "aime_alarm",
+            r.iter().map(|x| x.seq.aime_alarm).collect::<Vec<_>>(),
+        )?;
         d.set_item(
             "sprt_alarm",
             r.iter().map(|x| x.seq.sprt_alarm).collect::<Vec<_>>(),

@@ -1,15 +1,17 @@
-//! Fault detectors (METHODS §2–§4). Each steps once per epoch on a residual `r` (m) and its
+//! Fault detectors (METHODS §2–§4, AIME §11). Each steps once per epoch on a residual `r` (m) and its
 //! covariance `A` (m × m) and reports a [`Decision`]: statistic, threshold, alarm.
 //!
 //! NaN components of `r` mark measurements that were not used this epoch (see
 //! [`crate::kalman::Innovation`]); a detector skips them. With no component at all a detector
 //! leaves its state unchanged and repeats its previous alarm, with a NaN statistic.
 
+pub mod aime;
 pub mod chi2;
 pub mod joint;
 pub mod sprt;
 pub mod state_chi2;
 
+pub use aime::Aime;
 pub use chi2::ResidualChi2;
 pub use joint::{JointChi2Sprt, JointDecision};
 pub use sprt::{ImprovedSprt, SprtVariance};

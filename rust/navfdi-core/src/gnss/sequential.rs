@@ -11,6 +11,8 @@
 //!   residuals carry slowly varying satellite biases (multipath, broadcast orbit and clock), so
 //!   on real data it alarms on biased satellites without any fault (measured, see
 //!   docs/gnss_real.md).
+//! * **AIME** ([`crate::detect::Aime`]) on the same normalised residual, window N epochs:
+//!   the χ²(1) test of the window mean; like the SPRT it reads a steady bias as a fault.
 //! * **Rate CUSUM**: Page's two-sided CUSUM on the residual's epoch-to-epoch change
 //!   `d_k = v_k − v_{k−1}` normalised by its own running RMS:
 //!   `g⁺ = max(0, g⁺ + d/ŝ − ν)`, `g⁻ = max(0, g⁻ − d/ŝ − ν)`, alarm when either exceeds `h`.
@@ -23,6 +25,7 @@
 //!   not Gaussian white noise).
 
 use crate::detect::sprt::{ImprovedSprt, SprtVariance};
+use crate::detect::Aime;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector};
 
@@ -123,6 +126,7 @@ impl RateCusum {
 #[derive(Debug, Clone)]
 pub struct SatDetectors {
     sprt: ImprovedSprt,
+    aime: Aime,
     cusum: RateCusum,
 }
 
@@ -133,6 +137,10 @@ pub struct SeqOutput {
     pub sprt: f64,
     /// SPRT alarm.
     pub sprt_alarm: bool,
+    /// AIME statistic.
+    pub aime: f64,
+    /// AIME alarm.
+    pub aime_alarm: bool,
     /// CUSUM statistic max(g⁺, g⁻).
     pub cusum: f64,
     /// CUSUM alarm.
@@ -144,6 +152,8 @@ impl SeqOutput {
     pub const NONE: SeqOutput = SeqOutput {
         sprt: f64::NAN,
         sprt_alarm: false,
+        aime: f64::NAN,
+        aime_alarm: false,
         cusum: f64::NAN,
         cusum_alarm: false,
     };
@@ -154,6 +164,8 @@ impl SeqOutput {
 pub struct SeqConfig {
     /// SPRT false-alarm and missed-detection probabilities.
     pub sprt: (f64, f64),
+    /// AIME false-alarm probability and window (epochs).
+    pub aime: (f64, usize),
     /// Rate CUSUM.
     pub cusum: CusumConfig,
 }
@@ -162,6 +174,7 @@ impl Default for SeqConfig {
     fn default() -> Self {
         SeqConfig {
             sprt: (1e-3, 1e-3),
+            aime: (1e-3, 10),
             cusum: CusumConfig::default(),
         }
     }
@@ -171,6 +184,7 @@ impl SeqConfig {
     /// Check the numbers.
     pub fn validate(&self) -> Result<()> {
         ImprovedSprt::new(self.sprt.0, self.sprt.1, SprtVariance::Known)?;
+        Aime::new(self.aime.0, self.aime.1)?;
         self.cusum.validate()
     }
 }
@@ -180,20 +194,28 @@ impl SatDetectors {
     pub fn new(cfg: &SeqConfig) -> Result<Self> {
         Ok(SatDetectors {
             sprt: ImprovedSprt::new(cfg.sprt.0, cfg.sprt.1, SprtVariance::Known)?,
+            aime: Aime::new(cfg.aime.0, cfg.aime.1)?,
             cusum: RateCusum::default(),
         })
     }
 
     /// Feed residual `v` (m) with its σ (m).
     pub fn step(&mut self, v: f64, sigma: f64, cfg: &SeqConfig) -> SeqOutput {
-        let d = self.sprt.test_trusted(
-            &DVector::from_element(1, v / sigma),
-            &DMatrix::from_element(1, 1, 1.0),
-        );
+        let x = DVector::from_element(1, v / sigma);
+        let one = DMatrix::from_element(1, 1, 1.0);
+        let d = self.sprt.test_trusted(&x, &one);
+        let a = self.aime.test(&x, &one).unwrap_or(crate::detect::Decision {
+            statistic: f64::NAN,
+            threshold: f64::NAN,
+            alarm: false,
+            dof: 0,
+        });
         let (cusum, cusum_alarm) = self.cusum.step(v, &cfg.cusum);
         SeqOutput {
             sprt: d.statistic,
             sprt_alarm: d.alarm,
+            aime: a.statistic,
+            aime_alarm: a.alarm,
             cusum,
             cusum_alarm,
         }

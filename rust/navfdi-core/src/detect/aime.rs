@@ -1,0 +1,339 @@
+//! AIME: the autonomous integrity monitored extrapolation test (METHODS §11, paper 004).
+//!
+//! Over the last N epochs, with innovations `r_j` (m) and covariances `A_j`:
+//! `r̄ = (Σ A_j⁻¹)⁻¹ Σ A_j⁻¹ r_j`, `Ā = (Σ A_j⁻¹)⁻¹`, statistic
+//! `r̄ᵀĀ⁻¹r̄ = sᵀ S⁻¹ s` with the information sums `S = Σ A_j⁻¹`, `s = Σ A_j⁻¹ r_j`; under no
+//! fault (independent zero-mean innovations) it is χ²(m); alarm when it reaches
+//! `F⁻¹_{χ²(m)}(1 − P_f)`.
+//!
+//! The window sums are updated in O(m²) per epoch (add the new epoch's `A⁻¹`, `A⁻¹r`, subtract
+//! the one leaving the window). Rounding would accumulate over millions of epochs, so the sums
+//! are recomputed exactly from the stored window every N epochs (O(N m²) once per N epochs:
+//! O(m²) per epoch on average); the drift test runs 10⁶ epochs.
+//!
+//! An epoch without any component leaves the window unchanged (as the other detectors do).
+//! Missing components (NaN) contribute no information: the epoch's `A⁻¹` is the inverse of
+//! the available sub-block, zero elsewhere. Components with no information in the whole window
+//! are left out of the statistic, whose degrees of freedom are the components kept.
+
+use super::{check_residual, Decision};
+use crate::error::{Error, Result};
+use crate::stats::chi2_threshold;
+use crate::validate::check_probability;
+use nalgebra::{Cholesky, DMatrix, DVector};
+use std::collections::VecDeque;
+
+/// Largest window accepted (epochs).
+pub const MAX_WINDOW: usize = 1_000_000;
+
+/// AIME detector with window `N` epochs and false-alarm probability `pf` per epoch.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct Aime {
+    pf: f64,
+    window: usize,
+    thresholds: Vec<f64>,
+    /// Per epoch in the window: (A⁻¹ as a column-major m × m, A⁻¹ r).
+    entries: VecDeque<(Vec<f64>, Vec<f64>)>,
+    info: Vec<f64>,
+    info_r: Vec<f64>,
+    m: usize,
+    since_resum: usize,
+    alarm: bool,
+}
+
+impl Aime {
+    /// New detector: `pf` in (0, 1), `window` ≥ 1 epochs.
+    pub fn new(pf: f64, window: usize) -> Result<Self> {
+        check_probability("pf", pf)?;
+        if window == 0 || window > MAX_WINDOW {
+            return Err(Error::InvalidParameter {
+                name: "window".into(),
+                value: window as f64,
+                requirement: format!("the AIME window must be 1 … {MAX_WINDOW} epochs"),
+            });
+        }
+        Ok(Aime {
+            pf,
+            window,
+            thresholds: Vec::new(),
+            entries: VecDeque::new(),
+            info: Vec::new(),
+            info_r: Vec::new(),
+            m: 0,
+            since_resum: 0,
+            alarm: false,
+        })
+    }
+
+    /// False-alarm probability per epoch.
+    pub fn pf(&self) -> f64 {
+        self.pf
+    }
+
+    /// Window length N (epochs).
+    pub fn window(&self) -> usize {
+        self.window
+    }
+
+    /// Epochs currently in the window.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// No epoch in the window yet.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// Last alarm state.
+    pub fn alarm(&self) -> bool {
+        self.alarm
+    }
+
+    /// Threshold for `dof` components (NaN for 0).
+    pub fn threshold(&mut self, dof: usize) -> Result<f64> {
+        if dof == 0 {
+            return Ok(f64::NAN);
+        }
+        while self.thresholds.len() < dof {
+            let d = self.thresholds.len() + 1;
+            self.thresholds.push(chi2_threshold(self.pf, d)?);
+        }
+        Ok(self.thresholds[dof - 1])
+    }
+
+    /// Empty the window (keeps the dimension).
+    pub fn reset(&mut self) {
+        self.entries.clear();
+        self.info.iter_mut().for_each(|v| *v = 0.0);
+        self.info_r.iter_mut().for_each(|v| *v = 0.0);
+        self.since_resum = 0;
+        self.alarm = false;
+    }
+
+    /// Test one epoch: residual `r` (NaN = unavailable) and covariance `A`, validated
+    /// (shape, finiteness, symmetric positive definite on the available components). A
+    /// rejected epoch changes nothing. The residual dimension must stay the same between
+    /// resets.
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        let checked = check_residual(r, a)?;
+        let m = r.len();
+        if !self.entries.is_empty() && m != self.m {
+            return Err(Error::Invalid(format!(
+                "residual: {m} components, but the AIME window holds {}-component residuals; reset() first to change the dimension",
+                self.m
+            )));
+        }
+        let Some(chol) = &checked.chol else {
+            // No component this epoch: state unchanged, previous alarm repeated.
+            return Ok(Decision {
+                statistic: f64::NAN,
+                threshold: f64::NAN,
+                alarm: self.alarm,
+                dof: 0,
+            });
+        };
+        let mut ainv = vec![0.0; m * m];
+        let mut ainv_r = vec![0.0; m];
+        {
+            let idx = &checked.idx;
+            let inv = chol.inverse();
+            for (p, &i) in idx.iter().enumerate() {
+                for (q, &j) in idx.iter().enumerate() {
+                    ainv[i + j * m] = inv[(p, q)];
+                }
+            }
+            for &i in idx {
+                ainv_r[i] = idx.iter().map(|&j| ainv[i + j * m] * r[j]).sum();
+            }
+        }
+        Ok(self.push(m, ainv, ainv_r))
+    }
+
+    fn push(&mut self, m: usize, ainv: Vec<f64>, ainv_r: Vec<f64>) -> Decision {
+        if self.m != m || self.info.len() != m * m {
+            self.m = m;
+            self.info = vec![0.0; m * m];
+            self.info_r = vec![0.0; m];
+        }
+        for (s, v) in self.info.iter_mut().zip(&ainv) {
+            *s += v;
+        }
+        for (s, v) in self.info_r.iter_mut().zip(&ainv_r) {
+            *s += v;
+        }
+        self.entries.push_back((ainv, ainv_r));
+        if self.entries.len() > self.window {
+            if let Some((old, old_r)) = self.entries.pop_front() {
+                for (s, v) in self.info.iter_mut().zip(&old) {
+                    *s -= v;
+                }
+                for (s, v) in self.info_r.iter_mut().zip(&old_r) {
+                    *s -= v;
+                }
+            }
+        }
+        self.since_resum += 1;
+        if self.since_resum >= self.window {
+            self.resum();
+        }
+        self.decide()
+    }
+
+    /// Check a deserialised state (window, sizes) before use.
+    pub fn check_consistent(&self) -> Result<()> {
+        check_probability("pf", self.pf)?;
+        let m = self.m;
+        let ok = self.window >= 1
+            && self.window <= MAX_WINDOW
+            && self.entries.len() <= self.window
+            && (self.entries.is_empty() || (self.info.len() == m * m && self.info_r.len() == m))
+            && self
+                .entries
+                .iter()
+                .all(|(a, r)| a.len() == m * m && r.len() == m);
+        if ok {
+            Ok(())
+        } else {
+            Err(Error::Invalid(
+                "AIME state: window and stored sums are inconsistent".into(),
+            ))
+        }
+    }
+
+    /// Recompute the sums exactly from the stored window.
+    fn resum(&mut self) {
+        self.info.iter_mut().for_each(|v| *v = 0.0);
+        self.info_r.iter_mut().for_each(|v| *v = 0.0);
+        for (a, ar) in &self.entries {
+            for (s, v) in self.info.iter_mut().zip(a) {
+                *s += v;
+            }
+            for (s, v) in self.info_r.iter_mut().zip(ar) {
+                *s += v;
+            }
+        }
+        self.since_resum = 0;
+    }
+
+    fn decide(&mut self) -> Decision {
+        let m = self.m;
+        // Components with information in the window.
+        let max_diag = (0..m).map(|i| self.info[i + i * m]).fold(0.0, f64::max);
+        let keep: Vec<usize> = (0..m)
+            .filter(|&i| self.info[i + i * m] > 1e-12 * max_diag && self.info[i + i * m] > 0.0)
+            .collect();
+        let k = keep.len();
+        let s = DMatrix::from_fn(k, k, |p, q| self.info[keep[p] + keep[q] * m]);
+        let v = DVector::from_fn(k, |p, _| self.info_r[keep[p]]);
+        let statistic = if k == 0 {
+            f64::NAN
+        } else {
+            match Cholesky::new(s) {
+                Some(c) => v.dot(&c.solve(&v)),
+                None => f64::NAN,
+            }
+        };
+        let threshold = self.threshold(k).unwrap_or(f64::NAN);
+        self.alarm = statistic.is_finite() && statistic >= threshold;
+        Decision {
+            statistic,
+            threshold,
+            alarm: self.alarm,
+            dof: if statistic.is_finite() { k } else { 0 },
+        }
+    }
+
+    /// The window's weighted mean innovation `r̄` (NaN for components without information).
+    pub fn mean(&self) -> DVector<f64> {
+        let m = self.m;
+        let keep: Vec<usize> = (0..m).filter(|&i| self.info[i + i * m] > 0.0).collect();
+        let mut out = DVector::from_element(m, f64::NAN);
+        let k = keep.len();
+        let s = DMatrix::from_fn(k, k, |p, q| self.info[keep[p] + keep[q] * m]);
+        let v = DVector::from_fn(k, |p, _| self.info_r[keep[p]]);
+        if let Some(c) = Cholesky::new(s) {
+            let x = c.solve(&v);
+            for (p, &i) in keep.iter().enumerate() {
+                out[i] = x[p];
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    fn reference(rs: &[DVector<f64>], as_: &[DMatrix<f64>]) -> f64 {
+        let m = rs[0].len();
+        let mut s = DMatrix::zeros(m, m);
+        let mut v = DVector::zeros(m);
+        for (r, a) in rs.iter().zip(as_) {
+            let inv = a.clone().try_inverse().unwrap();
+            v += &inv * r;
+            s += inv;
+        }
+        let rbar = s.clone().try_inverse().unwrap() * &v;
+        (rbar.transpose() * s * rbar)[(0, 0)]
+    }
+
+    #[test]
+    fn matches_the_definition_and_does_not_drift() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let n = 7;
+        let mut d = Aime::new(0.01, n).unwrap();
+        let mut rs = Vec::new();
+        let mut as_ = Vec::new();
+        for k in 0..1_000_000usize {
+            let r = DVector::from_fn(2, |_, _| {
+                Distribution::<f64>::sample(&StandardNormal, &mut rng)
+            });
+            let l = DMatrix::from_fn(2, 2, |i, j| {
+                if i >= j {
+                    0.5 + 0.1 * Distribution::<f64>::sample(&StandardNormal, &mut rng)
+                } else {
+                    0.0
+                }
+            });
+            let a = &l * l.transpose() + DMatrix::identity(2, 2) * 0.1;
+            let dec = d.test(&r, &a).unwrap();
+            rs.push(r);
+            as_.push(a);
+            if rs.len() > n {
+                rs.remove(0);
+                as_.remove(0);
+            }
+            if k % 99_991 == 0 || k > 999_990 {
+                let want = reference(&rs, &as_);
+                assert!(
+                    (dec.statistic - want).abs() <= 1e-9 * want.max(1.0),
+                    "{k}: {} vs {want}",
+                    dec.statistic
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn missing_components_and_bad_input() {
+        let mut d = Aime::new(0.01, 3).unwrap();
+        let a = DMatrix::identity(2, 2);
+        let dec = d.test(&DVector::from_vec(vec![1.0, f64::NAN]), &a).unwrap();
+        assert_eq!(dec.dof, 1);
+        assert!((dec.statistic - 1.0).abs() < 1e-12);
+        let dec = d.test(&DVector::from_vec(vec![1.0, 2.0]), &a).unwrap();
+        assert_eq!(dec.dof, 2);
+        // (1+1)²/2 + 2²/1 = 2 + 4
+        assert!((dec.statistic - 6.0).abs() < 1e-12);
+        assert!(d
+            .test(&DVector::from_vec(vec![1.0]), &DMatrix::identity(1, 1))
+            .is_err());
+        assert_eq!(d.len(), 2);
+        assert!(Aime::new(0.01, 0).is_err());
+        assert!(Aime::new(1.5, 3).is_err());
+    }
+}
