@@ -175,6 +175,8 @@ def test_sequential_detectors_on_clean_data(gps):
 
 def test_clean_false_exclusion_rate_is_reported(gps):
     s = gps.summary()
+    # Low satellites are counted, not dropped silently (G07, G14, G22 set during the file).
+    assert s["skipped"]["below_mask"] > 0
     assert s["clean_epochs"] == 301
     assert 0.0 <= s["false_exclusion_rate"] <= 1.0
     assert s["global_alarm_rate_clean"] <= s["alpha"] * 5
@@ -243,6 +245,7 @@ def test_bad_navigation_files(tmp_path):
     no_gal = "".join(b for b in _records(text) if not b.startswith("E"))
     with pytest.raises(navfdi.FileFormatError, match="no Galileo ephemerides"):
         navfdi.gnss_solve(OBS, _write(tmp_path / "nogal.nav", no_gal), systems="G,E")
+    assert main(["gnss", str(OBS), str(tmp_path / "nogal.nav"), "--systems", "G,E"]) == 2
     with pytest.raises(FileNotFoundError):
         navfdi.gnss_solve(OBS, tmp_path / "missing.nav")
 
@@ -294,3 +297,11 @@ def test_geodesy_helpers_round_trip():
     x = lla_to_ecef(35.1, 136.9, 104.0)
     assert np.allclose(ecef_to_lla(x[None, :])[0], [35.1, 136.9, 104.0], atol=1e-8)
     assert math.isclose(np.linalg.norm(lla_to_ecef(0, 0, 0)), 6378137.0)
+
+
+def test_files_too_large_for_memory_are_refused_before_reading(monkeypatch, capsys):
+    monkeypatch.setenv("NAVFDI_MEMORY_LIMIT", "1000000")
+    with pytest.raises(MemoryError, match="base.nav: needs about .* split the file"):
+        navfdi.gnss_solve(OBS, NAV)
+    assert main(["gnss", str(OBS), str(NAV)]) == 2
+    assert "split the file" in capsys.readouterr().err

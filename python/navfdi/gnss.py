@@ -220,6 +220,7 @@ class GnssSolution:
             out["vertical_rms"] = float(np.sqrt(np.mean(u**2)))
             out["horizontal_max"] = float(np.max(np.hypot(e, n)))
             out["vertical_max"] = float(np.max(np.abs(u)))
+        out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
         clean = solved & (sol["faulty"] == "")
@@ -283,6 +284,8 @@ class GnssSolution:
         lines = [f"epochs {s['epochs']}, solved {s['solved']} ({', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
         if "horizontal_rms" in s:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
+        skipped = ", ".join(f"{k} {v}" for k, v in sorted(s["skipped"].items())) or "none"
+        lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
         lines.append(f"exclusions per satellite: {ex}")
         lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")

@@ -91,8 +91,10 @@ pub fn check_against(
         return Ok(());
     }
     Err(Error::TooLarge(format!(
-        "{what}: needs about {} of memory ({detail}) but {} is available; {advice}",
+        "{what}: needs about {} of memory ({detail}) but at most {} ({:.0} % of the {} available) may be used; {advice}",
         human(bytes),
+        human(FRACTION * available),
+        FRACTION * 100.0,
         human(available)
     )))
 }

@@ -105,6 +105,18 @@ fn label(line: &str) -> &str {
 /// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
 /// corrupt gzip, not text, Hatanaka-compressed).
 pub fn read_text(path: &str) -> Result<String> {
+    let size = std::fs::metadata(path)
+        .map_err(|e| Error::Io(format!("{path}: {e}")))?
+        .len() as f64;
+    // Text, its lines, the normalised copy and the parser's records: about 12 × the text
+    // (a gzip file expands about 4 ×).
+    let factor = if path.ends_with(".gz") { 48.0 } else { 12.0 };
+    crate::memory::check(
+        &format!("reading {path}"),
+        size * factor,
+        &format!("a {} file", crate::memory::human(size)),
+        "split the file (e.g. with gfzrnx or teqc) and process the parts",
+    )?;
     let mut bytes = std::fs::read(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
     if bytes.starts_with(&[0x1f, 0x8b]) {
         use std::io::Read;
