@@ -96,3 +96,43 @@ def test_missing_components_pickle_and_bad_input():
     det.reset()
     assert det.filled == 0
     det.test([1.0], np.eye(1))
+
+
+def two_stage_reference(rs: np.ndarray, n1: int, n2: int, q: float, b: float) -> np.ndarray:
+    """numpy two-stage AIME on scalar unit-variance innovations."""
+    s1 = reference(rs, np.ones((len(rs), 1, 1)), n1)
+    out = np.full(len(rs), np.nan)
+    x, p, r = s1[0], q, 1.0
+    nus, vs = [], []
+    for k in range(1, len(rs)):
+        r = b * r + (1 - b) * 0.5 * (s1[k] - s1[k - 1]) ** 2
+        pp = p + q
+        nu, v = s1[k] - x, pp + r
+        nus.append(nu)
+        vs.append(v)
+        w = 1 / np.array(vs[-n2:])
+        out[k] = (np.sum(w * np.array(nus[-n2:]))) ** 2 / np.sum(w)
+        g = pp / v
+        x, p = x + g * nu, (1 - g) * pp
+    return out
+
+
+@pytest.mark.parametrize("q, b", [(10.0, 0.99), (0.5, 0.9)])
+def test_two_stage_matches_numpy(q, b):
+    rng = np.random.default_rng(5)
+    rs = rng.normal(size=(200, 1))
+    rs[100:, 0] += 0.1 * np.arange(100)
+    det = navfdi.TwoStageAime(0.001, 5, 10, q=q, b=b)
+    run = det.test_sequence(rs, np.ones((200, 1, 1)))
+    np.testing.assert_allclose(run.statistic, two_stage_reference(rs, 5, 10, q, b), rtol=1e-9, atol=1e-12, equal_nan=True)
+    assert run.threshold[-1] == pytest.approx(stats.chi2.ppf(0.999, 1))
+    assert det.stage1_statistic == pytest.approx(reference(rs, np.ones((200, 1, 1)), 5)[-1])
+    clone = pickle.loads(pickle.dumps(det))
+    a, c = det.test([1.0], [[1.0]]), clone.test([1.0], [[1.0]])
+    assert a.statistic == c.statistic
+    with pytest.raises(ValueError, match="q"):
+        navfdi.TwoStageAime(0.01, 2, 10, q=0.0)
+    with pytest.raises(ValueError, match="b"):
+        navfdi.TwoStageAime(0.01, 2, 10, b=1.0)
+    with pytest.raises(ValueError, match="window2"):
+        navfdi.TwoStageAime(0.01, 2, 0)

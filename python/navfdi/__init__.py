@@ -8,7 +8,7 @@ Filtering
     :class:`Innovation`, :class:`FilterRun`.
 Detectors
     :class:`ResidualChi2`, :class:`ImprovedSprt`, :class:`JointChi2Sprt` with per-epoch
-    :class:`Decision` and whole-sequence :class:`DetectionRun`; the windowed :class:`Aime`; :func:`alarm_intervals`;
+    :class:`Decision` and whole-sequence :class:`DetectionRun`; the windowed :class:`Aime` and :class:`TwoStageAime`; :func:`alarm_intervals`;
     the dual-propagator state chi-square test :class:`StateChi2` (:class:`StateDecision`).
 Statistics
     :func:`chi2_threshold`, :func:`sprt_threshold`, :func:`noncentrality`, :func:`ncx2_cdf`,
@@ -52,6 +52,7 @@ from navfdi._core import (
     SnapshotFde,
     StateChi2,
     StateDecision,
+    TwoStageAime,
     WeightedFusion,
     __version__,
     chi2_threshold,
@@ -95,6 +96,7 @@ __all__ = [
     "SnapshotFde",
     "StateChi2",
     "StateDecision",
+    "TwoStageAime",
     "VariantRuns",
     "WeightedFusion",
     "__version__",

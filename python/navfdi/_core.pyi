@@ -35,6 +35,7 @@ __all__ = [
     "DetectionRun",
     "ResidualChi2",
     "Aime",
+    "TwoStageAime",
     "ImprovedSprt",
     "JointChi2Sprt",
     "chi2_threshold",
@@ -323,6 +324,56 @@ class Aime:
     @property
     def filled(self) -> int:
         """Epochs currently in the window (≤ N)."""
+    @property
+    def alarm(self) -> bool:
+        """Last alarm state."""
+
+@final
+class TwoStageAime:
+    """Two-stage AIME (paper 004, METHODS §11): stage 1 = :class:`Aime` (``window1``) on the
+    innovations; its statistic s_k feeds a scalar random-walk Kalman filter (process variance
+    ``q``, the paper's 10; measurement noise ``R_k = b R_{k−1} + (1 − b)·½(s_k − s_{k−1})²``,
+    ``R_0 = 1``); stage 2 = :class:`Aime` (``window2``) on that filter's innovations with
+    variance ``P + q + R``; only stage 2 is compared with its χ²(1) threshold. The first epoch
+    initialises the filter (NaN statistic). Under no fault the stage-2 statistic is not exactly
+    χ²(1): measure its false-alarm rate.
+
+    Parameters
+    ----------
+    pf : float
+        False-alarm probability of the stage-2 test, in (0, 1).
+    window1, window2 : int
+        Windows of stage 1 and stage 2 in epochs.
+    q : float
+        Random-walk variance of the statistic filter (> 0).
+    b : float
+        Fading factor of the Allan-variance estimate, in (0, 1) (paper: 0.9–0.999).
+    """
+
+    def __new__(cls, pf: float, window1: int, window2: int, q: float = 10.0, b: float = 0.99) -> TwoStageAime: ...
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support: ``(_restore, (class name, JSON state))``."""
+    def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:
+        """Test one epoch (``residual`` (m,), ``covariance`` (m, m)); the decision is stage 2's.
+        Bad input raises and leaves the detector unchanged."""
+    def test_sequence(self, residuals: ArrayLike, covariances: ArrayLike) -> DetectionRun:
+        """Test every epoch of ``residuals`` (T, m) with ``covariances`` (T, m, m) in Rust."""
+    def reset(self) -> None:
+        """Start over (both windows and the statistic filter)."""
+    def threshold(self, dof: int | None = None) -> float:
+        """Stage-2 threshold ``F⁻¹_{χ²(1)}(1 - pf)`` (``dof``, if given, must be 1)."""
+    @property
+    def pf(self) -> float:
+        """False-alarm probability of the stage-2 test."""
+    @property
+    def windows(self) -> tuple[int, int]:
+        """(stage-1, stage-2) windows in epochs."""
+    @property
+    def stage1_statistic(self) -> float:
+        """The last stage-1 AIME statistic (NaN before the first epoch)."""
+    @property
+    def measurement_noise(self) -> float:
+        """The adapted R of the statistic filter."""
     @property
     def alarm(self) -> bool:
         """Last alarm state."""

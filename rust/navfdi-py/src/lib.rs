@@ -132,6 +132,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<detect::PyDetectionRun>()?;
     m.add_class::<detect::PyResidualChi2>()?;
     m.add_class::<detect::PyAime>()?;
+    m.add_class::<detect::PyTwoStageAime>()?;
     m.add_class::<detect::PyImprovedSprt>()?;
     m.add_class::<detect::PyJointChi2Sprt>()?;
     m.add_class::<detect::PyStateChi2>()?;

@@ -58,6 +58,13 @@ pub fn _restore(py: Python<'_>, kind: &str, state: &str) -> PyResult<Py<PyAny>> 
                 .map_err(|e| PyValueError::new_err(format!("cannot restore an Aime: {e}")))?;
             Py::new(py, crate::detect::PyAime::from_inner(inner))?.into_any()
         }
+        "TwoStageAime" => {
+            let inner: navfdi_core::detect::TwoStageAime = load(kind, state)?;
+            inner.check_consistent().map_err(|e| {
+                PyValueError::new_err(format!("cannot restore a TwoStageAime: {e}"))
+            })?;
+            Py::new(py, crate::detect::PyTwoStageAime::from_inner(inner))?.into_any()
+        }
         "StateChi2" => {
             let inner: navfdi_core::detect::StateChi2 = load(kind, state)?;
             inner

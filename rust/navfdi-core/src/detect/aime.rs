@@ -262,6 +262,157 @@ impl Aime {
     }
 }
 
+/// Two-stage AIME (paper 004, METHODS §11): stage 1 is [`Aime`] on the innovations (short
+/// window); its statistic `s_k` is the measurement of a scalar random-walk Kalman filter
+/// (`x_k = x_{k−1} + w`, `Var w = q`; the paper sets q = 10) whose measurement noise follows an
+/// Allan-variance estimate with fading factor b: `R_k = b R_{k−1} + (1 − b)·½(s_k − s_{k−1})²`,
+/// `R_0 = 1` (METHODS §11 resolution; the paper's formulas (23)–(24) are lost). Stage 2 is
+/// [`Aime`] (longer window) on that filter's innovations `ν_k = s_k − x̂_{k−1}` with variance
+/// `S_k = P_{k−1} + q + R_k` (paper eq. 26); only the stage-2 statistic is compared with the
+/// threshold. A steadily growing stage-1 statistic (a slowly growing fault) gives innovations
+/// of one sign, which stage 2 accumulates.
+///
+/// The first stage-1 statistic initialises the filter (`x̂ = s₁`, `P = q`); stage 2 starts at
+/// the second. Under no fault the stage-2 statistic is not exactly χ²(1) (`s_k` is χ²(m)
+/// correlated over the stage-1 window, and R adapts): its false-alarm rate is measured, not
+/// guaranteed.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct TwoStageAime {
+    stage1: Aime,
+    stage2: Aime,
+    q: f64,
+    b: f64,
+    x: f64,
+    p: f64,
+    r: f64,
+    prev: Option<f64>,
+    last_stage1: f64,
+}
+
+impl TwoStageAime {
+    /// `pf` of the stage-2 test, windows of the two stages (epochs), process noise `q` > 0
+    /// and fading factor `b` in (0, 1).
+    pub fn new(pf: f64, window1: usize, window2: usize, q: f64, b: f64) -> Result<Self> {
+        if !(q > 0.0 && q.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "q".into(),
+                value: q,
+                requirement: "the random-walk variance must be positive and finite".into(),
+            });
+        }
+        if !(b > 0.0 && b < 1.0) {
+            return Err(Error::InvalidParameter {
+                name: "b".into(),
+                value: b,
+                requirement: "the fading factor must be in (0, 1) (the paper uses 0.9–0.999)"
+                    .into(),
+            });
+        }
+        Ok(TwoStageAime {
+            stage1: Aime::new(pf, window1)?,
+            stage2: Aime::new(pf, window2)?,
+            q,
+            b,
+            x: 0.0,
+            p: q,
+            r: 1.0,
+            prev: None,
+            last_stage1: f64::NAN,
+        })
+    }
+
+    /// False-alarm probability of the stage-2 test.
+    pub fn pf(&self) -> f64 {
+        self.stage2.pf()
+    }
+
+    /// Windows (stage 1, stage 2) in epochs.
+    pub fn windows(&self) -> (usize, usize) {
+        (self.stage1.window(), self.stage2.window())
+    }
+
+    /// The last stage-1 statistic (NaN before the first epoch).
+    pub fn last_stage1(&self) -> f64 {
+        self.last_stage1
+    }
+
+    /// The adapted measurement noise R of the statistic filter.
+    pub fn measurement_noise(&self) -> f64 {
+        self.r
+    }
+
+    /// Last alarm state.
+    pub fn alarm(&self) -> bool {
+        self.stage2.alarm()
+    }
+
+    /// Stage-2 threshold (χ²(1)).
+    pub fn threshold(&mut self) -> Result<f64> {
+        self.stage2.threshold(1)
+    }
+
+    /// Start over.
+    pub fn reset(&mut self) {
+        self.stage1.reset();
+        self.stage2.reset();
+        self.x = 0.0;
+        self.p = self.q;
+        self.r = 1.0;
+        self.prev = None;
+        self.last_stage1 = f64::NAN;
+    }
+
+    /// Check a deserialised state.
+    pub fn check_consistent(&self) -> Result<()> {
+        self.stage1.check_consistent()?;
+        self.stage2.check_consistent()?;
+        if !(self.q > 0.0 && self.b > 0.0 && self.b < 1.0 && self.p >= 0.0 && self.r >= 0.0) {
+            return Err(Error::Invalid(
+                "two-stage AIME state: q, b, P or R out of range".into(),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Test one epoch (validated like [`Aime::test`]; a rejected epoch changes nothing).
+    pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
+        let d1 = self.stage1.test(r, a)?;
+        let s = d1.statistic;
+        let threshold = self.stage2.threshold(1)?;
+        if !s.is_finite() {
+            return Ok(Decision {
+                statistic: f64::NAN,
+                threshold,
+                alarm: self.stage2.alarm(),
+                dof: 0,
+            });
+        }
+        self.last_stage1 = s;
+        let Some(prev) = self.prev.replace(s) else {
+            self.x = s;
+            self.p = self.q;
+            return Ok(Decision {
+                statistic: f64::NAN,
+                threshold,
+                alarm: false,
+                dof: 0,
+            });
+        };
+        self.r = self.b * self.r + (1.0 - self.b) * 0.5 * (s - prev) * (s - prev);
+        let p_pred = self.p + self.q;
+        let nu = s - self.x;
+        let var = p_pred + self.r;
+        let d2 = self.stage2.test(
+            &DVector::from_element(1, nu),
+            &DMatrix::from_element(1, 1, var),
+        )?;
+        let k = p_pred / var;
+        self.x += k * nu;
+        self.p = (1.0 - k) * p_pred;
+        Ok(d2)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -316,6 +467,42 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn two_stage_follows_its_definition() {
+        let mut t = TwoStageAime::new(0.01, 2, 3, 10.0, 0.9).unwrap();
+        let one = DMatrix::from_element(1, 1, 1.0);
+        let rs = [0.5, -1.0, 2.0, 0.3, 3.0];
+        let mut s1 = Aime::new(0.01, 2).unwrap();
+        let mut s2 = Aime::new(0.01, 3).unwrap();
+        let (mut x, mut p, mut r, mut prev) = (0.0, 10.0, 1.0, f64::NAN);
+        for (k, &v) in rs.iter().enumerate() {
+            let vec = DVector::from_element(1, v);
+            let d = t.test(&vec, &one).unwrap();
+            let s = s1.test(&vec, &one).unwrap().statistic;
+            if k == 0 {
+                x = s;
+                assert!(d.statistic.is_nan());
+            } else {
+                r = 0.9 * r + 0.1 * 0.5 * (s - prev).powi(2);
+                let pp = p + 10.0;
+                let nu = s - x;
+                let want = s2
+                    .test(
+                        &DVector::from_element(1, nu),
+                        &DMatrix::from_element(1, 1, pp + r),
+                    )
+                    .unwrap();
+                assert!((d.statistic - want.statistic).abs() < 1e-12);
+                let g = pp / (pp + r);
+                x += g * nu;
+                p = (1.0 - g) * pp;
+            }
+            prev = s;
+        }
+        assert!(TwoStageAime::new(0.01, 2, 3, 0.0, 0.9).is_err());
+        assert!(TwoStageAime::new(0.01, 2, 3, 10.0, 1.0).is_err());
     }
 
     #[test]

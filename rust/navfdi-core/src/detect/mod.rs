@@ -11,7 +11,7 @@ pub mod joint;
 pub mod sprt;
 pub mod state_chi2;
 
-pub use aime::Aime;
+pub use aime::{Aime, TwoStageAime};
 pub use chi2::ResidualChi2;
 pub use joint::{JointChi2Sprt, JointDecision};
 pub use sprt::{ImprovedSprt, SprtVariance};
