@@ -305,3 +305,57 @@ def test_files_too_large_for_memory_are_refused_before_reading(monkeypatch, caps
         navfdi.gnss_solve(OBS, NAV)
     assert main(["gnss", str(OBS), str(NAV)]) == 2
     assert "split the file" in capsys.readouterr().err
+
+
+def _mutate(rng, lines: list[str], head_end: int) -> list[str]:
+    out = list(lines)
+    for _ in range(rng.randint(1, 3)):
+        i = rng.randrange(len(out))
+        op = rng.choice(["del", "dup", "chars", "trunc", "swap", "hdr"])
+        if op == "del":
+            del out[i]
+        elif op == "dup":
+            out.insert(i, out[i])
+        elif op == "chars":
+            s = list(out[i])
+            for _ in range(rng.randint(1, 5)):
+                if s:
+                    s[rng.randrange(len(s))] = rng.choice("0123456789 .-+EeXG>\t")
+            out[i] = "".join(s)
+        elif op == "trunc":
+            out[i] = out[i][: rng.randrange(len(out[i]) + 1)]
+        elif op == "swap":
+            j = rng.randrange(len(out))
+            out[i], out[j] = out[j], out[i]
+        else:
+            j = rng.randrange(head_end)
+            s = list(out[j])
+            if s:
+                s[rng.randrange(min(len(s), 60))] = rng.choice("0123456789 XZ")
+            out[j] = "".join(s)
+    return out
+
+
+@pytest.mark.parametrize("kind", ["obs", "nav"])
+def test_corrupted_files_give_a_result_or_a_format_error_never_a_crash(tmp_path, obs_text, capfd, kind):
+    import random
+
+    text = obs_text if kind == "obs" else NAV.read_text()
+    lines = text.splitlines(keepends=True)
+    head_end = next(i for i, line in enumerate(lines) if "END OF HEADER" in line) + 1
+    if kind == "obs":
+        starts = [i for i, line in enumerate(lines) if line.startswith(">")]
+        lines = lines[: starts[4]]
+    rng = random.Random(11)
+    outcomes = {"ok": 0, "format": 0}
+    for trial in range(300):
+        p = tmp_path / f"m.{kind}"
+        p.write_text("".join(_mutate(rng, lines, head_end)))
+        try:
+            navfdi.read_rinex(p)
+            outcomes["ok"] += 1
+        except navfdi.FileFormatError as e:
+            assert "m." + kind in str(e)
+            outcomes["format"] += 1
+    assert outcomes["format"] > 50 and outcomes["ok"] > 10
+    assert "panicked" not in capfd.readouterr().err

@@ -14,6 +14,8 @@
 //!    3.xx, `END OF HEADER`), each epoch line, the satellite lines each announces, the field
 //!    count against the header and that every field is a number; navigation records must
 //!    have their continuation lines. Failures name the file, the line and what was expected.
+//!    Every header line must carry a label, and a panic inside the crate's parser (it has
+//!    some on malformed input) becomes a format error.
 //! 3. **Health and clocks are interpreted here**: its `sv_healthy()` reports every Galileo
 //!    record unhealthy, and its clock correction returns nothing before t_oc; see
 //!    [`super::broadcast`].
@@ -196,9 +198,10 @@ fn check_version(path: &str, text: &str, kind: char) -> Result<String> {
     Ok(version)
 }
 
-/// Index of the line after `END OF HEADER` (0-based), or an error.
+/// Index of the line after `END OF HEADER` (0-based), or an error. Every header line must
+/// carry its label in columns 61–80.
 fn header_end(path: &str, lines: &[&str]) -> Result<usize> {
-    lines
+    let end = lines
         .iter()
         .position(|l| label(l) == "END OF HEADER")
         .map(|i| i + 1)
@@ -208,7 +211,48 @@ fn header_end(path: &str, lines: &[&str]) -> Result<usize> {
                 Some(lines.len()),
                 "no 'END OF HEADER' line: the header is truncated or the file is not RINEX",
             )
-        })
+        })?;
+    if let Some(i) = lines[..end].iter().position(|l| label(l).is_empty()) {
+        return Err(format_err(
+            path,
+            Some(i + 1),
+            "header line without its label in columns 61–80 (truncated or malformed line)",
+        ));
+    }
+    if let Some(i) = lines[..end].iter().position(|l| l.trim_end().len() > 80) {
+        return Err(format_err(
+            path,
+            Some(i + 1),
+            "header line longer than 80 characters (two lines run together?)",
+        ));
+    }
+    Ok(end)
+}
+
+/// The `rinex` crate's parser, with a panic inside it (it has some on malformed input, e.g.
+/// an empty satellite field in a header line) turned into a format error.
+fn crate_parse(path: &str, text: &str) -> Result<Rinex> {
+    let parsed = std::panic::catch_unwind(|| Rinex::parse(&mut BufReader::new(text.as_bytes())));
+    match parsed {
+        Ok(Ok(r)) => Ok(r),
+        Ok(Err(e)) => Err(format_err(
+            path,
+            None,
+            format!("the RINEX parser failed: {e}"),
+        )),
+        Err(p) => {
+            let msg = p
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| p.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(format_err(
+                path,
+                None,
+                format!("the RINEX parser stopped on malformed content ({msg}); check the header and records"),
+            ))
+        }
+    }
 }
 
 /// Normalised header text, placeholder → original type names, type counts per system.
@@ -413,8 +457,7 @@ pub fn parse_obs(path: &str, text: &str) -> Result<ObsData> {
         ));
     }
     let expected = check_obs_body(path, &lines, end, &counts)?;
-    let rnx = Rinex::parse(&mut BufReader::new(normalised.as_bytes()))
-        .map_err(|e| format_err(path, None, format!("the RINEX parser failed: {e}")))?;
+    let rnx = crate_parse(path, &normalised)?;
     let mut codes: Vec<String> = Vec::new();
     let mut code_ix: HashMap<String, u16> = HashMap::new();
     let mut epochs = Vec::new();
@@ -583,8 +626,7 @@ pub fn parse_nav(path: &str, text: &str) -> Result<NavData> {
             "no navigation records after the header",
         ));
     }
-    let rnx = Rinex::parse(&mut BufReader::new(text.as_bytes()))
-        .map_err(|e| format_err(path, None, format!("the RINEX parser failed: {e}")))?;
+    let rnx = crate_parse(path, text)?;
     let klobuchar = rnx
         .header
         .ionod_corrections
