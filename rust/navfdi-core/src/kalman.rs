@@ -240,8 +240,14 @@ impl KalmanFilter {
         if q_scale != 1.0 {
             ws.nn_c *= q_scale;
         }
-        gemm_nt(&mut ws.nn_c, fading, &ws.nn_a, phi, 1.0);
-        symmetrize_with(&mut ws.nn_c, &mut ws.nn_a);
+        let n = phi.nrows();
+        if n * n * n >= crate::linalg::SYMMETRIC_MIN {
+            // Large states: only the lower triangle of (ΦP)Φᵀ (symmetric), mirrored.
+            crate::linalg::gemm_nt_symmetric(&mut ws.nn_c, fading, &ws.nn_a, phi);
+        } else {
+            gemm_nt(&mut ws.nn_c, fading, &ws.nn_a, phi, 1.0);
+            symmetrize_with(&mut ws.nn_c, &mut ws.nn_a);
+        }
         if !all_finite(ws.x.as_slice()) || !all_finite(ws.nn_c.as_slice()) {
             return Err(Error::Numerical {
                 context: "predict".into(),

@@ -18,6 +18,10 @@ use nalgebra::DMatrix;
 /// Products with at least this many multiply-adds (m·n·k) use the blocked kernel.
 pub const BLOCKED_MIN: usize = 48 * 48 * 48;
 
+/// Covariance propagations `(ΦP)Φᵀ` with n³ at least this compute only one triangle
+/// ([`gemm_nt_symmetric`]); below it the small-matrix kernel's full product is faster.
+pub const SYMMETRIC_MIN: usize = 96 * 96 * 96;
+
 /// `c ← α·a·b + β·c` (nalgebra's `gemm` convention).
 pub fn gemm(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>, beta: f64) {
     if b.nrows() != a.ncols() || !product(c, alpha, a, b, b.ncols(), (1, b.nrows()), beta) {
@@ -127,6 +131,55 @@ pub fn from_row_major(rows: usize, cols: usize, data: &[f64]) -> DMatrix<f64> {
     DMatrix::from_vec(rows, cols, out)
 }
 
+/// `c_lower ← c_lower + α·a·bᵀ` on the lower triangle (diagonal included) of the square
+/// n × n `c`, then the upper triangle is set to the mirror of the lower one, so `c` is exactly
+/// symmetric. For `a·bᵀ` known to be symmetric (e.g. `(ΦP)Φᵀ`) this computes half the
+/// products of a full `gemm` (faer's triangular matmul, parallel on rayon's threads).
+pub fn gemm_nt_symmetric(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>) {
+    use faer::linalg::matmul::triangular::{matmul, BlockStructure};
+    let n = c.nrows();
+    if c.ncols() != n || a.nrows() != n || b.nrows() != n || a.ncols() != b.ncols() {
+        // Shapes that cannot be a symmetric product: the general product reports the mismatch.
+        gemm_nt(c, alpha, a, b, 1.0);
+        symmetrize_tiled(c);
+        return;
+    }
+    let k = a.ncols();
+    {
+        let dst = faer::MatMut::from_column_major_slice_mut(c.as_mut_slice(), n, n);
+        let lhs = faer::MatRef::from_column_major_slice(a.as_slice(), n, k);
+        let rhs = faer::MatRef::from_column_major_slice(b.as_slice(), n, k).transpose();
+        matmul(
+            dst,
+            BlockStructure::TriangularLower,
+            faer::Accum::Add,
+            lhs,
+            BlockStructure::Rectangular,
+            rhs,
+            BlockStructure::Rectangular,
+            alpha,
+            faer::Par::rayon(0),
+        );
+    }
+    mirror_lower(c);
+}
+
+/// Copy the lower triangle of a square matrix onto its upper triangle, tile by tile.
+pub fn mirror_lower(m: &mut DMatrix<f64>) {
+    let n = m.nrows();
+    let s = m.as_mut_slice();
+    for j0 in (0..n).step_by(TILE) {
+        for i0 in (j0..n).step_by(TILE) {
+            for j in j0..(j0 + TILE).min(n) {
+                let start = if i0 == j0 { j + 1 } else { i0 };
+                for i in start..(i0 + TILE).min(n) {
+                    s[j + i * n] = s[i + j * n];
+                }
+            }
+        }
+    }
+}
+
 /// `M ← (M + Mᵀ)/2` in place for a square matrix, tile by tile.
 pub fn symmetrize_tiled(m: &mut DMatrix<f64>) {
     let n = m.nrows();
@@ -170,6 +223,23 @@ pub fn max_asymmetry(m: &DMatrix<f64>) -> (f64, (usize, usize)) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn symmetric_product_equals_the_full_one() {
+        for &n in &[1usize, 7, 100, 131] {
+            let phi = DMatrix::from_fn(n, n, |i, j| ((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.4);
+            let l = DMatrix::from_fn(n, n, |i, j| ((i * 3 + j * 5) % 7) as f64 / 7.0);
+            let p = &l * l.transpose() + DMatrix::identity(n, n);
+            let ap = &phi * &p;
+            let q = DMatrix::identity(n, n) * 0.01;
+            let want = &q + 0.9 * &ap * phi.transpose();
+            let mut got = q.clone();
+            gemm_nt_symmetric(&mut got, 0.9, &ap, &phi);
+            assert_eq!(got, got.transpose(), "exactly symmetric, n = {n}");
+            let scale = want.amax();
+            assert!((&got - &want).amax() <= 1e-12 * scale, "n = {n}");
+        }
+    }
 
     #[test]
     fn matches_nalgebra_for_many_shapes() {
