@@ -359,3 +359,29 @@ def test_corrupted_files_give_a_result_or_a_format_error_never_a_crash(tmp_path,
             outcomes["format"] += 1
     assert outcomes["format"] > 50 and outcomes["ok"] > 10
     assert "panicked" not in capfd.readouterr().err
+
+
+def test_corrupt_ephemeris_values_never_give_nan_positions(tmp_path):
+    # sqrt(A) of G13's record set to 0 (parses, but no such orbit) and G05's clock bias to 1e30:
+    # the records are skipped or the satellites marked bad_ephemeris; every epoch still solves.
+    text = NAV.read_text()
+    recs = _records(text)
+    out = []
+    for r in recs:
+        lines = r.splitlines(keepends=True)
+        if r.startswith("G13"):
+            l2 = lines[2]
+            lines[2] = l2[:61] + " 0.000000000000E+00" + l2[80:]
+        if r.startswith("G05"):
+            l0 = lines[0]
+            lines[0] = l0[:23] + " 1.000000000000E+30" + l0[42:]
+        out.append("".join(lines))
+    bad = _write(tmp_path / "bad.nav", "".join(out))
+    sol = navfdi.gnss_solve(OBS, bad, systems="G", truth=TRUTH)
+    s = sol.solution
+    assert (s["status"] != "no_solution").all()
+    assert np.isfinite(s[["x", "y", "z"]].to_numpy()).all()
+    st = sol.satellites
+    assert st.loc[st["satellite"] == "G13", "status"].isin(["no_ephemeris"]).all()
+    assert st.loc[st["satellite"] == "G05", "status"].isin(["bad_ephemeris"]).all()
+    assert sol.summary()["skipped"]["bad_ephemeris"] == 301

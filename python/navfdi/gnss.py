@@ -220,7 +220,7 @@ class GnssSolution:
             out["vertical_rms"] = float(np.sqrt(np.mean(u**2)))
             out["horizontal_max"] = float(np.max(np.hypot(e, n)))
             out["vertical_max"] = float(np.max(np.abs(u)))
-        out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "below_mask", "unsolved") and v > 0}
+        out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
         clean = solved & (sol["faulty"] == "")

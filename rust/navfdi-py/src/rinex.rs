@@ -428,7 +428,7 @@ impl PyGnssRun {
     /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``aime``,
     /// ``cusum`` (sequential statistics), ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm``
     /// (bool), ``status`` (``used``,
-    /// ``excluded``, ``below_mask``, ``no_ephemeris``, ``unhealthy``, ``unsolved``).
+    /// ``excluded``, ``below_mask``, ``no_ephemeris``, ``unhealthy``, ``bad_ephemeris``, ``unsolved``).
     fn satellite_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let r = &self.out.sats;
         let n = r.len();

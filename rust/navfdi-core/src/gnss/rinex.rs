@@ -88,7 +88,8 @@ pub struct NavData {
     pub klobuchar: Option<Klobuchar>,
     /// Records per system letter as read (all systems, incl. those not positioned).
     pub records: BTreeMap<char, usize>,
-    /// Records skipped because a required orbit field is missing.
+    /// Records skipped because a required orbit field is missing or the orbit is impossible
+    /// (√A outside 1000–10 000 √m, eccentricity ≥ 0.9).
     pub incomplete: usize,
 }
 
@@ -662,6 +663,12 @@ pub fn parse_nav(path: &str, text: &str) -> Result<NavData> {
             incomplete += 1;
             continue;
         };
+        // Orbits no GNSS satellite flies (a corrupt record): √A of 1000–10 000 √m (semi-major
+        // axis 1 000–100 000 km), eccentricity below 0.9.
+        if !(v[0] > 1e3 && v[0] < 1e4 && v[1] >= 0.0 && v[1] < 0.9) {
+            incomplete += 1;
+            continue;
+        }
         let toe_sow = v[15];
         let mut d = toe_sow - toc_sys.sow;
         d -= (d / super::broadcast::WEEK).round() * super::broadcast::WEEK;

@@ -255,6 +255,8 @@ pub enum SatStatus {
     NoEphemeris,
     /// Only unhealthy ephemerides.
     Unhealthy,
+    /// The selected ephemeris gives an impossible position or clock (corrupt record).
+    BadEphemeris,
     /// No solution at this epoch (satellite above the mask with an ephemeris).
     Unsolved,
 }
@@ -268,6 +270,7 @@ impl SatStatus {
             SatStatus::BelowMask => "below_mask",
             SatStatus::NoEphemeris => "no_ephemeris",
             SatStatus::Unhealthy => "unhealthy",
+            SatStatus::BadEphemeris => "bad_ephemeris",
             SatStatus::Unsolved => "unsolved",
         }
     }
@@ -540,6 +543,13 @@ pub fn solve(
                 Ok(eph) => {
                     let ttx = eph.transmission_time(&ep.time, rho);
                     let st = eph.state(&ttx);
+                    let r = st.pos.norm();
+                    if !(r > 1e7 && r < 6e7 && st.clock.is_finite() && st.clock.abs() < 1.0) {
+                        // A record that parses but gives no usable orbit or clock.
+                        sr.status = SatStatus::BadEphemeris;
+                        out.sats.push(sr);
+                        continue;
+                    }
                     sr.sat_pos = st.pos;
                     sr.sat_clock = st.clock;
                     out.sats.push(sr);
