@@ -500,23 +500,13 @@ def _plot(s: GnssSolution, d: Path) -> list[Path]:
         fig, ax = plt.subplots(figsize=(9, 4))
         for c in ("east", "north", "up"):
             ax.plot(tau, sol[c], label=c, lw=1)
-        _shade_faults(ax, s.faults)
-        ax.set(xlabel="time since first epoch (s)", ylabel="error (m)", title="Position error against the truth")
-        ax.legend()
         ax.grid(alpha=0.3)
-        paths.append(d / "errors.png")
-        fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
-        plt.close(fig)
+        paths.append(_finish(plt, fig, ax, s.faults, d / "errors.png", {}, ylabel="error (m)", title="Position error against the truth"))
     fig, ax = plt.subplots(figsize=(9, 4))
     ax.semilogy(tau, sol["first_statistic"], lw=1, label="global test, all satellites")
     ax.semilogy(tau, sol["first_threshold"], "k--", lw=1, label="threshold")
-    _shade_faults(ax, s.faults)
-    ax.set(xlabel="time since first epoch (s)", ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold")
-    ax.legend()
     ax.grid(alpha=0.3)
-    paths.append(d / "statistic.png")
-    fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    paths.append(_finish(plt, fig, ax, s.faults, d / "statistic.png", {}, ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold"))
     fig, ax = plt.subplots(figsize=(9, 4))
     names = sorted(str(n) for n in sats["satellite"].unique())
     pos = {n: i for i, n in enumerate(names)}
@@ -524,14 +514,19 @@ def _plot(s: GnssSolution, d: Path) -> list[Path]:
     ex = sats[sats["status"] == "excluded"]
     ax.scatter(tau[used["epoch"]], [pos[str(n)] for n in used["satellite"]], s=2, c="0.75", label="used")
     ax.scatter(tau[ex["epoch"]], [pos[str(n)] for n in ex["satellite"]], s=8, c="C3", label="excluded")
-    _shade_faults(ax, s.faults)
     ax.set_yticks(range(len(names)), names, fontsize=7)
-    ax.set(xlabel="time since first epoch (s)", title="Satellites used and excluded per epoch")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
-    paths.append(d / "exclusions.png")
-    fig.savefig(paths[-1], dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    paths.append(_finish(plt, fig, ax, s.faults, d / "exclusions.png", {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0)}, title="Satellites used and excluded per epoch"))
     return paths
+
+
+def _finish(plt: Any, fig: Any, ax: Any, faults: list[GnssFault], path: Path, legend: dict[str, Any], **labels: str) -> Path:
+    """Shade the fault windows, label the time axis, add the legend, save ``path`` and close."""
+    _shade_faults(ax, faults)
+    ax.set(xlabel="time since first epoch (s)", **labels)
+    ax.legend(**legend)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return path
 
 
 def _shade_faults(ax: Any, faults: list[GnssFault]) -> None:

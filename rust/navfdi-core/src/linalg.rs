@@ -164,38 +164,37 @@ pub fn gemm_nt_symmetric(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: 
     mirror_lower(c);
 }
 
-/// Copy the lower triangle of a square matrix onto its upper triangle, tile by tile.
-pub fn mirror_lower(m: &mut DMatrix<f64>) {
-    let n = m.nrows();
-    let s = m.as_mut_slice();
+/// Call `f(lower, upper)` with the buffer offsets of every pair `(i, j)`, `(j, i)` with
+/// i > j of a square n × n column-major matrix, tile by tile (both tiles stay in L1).
+fn for_each_symmetric_pair(n: usize, mut f: impl FnMut(usize, usize)) {
     for j0 in (0..n).step_by(TILE) {
         for i0 in (j0..n).step_by(TILE) {
             for j in j0..(j0 + TILE).min(n) {
                 let start = if i0 == j0 { j + 1 } else { i0 };
                 for i in start..(i0 + TILE).min(n) {
-                    s[j + i * n] = s[i + j * n];
+                    f(i + j * n, j + i * n);
                 }
             }
         }
     }
 }
 
+/// Copy the lower triangle of a square matrix onto its upper triangle, tile by tile.
+pub fn mirror_lower(m: &mut DMatrix<f64>) {
+    let n = m.nrows();
+    let s = m.as_mut_slice();
+    for_each_symmetric_pair(n, |lo, up| s[up] = s[lo]);
+}
+
 /// `M ← (M + Mᵀ)/2` in place for a square matrix, tile by tile.
 pub fn symmetrize_tiled(m: &mut DMatrix<f64>) {
     let n = m.nrows();
     let s = m.as_mut_slice();
-    for j0 in (0..n).step_by(TILE) {
-        for i0 in (j0..n).step_by(TILE) {
-            for j in j0..(j0 + TILE).min(n) {
-                let start = if i0 == j0 { j + 1 } else { i0 };
-                for i in start..(i0 + TILE).min(n) {
-                    let v = 0.5 * (s[i + j * n] + s[j + i * n]);
-                    s[i + j * n] = v;
-                    s[j + i * n] = v;
-                }
-            }
-        }
-    }
+    for_each_symmetric_pair(n, |lo, up| {
+        let v = 0.5 * (s[lo] + s[up]);
+        s[lo] = v;
+        s[up] = v;
+    });
 }
 
 /// Largest `|M[i, j] − M[j, i]|` and where (i > j), tile by tile.
@@ -203,20 +202,13 @@ pub fn max_asymmetry(m: &DMatrix<f64>) -> (f64, (usize, usize)) {
     let n = m.nrows();
     let s = m.as_slice();
     let (mut worst, mut at) = (0.0, (0, 0));
-    for j0 in (0..n).step_by(TILE) {
-        for i0 in (j0..n).step_by(TILE) {
-            for j in j0..(j0 + TILE).min(n) {
-                let start = if i0 == j0 { j + 1 } else { i0 };
-                for i in start..(i0 + TILE).min(n) {
-                    let d = (s[i + j * n] - s[j + i * n]).abs();
-                    if d > worst {
-                        worst = d;
-                        at = (i, j);
-                    }
-                }
-            }
+    for_each_symmetric_pair(n, |lo, up| {
+        let d = (s[lo] - s[up]).abs();
+        if d > worst {
+            worst = d;
+            at = (lo % n, lo / n);
         }
-    }
+    });
     (worst, at)
 }
 

@@ -18,7 +18,6 @@
 
 use super::{check_residual, Decision};
 use crate::error::{Error, Result};
-use crate::stats::chi2_threshold;
 use crate::validate::check_probability;
 use nalgebra::{Cholesky, DMatrix, DVector};
 use std::collections::VecDeque;
@@ -92,14 +91,7 @@ impl Aime {
 
     /// Threshold for `dof` components (NaN for 0).
     pub fn threshold(&mut self, dof: usize) -> Result<f64> {
-        if dof == 0 {
-            return Ok(f64::NAN);
-        }
-        while self.thresholds.len() < dof {
-            let d = self.thresholds.len() + 1;
-            self.thresholds.push(chi2_threshold(self.pf, d)?);
-        }
-        Ok(self.thresholds[dof - 1])
+        super::cached_chi2_threshold(&mut self.thresholds, self.pf, dof)
     }
 
     /// Empty the window (keeps the dimension).

@@ -3,7 +3,6 @@
 
 use super::{check_residual, Decision};
 use crate::error::{Error, Result};
-use crate::stats::chi2_threshold;
 use crate::validate::check_probability;
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
@@ -36,14 +35,7 @@ impl ResidualChi2 {
 
     /// Threshold `T_D` for `dof` components.
     pub fn threshold(&mut self, dof: usize) -> Result<f64> {
-        if dof == 0 {
-            return Ok(f64::NAN);
-        }
-        while self.thresholds.len() < dof {
-            let d = self.thresholds.len() + 1;
-            self.thresholds.push(chi2_threshold(self.pf, d)?);
-        }
-        Ok(self.thresholds[dof - 1])
+        super::cached_chi2_threshold(&mut self.thresholds, self.pf, dof)
     }
 
     /// Last alarm state.
@@ -116,6 +108,7 @@ pub(crate) fn whitened_norm2(chol: &Cholesky<f64, Dyn>, r: &DVector<f64>) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::stats::chi2_threshold;
 
     #[test]
     fn decides_against_threshold() {

@@ -21,6 +21,19 @@ use crate::error::{Error, Result};
 use crate::validate::{check_symmetric, shape_str};
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
+/// `F⁻¹_{χ²(dof)}(1 − pf)` kept in `cache` (entry `dof − 1`, computed on first use); NaN for
+/// `dof = 0`.
+pub(crate) fn cached_chi2_threshold(cache: &mut Vec<f64>, pf: f64, dof: usize) -> Result<f64> {
+    if dof == 0 {
+        return Ok(f64::NAN);
+    }
+    while cache.len() < dof {
+        let d = cache.len() + 1;
+        cache.push(crate::stats::chi2_threshold(pf, d)?);
+    }
+    Ok(cache[dof - 1])
+}
+
 /// One epoch's decision of a detector.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Decision {

@@ -325,18 +325,7 @@ pub fn fde<M: FdeModel>(
     let n = usable.len();
     let u = model.unknowns();
     let mut active: Vec<usize> = (0..n).filter(|&i| usable[i]).collect();
-    let mut out = FdeOutcome {
-        solution: None,
-        statistic: f64::NAN,
-        threshold: f64::NAN,
-        dof: 0,
-        first: (f64::NAN, f64::NAN, 0),
-        w: vec![f64::NAN; n],
-        excluded: Vec::new(),
-        excluded_w: Vec::new(),
-        status: FdeStatus::NoSolution,
-        reason: String::new(),
-    };
+    let mut out = FdeOutcome::empty(n);
     loop {
         if active.len() < u + 1 {
             out.reason = format!(
@@ -415,6 +404,22 @@ pub fn fde<M: FdeModel>(
 }
 
 impl FdeOutcome {
+    /// No solution yet for `n` observations (NaN statistics and w, nothing excluded).
+    pub fn empty(n: usize) -> Self {
+        FdeOutcome {
+            solution: None,
+            statistic: f64::NAN,
+            threshold: f64::NAN,
+            dof: 0,
+            first: (f64::NAN, f64::NAN, 0),
+            w: vec![f64::NAN; n],
+            excluded: Vec::new(),
+            excluded_w: Vec::new(),
+            status: FdeStatus::NoSolution,
+            reason: String::new(),
+        }
+    }
+
     /// `w` with each excluded observation's |w| at its exclusion in place of NaN (what a
     /// per-satellite record shows).
     pub fn w_with_excluded(&self) -> Vec<f64> {
@@ -458,23 +463,60 @@ impl<'a> PositionModel<'a> {
             x0,
         }
     }
+}
 
-    fn linearise(&self, idx: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
-        let m = idx.len();
-        let r = Vector3::new(self.x[0], self.x[1], self.x[2]);
-        let mut b = DMatrix::zeros(m, 4);
-        let mut l = DVector::zeros(m);
-        for (j, &i) in idx.iter().enumerate() {
-            let d = self.sat[i] - r;
-            let range = d.norm();
-            for c in 0..3 {
-                b[(j, c)] = -d[c] / range;
-            }
-            b[(j, 3)] = 1.0;
-            l[j] = self.rho[i] - (range + self.x[3]);
+/// `(B, l)` of [`PositionModel`] at `x = [x, y, z, b]` for the observations `idx`.
+fn position_linearise(
+    sat: &[Vector3<f64>],
+    rho: &[f64],
+    x: &[f64],
+    idx: &[usize],
+) -> (DMatrix<f64>, DVector<f64>) {
+    let m = idx.len();
+    let r = Vector3::new(x[0], x[1], x[2]);
+    let mut b = DMatrix::zeros(m, 4);
+    let mut l = DVector::zeros(m);
+    for (j, &i) in idx.iter().enumerate() {
+        let d = sat[i] - r;
+        let range = d.norm();
+        for c in 0..3 {
+            b[(j, c)] = -d[c] / range;
         }
-        (b, l)
+        b[(j, 3)] = 1.0;
+        l[j] = rho[i] - (range + x[3]);
     }
+    (b, l)
+}
+
+/// Gauss-Newton for a nonlinear [`FdeModel`]: from `x` (updated in place), `lin(x)` gives
+/// `(B, l)` with `l` = observed − predicted; step `(BᵀD⁻¹B)⁻¹BᵀD⁻¹l` until its norm is below
+/// `tolerance`, at most `iterations` times. Returns `(B, l)` at the solution; None when the
+/// normal matrix is singular, a step is not finite or the iteration does not converge.
+pub fn gauss_newton<F>(
+    x: &mut [f64],
+    mut lin: F,
+    dinv: &DMatrix<f64>,
+    iterations: usize,
+    tolerance: f64,
+) -> Option<(DMatrix<f64>, DVector<f64>)>
+where
+    F: FnMut(&[f64]) -> (DMatrix<f64>, DVector<f64>),
+{
+    for _ in 0..iterations {
+        let (b, l) = lin(x);
+        let f = dinv * &b;
+        let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
+        if !dx.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        for (xi, d) in x.iter_mut().zip(dx.iter()) {
+            *xi += d;
+        }
+        if dx.norm() < tolerance {
+            return Some(lin(x));
+        }
+    }
+    None
 }
 
 impl FdeModel for PositionModel<'_> {
@@ -491,21 +533,14 @@ impl FdeModel for PositionModel<'_> {
         // Each subset starts from the caller's start value, so an exclusion does not inherit a
         // solution pulled by the excluded observation.
         self.x = self.x0;
-        for _ in 0..cfg.max_iterations {
-            let (b, l) = self.linearise(idx);
-            let f = dinv * &b;
-            let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
-            if !dx.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-            for c in 0..4 {
-                self.x[c] += dx[c];
-            }
-            if dx.norm() < cfg.tolerance {
-                return Some(self.linearise(idx));
-            }
-        }
-        None
+        let (sat, rho) = (self.sat, self.rho);
+        gauss_newton(
+            &mut self.x,
+            |x| position_linearise(sat, rho, x, idx),
+            dinv,
+            cfg.max_iterations,
+            cfg.tolerance,
+        )
     }
 
     fn solution(&self) -> DVector<f64> {

@@ -30,12 +30,12 @@ use super::broadcast::{select, EphProblem, GpsTime, Sat, Sys};
 use super::geodesy::{ecef_to_lla, elevation_azimuth};
 use super::rinex::{NavData, ObsData};
 use super::sequential::{SatDetectors, SeqConfig, SeqOutput};
-use super::snapshot::{fde, FdeConfig, FdeModel, FdeOutcome, FdeStatus, ObsCov};
+use super::snapshot::{fde, gauss_newton, FdeConfig, FdeModel, FdeOutcome, ObsCov};
 use super::C;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
-use std::collections::BTreeMap;
+use nalgebra::{DMatrix, DVector, Vector3};
+use std::collections::btree_map::{BTreeMap, Entry};
 
 /// Earth rotation rate used for the Sagnac term (rad/s, WGS-84).
 const OMEGA_E: f64 = 7.292_115_146_7e-5;
@@ -338,8 +338,11 @@ pub struct SppRun {
     pub sats: Vec<SatRow>,
 }
 
-/// The measurement model of one epoch (see the module docs).
-struct SppModel<'a> {
+/// Gauss-Newton convergence of a fix: step norm below this (m).
+const SPP_TOLERANCE: f64 = 1e-4;
+
+/// The measurement model of one epoch (see the module docs), apart from its unknowns.
+struct SppGeometry<'a> {
     sat: &'a [Vector3<f64>],
     rho: &'a [f64],
     col: &'a [usize],
@@ -348,14 +351,12 @@ struct SppModel<'a> {
     klob: Option<&'a Klobuchar>,
     sow: f64,
     trop: bool,
-    x: Vec<f64>,
-    x0: Vec<f64>,
 }
 
-impl SppModel<'_> {
-    /// Predicted ρ_c, unit vector to the satellite and (I, T, el, az) at the current x.
-    fn predict(&self, i: usize) -> (f64, Vector3<f64>, [f64; 4]) {
-        let r = Vector3::new(self.x[0], self.x[1], self.x[2]);
+impl SppGeometry<'_> {
+    /// Predicted ρ_c, unit vector to the satellite and (I, T, el, az) at `x`.
+    fn predict(&self, x: &[f64], i: usize) -> (f64, Vector3<f64>, [f64; 4]) {
+        let r = Vector3::new(x[0], x[1], x[2]);
         let s = self.sat[i];
         let d = s - r;
         let range = d.norm();
@@ -373,16 +374,16 @@ impl SppModel<'_> {
                 extra[1] = saastamoinen(lat, h, el, 0.7);
             }
         }
-        let pred = geo + self.x[3 + self.col[i]] + extra[0] + extra[1];
+        let pred = geo + x[3 + self.col[i]] + extra[0] + extra[1];
         (pred, d / range, extra)
     }
 
-    fn linearise(&self, idx: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
+    fn linearise(&self, x: &[f64], idx: &[usize]) -> (DMatrix<f64>, DVector<f64>) {
         let u = 3 + self.n_clk;
         let mut b = DMatrix::zeros(idx.len(), u);
         let mut l = DVector::zeros(idx.len());
         for (j, &i) in idx.iter().enumerate() {
-            let (pred, e, _) = self.predict(i);
+            let (pred, e, _) = self.predict(x, i);
             for c in 0..3 {
                 b[(j, c)] = -e[c];
             }
@@ -393,9 +394,16 @@ impl SppModel<'_> {
     }
 }
 
+/// The geometry with its unknowns `[x, y, z, clocks…]`, as the exclusion loop solves it.
+struct SppModel<'a> {
+    geo: SppGeometry<'a>,
+    x: Vec<f64>,
+    x0: Vec<f64>,
+}
+
 impl FdeModel for SppModel<'_> {
     fn unknowns(&self) -> usize {
-        3 + self.n_clk
+        3 + self.geo.n_clk
     }
 
     fn solve(
@@ -405,21 +413,14 @@ impl FdeModel for SppModel<'_> {
         cfg: &FdeConfig,
     ) -> Option<(DMatrix<f64>, DVector<f64>)> {
         self.x.clone_from(&self.x0);
-        for _ in 0..cfg.max_iterations {
-            let (b, l) = self.linearise(idx);
-            let f = dinv * &b;
-            let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
-            if !dx.iter().all(|v| v.is_finite()) {
-                return None;
-            }
-            for (x, d) in self.x.iter_mut().zip(dx.iter()) {
-                *x += d;
-            }
-            if dx.norm() < 1e-4 {
-                return Some(self.linearise(idx));
-            }
-        }
-        None
+        let geo = &self.geo;
+        gauss_newton(
+            &mut self.x,
+            |x| geo.linearise(x, idx),
+            dinv,
+            cfg.max_iterations,
+            SPP_TOLERANCE,
+        )
     }
 
     fn solution(&self) -> DVector<f64> {
@@ -482,12 +483,21 @@ pub fn solve(
         None
     };
     let range = range.start.min(obs.epochs.len())..range.end.min(obs.epochs.len());
+    // Without exclusion the loop still reports the global test, with a w-test that never fires.
+    let no_exclusion;
+    let fde_cfg = if cfg.exclude {
+        &cfg.fde
+    } else {
+        no_exclusion = FdeConfig::new(cfg.fde.alpha, Some(f64::MAX))?;
+        &no_exclusion
+    };
     for ei in range {
         cancel.check()?;
         let ep = &obs.epochs[ei];
         let tau = ep.time.diff(&t0);
         let mut cands: Vec<Candidate> = Vec::new();
         let mut faulty = Vec::new();
+        let first_row = out.sats.len();
         for o in &ep.obs {
             let Some(&(_, _, scale)) = codes
                 .iter()
@@ -564,8 +574,7 @@ pub fn solve(
                 }
             }
         }
-        let first_row = out.sats.len() - ep_rows(&out.sats, ei);
-        let mut sol = solve_epoch(cfg, klob.as_ref(), ep.time, &cands, state, out)?;
+        let mut sol = solve_epoch(cfg, fde_cfg, klob.as_ref(), ep.time, &cands, state, out)?;
         sol.faulty = faulty;
         out.epochs.push(sol);
         // Sequential detectors: satellites with a residual step theirs; the others restart.
@@ -574,12 +583,9 @@ pub fn solve(
             if !row.residual.is_finite() || !(row.sigma > 0.0) {
                 continue;
             }
-            let det = match state.detectors.get_mut(&row.sat) {
-                Some(d) => d,
-                None => state
-                    .detectors
-                    .entry(row.sat)
-                    .or_insert(SatDetectors::new(&cfg.sequential)?),
+            let det = match state.detectors.entry(row.sat) {
+                Entry::Occupied(e) => e.into_mut(),
+                Entry::Vacant(v) => v.insert(SatDetectors::new(&cfg.sequential)?),
             };
             row.seq = det.step(row.residual, row.sigma, &cfg.sequential);
             seen.push(row.sat);
@@ -589,13 +595,24 @@ pub fn solve(
     Ok(())
 }
 
-/// Number of trailing rows of `sats` that belong to epoch `ei`.
-fn ep_rows(sats: &[SatRow], ei: usize) -> usize {
-    sats.iter().rev().take_while(|r| r.epoch == ei).count()
+/// The positioning systems among the candidates `i` with `keep(i)` (their clock columns, in
+/// the order GPS, Galileo, BeiDou, QZSS) and each candidate's column (0 for a system not kept).
+fn clock_columns(cands: &[Candidate], keep: impl Fn(usize) -> bool) -> (Vec<Sys>, Vec<usize>) {
+    let systems: Vec<Sys> = Sys::POSITIONING
+        .iter()
+        .copied()
+        .filter(|s| (0..cands.len()).any(|i| keep(i) && cands[i].sat.sys == *s))
+        .collect();
+    let col = cands
+        .iter()
+        .map(|c| systems.iter().position(|s| *s == c.sat.sys).unwrap_or(0))
+        .collect();
+    (systems, col)
 }
 
 fn solve_epoch(
     cfg: &SppConfig,
+    fde_cfg: &FdeConfig,
     klob: Option<&Klobuchar>,
     time: GpsTime,
     cands: &[Candidate],
@@ -610,74 +627,56 @@ fn solve_epoch(
         time,
         position: None,
         clocks: Vec::new(),
-        fde: FdeOutcome {
-            solution: None,
-            statistic: f64::NAN,
-            threshold: f64::NAN,
-            dof: 0,
-            first: (f64::NAN, f64::NAN, 0),
-            w: vec![f64::NAN; n],
-            excluded: Vec::new(),
-            excluded_w: Vec::new(),
-            status: FdeStatus::NoSolution,
-            reason: String::new(),
-        },
+        fde: FdeOutcome::empty(n),
         excluded: Vec::new(),
         faulty: Vec::new(),
         used: 0,
     };
-    // Systems present → clock columns.
-    let systems: Vec<Sys> = Sys::POSITIONING
-        .iter()
-        .copied()
-        .filter(|s| cands.iter().any(|c| c.sat.sys == *s))
-        .collect();
-    let col: Vec<usize> = cands
-        .iter()
-        .map(|c| systems.iter().position(|s| *s == c.sat.sys).unwrap_or(0))
-        .collect();
-    let u = 3 + systems.len();
+    // The model without atmosphere; each use below sets its clock columns.
+    let uncorrected = SppGeometry {
+        sat: &sat,
+        rho: &rho,
+        col: &[],
+        iono_scale: &iono_scale,
+        n_clk: 0,
+        klob: None,
+        sow: time.sow,
+        trop: false,
+    };
     // Start position: the last solution, else an uncorrected fix from the Earth's centre.
-    let mut x0 = vec![0.0; u];
-    match &state.last {
-        Some((p, clocks)) => {
-            x0[..3].copy_from_slice(p.as_slice());
-            for (j, s) in systems.iter().enumerate() {
-                x0[3 + j] = clocks.iter().find(|(c, _)| c == s).map_or(0.0, |c| c.1);
-            }
-        }
+    let r0 = match &state.last {
+        Some((p, _)) => *p,
         None => {
+            let (systems, col) = clock_columns(cands, |_| true);
+            let u = 3 + systems.len();
             if n < u {
                 empty.fde.reason = format!(
                     "{n} satellites with ephemerides; at least {u} are needed for a first fix"
                 );
                 return Ok(empty);
             }
-            let mut coarse = SppModel {
-                sat: &sat,
-                rho: &rho,
+            let geo = SppGeometry {
                 col: &col,
-                iono_scale: &iono_scale,
                 n_clk: systems.len(),
-                klob: None,
-                sow: time.sow,
-                trop: false,
-                x: x0.clone(),
-                x0: x0.clone(),
+                ..uncorrected
+            };
+            let mut coarse = SppModel {
+                geo,
+                x: vec![0.0; u],
+                x0: vec![0.0; u],
             };
             let idx: Vec<usize> = (0..n).collect();
-            let fc = FdeConfig::new(cfg.fde.alpha, Some(cfg.fde.k))?;
-            match coarse.solve(&idx, &DMatrix::identity(n, n), &fc) {
-                Some(_) => x0.clone_from(&coarse.x),
-                None => {
-                    empty.fde.reason = "no first fix (singular geometry or no convergence)".into();
-                    return Ok(empty);
-                }
+            if coarse
+                .solve(&idx, &DMatrix::identity(n, n), &cfg.fde)
+                .is_none()
+            {
+                empty.fde.reason = "no first fix (singular geometry or no convergence)".into();
+                return Ok(empty);
             }
+            Vector3::new(coarse.x[0], coarse.x[1], coarse.x[2])
         }
-    }
+    };
     // Elevation mask and weights at the start position.
-    let r0 = Vector3::new(x0[0], x0[1], x0[2]);
     let (lat, lon, h) = ecef_to_lla(&r0);
     let mut usable = vec![false; n];
     let mut sigma = vec![1.0; n];
@@ -715,48 +714,33 @@ fn solve_epoch(
         sigma[i] = factor * var.sqrt();
         row.sigma = sigma[i];
     }
-    // Keep only systems with a usable satellite.
-    let systems: Vec<Sys> = systems
-        .into_iter()
-        .filter(|s| (0..n).any(|i| usable[i] && cands[i].sat.sys == *s))
-        .collect();
-    let col: Vec<usize> = cands
-        .iter()
-        .map(|c| systems.iter().position(|s| *s == c.sat.sys).unwrap_or(0))
-        .collect();
-    let old_x0 = x0.clone();
-    let mut x0 = vec![0.0; 3 + systems.len()];
-    x0[..3].copy_from_slice(&old_x0[..3]);
-    for (j, s) in systems.iter().enumerate() {
-        x0[3 + j] = state
+    // Clock columns of the systems with a usable satellite; clocks start from the last fix.
+    let (systems, col) = clock_columns(cands, |i| usable[i]);
+    let mut x0 = r0.as_slice().to_vec();
+    x0.extend(systems.iter().map(|s| {
+        state
             .last
             .as_ref()
             .and_then(|(_, c)| c.iter().find(|(cs, _)| cs == s).map(|c| c.1))
-            .unwrap_or(0.0);
-    }
-    let mut model = SppModel {
-        sat: &sat,
-        rho: &rho,
+            .unwrap_or(0.0)
+    }));
+    let geo = SppGeometry {
         col: &col,
-        iono_scale: &iono_scale,
         n_clk: systems.len(),
         klob,
-        sow: time.sow,
         trop: cfg.troposphere,
+        ..uncorrected
+    };
+    let mut model = SppModel {
+        geo,
         x: x0.clone(),
         x0,
     };
     let cov = ObsCov::Sigma(sigma);
-    let outcome = if cfg.exclude {
-        fde(&mut model, &cov, &usable, None, &cfg.fde)?
-    } else {
-        let no_excl = FdeConfig::new(cfg.fde.alpha, Some(f64::MAX))?;
-        fde(&mut model, &cov, &usable, None, &no_excl)?
-    };
+    let outcome = fde(&mut model, &cov, &usable, None, fde_cfg)?;
     let mut sol = empty;
     sol.excluded = outcome.excluded.iter().map(|&i| cands[i].sat).collect();
     if let Some(x) = &outcome.solution {
-        model.x = x.iter().copied().collect();
         let p = Vector3::new(x[0], x[1], x[2]);
         let clocks: Vec<(Sys, f64)> = systems
             .iter()
@@ -769,7 +753,7 @@ fn solve_epoch(
             if !usable[i] {
                 continue;
             }
-            let (pred, _, extra) = model.predict(i);
+            let (pred, _, extra) = model.geo.predict(x.as_slice(), i);
             row.residual = rho[i] - pred;
             row.iono = extra[0];
             row.tropo = extra[1];
