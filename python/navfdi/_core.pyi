@@ -805,10 +805,15 @@ class FusedValue:
 class WeightedFusion:
     """Inverse-variance fusion of one quantity (e.g. altitude, m) over n sensors with a fault
     matrix (METHODS §9, paper 003): ``y = Σ w_i M_i x_i / Σ w_i M_i``, ``w_i = 1/σ_i²`` with
-    ``σ_i²`` the mean square of sensor i's deviation from the filter's prediction over the last
-    ``window`` samples (``prior_sigma[i]`` before two samples)."""
+    ``σ_i²`` from sensor i's deviations from the filter's prediction over the last ``window``
+    samples: their mean square (``estimate="mean_square"``, a bias counts) or their variance
+    about their mean (``"variance"``, paper 003's eq. 35); ``prior_sigma[i]`` before two
+    samples; never below ``(1e-3 · prior_sigma[i])²``."""
 
-    def __new__(cls, prior_sigma: list[float], window: int = 20) -> WeightedFusion: ...
+    def __new__(cls, prior_sigma: list[float], window: int = 20, estimate: str = "mean_square") -> WeightedFusion: ...
+    @property
+    def estimate(self) -> str:
+        """``"mean_square"`` or ``"variance"``."""
     def step(self, values: ArrayLike, predicted: float, healthy: list[bool]) -> FusedValue:
         """One epoch: ``values`` (n,) per sensor (NaN: not available), the filter's
         ``predicted`` value, ``healthy`` (n,) the fault matrix M_i. Bad input raises

@@ -348,7 +348,9 @@ class ScenarioRun:
         ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
         component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
         isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m).
-        With ``[modes]``: ``mode`` (``q1``, ``q2``, ``q3``). With ``[state_chi2]``:
+        With altitude fusion: ``fused_alt.error`` (m) and per fused sensor
+        ``fused_alt.{sensor}.error`` (its height measurement error, m) and ``.weight``
+        (normalised, 0 when it did not contribute). With ``[modes]``: ``mode`` (``q1``, ``q2``, ``q3``). With ``[state_chi2]``:
         ``state_chi2.statistic, .threshold, .alarm, .ready, .ill_conditioned``. Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
         no_measurement), ``fde.used`` (satellites updating the filter), ``fde.excluded``
         (comma-separated names) and per satellite ever in view ``sat.{name}.in_view``,
@@ -369,6 +371,11 @@ class ScenarioRun:
                     cols[f"{sub}.{d['name']}.{k}"] = d[k]
         if "fused_alt" in self.record:
             cols["fused_alt.error"] = self.record["fused_alt"]
+        fu = self.record.get("fusion")
+        if fu is not None:
+            for j, name in enumerate(fu["sensors"]):
+                cols[f"fused_alt.{name}.error"] = fu["error"][:, j]
+                cols[f"fused_alt.{name}.weight"] = fu["weight"][:, j]
         if "mode" in self.record:
             cols["mode"] = np.array(["", "q1", "q2", "q3"], dtype=object)[self.record["mode"]]
         st = self.record.get("state_chi2")

@@ -287,8 +287,8 @@ def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
         dp = f"{p}.detectors[{j}]"
         _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
         kind = _str(_need(d, "kind", dp), f"{dp}.kind")
-        if kind not in ("chi2", "sprt", "joint"):
-            raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt or joint")
+        if kind not in ("chi2", "sprt", "joint", "state_chi2"):
+            raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt, joint or state_chi2")
         dets.append(
             {
                 "name": _name(d.get("name", kind), f"{dp}.name"),
@@ -376,13 +376,36 @@ def _centralized(c: Any) -> dict[str, Any]:
     return out
 
 
+def _per_component(value: Any, comps: list[tuple[str, str]], kind: str, path: str, positive: bool) -> list[float]:
+    """A sensor's per-component σ (``noise`` > 0, ``bias`` ≥ 0): one value for every
+    component or one per component, in the components' units."""
+    values = value if isinstance(value, list) else [value] * len(comps)
+    if len(values) != len(comps):
+        raise ScenarioError(
+            f"{path}: {len(values)} values for a {kind} sensor with {len(comps)} components ({', '.join(c for c, _ in comps)}); give one value or one per component"
+        )
+    out = []
+    for j, (v, (_, dim)) in enumerate(zip(values, comps)):
+        vp = f"{path}[{j}]" if isinstance(value, list) else path
+        x = _unit(v, dim, vp)
+        if not (x > 0 if positive else x >= 0):
+            raise ScenarioError(f"{vp} = {v!r}: a {'noise' if positive else 'bias'} standard deviation must be {'positive' if positive else 'zero or positive'}")
+        out.append(x)
+    return out
+
+
 def _altitude_fusion(a: Any) -> dict[str, Any]:
-    """``centralized.altitude_fusion``: sensors (names), samples (window N)."""
+    """``centralized.altitude_fusion``: sensors (names), samples (window N), estimate
+    (``mean_square``, default, or ``variance`` as paper 003's eq. 35)."""
     p = "centralized.altitude_fusion"
-    _check_keys(a, {"sensors", "samples"}, p)
+    _check_keys(a, {"sensors", "samples", "estimate"}, p)
+    estimate = _str(a.get("estimate", "mean_square"), f"{p}.estimate")
+    if estimate not in ("mean_square", "variance"):
+        raise ScenarioError(f"{p}.estimate = {estimate!r}: use mean_square or variance")
     return {
         "sensors": [_str(v, f"{p}.sensors[{i}]") for i, v in enumerate(_list(_need(a, "sensors", p), f"{p}.sensors"))],
         "samples": _count(a.get("samples", 20), f"{p}.samples"),
+        "estimate": estimate,
     }
 
 
@@ -443,25 +466,15 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     kinds: dict[str, str] = {}
     for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
         p = f"sensors[{i}]"
-        _check_keys(s, {"name", "kind", "noise", "rate", "outages", "ranges"}, p)
+        _check_keys(s, {"name", "kind", "noise", "bias", "rate", "outages", "ranges"}, p)
         name = _name(_need(s, "name", p), f"{p}.name")
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in SENSOR_COMPONENTS:
             raise ScenarioError(f"{p}.kind = {kind!r}: unknown sensor (use one of: {', '.join(SENSOR_COMPONENTS)})")
         comps = SENSOR_COMPONENTS[kind]
         noise = _need(s, "noise", p)
-        values = noise if isinstance(noise, list) else [noise] * len(comps)
-        if len(values) != len(comps):
-            raise ScenarioError(
-                f"{p}.noise: {len(values)} values for a {kind} sensor with {len(comps)} components ({', '.join(c for c, _ in comps)}); give one value or one per component"
-            )
-        ns = []
-        for j, (v, (_, dim)) in enumerate(zip(values, comps)):
-            np_ = f"{p}.noise[{j}]" if isinstance(noise, list) else f"{p}.noise"
-            x = _unit(v, dim, np_)
-            if not x > 0:
-                raise ScenarioError(f"{np_} = {v!r}: a noise standard deviation must be positive")
-            ns.append(x)
+        ns = _per_component(noise, comps, kind, f"{p}.noise", positive=True)
+        bias = [] if "bias" not in s else _per_component(s["bias"], comps, kind, f"{p}.bias", positive=False)
         outages = []
         for j, w in enumerate(_list(s.get("outages", []), f"{p}.outages")):
             w = _list(w, f"{p}.outages[{j}]")
@@ -469,6 +482,8 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
                 raise ScenarioError(f"{p}.outages[{j}]: expected [start, end], got {w!r}")
             outages.append([_unit(w[0], "time", f"{p}.outages[{j}][0]"), _unit(w[1], "time", f"{p}.outages[{j}][1]")])
         entry: dict[str, Any] = {"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages}
+        if bias:
+            entry["bias"] = bias
         if kind == "gnss_ranges":
             entry["ranges"] = _ranges(_need(s, "ranges", p), f"{p}.ranges")
         elif "ranges" in s:

@@ -91,6 +91,14 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
     if !rec.fused_alt.is_empty() {
         d.set_item("fused_alt", to_numpy(py, rec.fused_alt, &[t])?)?;
     }
+    if let Some(fr) = rec.fusion {
+        let n = fr.sensors.len();
+        let fd = PyDict::new(py);
+        fd.set_item("sensors", fr.sensors)?;
+        fd.set_item("error", to_numpy(py, fr.error, &[t, n])?)?;
+        fd.set_item("weight", to_numpy(py, fr.weight, &[t, n])?)?;
+        d.set_item("fusion", fd)?;
+    }
     if !rec.mode.is_empty() {
         d.set_item("mode", to_numpy(py, rec.mode, &[t])?)?;
     }

@@ -2,7 +2,7 @@
 
 use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
-use navfdi_core::fusion::{Fused, WeightedFusion};
+use navfdi_core::fusion::{Estimate, Fused, WeightedFusion};
 use pyo3::prelude::*;
 
 /// One epoch's output of :class:`WeightedFusion`.
@@ -29,8 +29,8 @@ impl PyFused {
     fn weights<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         Ok(to_numpy(py, self.inner.weights.clone(), &[self.inner.weights.len()])?.into_any())
     }
-    /// Estimated σ_i² per sensor, shape (n,) (mean square deviation over the window, or the
-    /// prior before two samples).
+    /// Estimated σ_i² per sensor, shape (n,) (mean square or variance of the deviations over
+    /// the window, or the prior before two samples).
     #[getter]
     fn sigma2<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         Ok(to_numpy(py, self.inner.sigma2.clone(), &[self.inner.sigma2.len()])?.into_any())
@@ -59,14 +59,33 @@ impl PyWeightedFusion {
 #[pymethods]
 impl PyWeightedFusion {
     #[new]
-    #[pyo3(signature = (prior_sigma, window = 20))]
-    fn new(prior_sigma: Vec<f64>, window: i64) -> PyResult<Self> {
+    #[pyo3(signature = (prior_sigma, window = 20, estimate = "mean_square"))]
+    fn new(prior_sigma: Vec<f64>, window: i64, estimate: &str) -> PyResult<Self> {
         let window = usize::try_from(window).map_err(|_| {
             pyo3::exceptions::PyValueError::new_err(format!("window = {window}: must be >= 2"))
         })?;
+        let estimate = match estimate {
+            "mean_square" => Estimate::MeanSquare,
+            "variance" => Estimate::Variance,
+            other => {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "estimate = {other:?}: use \"mean_square\" or \"variance\""
+                )))
+            }
+        };
         Ok(PyWeightedFusion {
-            inner: WeightedFusion::new(&prior_sigma, window).py()?,
+            inner: WeightedFusion::new(&prior_sigma, window)
+                .py()?
+                .with_estimate(estimate),
         })
+    }
+    /// How σ_i² is estimated: ``"mean_square"`` or ``"variance"``.
+    #[getter]
+    fn estimate(&self) -> &'static str {
+        match self.inner.estimate() {
+            Estimate::MeanSquare => "mean_square",
+            Estimate::Variance => "variance",
+        }
     }
     /// One epoch: ``values`` (n,) per sensor (NaN: not available), the filter's ``predicted``
     /// value, ``healthy`` (n,) booleans, the fault matrix M_i.

@@ -31,7 +31,7 @@ use crate::kalman::KalmanFilter;
 use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{channel_sensors, make_detector, varying_h, RunRecord};
-use crate::sim::spec::Policy;
+use crate::sim::spec::{DetectorKind, Policy};
 use nalgebra::{DMatrix, DVector};
 
 /// Per-component state of the `fading` policy.
@@ -89,11 +89,21 @@ pub fn run_centralized(
             .iter()
             .map(|&(i, row)| spec.sensors[sensor_idx[i]].noise[row - offsets[i]])
             .collect();
-        (rows, prior, af.samples)
+        (rows, prior, af.samples, af.estimate)
     });
+    let mut rec = RunRecord::empty(prep);
     let extra = usize::from(fusion.is_some());
+    rec.fusion = c
+        .altitude_fusion
+        .as_ref()
+        .map(|af| crate::sim::run::FusionRecord {
+            sensors: af.sensors.clone(),
+            ..Default::default()
+        });
     let mut fuser = match &fusion {
-        Some((_, prior, n)) => Some(crate::fusion::WeightedFusion::new(prior, *n)?),
+        Some((_, prior, n, e)) => {
+            Some(crate::fusion::WeightedFusion::new(prior, *n)?.with_estimate(*e))
+        }
         None => None,
     };
     let mut h = DMatrix::zeros(m + extra, N_STATES);
@@ -108,13 +118,32 @@ pub fn run_centralized(
         r.view_mut((o, o), (d, d)).copy_from(&prep.r[si]);
     }
     let mut kf = KalmanFilter::new(DVector::zeros(N_STATES), prep.p0.clone())?;
-    let mut detectors: Vec<Vec<Detector>> = Vec::with_capacity(channels.len());
+    // Innovation detectors, and state detectors (None) with their thresholds.
+    let tested = rec
+        .state
+        .as_ref()
+        .map_or(0, |st| st.detector.states().len());
+    let mut detectors: Vec<Vec<Option<Detector>>> = Vec::with_capacity(channels.len());
+    let mut state_thr: Vec<Vec<f64>> = Vec::with_capacity(channels.len());
     let mut decision: Vec<Option<usize>> = Vec::with_capacity(channels.len());
     for ch in &channels {
         detectors.push(
             ch.detectors
                 .iter()
-                .map(|d| make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples))
+                .map(|d| match d.kind {
+                    DetectorKind::StateChi2 => Ok(None),
+                    _ => make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples)
+                        .map(Some),
+                })
+                .collect::<Result<_>>()?,
+        );
+        state_thr.push(
+            ch.detectors
+                .iter()
+                .map(|d| match d.kind {
+                    DetectorKind::StateChi2 => crate::stats::chi2_threshold(d.pf, tested),
+                    _ => Ok(f64::NAN),
+                })
                 .collect::<Result<_>>()?,
         );
         decision.push(
@@ -145,7 +174,15 @@ pub fn run_centralized(
         .iter()
         .map(|&d| vec![Component::default(); d])
         .collect();
-    let mut rec = RunRecord::empty(prep);
+    let has_state: Vec<bool> = channels
+        .iter()
+        .map(|ch| {
+            ch.detectors
+                .iter()
+                .any(|d| d.kind == DetectorKind::StateChi2)
+        })
+        .collect();
+    let mut pairs: Vec<[Option<KalmanFilter>; 2]> = channels.iter().map(|_| [None, None]).collect();
     let mut z = DVector::from_element(m + extra, f64::NAN);
     let mut z_used = z.clone();
     let mut sig = DVector::zeros(N_STATES);
@@ -167,6 +204,27 @@ pub fn run_centralized(
         let (inn, pending) = kf
             .innovation_pending(&z, &h, &r)
             .map_err(|e| crate::run::at_epoch(k, e))?;
+        if let Some(st) = rec.state.as_mut() {
+            st.detector.advance(&prep.phi[k], &prep.q[k]);
+        }
+        // Paper 003's sensor sub-filters: each runs on its own sensor's measurement alone.
+        for (i, pair) in pairs.iter_mut().enumerate() {
+            if pair.iter().all(Option::is_none) {
+                continue;
+            }
+            let (o, d) = (offsets[i], dims[i]);
+            let zi: DVector<f64> = z.rows(o, d).into_owned();
+            let hi: DMatrix<f64> = h.rows(o, d).into_owned();
+            let ri = &prep.r[sensor_idx[i]];
+            for f in pair.iter_mut().flatten() {
+                f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                if zi.iter().any(|v| !v.is_nan()) {
+                    f.update_trusted(&zi, &hi, ri)
+                        .map_err(|e| crate::run::at_epoch(k, e))?;
+                }
+            }
+        }
         let single = channels.len() == 1;
         let mut any_excluded = false;
         z_used.copy_from(&z);
@@ -175,7 +233,6 @@ pub fn run_centralized(
             let (o, d) = (offsets[i], dims[i]);
             let ri: DVector<f64> = inn.residual.rows(o, d).into_owned();
             let ai: DMatrix<f64> = inn.covariance.view((o, o), (d, d)).into_owned();
-            let sub = &mut rec.subs[i];
             let (lambda, dof) = if single {
                 (inn.statistic, inn.dof())
             } else if ri.iter().all(|v| v.is_nan()) {
@@ -184,6 +241,7 @@ pub fn run_centralized(
                 crate::detect::ResidualChi2::statistic(&ri, &ai)
                     .map_err(|e| crate::run::at_epoch(k, e))?
             };
+            let sub = &mut rec.subs[i];
             sub.statistic.push(lambda);
             sub.dof.push(dof as u32);
             if mdb {
@@ -196,11 +254,35 @@ pub fn run_centralized(
                 }
             }
             let mut decisions = Vec::with_capacity(ch_det.len());
-            for det in ch_det.iter_mut() {
-                decisions.push(
-                    det.test_innovation(&ri, &ai, lambda, dof)
+            for (j, det) in ch_det.iter_mut().enumerate() {
+                decisions.push(match det {
+                    Some(det) => det
+                        .test_innovation(&ri, &ai, lambda, dof)
                         .map_err(|e| crate::run::at_epoch(k, e))?,
-                );
+                    None => {
+                        let st = rec.state.as_ref().ok_or_else(|| {
+                            Error::Invalid("a state_chi2 detector needs [state_chi2]".into())
+                        })?;
+                        // Tested in the epochs the sensor measures, as the residual test.
+                        let pair = &pairs[i];
+                        let measured = ri.iter().any(|v| !v.is_nan());
+                        let dec = st.detector.test_with(
+                            |q| {
+                                pair[q]
+                                    .as_ref()
+                                    .filter(|_| measured)
+                                    .map(|f| (f.x(), f.p()))
+                            },
+                            state_thr[i][j],
+                        );
+                        crate::detect::Decision {
+                            statistic: dec.statistic,
+                            threshold: dec.threshold,
+                            alarm: dec.alarm,
+                            dof: dec.dof,
+                        }
+                    }
+                });
             }
             let mut excluded = vec![false; d];
             let mut reinstated = false;
@@ -212,13 +294,13 @@ pub fn run_centralized(
                         }
                     }
                     Policy::Latched => {
-                        let (stats, thr) = sprt_components(&ch_det[di])?;
+                        let (stats, thr) = sprt_components(ch_det[di].as_ref())?;
                         for (j, e) in excluded.iter_mut().enumerate() {
                             *e = stats.get(j).is_some_and(|l| *l >= thr);
                         }
                     }
                     Policy::Fading => {
-                        let (stats, thr) = sprt_components(&ch_det[di])?;
+                        let (stats, thr) = sprt_components(ch_det[di].as_ref())?;
                         let mut new_detection = false;
                         for j in 0..d {
                             let cj = &mut comps[i][j];
@@ -230,7 +312,7 @@ pub fn run_centralized(
                                 }
                                 cj.faulty = true;
                                 cj.below = 0;
-                                if let Detector::Sprt(sp) = &mut ch_det[di] {
+                                if let Some(Detector::Sprt(sp)) = &mut ch_det[di] {
                                     sp.reset_component(j); // the "pseudo-normal" state
                                 }
                             } else if cj.faulty && !ri[j].is_nan() {
@@ -271,7 +353,7 @@ pub fn run_centralized(
                 dr.alarm.push(dec.alarm);
             }
         }
-        if let (Some((rows, _, _)), Some(fu)) = (&fusion, fuser.as_mut()) {
+        if let (Some((rows, _, _, _)), Some(fu)) = (&fusion, fuser.as_mut()) {
             // Fault matrix: a sensor's height counts when its row survived the policy.
             let values: Vec<f64> = rows.iter().map(|&(_, row)| z[row]).collect();
             let healthy: Vec<bool> = rows.iter().map(|&(_, row)| !z_used[row].is_nan()).collect();
@@ -284,6 +366,10 @@ pub fn run_centralized(
             }
             // Fused-altitude error against the true height error (the measurement's error).
             let truth = sim.x_true[k][crate::ins::POS + 2];
+            if let Some(fr) = rec.fusion.as_mut() {
+                fr.error.extend(values.iter().map(|v| v - truth));
+                fr.weight.extend_from_slice(&out.weights);
+            }
             match out.value {
                 Some(v) => {
                     z_used[m] = v;
@@ -301,15 +387,27 @@ pub fn run_centralized(
         }
         .map_err(|e| crate::run::at_epoch(k, e))?;
         rec.sources.push(sources);
+        let due = rec.state.as_ref().and_then(|st| st.detector.reset_due());
         rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+        // Sensor sub-filters restart with their propagator, from the same filter output.
+        if let Some(q) = due {
+            for (i, pair) in pairs.iter_mut().enumerate() {
+                if has_state[i] {
+                    pair[q] = Some(
+                        KalmanFilter::new(kf.x().clone(), kf.p().clone())
+                            .map_err(|e| crate::run::at_epoch(k, e))?,
+                    );
+                }
+            }
+        }
     }
     Ok(rec)
 }
 
 /// Per-component statistics and threshold of a deciding SPRT (validated to be one).
-fn sprt_components(d: &Detector) -> Result<(Vec<f64>, f64)> {
+fn sprt_components(d: Option<&Detector>) -> Result<(Vec<f64>, f64)> {
     match d {
-        Detector::Sprt(s) => Ok((s.component_statistics(), s.threshold())),
+        Some(Detector::Sprt(s)) => Ok((s.component_statistics(), s.threshold())),
         _ => Err(Error::Invalid(
             "centralized: the latched and fading policies need an sprt deciding detector".into(),
         )),

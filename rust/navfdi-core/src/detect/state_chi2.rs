@@ -63,6 +63,9 @@ pub struct StateChi2 {
     n: usize,
     epoch: u64,
     props: [Propagator; 2],
+    /// Propagators already advanced to the current epoch ([`StateChi2::advance`]).
+    #[serde(default)]
+    advanced: bool,
 }
 
 impl StateChi2 {
@@ -138,6 +141,7 @@ impl StateChi2 {
             n,
             epoch: 0,
             props: [empty.clone(), empty],
+            advanced: false,
         })
     }
 
@@ -216,7 +220,8 @@ impl StateChi2 {
         Ok(self.step_trusted(x, p, phi, q))
     }
 
-    /// [`StateChi2::step`] without validation (inside whole runs).
+    /// [`StateChi2::step`] without validation (inside whole runs): [`StateChi2::advance`],
+    /// [`StateChi2::test`] of `x`, `p`, then [`StateChi2::finish`] with them.
     pub fn step_trusted(
         &mut self,
         x: &DVector<f64>,
@@ -224,21 +229,66 @@ impl StateChi2 {
         phi: &DMatrix<f64>,
         q: &DMatrix<f64>,
     ) -> StateDecision {
-        // Propagate the running propagators.
-        if self.epoch > 0 {
-            for pr in self.props.iter_mut() {
-                if let Some(age) = pr.age.as_mut() {
-                    pr.x = phi * &pr.x;
-                    pr.p = phi * &pr.p * phi.transpose() + q;
-                    crate::validate::symmetrize(&mut pr.p);
-                    *age += 1;
-                }
+        self.advance(phi, q);
+        let out = self.test(x, p, self.threshold);
+        self.finish(x, p);
+        out
+    }
+
+    /// Propagate the running propagators to this epoch with `phi`, `q` (no-op at the first
+    /// epoch, and when already advanced this epoch). Unvalidated: n × n finite inputs.
+    pub fn advance(&mut self, phi: &DMatrix<f64>, q: &DMatrix<f64>) {
+        if self.epoch == 0 || self.advanced {
+            return;
+        }
+        for pr in self.props.iter_mut() {
+            if let Some(age) = pr.age.as_mut() {
+                pr.x = phi * &pr.x;
+                pr.p = phi * &pr.p * phi.transpose() + q;
+                crate::validate::symmetrize(&mut pr.p);
+                *age += 1;
             }
         }
+        self.advanced = true;
+    }
+
+    /// The propagator reset longer ago and its age, once that age is at least `min_age`
+    /// (None: the age rule is not met yet).
+    pub fn older(&self) -> Option<(usize, u64)> {
+        (0..2)
+            .filter_map(|i| self.props[i].age.map(|a| (i, a)))
+            .max_by_key(|&(_, a)| a)
+            .filter(|&(_, a)| a >= self.min_age)
+    }
+
+    /// The propagator [`StateChi2::finish`] resets at this epoch, if any.
+    pub fn reset_due(&self) -> Option<usize> {
+        self.epoch
+            .is_multiple_of(self.reset_every)
+            .then(|| ((self.epoch / self.reset_every) % 2) as usize)
+    }
+
+    /// Test the filter's estimate `x`, `p` of this epoch (after [`StateChi2::advance`]) against
+    /// the propagator reset longer ago, with `threshold`: `β = x − X_s`, `V = P_s − p` on the
+    /// tested states. Unvalidated: n-vector, n × n.
+    pub fn test(&self, x: &DVector<f64>, p: &DMatrix<f64>, threshold: f64) -> StateDecision {
+        self.test_with(|_| Some((x, p)), threshold)
+    }
+
+    /// [`StateChi2::test`] of the estimate `estimate(i)` paired with propagator `i` (None: not
+    /// tested). Paper 003's per-sensor test pairs each propagator with a sub-filter reset from
+    /// the same filter output at the same epoch and updated since by one sensor alone: both
+    /// start from the same state, so `V = P_s − P_i` is the covariance of `β` under no fault
+    /// (its eq. 25).
+    pub fn test_with<'a>(
+        &self,
+        estimate: impl Fn(usize) -> Option<(&'a DVector<f64>, &'a DMatrix<f64>)>,
+        threshold: f64,
+    ) -> StateDecision {
         let d = self.states.len();
         let mut out = StateDecision {
             statistic: f64::NAN,
-            threshold: self.threshold,
+            threshold,
             alarm: false,
             dof: d,
             propagator: None,
@@ -246,38 +296,41 @@ impl StateChi2 {
             ready: false,
             ill_conditioned: false,
         };
-        // The propagator reset longer ago.
-        let older = (0..2)
-            .filter_map(|i| self.props[i].age.map(|a| (i, a)))
-            .max_by_key(|&(_, a)| a);
-        if let Some((i, age)) = older.filter(|&(_, a)| a >= self.min_age) {
-            out.ready = true;
-            out.propagator = Some(i);
-            out.age = age;
-            let pr = &self.props[i];
-            let beta = DVector::from_iterator(d, self.states.iter().map(|&s| x[s] - pr.x[s]));
-            let v = DMatrix::from_fn(d, d, |a, b| {
-                let (sa, sb) = (self.states[a], self.states[b]);
-                pr.p[(sa, sb)] - p[(sa, sb)]
-            });
-            match whitened_statistic(&beta, &v) {
-                Some(l) => {
-                    out.statistic = l;
-                    out.alarm = l >= self.threshold;
-                }
-                None => out.ill_conditioned = true,
+        let Some((i, age)) = self.older() else {
+            return out;
+        };
+        let Some((x, p)) = estimate(i) else {
+            return out;
+        };
+        out.ready = true;
+        out.propagator = Some(i);
+        out.age = age;
+        let pr = &self.props[i];
+        let beta = DVector::from_iterator(d, self.states.iter().map(|&s| x[s] - pr.x[s]));
+        let v = DMatrix::from_fn(d, d, |a, b| {
+            let (sa, sb) = (self.states[a], self.states[b]);
+            pr.p[(sa, sb)] - p[(sa, sb)]
+        });
+        match whitened_statistic(&beta, &v) {
+            Some(l) => {
+                out.statistic = l;
+                out.alarm = l >= threshold;
             }
+            None => out.ill_conditioned = true,
         }
-        // Reset the propagator due at this epoch.
-        if self.epoch.is_multiple_of(self.reset_every) {
-            let i = ((self.epoch / self.reset_every) % 2) as usize;
+        out
+    }
+
+    /// End the epoch: reset the propagator due at it from the filter's `x`, `p`.
+    pub fn finish(&mut self, x: &DVector<f64>, p: &DMatrix<f64>) {
+        if let Some(i) = self.reset_due() {
             let pr = &mut self.props[i];
             pr.x.copy_from(x);
             pr.p.copy_from(p);
             pr.age = Some(0);
         }
         self.epoch += 1;
-        out
+        self.advanced = false;
     }
 }
 

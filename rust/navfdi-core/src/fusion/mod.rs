@@ -4,5 +4,5 @@
 pub mod federated;
 
 pub use federated::{FederatedFilter, StepReport, SubFilterConfig, SubReport};
-pub use weighted::{Fused, WeightedFusion};
+pub use weighted::{Estimate, Fused, WeightedFusion};
 pub mod weighted;

@@ -3,10 +3,12 @@
 //! sensors' detectors.
 //!
 //! `σ_i²` is estimated over the last `window` samples of sensor i's deviation from the
-//! filter's predicted value, `d = x_i − ŷ⁻`, as their **mean square** (**resolution**: not the
-//! variance about their mean, so that a biased sensor — a radio altimeter over uneven terrain
-//! — loses weight rather than keeping it); until a sensor has 2 samples its `prior_sigma` is
-//! used. A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
+//! filter's predicted value, `d = x_i − ŷ⁻`, either as their **variance** about their mean
+//! (paper 003's eq. 35, [`Estimate::Variance`]) or as their **mean square** (navfdi's
+//! default, [`Estimate::MeanSquare`]: a biased sensor — a radio altimeter over uneven terrain
+//! — then loses weight, where the variance keeps a slowly varying bias at full weight); until
+//! a sensor has 2 samples its `prior_sigma` is used, and the estimate is floored at
+//! `(SIGMA_FLOOR · prior_sigma)²`. A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
 //! none contributes the output says so (`value = None`) and the caller predicts only. The
 //! fused variance `1 / Σ w_i M_i` assumes independent sensors.
 
@@ -26,12 +28,28 @@ pub struct Fused {
     pub sigma2: Vec<f64>,
 }
 
+/// `σ_i` is never estimated below this fraction of the sensor's prior σ.
+pub const SIGMA_FLOOR: f64 = 1e-3;
+
+/// How `σ_i²` is estimated from the window of deviations `d`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Estimate {
+    /// `Σ d² / N`: a bias counts as error.
+    #[default]
+    MeanSquare,
+    /// `Σ (d − d̄)² / (N − 1)` (paper 003, eq. 35): only the scatter counts.
+    Variance,
+}
+
 /// Inverse-variance fusion with a fault matrix and windowed variance estimates.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct WeightedFusion {
     window: usize,
     prior: Vec<f64>,
     devs: Vec<VecDeque<f64>>,
+    #[serde(default)]
+    estimate: Estimate,
 }
 
 impl WeightedFusion {
@@ -66,7 +84,19 @@ impl WeightedFusion {
             prior: prior_sigma.to_vec(),
             // Grown as samples arrive (a large window costs memory only once filled).
             devs: vec![VecDeque::new(); prior_sigma.len()],
+            estimate: Estimate::MeanSquare,
         })
+    }
+
+    /// The same fusion with `estimate` for `σ_i²`.
+    pub fn with_estimate(mut self, estimate: Estimate) -> Self {
+        self.estimate = estimate;
+        self
+    }
+
+    /// How `σ_i²` is estimated.
+    pub fn estimate(&self) -> Estimate {
+        self.estimate
     }
 
     /// Check that a deserialised object is self-consistent (used when unpickling).
@@ -124,7 +154,16 @@ impl WeightedFusion {
                 d.push_back(v - predicted);
             }
             sigma2.push(if d.len() >= 2 {
-                (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).max(f64::MIN_POSITIVE)
+                let n = d.len() as f64;
+                let s2 = match self.estimate {
+                    Estimate::MeanSquare => d.iter().map(|x| x * x).sum::<f64>() / n,
+                    Estimate::Variance => {
+                        let mean = d.iter().sum::<f64>() / n;
+                        d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)
+                    }
+                };
+                // Floor: a sensor whose deviations do not scatter cannot take all the weight.
+                s2.max((SIGMA_FLOOR * prior).powi(2))
             } else {
                 prior * prior
             });
@@ -177,6 +216,21 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("values"));
+        // A constant offset: its mean square counts, its variance does not.
+        let mut ms = WeightedFusion::new(&[1.0, 1.0], 3).unwrap();
+        let mut var = ms.clone().with_estimate(Estimate::Variance);
+        for k in 0..3 {
+            let v = [1.0 + 0.1 * (k % 2) as f64, 3.0];
+            let a = ms.step(&v, 1.0, &[true, true]).unwrap();
+            let b = var.step(&v, 1.0, &[true, true]).unwrap();
+            if k == 2 {
+                assert!((a.sigma2[1] - 4.0).abs() < 1e-12);
+                assert!((b.sigma2[1] - 1e-6).abs() < 1e-18);
+                let m: f64 = 0.1 / 3.0;
+                let want = (2.0 * m * m + (0.1 - m).powi(2)) / 2.0;
+                assert!((b.sigma2[0] - want).abs() < 1e-15);
+            }
+        }
         assert!(WeightedFusion::new(&[1.0, 0.0], 3)
             .unwrap_err()
             .to_string()

@@ -26,6 +26,9 @@ pub struct Simulated {
     pub raw: Vec<DVector<f64>>,
 }
 
+/// Stream offset of the per-run sensor offsets.
+const BIAS_STREAM: u64 = 0x00B1_A50F_F5E7;
+
 fn normals(rng: &mut ChaCha8Rng, n: usize) -> DVector<f64> {
     DVector::from_fn(n, |_, _| StandardNormal.sample(rng))
 }
@@ -45,6 +48,20 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         .map(|_| Vec::with_capacity(epochs))
         .collect();
     let mut raw = Vec::new();
+    // Per-run constant sensor offsets, from their own stream so that runs without them draw
+    // exactly what they drew before offsets existed.
+    let bias: Vec<DVector<f64>> = {
+        let mut brng = ChaCha8Rng::seed_from_u64(seed);
+        brng.set_stream(stream ^ BIAS_STREAM);
+        prep.spec
+            .sensors
+            .iter()
+            .map(|s| {
+                let v = normals(&mut brng, s.bias.len());
+                DVector::from_fn(s.bias.len(), |c, _| s.bias[c] * v[c])
+            })
+            .collect()
+    };
     for k in 0..epochs {
         if k > 0 {
             let w = &prep.q_factor[k] * normals(&mut rng, n);
@@ -82,7 +99,7 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
             if prep.available[si][k] {
                 let mut zk = &prep.h[si][k] * &x + &prep.fault[si][k];
                 for c in 0..m {
-                    zk[c] += s.noise[c] * v[c];
+                    zk[c] += s.noise[c] * v[c] + bias[si].get(c).copied().unwrap_or(0.0);
                 }
                 z[si].push(zk);
             } else {

@@ -365,6 +365,7 @@ mod tests {
             name: "ra".into(),
             kind: SensorKind::RadioAltimeter,
             noise: vec![0.5],
+            bias: vec![],
             rate: 1.0,
             outages: vec![],
             ranges: None,

@@ -107,6 +107,21 @@ pub struct RunRecord {
     /// Error of the fused altitude measurement per epoch (m; NaN when no sensor contributed:
     /// the filter predicted only in height); empty without altitude fusion.
     pub fused_alt: Vec<f64>,
+    /// Altitude fusion inputs: the fused sensors' names and, per epoch, each one's height
+    /// measurement error (m, NaN when absent) and normalised weight `w_i M_i / Σ w_j M_j`
+    /// (T × sensors row-major); empty without altitude fusion.
+    pub fusion: Option<FusionRecord>,
+}
+
+/// Per-epoch inputs of the altitude fusion (see [`RunRecord::fusion`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FusionRecord {
+    /// Fused sensors in configuration order.
+    pub sensors: Vec<String>,
+    /// Height measurement error per epoch and sensor (m; NaN when absent), T × sensors.
+    pub error: Vec<f64>,
+    /// Normalised weight per epoch and sensor (0 when it did not contribute), T × sensors.
+    pub weight: Vec<f64>,
 }
 
 /// Per-epoch record of the state chi-square test of the navigation solution, with the
@@ -157,6 +172,11 @@ pub fn make_detector(
                 Some(n) => d.with_min_samples(n)?,
                 None => d,
             })
+        }
+        DetectorKind::StateChi2 => {
+            return Err(crate::error::Error::Invalid(
+                "a state_chi2 detector tests sub-filter states, not innovations (centralized architecture only)".into(),
+            ))
         }
     })
 }
@@ -322,6 +342,7 @@ impl RunRecord {
             sats: None,
             mode: prep.mode.clone(),
             fused_alt: Vec::new(),
+            fusion: None,
             // Parameters validated by the scenario, so the detector can always be built.
             state: prep.spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(prep.spec.dt);

@@ -316,6 +316,9 @@ pub struct AltitudeFusionSpec {
     /// Samples N of each sensor's deviation from the predicted height in its variance
     /// estimate.
     pub samples: usize,
+    /// How σ_i² is estimated from those samples (default mean square).
+    #[serde(default)]
+    pub estimate: crate::fusion::Estimate,
 }
 
 impl SensorKind {
@@ -480,6 +483,10 @@ pub struct SensorSpec {
     pub kind: SensorKind,
     /// Noise σ per component (SI units of the component), length = kind dimension.
     pub noise: Vec<f64>,
+    /// σ per component of a constant offset drawn once per run (e.g. a barometer's bias; the
+    /// filter does not model it); empty: none.
+    #[serde(default)]
+    pub bias: Vec<f64>,
     /// Measurement rate (Hz); at most the filter rate.
     pub rate: f64,
     /// Windows `[start, end)` (s) without measurements.
@@ -560,6 +567,10 @@ pub enum DetectorKind {
     Sprt,
     /// Joint chi-square / SPRT.
     Joint,
+    /// State chi-square of the sensor's sub-filter against the navigation solution's
+    /// propagators (paper 003, METHODS §8; centralized architecture with `[state_chi2]`,
+    /// whose schedule and tested states it uses, with this detector's `pf`).
+    StateChi2,
 }
 
 /// A detector attached to a sub-filter.
@@ -934,6 +945,20 @@ impl ScenarioSpec {
             for (j, n) in s.noise.iter().enumerate() {
                 positive(&format!("{p}.noise[{j}]"), *n)?;
             }
+            if !s.bias.is_empty() && (s.bias.len() != s.kind.dim() || s.ranges.is_some()) {
+                return Err(bad(
+                    format!("{p}.bias"),
+                    format!(
+                        "{} values given; a {:?} sensor has {} components (no bias for gnss_ranges)",
+                        s.bias.len(),
+                        s.kind,
+                        s.kind.dim()
+                    ),
+                ));
+            }
+            for (j, b) in s.bias.iter().enumerate() {
+                non_negative(&format!("{p}.bias[{j}]"), *b)?;
+            }
             positive(&format!("{p}.rate"), s.rate)?;
             if s.rate * self.dt > 1.0 + 1e-9 {
                 return Err(bad(
@@ -1265,9 +1290,20 @@ impl ScenarioSpec {
         Ok(())
     }
 
-    fn validate_detectors(&self, p: &str, detectors: &[DetectorSpec]) -> Result<()> {
+    fn validate_detectors(
+        &self,
+        p: &str,
+        detectors: &[DetectorSpec],
+        centralized: bool,
+    ) -> Result<()> {
         for (j, d) in detectors.iter().enumerate() {
             let dp = format!("{p}.detectors[{j}]");
+            if d.kind == DetectorKind::StateChi2 && !(centralized && self.state_chi2.is_some()) {
+                return Err(bad(
+                    format!("{dp}.kind"),
+                    "state_chi2 detectors run in the centralized architecture and need a [state_chi2] section (its propagator schedule and states)",
+                ));
+            }
             if d.name.is_empty() || detectors[..j].iter().any(|o| o.name == d.name) {
                 return Err(bad(
                     format!("{dp}.name"),
@@ -1280,7 +1316,7 @@ impl ScenarioSpec {
             crate::validate::check_probability(&format!("{dp}.pf"), d.pf)
                 .map_err(|e| Error::Invalid(e.to_string()))?;
             match (d.kind, d.pm) {
-                (DetectorKind::Chi2, _) => {}
+                (DetectorKind::Chi2 | DetectorKind::StateChi2, _) => {}
                 (_, None) => {
                     return Err(bad(
                         format!("{dp}.pm"),
@@ -1338,7 +1374,7 @@ impl ScenarioSpec {
             let p = format!("centralized.sensors[{i}]");
             let dup = c.sensors[..i].iter().any(|o| o.sensor == cs.sensor);
             self.check_sensor_ref(&p, &cs.sensor, dup, "is listed twice")?;
-            self.validate_detectors(&p, &cs.detectors)?;
+            self.validate_detectors(&p, &cs.detectors, true)?;
             if let Some(dn) = &cs.decision {
                 let Some(d) = cs.detectors.iter().find(|d| &d.name == dn) else {
                     return Err(bad(
@@ -1417,7 +1453,7 @@ impl ScenarioSpec {
             self.check_sensor_ref(&p, &sf.sensor, dup, "already has a sub-filter")?;
             positive(&format!("{p}.share"), sf.share)?;
             total += sf.share;
-            self.validate_detectors(&p, &sf.detectors)?;
+            self.validate_detectors(&p, &sf.detectors, false)?;
             if let Some(iso) = &sf.isolation {
                 if !sf.detectors.iter().any(|d| &d.name == iso) {
                     return Err(bad(
