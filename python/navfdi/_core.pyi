@@ -651,7 +651,8 @@ class PreparedScenario:
         (0: all cores), GIL released. Returns arrays ``run`` (count,); ``detected``, ``delay``
         (s), ``clear_delay`` (s), ``false_alarm_epochs``, ``outside_epochs``,
         ``wrong_isolations`` (count, cells); ``att_rms``, ``att_max`` (rad), ``pos_rms``,
-        ``pos_max`` (m) (count,); ``records`` ({run: record} for runs in ``keep``)."""
+        ``pos_max``, ``lat_rms``, ``lat_max``, ``fused_alt_rms``, ``fused_alt_max`` (m; the
+        fused-altitude ones NaN without altitude fusion) (count,); ``records`` ({run: record} for runs in ``keep``)."""
 
 @final
 class SnapshotFde:
@@ -808,7 +809,8 @@ class WeightedFusion:
     ``σ_i²`` from sensor i's deviations from the filter's prediction over the last ``window``
     samples: their mean square (``estimate="mean_square"``, a bias counts) or their variance
     about their mean (``"variance"``, paper 003's eq. 35); ``prior_sigma[i]`` before two
-    samples; never below ``(1e-3 · prior_sigma[i])²``."""
+    samples; never below ``prior_sigma[i]²`` (the sensor's own noise is part of every
+    deviation; a smaller sample estimate is sampling error)."""
 
     def __new__(cls, prior_sigma: list[float], window: int = 20, estimate: str = "mean_square") -> WeightedFusion: ...
     @property

@@ -60,6 +60,8 @@ RUN_COLUMNS = [
     "pos_max",
     "lat_rms",
     "lat_max",
+    "fused_alt_rms",
+    "fused_alt_max",
 ]
 
 
@@ -87,6 +89,7 @@ SUMMARY_FIGURES = [
     "error_rms",
     "position_error_rms",
     "latitude_error_rms",
+    "fused_alt_rms",
 ]
 
 
@@ -214,7 +217,8 @@ class Campaign:
         ``after_fault_alarm_rate`` (epochs with any exclusion among the 50 measured epochs after
         the fault ends),
         ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
-        ``position_error_rms`` (m), ``latitude_error_rms`` (north position, m), ``runs_requested`` and ``partial`` (True where the point
+        ``position_error_rms`` (m), ``latitude_error_rms`` (north position, m), ``fused_alt_rms`` (fused-altitude error RMS over
+        the runs, m; NaN without altitude fusion), ``runs_requested`` and ``partial`` (True where the point
         has fewer finished runs than requested: an interrupted campaign). Fault rows carry NaN
         false-alarm rates; ``none`` rows NaN detection figures. Every point × cell has a row,
         with ``runs = 0`` and NaN figures where an interrupted campaign ran none.
@@ -273,6 +277,8 @@ class Campaign:
             rec["error_rms"] = float(np.sqrt(np.mean(g["att_rms"].to_numpy() ** 2)))
             rec["position_error_rms"] = float(np.sqrt(np.mean(g["pos_rms"].to_numpy() ** 2)))
             rec["latitude_error_rms"] = float(np.sqrt(np.mean(g["lat_rms"].to_numpy() ** 2)))
+            fa = g["fused_alt_rms"].to_numpy()
+            rec["fused_alt_rms"] = float(np.sqrt(np.mean(fa[np.isfinite(fa)] ** 2))) if np.isfinite(fa).any() else float("nan")
             rows.append(rec)
             seen.add((rec["point"], rec["subfilter"], rec["detector"], rec["fault_id"]))
         for point, cells in enumerate(self.cells):
@@ -387,7 +393,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
         }
         for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
             cols[k] = ch[k].reshape(-1)
-        for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max"):
+        for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max", "fused_alt_rms", "fused_alt_max"):
             cols[k] = np.repeat(ch[k], c)
         for path, value in points[point].items():
             cols[path] = [value] * (n * c)

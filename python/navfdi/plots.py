@@ -19,6 +19,10 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     * ``modes.png``: the navigation mode per epoch (scenarios with ``[modes]``);
     * ``detector_navigation_state_chi2.png``: the state chi-square test of the navigation
       solution (scenarios with ``[state_chi2]``);
+    * ``altitude_fusion.png`` (altitude fusion, paper 003's Fig. 9, 10, 12): each fused
+      sensor's height measurement error, the fused altitude's error and the weights;
+    * ``altitude_statistics.png`` (altitude fusion, paper 003's Fig. 11): residual and state
+      chi-square statistics of every fused sensor;
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
       isolation.
 
@@ -110,6 +114,8 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
+    if "fusion" in run.record:
+        paths += _plot_altitude(run, out, prefix, plt)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     arcsec = np.degrees(1.0) * 3600
     sigma = run.record["sigma"]
@@ -130,6 +136,59 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     fig.savefig(p, dpi=110)
     plt.close(fig)
     paths.append(p)
+    return paths
+
+
+def _state_detector(run: ScenarioRun, sub: str) -> str | None:
+    """Name of a sensor's ``state_chi2`` detector (centralized architecture), if any."""
+    for cs in run.scenario.core.get("centralized", {}).get("sensors", []):
+        if cs["sensor"] == sub:
+            for d in cs["detectors"]:
+                if d["kind"] == "state_chi2":
+                    return str(d["name"])
+    return None
+
+
+def _plot_altitude(run: ScenarioRun, out: Path, prefix: str, plt: Any) -> list[Path]:
+    """The altitude-fusion figures of :func:`plot_run`."""
+    t = run.t
+    fu = run.record["fusion"]
+    var = f", variant {run.variant}" if prefix else ""
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True, constrained_layout=True, gridspec_kw={"height_ratios": [2, 1]})
+    for j, name in enumerate(fu["sensors"]):
+        axes[0].plot(t, fu["error"][:, j], lw=0.8, marker=MARKERS[j % len(MARKERS)], markevery=max(1, t.size // 20), ms=3, label=name)
+        axes[1].plot(t, fu["weight"][:, j], lw=0.8, marker=MARKERS[j % len(MARKERS)], markevery=max(1, t.size // 20), ms=3, label=name)
+    axes[0].plot(t, run.record["fused_alt"], lw=1.4, color="k", label="fused")
+    axes[0].set_ylabel("height measurement error [m]")
+    axes[1].set_ylabel("weight w_i M_i / Σ w M")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, ncol=len(fu["sensors"]) + 1)
+    axes[0].set_title(f"{run.scenario.name}{var}: altitude fusion (seed {run.seed}); gaps: sensor absent or fused value absent")
+    axes[1].set_xlabel("time [s]")
+    paths = [out / f"{prefix}altitude_fusion.png"]
+    fig.savefig(paths[0], dpi=110)
+    plt.close(fig)
+    subs = {s["sensor"]: s for s in run.record["subfilters"]}
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), sharex=True, constrained_layout=True)
+    for j, name in enumerate(fu["sensors"]):
+        s = subs[name]
+        state = _state_detector(run, name)
+        series = [(axes[1], s["statistic"])]
+        if state is not None:
+            series.append((axes[0], run.detector(name, state)["statistic"]))
+        for ax, stat in series:
+            ax.semilogy(t, np.where(np.isfinite(stat), np.maximum(stat, 1e-6), np.nan), lw=0.8, marker=MARKERS[j % len(MARKERS)], markevery=max(1, t.size // 20), ms=3, label=name)
+    axes[0].set_ylabel("state χ² λ = βᵀV⁻¹β")
+    axes[1].set_ylabel("residual χ² rᵀA⁻¹r")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, ncol=len(fu["sensors"]))
+    axes[0].set_title(f"{run.scenario.name}{var}: state (top) and residual (bottom) chi-square per fused sensor (seed {run.seed})")
+    axes[1].set_xlabel("time [s]")
+    paths.append(out / f"{prefix}altitude_statistics.png")
+    fig.savefig(paths[1], dpi=110)
+    plt.close(fig)
     return paths
 
 
@@ -165,7 +224,9 @@ def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
 
 def plot_variant_errors(runs, out: Path) -> list[Path]:
     """``variant_errors.png``: latitude (north), east and up position error per variant over
-    time, with each variant's ±1σ envelope, faults shaded (paper 002's Fig. 3b style)."""
+    time, with each variant's ±1σ envelope, faults shaded (paper 002's Fig. 3b style); with
+    altitude fusion also ``variant_fused_altitude.png``, the fused altitude's error per
+    variant (paper 003's Fig. 10b and 12b)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -188,7 +249,24 @@ def plot_variant_errors(runs, out: Path) -> list[Path]:
     p = out / "variant_errors.png"
     fig.savefig(p, dpi=110)
     plt.close(fig)
-    return [p]
+    paths = [p]
+    if "fused_alt" in first.record:
+        # Paper 003's Fig. 10b / 12b: the fused altitude's error without and with isolation.
+        fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
+        for gi, (name, r) in enumerate(runs.runs.items()):
+            f = r.record["fused_alt"]
+            ok = np.isfinite(f)
+            rms = float(np.sqrt(np.mean(f[ok] ** 2))) if ok.any() else float("nan")
+            ax.plot(r.t, f, lw=0.9, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, r.t.size // 25), ms=3, label=f"{name} (RMS {rms:.3f} m)")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("fused altitude error [m]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        ax.set_title(f"{first.scenario.name}: fused altitude error per variant (seed {runs.seed})")
+        paths.append(out / "variant_fused_altitude.png")
+        fig.savefig(paths[-1], dpi=110)
+        plt.close(fig)
+    return paths
 
 
 MARKERS = ["o", "s", "^", "D", "v", "P", "X", "*", "<", ">"]

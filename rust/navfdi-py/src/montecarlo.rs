@@ -59,7 +59,7 @@ impl PyPreparedScenario {
     /// (0: all cores), with the GIL released. Returns a dict of arrays: ``run`` (count,),
     /// ``detected``, ``delay``, ``clear_delay``, ``false_alarm_epochs``, ``outside_epochs``,
     /// ``wrong_isolations`` (count, cells), ``att_rms``, ``att_max``, ``pos_rms``, ``pos_max``,
-    /// ``lat_rms``, ``lat_max`` (count,), and ``records`` ({run: record dict} for the runs listed in ``keep``).
+    /// ``lat_rms``, ``lat_max``, ``fused_alt_rms``, ``fused_alt_max`` (count,), and ``records`` ({run: record dict} for the runs listed in ``keep``).
     #[pyo3(signature = (seed, start, count, threads = 0, keep = None))]
     fn run_chunk<'py>(
         &self,
@@ -156,6 +156,14 @@ impl PyPreparedScenario {
         d.set_item(
             "lat_max",
             to_numpy(py, rows.iter().map(|r| r.lat_max).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "fused_alt_rms",
+            to_numpy(py, rows.iter().map(|r| r.fused_alt_rms).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "fused_alt_max",
+            to_numpy(py, rows.iter().map(|r| r.fused_alt_max).collect(), &[n])?,
         )?;
         let recs = PyDict::new(py);
         for r in rows {

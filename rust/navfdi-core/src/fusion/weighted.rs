@@ -7,8 +7,9 @@
 //! (paper 003's eq. 35, [`Estimate::Variance`]) or as their **mean square** (navfdi's
 //! default, [`Estimate::MeanSquare`]: a biased sensor — a radio altimeter over uneven terrain
 //! — then loses weight, where the variance keeps a slowly varying bias at full weight); until
-//! a sensor has 2 samples its `prior_sigma` is used, and the estimate is floored at
-//! `(SIGMA_FLOOR · prior_sigma)²`. A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
+//! a sensor has 2 samples its `prior_sigma` (the sensor's stated noise σ) is used, and the
+//! estimate is never below `prior_sigma²` (**resolution**: the deviation contains the sensor's
+//! own noise; a smaller estimate is sampling error that would give the sensor all the weight). A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
 //! none contributes the output says so (`value = None`) and the caller predicts only. The
 //! fused variance `1 / Σ w_i M_i` assumes independent sensors.
 
@@ -27,9 +28,6 @@ pub struct Fused {
     /// Estimated `σ_i²` per sensor used for the weights.
     pub sigma2: Vec<f64>,
 }
-
-/// `σ_i` is never estimated below this fraction of the sensor's prior σ.
-pub const SIGMA_FLOOR: f64 = 1e-3;
 
 /// How `σ_i²` is estimated from the window of deviations `d`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
@@ -162,8 +160,10 @@ impl WeightedFusion {
                         d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)
                     }
                 };
-                // Floor: a sensor whose deviations do not scatter cannot take all the weight.
-                s2.max((SIGMA_FLOOR * prior).powi(2))
+                // Floor: the deviation contains the sensor's own noise, so an estimate below
+                // it is sampling error (from 2–3 samples it can be near zero and would take
+                // all the weight, and the fused variance 1/Σw would collapse).
+                s2.max(prior * prior)
             } else {
                 prior * prior
             });
@@ -217,7 +217,7 @@ mod tests {
             .to_string()
             .contains("values"));
         // A constant offset: its mean square counts, its variance does not.
-        let mut ms = WeightedFusion::new(&[1.0, 1.0], 3).unwrap();
+        let mut ms = WeightedFusion::new(&[0.01, 1.0], 3).unwrap();
         let mut var = ms.clone().with_estimate(Estimate::Variance);
         for k in 0..3 {
             let v = [1.0 + 0.1 * (k % 2) as f64, 3.0];
@@ -225,7 +225,7 @@ mod tests {
             let b = var.step(&v, 1.0, &[true, true]).unwrap();
             if k == 2 {
                 assert!((a.sigma2[1] - 4.0).abs() < 1e-12);
-                assert!((b.sigma2[1] - 1e-6).abs() < 1e-18);
+                assert!((b.sigma2[1] - 1.0).abs() < 1e-15);
                 let m: f64 = 0.1 / 3.0;
                 let want = (2.0 * m * m + (0.1 - m).powi(2)) / 2.0;
                 assert!((b.sigma2[0] - want).abs() < 1e-15);

@@ -82,6 +82,11 @@ pub struct RunMetrics {
     pub lat_rms: f64,
     /// Latitude (north position) error maximum |error| (m).
     pub lat_max: f64,
+    /// Fused-altitude error RMS over the epochs it existed (m; NaN without altitude fusion or
+    /// when it never existed).
+    pub fused_alt_rms: f64,
+    /// Fused-altitude error maximum |error| (m; NaN likewise).
+    pub fused_alt_max: f64,
     /// Optional full record of the run (kept for chosen runs).
     pub record: Option<RunRecord>,
 }
@@ -200,9 +205,21 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             pmax = pmax.max(v.abs());
         }
     }
+    let (mut f2, mut fmax, mut fn_) = (0.0, f64::NAN, 0usize);
+    for v in rec.fused_alt.iter().filter(|v| v.is_finite()) {
+        f2 += v * v;
+        fmax = if fn_ == 0 { v.abs() } else { fmax.max(v.abs()) };
+        fn_ += 1;
+    }
     RunMetrics {
         run,
         cells: out,
+        fused_alt_rms: if fn_ > 0 {
+            (f2 / fn_ as f64).sqrt()
+        } else {
+            f64::NAN
+        },
+        fused_alt_max: fmax,
         att_rms: (a2 / (3.0 * epochs)).sqrt(),
         att_max: amax,
         pos_rms: (p2 / (3.0 * epochs)).sqrt(),
