@@ -175,3 +175,56 @@ def test_montecarlo_reports_fused_altitude():
     runs = c.runs
     want = math.sqrt(np.mean(runs[(runs.variant == "isolation") & (runs.subfilter == "ra") & (runs.detector == "chi2")]["fused_alt_rms"] ** 2))
     assert iso == pytest.approx(want, rel=1e-12) and iso < no
+
+
+def test_radio_altimeter_noise_scales_with_the_height_above_the_terrain():
+    """σ_k² = noise² + (2 % · AGL_k)²: across runs, the RA's error at an epoch is the terrain
+    under the vehicle (the same in every run) plus noise of that variance."""
+    sc = navfdi.load_scenario("geng2016")
+    errs = []
+    for seed in range(120):
+        fu = navfdi.run_scenario(sc, seed=seed)["no_isolation"].record["fusion"]
+        errs.append(fu["error"][:, fu["sensors"].index("ra")])
+    e = np.array(errs)  # runs × epochs
+    terrain = e.mean(axis=0)
+    want = 0.02**2 + (0.02 * (8.0 - terrain)) ** 2
+    ratio = e.var(axis=0, ddof=1) / want
+    assert 0.95 < ratio.mean() < 1.05, ratio.mean()
+    # Where the vehicle is low over a crest the noise is smaller than over a trough.
+    lo, hi = terrain > 1.0, terrain < -1.0
+    assert e.var(axis=0)[lo].mean() < e.var(axis=0)[hi].mean()
+
+
+@pytest.mark.parametrize(
+    "sensor, value, match",
+    [
+        (3, "150 %", r"sensors\[3\]\.proportional_noise.*between"),
+        (3, "0.02", r"sensors\[3\]\.proportional_noise.*unit"),
+        (2, "2 %", r"sensors\[2\]\.proportional_noise: only a radio_altimeter"),
+    ],
+)
+def test_bad_proportional_noise_is_named(sensor, value, match):
+    raw = copy.deepcopy(navfdi.load_scenario("geng2016").raw)
+    raw["sensors"][sensor]["proportional_noise"] = value
+    with pytest.raises(ScenarioError, match=match):
+        navfdi.load_scenario(raw)
+
+
+def test_proportional_noise_in_a_federated_filter():
+    """The federated architecture takes the per-epoch R too (its RA sub-filter's residual
+    statistic stays χ²(1)-sized where the terrain is flat under the vehicle)."""
+    raw = copy.deepcopy(navfdi.load_scenario("yang2013").raw)
+    raw.update(duration="200 s", faults=[])
+    raw.pop("variants", None)
+    raw["terrain"] = {"waves": [{"amplitude": "0.001 m", "wavelength": "1000 m", "heading": "0 deg"}]}
+    raw["sensors"].append({"name": "ra", "kind": "radio_altimeter", "noise": "0.1 m", "proportional_noise": "1 %", "rate": "1 Hz"})
+    raw["federated"]["subfilters"].append({"sensor": "ra", "share": 0.2, "detectors": [{"name": "chi2", "kind": "chi2", "pf": 0.01}]})
+    raw["federated"]["subfilters"][0]["share"] = 0.4
+    raw["federated"]["subfilters"][1]["share"] = 0.4
+    sc = navfdi.load_scenario(raw)
+    stats_ = []
+    for seed in range(10):
+        r = navfdi.run_scenario(sc, seed=seed, compare_isolation=False)
+        stats_.append(r.detector("ra", "chi2")["statistic"][20:])
+    # With the fixed 0.1 m σ the statistic would be ~ (1 % · ~500+ m / 0.1 m)² ≈ 25+ times larger.
+    assert 0.7 < np.nanmean(stats_) < 1.5, np.nanmean(stats_)

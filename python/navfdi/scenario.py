@@ -466,7 +466,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     kinds: dict[str, str] = {}
     for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
         p = f"sensors[{i}]"
-        _check_keys(s, {"name", "kind", "noise", "bias", "rate", "outages", "ranges"}, p)
+        _check_keys(s, {"name", "kind", "noise", "bias", "proportional_noise", "rate", "outages", "ranges"}, p)
         name = _name(_need(s, "name", p), f"{p}.name")
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in SENSOR_COMPONENTS:
@@ -484,6 +484,13 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         entry: dict[str, Any] = {"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages}
         if bias:
             entry["bias"] = bias
+        if "proportional_noise" in s:
+            if kind != "radio_altimeter":
+                raise ScenarioError(f"{p}.proportional_noise: only a radio_altimeter's noise scales with the height above the terrain (this one is {kind})")
+            frac = _unit(s["proportional_noise"], "fraction", f"{p}.proportional_noise")
+            if not 0 < frac < 1:
+                raise ScenarioError(f"{p}.proportional_noise = {s['proportional_noise']!r}: must be between 0 % and 100 % (exclusive)")
+            entry["proportional_noise"] = frac
         if kind == "gnss_ranges":
             entry["ranges"] = _ranges(_need(s, "ranges", p), f"{p}.ranges")
         elif "ranges" in s:

@@ -85,9 +85,13 @@ pub fn run_centralized(
                 Some((i, offsets[i] + j))
             })
             .collect();
+        // A proportional σ's prior is its value at the first epoch.
         let prior: Vec<f64> = rows
             .iter()
-            .map(|&(i, row)| spec.sensors[sensor_idx[i]].noise[row - offsets[i]])
+            .map(|&(i, row)| match prep.r_epoch[sensor_idx[i]].first() {
+                Some(var) => var.sqrt(),
+                None => spec.sensors[sensor_idx[i]].noise[row - offsets[i]],
+            })
             .collect();
         (rows, prior, af.samples, af.estimate)
     });
@@ -198,6 +202,9 @@ pub fn run_centralized(
             if varying[i] {
                 h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][k]);
             }
+            if let Some(var) = prep.r_epoch[si].get(k) {
+                r[(o, o)] = *var;
+            }
         }
         // Test before update: the innovation of every available component, kept so that an
         // epoch without exclusions applies it without recomputation.
@@ -215,12 +222,12 @@ pub fn run_centralized(
             let (o, d) = (offsets[i], dims[i]);
             let zi: DVector<f64> = z.rows(o, d).into_owned();
             let hi: DMatrix<f64> = h.rows(o, d).into_owned();
-            let ri = &prep.r[sensor_idx[i]];
+            let ri: DMatrix<f64> = r.view((o, o), (d, d)).into_owned();
             for f in pair.iter_mut().flatten() {
                 f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
                     .map_err(|e| crate::run::at_epoch(k, e))?;
                 if zi.iter().any(|v| !v.is_nan()) {
-                    f.update_trusted(&zi, &hi, ri)
+                    f.update_trusted(&zi, &hi, &ri)
                         .map_err(|e| crate::run::at_epoch(k, e))?;
                 }
             }

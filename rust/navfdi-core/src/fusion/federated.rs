@@ -260,6 +260,13 @@ impl FederatedFilter {
         }
     }
 
+    /// Replace `R_i` without validation (the caller guarantees shape and a valid covariance).
+    pub fn set_r_trusted(&mut self, i: usize, r: &DMatrix<f64>) {
+        if let Some(sub) = self.subs.get_mut(i) {
+            sub.cfg.r.copy_from(r);
+        }
+    }
+
     /// Validate one epoch's inputs: `Φ`, `Q` (n × n) and one measurement per sub-filter.
     pub fn check_step(
         &self,

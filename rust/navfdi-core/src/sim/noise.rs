@@ -99,7 +99,11 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
             if prep.available[si][k] {
                 let mut zk = &prep.h[si][k] * &x + &prep.fault[si][k];
                 for c in 0..m {
-                    zk[c] += s.noise[c] * v[c] + bias[si].get(c).copied().unwrap_or(0.0);
+                    let sd = match prep.r_epoch[si].get(k) {
+                        Some(var) if c == 0 => var.sqrt(),
+                        _ => s.noise[c],
+                    };
+                    zk[c] += sd * v[c] + bias[si].get(c).copied().unwrap_or(0.0);
                 }
                 z[si].push(zk);
             } else {

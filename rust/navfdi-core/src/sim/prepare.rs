@@ -30,6 +30,9 @@ pub struct Prepared {
     pub h: Vec<Vec<DMatrix<f64>>>,
     /// Per sensor: `R` (diagonal of the noise variances).
     pub r: Vec<DMatrix<f64>>,
+    /// Per sensor: the variance of its single component per epoch when its noise scales with
+    /// the height above the terrain (`proportional_noise`), replacing `r` then; empty otherwise.
+    pub r_epoch: Vec<Vec<f64>>,
     /// Per sensor and epoch: a measurement is taken (rate and outages).
     pub available: Vec<Vec<bool>>,
     /// Per sensor and epoch: the fault added to each component (all zero without faults).
@@ -200,6 +203,7 @@ impl Prepared {
         let t: Vec<f64> = (0..epochs).map(|k| k as f64 * dt).collect();
         let mut h = Vec::new();
         let mut r = Vec::new();
+        let mut r_epoch = Vec::new();
         let mut available: Vec<Vec<bool>> = Vec::new();
         let mut fault = Vec::new();
         let mut ranges = None;
@@ -256,6 +260,19 @@ impl Prepared {
                     .collect(),
                 _ => vec![0.0; truth.len()],
             };
+            // Height above the terrain (whose zero is height 0) sets a proportional σ.
+            r_epoch.push(if s.proportional_noise > 0.0 {
+                truth
+                    .iter()
+                    .zip(&terrain)
+                    .map(|(e, th)| {
+                        let agl = (e.h - th).max(0.0);
+                        s.noise[0].powi(2) + (s.proportional_noise * agl).powi(2)
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            });
             fault.push(
                 t.iter()
                     .zip(&terrain)
@@ -310,6 +327,7 @@ impl Prepared {
             p0_factor,
             h,
             r,
+            r_epoch,
             available,
             fault,
             ranges,
@@ -366,6 +384,7 @@ mod tests {
             kind: SensorKind::RadioAltimeter,
             noise: vec![0.5],
             bias: vec![],
+            proportional_noise: 0.0,
             rate: 1.0,
             outages: vec![],
             ranges: None,

@@ -258,6 +258,9 @@ pub fn run_federated(
             if varying_h[i] {
                 fed.set_h_trusted(i, &prep.h[si][k]);
             }
+            if let Some(var) = prep.r_epoch[si].get(k) {
+                fed.set_r_trusted(i, &nalgebra::DMatrix::from_element(1, 1, *var));
+            }
         }
         let rep = fed
             .step_trusted(&prep.phi[k], &prep.q[k], &zs)

@@ -487,6 +487,11 @@ pub struct SensorSpec {
     /// filter does not model it); empty: none.
     #[serde(default)]
     pub bias: Vec<f64>,
+    /// Radio altimeter: noise proportional to the height above the terrain (a fraction, e.g.
+    /// 0.02 for ±2 %): σ_k² = noise² + (proportional_noise · AGL_k)², in the simulation and in
+    /// the filter's R; 0: none.
+    #[serde(default)]
+    pub proportional_noise: f64,
     /// Measurement rate (Hz); at most the filter rate.
     pub rate: f64,
     /// Windows `[start, end)` (s) without measurements.
@@ -958,6 +963,23 @@ impl ScenarioSpec {
             }
             for (j, b) in s.bias.iter().enumerate() {
                 non_negative(&format!("{p}.bias[{j}]"), *b)?;
+            }
+            if s.proportional_noise != 0.0 {
+                if s.kind != SensorKind::RadioAltimeter {
+                    return Err(bad(
+                        format!("{p}.proportional_noise"),
+                        format!("only a radio_altimeter's noise scales with the height above the terrain (this one is {:?})", s.kind),
+                    ));
+                }
+                if !(s.proportional_noise > 0.0 && s.proportional_noise < 1.0) {
+                    return Err(bad(
+                        format!("{p}.proportional_noise"),
+                        format!(
+                            "{} must be a fraction in (0, 1), e.g. 0.02 for 2 %",
+                            crate::error::num(s.proportional_noise)
+                        ),
+                    ));
+                }
             }
             positive(&format!("{p}.rate"), s.rate)?;
             if s.rate * self.dt > 1.0 + 1e-9 {
