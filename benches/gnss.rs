@@ -17,9 +17,10 @@
 //! `benches/bench_gnss.py` (same machine, same algorithm).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use navfdi_core::cancel::NEVER;
 use navfdi_core::gnss::innovation::innovation_fde;
+use navfdi_core::gnss::prefilter::{dll_variance, fll_variance, Prefilter, PrefilterConfig};
 use navfdi_core::gnss::snapshot::{snapshot_fde, FdeConfig, ObsCov};
 use navfdi_core::kalman::KalmanFilter;
 use navfdi_core::sim::noise::simulate;
@@ -156,6 +157,25 @@ fn bench(c: &mut Criterion) {
                 innovation_fde(&inn0.residual, &inn0.covariance, m, true, None, true, &cfg)
                     .expect("fde"),
             )
+        })
+    });
+    // Paper 004's channel prefilter: one 20 ms step (predict, both discriminators, Joseph).
+    let mut pf = Prefilter::new(
+        PrefilterConfig::default(),
+        Vector3::zeros(),
+        Matrix3::identity() * 0.01,
+    )
+    .expect("prefilter");
+    let r = Vector2::new(
+        dll_variance(48.0, 0.02, 1.0).expect("dll"),
+        fll_variance(48.0, 0.02, false).expect("fll"),
+    );
+    let mut k = 0u32;
+    g.bench_function("prefilter_step", |b| {
+        b.iter(|| {
+            k = k.wrapping_add(1);
+            let z = Vector2::new(1e-3 * f64::from(k % 7), 0.1 * f64::from(k % 5));
+            black_box(pf.step_with(black_box(z), r))
         })
     });
     g.sample_size(20);

@@ -27,6 +27,9 @@ GNSS
     Real data: :func:`read_rinex` (RINEX 3 observation/navigation files as tables),
     :func:`gnss_solve` (single-point positioning with FDE, injected faults) returning a
     :class:`GnssSolution`; :class:`GnssFault`; :class:`FileFormatError` for bad files.
+    Ultra-tight building blocks (paper 004): the channel :class:`Prefilter` (returning
+    :class:`PrefilterStep`) and the discriminator noise :func:`dll_variance`,
+    :func:`fll_variance`.
 Monte-Carlo
     :func:`montecarlo` (runs × sweep points in parallel in Rust, or on Dask) returning a
     :class:`Campaign` with per-run metrics, summaries, plots.
@@ -48,6 +51,8 @@ from navfdi._core import (
     JointChi2Sprt,
     KalmanFilter,
     LinAlgError,
+    Prefilter,
+    PrefilterStep,
     ResidualChi2,
     SnapshotFde,
     StateChi2,
@@ -56,6 +61,8 @@ from navfdi._core import (
     WeightedFusion,
     __version__,
     chi2_threshold,
+    dll_variance,
+    fll_variance,
     ls_test,
     mdb,
     ncx2_cdf,
@@ -89,6 +96,8 @@ __all__ = [
     "JointChi2Sprt",
     "KalmanFilter",
     "LinAlgError",
+    "Prefilter",
+    "PrefilterStep",
     "ResidualChi2",
     "Scenario",
     "ScenarioError",
@@ -103,6 +112,8 @@ __all__ = [
     "alarm_intervals",
     "bundled_scenarios",
     "chi2_threshold",
+    "dll_variance",
+    "fll_variance",
     "gnss_solve",
     "load_scenario",
     "ls_test",

@@ -18,6 +18,10 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "__version__",
+    "Prefilter",
+    "PrefilterStep",
+    "dll_variance",
+    "fll_variance",
     "memory_available",
     "check_campaign_memory",
     "match_alarms",
@@ -892,3 +896,77 @@ class GnssRun:
     @property
     def receiver(self) -> str:
         """Receiver type from the observation header."""
+
+def dll_variance(cn0_dbhz: float, t: float = 0.02, spacing: float = 1.0) -> float:
+    """Variance (chips²) of one output of a noncoherent early-minus-late power delay
+    discriminator after coherent integration ``t`` (s) with early-late ``spacing`` (chips, in
+    (0, 2)) at ``cn0_dbhz`` (0–80 dB-Hz): Kaplan & Hegarty (2006) eq. 5.71 with the bandwidth
+    of one output, B = 1/(2T). Bad arguments raise ``ValueError`` naming them."""
+
+def fll_variance(cn0_dbhz: float, t: float = 0.02, high_noise: bool = False) -> float:
+    """Variance (Hz²) of one output of a cross-product (ATAN2) frequency discriminator after
+    coherent integration ``t`` (s) at ``cn0_dbhz``: Kaplan & Hegarty (2006) eq. 5.64 with
+    B = 1/(2T) and F = 1 (2 with ``high_noise``, near the tracking threshold)."""
+
+@final
+class PrefilterStep:
+    """One step's innovation of :class:`Prefilter` (read-only)."""
+
+    def __new__(cls) -> PrefilterStep: ...
+    @property
+    def residual(self) -> NDArray[np.float64]:
+        """Innovation (2,): code (chips) and frequency (Hz); NaN where a discriminator gave no
+        output."""
+    @property
+    def covariance(self) -> NDArray[np.float64]:
+        """Its covariance (2, 2) ``HP⁻Hᵀ + R`` (NaN rows/columns where absent)."""
+    @property
+    def statistic(self) -> float:
+        """``λ = rᵀA⁻¹r`` over the used components (NaN when none): χ²(dof) under no fault."""
+    @property
+    def dof(self) -> int:
+        """Components used (0–2)."""
+
+@final
+class Prefilter:
+    """Channel prefilter of an ultra-tight (vector-tracking) receiver (paper 004, METHODS §11):
+    a 3-state Kalman filter on the replica's code-phase error (chips), carrier-frequency error
+    (Hz) and its rate (Hz/s) with ``Φ = [[1, βT, βT²/2], [0, 1, T], [0, 0, 1]]``, a random walk
+    of the frequency rate (``jerk_psd``, Hz²/s³) and optionally of the code phase
+    (``code_psd``, chips²/s), updated every ``t`` seconds by the delay and frequency
+    discriminator outputs with the noise of :func:`dll_variance` and :func:`fll_variance`.
+    ``beta`` defaults to GPS L1 C/A (1.023 MHz / 1575.42 MHz); ``x0`` (3,) defaults to zeros,
+    ``P0`` (3, 3) to diag(0.01 chips², 1 Hz², 1 Hz²/s²)."""
+
+    def __new__(
+        cls,
+        t: float = 0.02,
+        beta: float = ...,
+        jerk_psd: float = 1.0,
+        code_psd: float = 0.0,
+        spacing: float = 1.0,
+        x0: ArrayLike | None = None,
+        P0: ArrayLike | None = None,
+    ) -> Prefilter: ...
+    def step(self, z_code: float, z_freq: float, cn0_dbhz: float) -> PrefilterStep:
+        """One coherent integration: predict over ``t``, then update with the code (chips) and
+        frequency (Hz) discriminator outputs (NaN: absent) whose noise follows ``cn0_dbhz``.
+        Returns the innovation the update used. Bad input raises ``ValueError`` and changes
+        nothing."""
+    def shift(self, dx: ArrayLike) -> None:
+        """Add ``dx`` (3,) to the state (a replica correction moves the errors by its
+        negative)."""
+    @property
+    def x(self) -> NDArray[np.float64]:
+        """State (3,): code-phase error (chips), frequency error (Hz), its rate (Hz/s)."""
+    @property
+    def P(self) -> NDArray[np.float64]:
+        """Covariance (3, 3)."""
+    @property
+    def phi(self) -> NDArray[np.float64]:
+        """Transition matrix Φ (3, 3) of one step."""
+    @property
+    def q(self) -> NDArray[np.float64]:
+        """Process noise Q (3, 3) of one step."""
+    def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
+        """Pickle support."""

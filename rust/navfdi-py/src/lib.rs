@@ -12,6 +12,7 @@ mod gnss;
 mod interrupt;
 mod montecarlo;
 mod pickling;
+mod prefilter;
 mod rinex;
 mod scenario;
 mod weighted;
@@ -161,5 +162,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rinex::read_rinex_nav, m)?)?;
     m.add_class::<rinex::PyGnssRun>()?;
     m.add_function(wrap_pyfunction!(montecarlo::check_campaign_memory, m)?)?;
+    m.add_class::<prefilter::PyPrefilter>()?;
+    m.add_class::<prefilter::PyPrefilterStep>()?;
+    m.add_function(wrap_pyfunction!(prefilter::py_dll_variance, m)?)?;
+    m.add_function(wrap_pyfunction!(prefilter::py_fll_variance, m)?)?;
     Ok(())
 }

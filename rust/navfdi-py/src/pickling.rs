@@ -72,6 +72,13 @@ pub fn _restore(py: Python<'_>, kind: &str, state: &str) -> PyResult<Py<PyAny>> 
                 .map_err(|e| PyValueError::new_err(format!("cannot restore a StateChi2: {e}")))?;
             Py::new(py, crate::detect::PyStateChi2::from_inner(inner))?.into_any()
         }
+        "Prefilter" => {
+            let inner: navfdi_core::gnss::prefilter::Prefilter = load(kind, state)?;
+            inner
+                .check_consistent()
+                .map_err(|e| PyValueError::new_err(format!("cannot restore a Prefilter: {e}")))?;
+            Py::new(py, crate::prefilter::PyPrefilter::from_inner(inner))?.into_any()
+        }
         "FederatedFilter" => {
             Py::new(py, PyFederatedFilter::from_inner(load(kind, state)?))?.into_any()
         }

@@ -7,6 +7,7 @@
 //! * [`rinex`]: RINEX 3 observation and navigation files (read with the `rinex` crate).
 //! * [`broadcast`]: GPS time, broadcast-ephemeris satellite positions and clocks, selection.
 //! * [`atmosphere`]: Klobuchar ionosphere and Saastamoinen troposphere.
+//! * [`prefilter`]: channel prefilters of an ultra-tight receiver and discriminator noise.
 //! * [`sequential`]: SPRT and rate CUSUM on each satellite's residual stream.
 //! * [`spp`]: single-point positioning with satellite FDE on real pseudoranges.
 //! * [`snapshot`]: iterative weighted least squares for position and clock from
@@ -18,6 +19,7 @@ pub mod broadcast;
 pub mod constellation;
 pub mod geodesy;
 pub mod innovation;
+pub mod prefilter;
 pub mod pv_filter;
 pub mod ranges;
 pub mod rinex;
