@@ -228,3 +228,21 @@ def test_proportional_noise_in_a_federated_filter():
         stats_.append(r.detector("ra", "chi2")["statistic"][20:])
     # With the fixed 0.1 m σ the statistic would be ~ (1 % · ~500+ m / 0.1 m)² ≈ 25+ times larger.
     assert 0.7 < np.nanmean(stats_) < 1.5, np.nanmean(stats_)
+
+
+def test_the_state_test_can_decide_the_fault_matrix():
+    """``decision = "state"``: the RA's M_i follows its state test (in alarm most of the
+    flight), and the fused altitude improves on no isolation as with the residual test."""
+    raw = copy.deepcopy(navfdi.load_scenario("geng2016").raw)
+    for cs in raw["centralized"]["sensors"]:
+        cs["decision"] = "state"
+    res = navfdi.run_scenario(navfdi.load_scenario(raw), seed=2)
+    r = res["isolation"]
+    state = r.detector("ra", "state")
+    np.testing.assert_array_equal(r.isolated("ra")[state["alarm"]], True)
+    present = np.isfinite(state["statistic"])
+    assert r.isolated("ra")[present].mean() > 0.5
+    err = res.errors().set_index("variant")
+    assert err.loc["isolation", "fused_alt_rms"] < 0.5 * err.loc["no_isolation", "fused_alt_rms"]
+    text = res.format_tables()
+    assert "fused altitude error per variant" in text and "whole run: no faults" in text

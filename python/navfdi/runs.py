@@ -340,7 +340,8 @@ class ScenarioRun:
         t0, t1 = self.error_window()
         a = np.degrees(self.attitude_rms(t0, t1, True)) * 3600
         b = np.degrees(self.attitude_rms(t0, t1, False)) * 3600
-        return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s (first fault to end of run): {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
+        span = "first fault to end of run" if self.scenario.faults() else "whole run: no faults"
+        return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s ({span}): {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
 
     def timeseries(self):
         """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,
@@ -526,7 +527,12 @@ class VariantRuns:
         t0, t1 = first.error_window()
         arcsec = np.degrees(1.0) * 3600
         rms = ", ".join(f"{name} {r.attitude_rms(t0, t1) * arcsec:.2f}" for name, r in self.runs.items())
-        lines.append(f"master attitude error RMS over {t0:g}–{first.t[-1]:g} s (first fault to end of run), arcsec: {rms}")
+        span = "first fault to end of run" if first.scenario.faults() else "whole run: no faults"
+        lines.append(f"master attitude error RMS over {t0:g}–{first.t[-1]:g} s ({span}), arcsec: {rms}")
+        if "fused_alt_rms" in err.columns:
+            lines.append("fused altitude error per variant: RMS / max [m], share of epochs predicting only in height")
+            for _, row in err.iterrows():
+                lines.append(f"  {row['variant']:<14} {row['fused_alt_rms']:>7.3f} / {row['fused_alt_max']:<6.2f} {row['fused_alt_predict_only']:>6.1%}")
         parts.append("\n".join(lines) + "\n")
         return "\n".join(parts)
 
