@@ -963,6 +963,15 @@ impl ScenarioSpec {
             }
             for (j, b) in s.bias.iter().enumerate() {
                 non_negative(&format!("{p}.bias[{j}]"), *b)?;
+                if *b > 1e7 {
+                    return Err(bad(
+                        format!("{p}.bias[{j}]"),
+                        format!(
+                            "{} is beyond any sensor's offset (at most 1e7 in the component's SI unit)",
+                            crate::error::num(*b)
+                        ),
+                    ));
+                }
             }
             if s.proportional_noise != 0.0 {
                 if s.kind != SensorKind::RadioAltimeter {
