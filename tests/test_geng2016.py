@@ -135,6 +135,10 @@ def test_state_detector_needs_centralized_and_a_schedule():
     bias["sensors"][2]["bias"] = "1e200 m"
     with pytest.raises(ScenarioError, match=r"sensors\[2\]\.bias\[0\].*beyond"):
         navfdi.load_scenario(bias)
+    bias["sensors"][2]["bias"] = "0.1 m"
+    bias["sensors"][2]["noise"] = "1e200 m"
+    with pytest.raises(ScenarioError, match=r"sensors\[2\]\.noise\[0\].*beyond"):
+        navfdi.load_scenario(bias)
 
 
 def test_bias_is_a_constant_per_run_and_leaves_other_draws_alone():

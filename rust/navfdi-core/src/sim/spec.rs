@@ -949,6 +949,16 @@ impl ScenarioSpec {
             }
             for (j, n) in s.noise.iter().enumerate() {
                 positive(&format!("{p}.noise[{j}]"), *n)?;
+                // Beyond this the squared σ overflows the filter's arithmetic.
+                if *n > 1e7 {
+                    return Err(bad(
+                        format!("{p}.noise[{j}]"),
+                        format!(
+                            "{} is beyond any sensor's noise (at most 1e7 in the component's SI unit)",
+                            crate::error::num(*n)
+                        ),
+                    ));
+                }
             }
             if !s.bias.is_empty() && (s.bias.len() != s.kind.dim() || s.ranges.is_some()) {
                 return Err(bad(
