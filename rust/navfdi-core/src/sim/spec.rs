@@ -672,6 +672,20 @@ fn positive(path: &str, v: f64) -> Result<()> {
     Ok(())
 }
 
+/// A sensor's σ (`what`: noise or offset) within what the filter's arithmetic can square.
+fn sensor_scale(path: &str, v: f64, what: &str) -> Result<()> {
+    if v > 1e7 {
+        return Err(bad(
+            path,
+            format!(
+                "{} is beyond any sensor's {what} (at most 1e7 in the component's SI unit)",
+                crate::error::num(v)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 fn non_negative(path: &str, v: f64) -> Result<()> {
     if !(v >= 0.0 && v.is_finite()) {
         return Err(bad(
@@ -949,16 +963,7 @@ impl ScenarioSpec {
             }
             for (j, n) in s.noise.iter().enumerate() {
                 positive(&format!("{p}.noise[{j}]"), *n)?;
-                // Beyond this the squared σ overflows the filter's arithmetic.
-                if *n > 1e7 {
-                    return Err(bad(
-                        format!("{p}.noise[{j}]"),
-                        format!(
-                            "{} is beyond any sensor's noise (at most 1e7 in the component's SI unit)",
-                            crate::error::num(*n)
-                        ),
-                    ));
-                }
+                sensor_scale(&format!("{p}.noise[{j}]"), *n, "noise")?;
             }
             if !s.bias.is_empty() && (s.bias.len() != s.kind.dim() || s.ranges.is_some()) {
                 return Err(bad(
@@ -973,15 +978,7 @@ impl ScenarioSpec {
             }
             for (j, b) in s.bias.iter().enumerate() {
                 non_negative(&format!("{p}.bias[{j}]"), *b)?;
-                if *b > 1e7 {
-                    return Err(bad(
-                        format!("{p}.bias[{j}]"),
-                        format!(
-                            "{} is beyond any sensor's offset (at most 1e7 in the component's SI unit)",
-                            crate::error::num(*b)
-                        ),
-                    ));
-                }
+                sensor_scale(&format!("{p}.bias[{j}]"), *b, "offset")?;
             }
             if s.proportional_noise != 0.0 {
                 if s.kind != SensorKind::RadioAltimeter {
