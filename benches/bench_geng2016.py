@@ -19,16 +19,7 @@ import time
 import numpy as np
 
 import navfdi
-from problem import problem
-
-
-def best(fn, repeat: int = 20) -> float:
-    out = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return min(out)
+from problem import best, problem
 
 
 def filters_seconds(epochs: int) -> float:
@@ -42,7 +33,7 @@ def filters_seconds(epochs: int) -> float:
             H[i, 6 + i % 3] = 1.0
         R = np.eye(m)
         zs = rng.standard_normal((epochs, m))
-        total += best(lambda: navfdi.run_filter(x0, P0, Phi, Q, zs, H, R))
+        total += best(lambda: navfdi.run_filter(x0, P0, Phi, Q, zs, H, R), 20)
     return 2 * total
 
 
@@ -51,7 +42,7 @@ def main() -> None:
     sc = navfdi.load_scenario("geng2016")
     epochs = round(sc.core["duration"] / sc.core["dt"])
     navfdi.run_scenario(sc, seed=0)  # warm up
-    one = best(lambda: navfdi.run_scenario(sc, seed=1))
+    one = best(lambda: navfdi.run_scenario(sc, seed=1), 20)
     ref = filters_seconds(epochs)
     t0 = time.perf_counter()
     c = navfdi.montecarlo(sc, runs=runs, seed=0, workers=2, progress=False)

@@ -25,6 +25,7 @@ from pathlib import Path
 import pytest
 
 import navfdi
+from problem import best
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "rinex"
 
@@ -42,15 +43,6 @@ def navfdi_run(obs: Path, nav: Path) -> navfdi.GnssSolution:
 
 def rnx2rtkp_run(obs: Path, nav: Path) -> None:
     subprocess.run(["rnx2rtkp", "-p", "0", "-m", "10", "-sys", "G", "-o", "/dev/null", str(obs), str(nav)], check=True, capture_output=True)
-
-
-def best(f, rounds: int = 7) -> float:
-    out = []
-    for _ in range(rounds):
-        t = time.perf_counter()
-        f()
-        out.append(time.perf_counter() - t)
-    return min(out)
 
 
 def glp_per_epoch(obs: Path, nav: Path, epochs: int = 30) -> tuple[float, float]:

@@ -7,6 +7,8 @@ The same model as ``benches/core_step.rs``.
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 N, M, T = 15, 6, 10_000
@@ -63,3 +65,13 @@ def run_filter(x0, P0, Phi, Q, zs, H, R):
     import navfdi
 
     return navfdi.run_filter(x0, P0, Phi, Q, zs, H, R).x[-1]
+
+
+def best(f, rounds: int = 7) -> float:
+    """Shortest wall time (s) of ``rounds`` calls of ``f()``."""
+    out = []
+    for _ in range(rounds):
+        t = time.perf_counter()
+        f()
+        out.append(time.perf_counter() - t)
+    return min(out)

@@ -133,38 +133,21 @@ impl PyPreparedScenario {
         ] {
             d.set_item(key, to_numpy(py, grid_i(&|m| f(m) as i64), &[n, c])?)?;
         }
-        d.set_item(
-            "att_rms",
-            to_numpy(py, rows.iter().map(|r| r.att_rms).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "att_max",
-            to_numpy(py, rows.iter().map(|r| r.att_max).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "pos_rms",
-            to_numpy(py, rows.iter().map(|r| r.pos_rms).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "pos_max",
-            to_numpy(py, rows.iter().map(|r| r.pos_max).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "lat_rms",
-            to_numpy(py, rows.iter().map(|r| r.lat_rms).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "lat_max",
-            to_numpy(py, rows.iter().map(|r| r.lat_max).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "fused_alt_rms",
-            to_numpy(py, rows.iter().map(|r| r.fused_alt_rms).collect(), &[n])?,
-        )?;
-        d.set_item(
-            "fused_alt_max",
-            to_numpy(py, rows.iter().map(|r| r.fused_alt_max).collect(), &[n])?,
-        )?;
+        for (key, f) in [
+            (
+                "att_rms",
+                (|r| r.att_rms) as fn(&navfdi_core::sim::montecarlo::RunMetrics) -> f64,
+            ),
+            ("att_max", |r| r.att_max),
+            ("pos_rms", |r| r.pos_rms),
+            ("pos_max", |r| r.pos_max),
+            ("lat_rms", |r| r.lat_rms),
+            ("lat_max", |r| r.lat_max),
+            ("fused_alt_rms", |r| r.fused_alt_rms),
+            ("fused_alt_max", |r| r.fused_alt_max),
+        ] {
+            d.set_item(key, to_numpy(py, rows.iter().map(f).collect(), &[n])?)?;
+        }
         let recs = PyDict::new(py);
         for r in rows {
             if let Some(rec) = r.record {

@@ -64,15 +64,11 @@ impl PyWeightedFusion {
         let window = usize::try_from(window).map_err(|_| {
             pyo3::exceptions::PyValueError::new_err(format!("window = {window}: must be >= 2"))
         })?;
-        let estimate = match estimate {
-            "mean_square" => Estimate::MeanSquare,
-            "variance" => Estimate::Variance,
-            other => {
-                return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                    "estimate = {other:?}: use \"mean_square\" or \"variance\""
-                )))
-            }
-        };
+        let estimate = Estimate::from_name(estimate).ok_or_else(|| {
+            pyo3::exceptions::PyValueError::new_err(format!(
+                "estimate = {estimate:?}: use \"mean_square\" or \"variance\""
+            ))
+        })?;
         Ok(PyWeightedFusion {
             inner: WeightedFusion::new(&prior_sigma, window)
                 .py()?
@@ -82,10 +78,7 @@ impl PyWeightedFusion {
     /// How σ_i² is estimated: ``"mean_square"`` or ``"variance"``.
     #[getter]
     fn estimate(&self) -> &'static str {
-        match self.inner.estimate() {
-            Estimate::MeanSquare => "mean_square",
-            Estimate::Variance => "variance",
-        }
+        self.inner.estimate().name()
     }
     /// One epoch: ``values`` (n,) per sensor (NaN: not available), the filter's ``predicted``
     /// value, ``healthy`` (n,) booleans, the fault matrix M_i.

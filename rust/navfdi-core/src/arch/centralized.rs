@@ -41,6 +41,12 @@ struct Component {
     below: u32,
 }
 
+/// One test of a sensor: an innovation detector, or paper 003's state test (its threshold).
+enum SensorTest {
+    Innovation(Detector),
+    State(f64),
+}
+
 /// Run the centralized filter over one simulated run. `isolation = false`: the detectors run
 /// and report but the policy never acts (every measurement is used).
 ///
@@ -71,30 +77,35 @@ pub fn run_centralized(
         })
         .collect();
     let m: usize = dims.iter().sum();
-    // Altitude fusion: the fused sensors' height rows (stack indices), their priors σ, and one
-    // extra row at the end of the stack for the fused altitude (always NaN in `z`, so the
-    // detectors never see it).
-    let fusion = c.altitude_fusion.as_ref().map(|af| {
-        let rows: Vec<(usize, usize)> = af
-            .sensors
-            .iter()
-            .filter_map(|name| {
-                let i = channels.iter().position(|ch| ch.sensor == name.as_str())?;
-                let si = sensor_idx[i];
-                let j = spec.sensors[si].kind.height_component()?;
-                Some((i, offsets[i] + j))
-            })
-            .collect();
-        // A proportional σ's prior is its value at the first epoch.
-        let prior: Vec<f64> = rows
-            .iter()
-            .map(|&(i, row)| match prep.r_epoch[sensor_idx[i]].first() {
-                Some(var) => var.sqrt(),
-                None => spec.sensors[sensor_idx[i]].noise[row - offsets[i]],
-            })
-            .collect();
-        (rows, prior, af.samples, af.estimate)
-    });
+    // Altitude fusion: the fused sensors' height rows (stack indices) and their fusion (priors
+    // σ from the sensors), and one extra row at the end of the stack for the fused altitude
+    // (always NaN in `z`, so the detectors never see it).
+    let mut fusion = match c.altitude_fusion.as_ref() {
+        Some(af) => {
+            let rows: Vec<(usize, usize)> = af
+                .sensors
+                .iter()
+                .filter_map(|name| {
+                    let i = channels.iter().position(|ch| ch.sensor == name.as_str())?;
+                    let si = sensor_idx[i];
+                    let j = spec.sensors[si].kind.height_component()?;
+                    Some((i, offsets[i] + j))
+                })
+                .collect();
+            // A proportional σ's prior is its value at the first epoch.
+            let prior: Vec<f64> = rows
+                .iter()
+                .map(|&(i, row)| match prep.r_epoch[sensor_idx[i]].first() {
+                    Some(var) => var.sqrt(),
+                    None => spec.sensors[sensor_idx[i]].noise[row - offsets[i]],
+                })
+                .collect();
+            let fuser =
+                crate::fusion::WeightedFusion::new(&prior, af.samples)?.with_estimate(af.estimate);
+            Some((rows, fuser))
+        }
+        None => None,
+    };
     let mut rec = RunRecord::empty(prep);
     let extra = usize::from(fusion.is_some());
     rec.fusion = c
@@ -104,12 +115,6 @@ pub fn run_centralized(
             sensors: af.sensors.clone(),
             ..Default::default()
         });
-    let mut fuser = match &fusion {
-        Some((_, prior, n, e)) => {
-            Some(crate::fusion::WeightedFusion::new(prior, *n)?.with_estimate(*e))
-        }
-        None => None,
-    };
     let mut h = DMatrix::zeros(m + extra, N_STATES);
     let mut r = DMatrix::zeros(m + extra, m + extra);
     if extra == 1 {
@@ -122,31 +127,23 @@ pub fn run_centralized(
         r.view_mut((o, o), (d, d)).copy_from(&prep.r[si]);
     }
     let mut kf = KalmanFilter::new(DVector::zeros(N_STATES), prep.p0.clone())?;
-    // Innovation detectors, and state detectors (None) with their thresholds.
+    // Each sensor's tests: innovation detectors, and state tests with their thresholds.
     let tested = rec
         .state
         .as_ref()
         .map_or(0, |st| st.detector.states().len());
-    let mut detectors: Vec<Vec<Option<Detector>>> = Vec::with_capacity(channels.len());
-    let mut state_thr: Vec<Vec<f64>> = Vec::with_capacity(channels.len());
+    let mut detectors: Vec<Vec<SensorTest>> = Vec::with_capacity(channels.len());
     let mut decision: Vec<Option<usize>> = Vec::with_capacity(channels.len());
     for ch in &channels {
         detectors.push(
             ch.detectors
                 .iter()
                 .map(|d| match d.kind {
-                    DetectorKind::StateChi2 => Ok(None),
+                    DetectorKind::StateChi2 => {
+                        crate::stats::chi2_threshold(d.pf, tested).map(SensorTest::State)
+                    }
                     _ => make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples)
-                        .map(Some),
-                })
-                .collect::<Result<_>>()?,
-        );
-        state_thr.push(
-            ch.detectors
-                .iter()
-                .map(|d| match d.kind {
-                    DetectorKind::StateChi2 => crate::stats::chi2_threshold(d.pf, tested),
-                    _ => Ok(f64::NAN),
+                        .map(SensorTest::Innovation),
                 })
                 .collect::<Result<_>>()?,
         );
@@ -177,14 +174,6 @@ pub fn run_centralized(
     let mut comps: Vec<Vec<Component>> = dims
         .iter()
         .map(|&d| vec![Component::default(); d])
-        .collect();
-    let has_state: Vec<bool> = channels
-        .iter()
-        .map(|ch| {
-            ch.detectors
-                .iter()
-                .any(|d| d.kind == DetectorKind::StateChi2)
-        })
         .collect();
     let mut pairs: Vec<[Option<KalmanFilter>; 2]> = channels.iter().map(|_| [None, None]).collect();
     let mut z = DVector::from_element(m + extra, f64::NAN);
@@ -261,33 +250,29 @@ pub fn run_centralized(
                 }
             }
             let mut decisions = Vec::with_capacity(ch_det.len());
-            for (j, det) in ch_det.iter_mut().enumerate() {
+            for det in ch_det.iter_mut() {
                 decisions.push(match det {
-                    Some(det) => det
+                    SensorTest::Innovation(det) => det
                         .test_innovation(&ri, &ai, lambda, dof)
                         .map_err(|e| crate::run::at_epoch(k, e))?,
-                    None => {
+                    SensorTest::State(threshold) => {
                         let st = rec.state.as_ref().ok_or_else(|| {
                             Error::Invalid("a state_chi2 detector needs [state_chi2]".into())
                         })?;
                         // Tested in the epochs the sensor measures, as the residual test.
                         let pair = &pairs[i];
                         let measured = ri.iter().any(|v| !v.is_nan());
-                        let dec = st.detector.test_with(
-                            |q| {
-                                pair[q]
-                                    .as_ref()
-                                    .filter(|_| measured)
-                                    .map(|f| (f.x(), f.p()))
-                            },
-                            state_thr[i][j],
-                        );
-                        crate::detect::Decision {
-                            statistic: dec.statistic,
-                            threshold: dec.threshold,
-                            alarm: dec.alarm,
-                            dof: dec.dof,
-                        }
+                        st.detector
+                            .test_with(
+                                |q| {
+                                    pair[q]
+                                        .as_ref()
+                                        .filter(|_| measured)
+                                        .map(|f| (f.x(), f.p()))
+                                },
+                                *threshold,
+                            )
+                            .into()
                     }
                 });
             }
@@ -301,13 +286,13 @@ pub fn run_centralized(
                         }
                     }
                     Policy::Latched => {
-                        let (stats, thr) = sprt_components(ch_det[di].as_ref())?;
+                        let (stats, thr) = sprt_components(&ch_det[di])?;
                         for (j, e) in excluded.iter_mut().enumerate() {
                             *e = stats.get(j).is_some_and(|l| *l >= thr);
                         }
                     }
                     Policy::Fading => {
-                        let (stats, thr) = sprt_components(ch_det[di].as_ref())?;
+                        let (stats, thr) = sprt_components(&ch_det[di])?;
                         let mut new_detection = false;
                         for j in 0..d {
                             let cj = &mut comps[i][j];
@@ -319,7 +304,8 @@ pub fn run_centralized(
                                 }
                                 cj.faulty = true;
                                 cj.below = 0;
-                                if let Some(Detector::Sprt(sp)) = &mut ch_det[di] {
+                                if let SensorTest::Innovation(Detector::Sprt(sp)) = &mut ch_det[di]
+                                {
                                     sp.reset_component(j); // the "pseudo-normal" state
                                 }
                             } else if cj.faulty && !ri[j].is_nan() {
@@ -360,7 +346,7 @@ pub fn run_centralized(
                 dr.alarm.push(dec.alarm);
             }
         }
-        if let (Some((rows, _, _, _)), Some(fu)) = (&fusion, fuser.as_mut()) {
+        if let Some((rows, fu)) = fusion.as_mut() {
             // Fault matrix: a sensor's height counts when its row survived the policy.
             let values: Vec<f64> = rows.iter().map(|&(_, row)| z[row]).collect();
             let healthy: Vec<bool> = rows.iter().map(|&(_, row)| !z_used[row].is_nan()).collect();
@@ -368,7 +354,7 @@ pub fn run_centralized(
             let out = fu
                 .step(&values, predicted, &healthy)
                 .map_err(|e| crate::run::at_epoch(k, e))?;
-            for &(_, row) in rows {
+            for &(_, row) in rows.iter() {
                 z_used[row] = f64::NAN;
             }
             // Fused-altitude error against the true height error (the measurement's error).
@@ -398,8 +384,8 @@ pub fn run_centralized(
         rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
         // Sensor sub-filters restart with their propagator, from the same filter output.
         if let Some(q) = due {
-            for (i, pair) in pairs.iter_mut().enumerate() {
-                if has_state[i] {
+            for (pair, tests) in pairs.iter_mut().zip(&detectors) {
+                if tests.iter().any(|t| matches!(t, SensorTest::State(_))) {
                     pair[q] = Some(
                         KalmanFilter::new(kf.x().clone(), kf.p().clone())
                             .map_err(|e| crate::run::at_epoch(k, e))?,
@@ -412,9 +398,9 @@ pub fn run_centralized(
 }
 
 /// Per-component statistics and threshold of a deciding SPRT (validated to be one).
-fn sprt_components(d: Option<&Detector>) -> Result<(Vec<f64>, f64)> {
+fn sprt_components(d: &SensorTest) -> Result<(Vec<f64>, f64)> {
     match d {
-        Some(Detector::Sprt(s)) => Ok((s.component_statistics(), s.threshold())),
+        SensorTest::Innovation(Detector::Sprt(s)) => Ok((s.component_statistics(), s.threshold())),
         _ => Err(Error::Invalid(
             "centralized: the latched and fading policies need an sprt deciding detector".into(),
         )),

@@ -52,6 +52,18 @@ pub struct StateDecision {
     pub ill_conditioned: bool,
 }
 
+impl From<StateDecision> for super::Decision {
+    /// The decision as any detector's (statistic, threshold, alarm, dof).
+    fn from(d: StateDecision) -> Self {
+        super::Decision {
+            statistic: d.statistic,
+            threshold: d.threshold,
+            alarm: d.alarm,
+            dof: d.dof,
+        }
+    }
+}
+
 /// Dual-propagator state chi-square detector.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StateChi2 {

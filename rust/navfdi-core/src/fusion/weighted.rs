@@ -9,8 +9,9 @@
 //! — then loses weight, where the variance keeps a slowly varying bias at full weight); until
 //! a sensor has 2 samples its `prior_sigma` (the sensor's stated noise σ) is used, and the
 //! estimate is never below `prior_sigma²` (**resolution**: the deviation contains the sensor's
-//! own noise; a smaller estimate is sampling error that would give the sensor all the weight). A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when
-//! none contributes the output says so (`value = None`) and the caller predicts only. The
+//! own noise; a smaller estimate is sampling error that would give the sensor all the weight).
+//! A sensor without a value this epoch (NaN) or with `M_i = 0` does not contribute; when none
+//! contributes the output says so (`value = None`) and the caller predicts only. The
 //! fused variance `1 / Σ w_i M_i` assumes independent sensors.
 
 use crate::error::{Error, Result};
@@ -38,6 +39,23 @@ pub enum Estimate {
     MeanSquare,
     /// `Σ (d − d̄)² / (N − 1)` (paper 003, eq. 35): only the scatter counts.
     Variance,
+}
+
+impl Estimate {
+    /// Its name in scenarios and the Python API: `mean_square` or `variance`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Estimate::MeanSquare => "mean_square",
+            Estimate::Variance => "variance",
+        }
+    }
+
+    /// The estimate of a [`Estimate::name`], None for anything else.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Estimate::MeanSquare, Estimate::Variance]
+            .into_iter()
+            .find(|e| e.name() == name)
+    }
 }
 
 /// Inverse-variance fusion with a fault matrix and windowed variance estimates.

@@ -343,24 +343,12 @@ impl Prefilter {
     }
 }
 
+/// [`crate::validate::check_covariance`] of a 3 × 3 covariance.
 fn check_cov3(name: &str, p: &Matrix3<f64>) -> Result<()> {
-    if p.iter().any(|v| !v.is_finite()) {
-        return Err(Error::Invalid(format!(
-            "{name}: every element must be finite"
-        )));
-    }
-    let asym = (p - p.transpose()).abs().max();
-    if asym > 1e-9 * p.abs().max().max(1e-300) {
-        return Err(Error::Invalid(format!("{name}: must be symmetric")));
-    }
-    let eig = p.symmetric_eigenvalues();
-    if eig.min() < -1e-12 * eig.max().abs().max(1e-300) {
-        return Err(Error::Invalid(format!(
-            "{name}: must be positive semi-definite (smallest eigenvalue {:e})",
-            eig.min()
-        )));
-    }
-    Ok(())
+    crate::validate::check_covariance(
+        name,
+        &nalgebra::DMatrix::from_column_slice(3, 3, p.as_slice()),
+    )
 }
 
 #[cfg(test)]

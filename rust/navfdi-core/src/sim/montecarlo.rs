@@ -205,10 +205,11 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             pmax = pmax.max(v.abs());
         }
     }
+    // NaN.max(x) = x: the maximum stays NaN only when no epoch had a fused altitude.
     let (mut f2, mut fmax, mut fn_) = (0.0, f64::NAN, 0usize);
     for v in rec.fused_alt.iter().filter(|v| v.is_finite()) {
         f2 += v * v;
-        fmax = if fn_ == 0 { v.abs() } else { fmax.max(v.abs()) };
+        fmax = fmax.max(v.abs());
         fn_ += 1;
     }
     RunMetrics {
