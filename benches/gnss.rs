@@ -4,9 +4,12 @@
 //!   epoch's solution) + global test + w-test, 10 satellites, one epoch, nothing excluded;
 //!   `snapshot_fde_10_exclude`: the same with a 60 m fault on one satellite (one exclusion,
 //!   a second solve and test);
-//! * `tight_epoch_17x20`: one tight-filter epoch with the innovation FDE: predict (17 states),
-//!   innovation of 10 pseudoranges + 10 rates, global test (passing, as in most epochs),
-//!   update, from a copy of the run's filter (`kalman_clone_17`: the copy alone);
+//! * `tight_epoch_17x20`: one tight-filter epoch with the innovation FDE as runs do it:
+//!   predict (17 states), the update of 10 pseudoranges + 10 rates row by row, which gives
+//!   the global statistic (passing, as in most epochs), test, commit, from a copy of the
+//!   run's filter (`kalman_clone_17`: the copy alone); `tight_epoch_17x20_batch`: the same
+//!   epoch with the batch innovation (20 × 20 A, Cholesky, gain, Joseph form), the path of
+//!   epochs that fail the test;
 //!   `tight_predict_17`, `tight_innovation_17x20`: its parts; `innovation_fde_with_w_20`: the
 //!   test with the w of every satellite (factorisation and inverse), as recorded by
 //!   `navfdi run`;
@@ -22,7 +25,7 @@ use navfdi_core::cancel::NEVER;
 use navfdi_core::gnss::innovation::innovation_fde;
 use navfdi_core::gnss::prefilter::{dll_variance, fll_variance, Prefilter, PrefilterConfig};
 use navfdi_core::gnss::snapshot::{snapshot_fde, FdeConfig, ObsCov};
-use navfdi_core::kalman::KalmanFilter;
+use navfdi_core::kalman::{KalmanFilter, Sequential};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
 use navfdi_core::sim::run::run_architecture;
@@ -101,7 +104,27 @@ fn bench(c: &mut Criterion) {
     let h: DMatrix<f64> = ep.h.clone();
     let r = r_of(ep);
     let state = kf.clone();
+    let r_diag: Vec<f64> = ep
+        .sigma
+        .iter()
+        .chain(&ep.sigma_rate)
+        .map(|s| s * s)
+        .collect();
+    let mut seq = Sequential::new(n);
     g.bench_function("tight_epoch_17x20", |b| {
+        b.iter(|| {
+            let mut f = state.clone();
+            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+                .expect("predict");
+            f.sequential_pending(&z, &h, &r_diag, &mut seq)
+                .expect("sequential");
+            let thr = cfg.threshold(seq.dof).expect("threshold");
+            assert!(seq.statistic < thr);
+            f.commit_sequential(&mut seq).expect("commit");
+            black_box(f)
+        })
+    });
+    g.bench_function("tight_epoch_17x20_batch", |b| {
         b.iter(|| {
             let mut f = state.clone();
             f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)

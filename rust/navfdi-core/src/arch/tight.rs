@@ -24,6 +24,12 @@
 //!   excludes update neither filter.
 //! * `none`: every satellite updates the filter; the innovation global test is recorded.
 //!
+//! Cost: when no per-satellite w is recorded (Monte-Carlo runs), `innovation` and `none`
+//! first update row by row ([`KalmanFilter::sequential_pending`], which yields the global
+//! statistic `rᵀA⁻¹r` without factoring A); only an epoch whose test fails under `innovation`
+//! goes on to the batch innovation and the w-test exclusion loop. Same filter, same test, to
+//! rounding.
+//!
 //! Recorded: the channel's one detector `global` (the first global test of the epoch:
 //! statistic, threshold, alarm), `isolated` = some satellite excluded, `fused` = the ranges
 //! updated the filter; and the per-satellite [`SatRecord`] with its FDE counts. With
@@ -39,7 +45,7 @@ use crate::gnss::snapshot::{
     fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
 };
 use crate::ins::{earth, POS};
-use crate::kalman::KalmanFilter;
+use crate::kalman::{KalmanFilter, Sequential};
 use crate::sim::metrics::{satellite_metrics, SatFault};
 use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
@@ -88,6 +94,8 @@ pub fn run_tight(
         (FdePlacement::GnssFilter, Some(r)) => Some(PvFilter::new(spec.dt, t.accel_psd, &r.clock)),
         _ => None,
     };
+    let mut seq = Sequential::new(n);
+    let mut r_diag: Vec<f64> = Vec::new();
     for k in 0..epochs {
         cancel.check()?;
         kf.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
@@ -120,16 +128,36 @@ pub fn run_tight(
         let rows = if t.rates { 2 * m } else { m };
         let z: DVector<f64> = sim.z[si][k].rows(0, rows).into_owned();
         let h: DMatrix<f64> = ep.h.rows(0, rows).into_owned();
-        let r = DMatrix::from_diagonal(&DVector::from_iterator(
-            rows,
+        r_diag.clear();
+        r_diag.extend(
             ep.sigma
                 .iter()
                 .map(|s| s * s)
                 .chain(ep.sigma_rate.iter().map(|s| s * s))
                 .take(rows),
-        ));
+        );
+        let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+        let mut sequential = false;
         let (out, pending) = match t.fde {
             FdePlacement::LsPrecheck => (ls_precheck(prep, sim, k, kf.x(), t.rates, &cfg)?, None),
+            // Fast path (no per-satellite w wanted): the update row by row, which yields the
+            // global statistic; only an epoch whose test fails (and that may exclude) goes on
+            // to the batch innovation and the w-test.
+            FdePlacement::Innovation | FdePlacement::None
+                if !full
+                    && seq_passes(&kf, &z, &h, &r_diag, &mut seq, &cfg, t.fde)
+                        .map_err(|e| crate::run::at_epoch(k, e))? =>
+            {
+                sequential = true;
+                let thr = cfg.threshold(seq.dof)?;
+                let out = SatFde {
+                    excluded: Vec::new(),
+                    status: FdeStatus::Passed,
+                    first: (seq.statistic, thr, seq.dof),
+                    w: vec![f64::NAN; m],
+                };
+                (out, None)
+            }
             FdePlacement::GnssFilter => {
                 let raw = sim.raw[k].as_slice();
                 let pv = pv
@@ -194,8 +222,14 @@ pub fn run_tight(
                 out.status.code()
             });
         let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
-        let updated = update_without(&mut kf, &z, &h, &r, m, excluded, pending)
-            .map_err(|e| crate::run::at_epoch(k, e))?;
+        let updated = if sequential {
+            kf.commit_sequential(&mut seq)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            m
+        } else {
+            update_without(&mut kf, &z, &h, &r, m, excluded, pending)
+                .map_err(|e| crate::run::at_epoch(k, e))?
+        };
         sub.fused.push(updated > 0);
         sat.used.push(updated as u32);
         rec.sources.push(u32::from(updated > 0));
@@ -227,6 +261,22 @@ pub fn run_tight(
     );
     rec.sats = Some(sat);
     Ok(rec)
+}
+
+/// The sequential update of `z` into `seq` and whether it can be committed as it is: the
+/// global test passes, or nothing would be excluded anyway (placement `none`). False sends the
+/// epoch to the batch innovation and w-test exclusion loop (the filter is unchanged).
+fn seq_passes(
+    kf: &KalmanFilter,
+    z: &DVector<f64>,
+    h: &DMatrix<f64>,
+    r_diag: &[f64],
+    seq: &mut Sequential,
+    cfg: &FdeConfig,
+    placement: FdePlacement,
+) -> Result<bool> {
+    kf.sequential_pending(z, h, r_diag, seq)?;
+    Ok(placement == FdePlacement::None || seq.statistic < cfg.threshold(seq.dof)?)
 }
 
 /// Method 1: snapshot FDE on the raw pseudoranges (and rates) of epoch `k`.
