@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from navfdi.scenario import fault_on
+
 if TYPE_CHECKING:
     from navfdi.runs import ScenarioRun
 
@@ -38,7 +40,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     faults = run.scenario.faults()
     for s in run.record["subfilters"]:
         sub = s["sensor"]
-        mine = [f for f in faults if f["sensor"] == sub]
+        mine = [f for f in faults if fault_on(f, sub)]
         if not mine:
             continue
         for d in s["detectors"]:
@@ -97,7 +99,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
         fig, axes = plt.subplots(len(groups), 1, figsize=(9, 3 + 2.5 * len(groups)), sharex=True, constrained_layout=True, squeeze=False)
         for ax, (label, idx, unit) in zip(axes[:, 0], groups):
             for f in faults:
-                if f["sensor"] == s["sensor"]:
+                if fault_on(f, s["sensor"]):
                     ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
             for gi, j in enumerate(idx):
                 ax.plot(t, s["mdb"][:, j], lw=1.0, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, t.size // 20), ms=3, label=comps[j])
@@ -211,6 +213,9 @@ def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
     core = run.scenario.core
     if core.get("architecture") == "tight":
         return None if core["tight"]["fde"] == "none" else f"{core['tight']['fde']} FDE"
+    if core.get("architecture") == "ultra_tight":
+        u = core["ultra_tight"]
+        return str(u["method"]) if u["exclude"] else None
     if core.get("architecture", "federated") == "centralized":
         for cs in core["centralized"]["sensors"]:
             if cs["sensor"] == sub:

@@ -25,7 +25,7 @@ import numpy as np
 
 from navfdi import _core
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events
-from navfdi.scenario import Scenario, load_scenario
+from navfdi.scenario import Scenario, fault_on, load_scenario
 
 ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
 
@@ -199,7 +199,13 @@ class ScenarioRun:
             return []
         sat = self.record["satellites"]
         n = sat["in_view"].sum(axis=1)
-        lines = [f"satellite FDE ({self.scenario.core['tight']['fde']}; {int(n.min())}–{int(n.max())} satellites in view):"]
+        core = self.scenario.core
+        if core.get("architecture") == "ultra_tight":
+            u = core["ultra_tight"]
+            how = f"{u['method']} AIME, {'excluding' if u['exclude'] else 'reporting only'}; {int(n.min())}–{int(n.max())} tracked channels in view"
+        else:
+            how = f"{core['tight']['fde']}; {int(n.min())}–{int(n.max())} satellites in view"
+        lines = [f"satellite FDE ({how}):"]
         lines.append(f"  {'fault':<10} {'sat':<5} {'detection':>10} {'identification':>15} {'after-fault alarms':>19} {'false excl./epoch':>18}")
         pct = lambda v: "-" if v != v else f"{100 * v:.2f} %"  # noqa: E731
         for _, r in tab.iterrows():
@@ -207,12 +213,13 @@ class ScenarioRun:
                 f"  {r['fault_id']:<10} {r['satellite'] if isinstance(r['satellite'], str) else '-':<5} {pct(r['detection_rate']):>10} {pct(r['identification_rate']):>15} "
                 f"{pct(r['after_fault_alarm_rate']):>19} {'-' if r['false_exclusion_rate'] != r['false_exclusion_rate'] else format(r['false_exclusion_rate'], '.4f'):>18}"
             )
-        lines.append("  (paper 001: method 1 detection 83.33 %, identification 100 %; method 2 80.67 %, 86.36 %)")
+        if core.get("architecture") == "tight":
+            lines.append("  (paper 001: method 1 detection 83.33 %, identification 100 %; method 2 80.67 %, 86.36 %)")
         return lines
 
     # ---- tables ----------------------------------------------------------------------------
     def _faults_on(self, sensor: str) -> list[dict[str, Any]]:
-        return sorted((f for f in self.scenario.faults() if f["sensor"] == sensor), key=lambda f: f["start"])
+        return sorted((f for f in self.scenario.faults() if fault_on(f, sensor)), key=lambda f: f["start"])
 
     def events(self):
         """One row per alarm interval: ``subfilter, detector, alarm_start, alarm_end, fault_id,

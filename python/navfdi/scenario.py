@@ -177,6 +177,40 @@ def _tight(t: Any) -> dict[str, Any]:
         "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
     }
 
+def _ultra_tight(u: Any) -> dict[str, Any]:
+    """The ``[ultra_tight]`` table (paper 004)."""
+    p = "ultra_tight"
+    _check_keys(
+        u,
+        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_window", "prefilter_window", "stage1_window",
+         "stage2_window", "stage_q", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
+        p,
+    )
+    method = _str(_need(u, "method", p), f"{p}.method")
+    if method not in ("m1", "m2", "m3"):
+        raise ScenarioError(f"{p}.method = {method!r}: use m1 (navigation-filter AIME), m2 (prefilter AIME) or m3 (two-stage AIME)")
+    sats = [_name(s, f"{p}.satellites[{i}]") for i, s in enumerate(_list(_need(u, "satellites", p), f"{p}.satellites"))]
+    return {
+        "sensor": _str(_need(u, "sensor", p), f"{p}.sensor"),
+        "satellites": sats,
+        "method": method,
+        "pf": _number(_need(u, "pf", p), f"{p}.pf"),
+        "cn0": _unit(_need(u, "cn0", p), "carrier_to_noise", f"{p}.cn0"),
+        "integration": _unit(u.get("integration", "20 ms"), "time", f"{p}.integration"),
+        "nav_window": _unit(u.get("nav_window", "20 s"), "time", f"{p}.nav_window"),
+        "prefilter_window": _unit(u.get("prefilter_window", "20 s"), "time", f"{p}.prefilter_window"),
+        "stage1_window": _unit(u.get("stage1_window", "2 s"), "time", f"{p}.stage1_window"),
+        "stage2_window": _unit(u.get("stage2_window", "10 s"), "time", f"{p}.stage2_window"),
+        "stage_q": _number(u.get("stage_q", 1e-3), f"{p}.stage_q"),
+        "fading_b": _number(u.get("fading_b", 0.99), f"{p}.fading_b"),
+        "jerk_psd": _unit(u.get("jerk_psd", "1 Hz^2/s^3"), "frequency2_per_time3", f"{p}.jerk_psd"),
+        "code_psd": _unit(u.get("code_psd", "0 chips^2/s"), "chips2_per_time", f"{p}.code_psd"),
+        "spacing": _number(u.get("spacing", 1.0), f"{p}.spacing"),
+        "exclude": _bool(u.get("exclude", True), f"{p}.exclude"),
+        "arm_after": _unit(u.get("arm_after", "30 s"), "time", f"{p}.arm_after"),
+    }
+
+
 _SEGMENTS: dict[str, dict[str, str]] = {
     "stationary": {"duration": "time"},
     "accelerate": {"duration": "time", "acceleration": "acceleration"},
@@ -303,7 +337,7 @@ def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
 
 
 #: Top-level fields a variant may override: the filter, never what is simulated.
-VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "state_chi2")
+VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "ultra_tight", "state_chi2")
 
 #: Names of the filter states, in order (15 INS error states; 17 with a receiver clock).
 STATE_NAMES = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "lat", "lon", "h", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "clock_bias", "clock_drift"]
@@ -411,7 +445,7 @@ def _altitude_fusion(a: Any) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "terrain", "state_chi2", "modes", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "terrain", "state_chi2", "modes", "variants"}, "")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -563,15 +597,18 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     core["faults"] = faults
 
     arch = _str(raw.get("architecture", "federated"), "architecture")
-    if arch not in ("federated", "centralized", "tight"):
-        raise ScenarioError(f"architecture = {arch!r}: use federated, centralized or tight")
+    if arch not in ("federated", "centralized", "tight", "ultra_tight"):
+        raise ScenarioError(f"architecture = {arch!r}: use federated, centralized, tight or ultra_tight")
     core["architecture"] = arch
     _variants(raw)
-    for other in ("federated", "centralized", "tight"):
+    for other in ("federated", "centralized", "tight", "ultra_tight"):
         if other != arch and other in raw:
             raise ScenarioError(f"{other}: given, but architecture is {arch!r} (remove it, or set architecture = {other!r})")
     if arch == "tight":
         core["tight"] = _tight(_need(raw, "tight", ""))
+        return core
+    if arch == "ultra_tight":
+        core["ultra_tight"] = _ultra_tight(_need(raw, "ultra_tight", ""))
         return core
     if arch == "centralized":
         core["centralized"] = _centralized(_need(raw, "centralized", ""))
@@ -811,3 +848,9 @@ def load_scenario(source: str | Path | Mapping[str, Any]) -> Scenario:
     except tomllib.TOMLDecodeError as e:
         raise ScenarioError(f"{origin}: malformed TOML: {e}") from None
     return from_dict(raw, source=origin)
+
+
+def fault_on(fault: Mapping[str, Any], channel: str) -> bool:
+    """Whether ``fault`` is one a record channel named ``channel`` should detect: a fault on
+    that sensor, or (an ultra-tight channel is named by its satellite) on that satellite."""
+    return bool(fault["sensor"] == channel or fault.get("satellite") == channel)

@@ -17,11 +17,14 @@ UNITS: dict[str, dict[str, float]] = {
     "acceleration": {"m/s2": 1.0, "m/s^2": 1.0, "g": _G0, "mg": _G0 * 1e-3, "ug": _G0 * 1e-6},
     "length": {"m": 1.0, "km": 1e3, "cm": 1e-2},
     "velocity": {"m/s": 1.0, "km/h": 1 / 3.6, "kn": 1852 / 3600},
-    "time": {"s": 1.0, "min": 60.0, "h": 3600.0},
+    "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
     "frequency": {"Hz": 1.0},
     "fraction": {"%": 0.01},
     "length2_per_time": {"m^2/s": 1.0, "m2/s": 1.0},
     "length2_per_time3": {"m^2/s^3": 1.0, "m2/s3": 1.0},
+    "carrier_to_noise": {"dB-Hz": 1.0},
+    "chips2_per_time": {"chips^2/s": 1.0, "chip^2/s": 1.0},
+    "frequency2_per_time3": {"Hz^2/s^3": 1.0},
 }
 
 

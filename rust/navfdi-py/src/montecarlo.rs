@@ -50,7 +50,7 @@ impl PyPreparedScenario {
                 let f = c
                     .fault
                     .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
-                (ch.sensor.to_string(), d.name.clone(), f, d.pf)
+                (ch.name().to_string(), d.name.clone(), f, d.pf)
             })
             .collect()
     }

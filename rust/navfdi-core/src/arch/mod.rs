@@ -6,3 +6,4 @@
 
 pub mod centralized;
 pub mod tight;
+pub mod ultra_tight;

@@ -279,6 +279,27 @@ pub struct TwoStageAime {
     r: f64,
     prev: Option<f64>,
     last_stage1: f64,
+    /// The statistic filter and stage 2 take every `every`-th stage-1 statistic (1: each).
+    #[serde(default = "one")]
+    every: usize,
+    /// Stage-1 statistics since the last one taken.
+    #[serde(default)]
+    count: usize,
+    /// The last stage-2 decision (repeated between the statistics taken).
+    #[serde(skip)]
+    last: Option<Decision>,
+    /// Starting R (1 unless [`TwoStageAime::with_decimation`] sets it); the statistic
+    /// filter then starts with `P = R₀` instead of `q`.
+    #[serde(default = "one_f")]
+    r0: f64,
+}
+
+fn one_f() -> f64 {
+    1.0
+}
+
+fn one() -> usize {
+    1
 }
 
 impl TwoStageAime {
@@ -310,7 +331,42 @@ impl TwoStageAime {
             r: 1.0,
             prev: None,
             last_stage1: f64::NAN,
+            every: 1,
+            count: 0,
+            last: None,
+            r0: 1.0,
         })
+    }
+
+    /// Feed the statistic filter and stage 2 with every `every`-th stage-1 statistic only
+    /// (`every` = the stage-1 window makes the samples non-overlapping, hence independent
+    /// under no fault, which is what the Allan-variance estimate of R assumes); stage-2's
+    /// window then counts those samples. Between them [`TwoStageAime::test`] repeats the last
+    /// decision.
+    ///
+    /// `r0` (> 0) is the starting R and the statistic filter's starting P (the first sample
+    /// initialises it with that sample's own variance): under no fault a stage-1 statistic is
+    /// χ²(m), of variance 2m, which is the natural `r0`.
+    pub fn with_decimation(mut self, every: usize, r0: f64) -> Result<Self> {
+        if !(r0 > 0.0 && r0.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: "r0".into(),
+                value: r0,
+                requirement: "the starting measurement noise must be positive and finite".into(),
+            });
+        }
+        self.r0 = r0;
+        self.r = r0;
+        if every == 0 || every > MAX_WINDOW {
+            return Err(Error::InvalidParameter {
+                name: "every".into(),
+                value: every as f64,
+                requirement: format!("take every 1 … {MAX_WINDOW}-th stage-1 statistic"),
+            });
+        }
+        self.every = every;
+        self.count = 0;
+        Ok(self)
     }
 
     /// False-alarm probability of the stage-2 test.
@@ -349,16 +405,25 @@ impl TwoStageAime {
         self.stage2.reset();
         self.x = 0.0;
         self.p = self.q;
-        self.r = 1.0;
+        self.r = self.r0;
         self.prev = None;
         self.last_stage1 = f64::NAN;
+        self.count = 0;
+        self.last = None;
     }
 
     /// Check a deserialised state.
     pub fn check_consistent(&self) -> Result<()> {
         self.stage1.check_consistent()?;
         self.stage2.check_consistent()?;
-        if !(self.q > 0.0 && self.b > 0.0 && self.b < 1.0 && self.p >= 0.0 && self.r >= 0.0) {
+        if !(self.q > 0.0
+            && self.b > 0.0
+            && self.b < 1.0
+            && self.p >= 0.0
+            && self.r >= 0.0
+            && self.every >= 1
+            && self.every <= MAX_WINDOW)
+        {
             return Err(Error::Invalid(
                 "two-stage AIME state: q, b, P or R out of range".into(),
             ));
@@ -380,9 +445,26 @@ impl TwoStageAime {
             });
         }
         self.last_stage1 = s;
+        self.count += 1;
+        if self.count < self.every {
+            return Ok(self.last.clone().unwrap_or(Decision {
+                statistic: f64::NAN,
+                threshold,
+                alarm: false,
+                dof: 0,
+            }));
+        }
+        self.count = 0;
+        let d = self.filter_and_test(s, threshold)?;
+        self.last = Some(d.clone());
+        Ok(d)
+    }
+
+    /// The statistic filter and stage 2 on one taken stage-1 statistic `s`.
+    fn filter_and_test(&mut self, s: f64, threshold: f64) -> Result<Decision> {
         let Some(prev) = self.prev.replace(s) else {
             self.x = s;
-            self.p = self.q;
+            self.p = if self.r0 != 1.0 { self.r0 } else { self.q };
             return Ok(Decision {
                 statistic: f64::NAN,
                 threshold,
@@ -514,5 +596,42 @@ mod tests {
         assert_eq!(d.len(), 2);
         assert!(Aime::new(0.01, 0).is_err());
         assert!(Aime::new(1.5, 3).is_err());
+    }
+
+    #[test]
+    fn decimated_two_stage_takes_every_nth_statistic() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let a = DMatrix::identity(2, 2);
+        let every = 5;
+        let mut d = TwoStageAime::new(1e-3, every, 4, 1e-3, 0.99)
+            .unwrap()
+            .with_decimation(every, 4.0)
+            .unwrap();
+        assert_eq!(d.measurement_noise(), 4.0);
+        let mut last = None;
+        for i in 0..200 {
+            let r = DVector::from_fn(2, |_, _| StandardNormal.sample(&mut rng));
+            let dec = d.test(&r, &a).unwrap();
+            if (i + 1) % every != 0 {
+                // Between taken statistics the last decision is repeated.
+                if let Some(l) = &last {
+                    let l: &Decision = l;
+                    assert_eq!(dec.statistic.to_bits(), l.statistic.to_bits());
+                    assert_eq!((dec.alarm, dec.dof), (l.alarm, l.dof));
+                }
+            } else {
+                last = Some(dec);
+            }
+        }
+        // The Allan estimate of R moves towards the variance of χ²(2) samples (4).
+        assert!(d.measurement_noise() > 1.0 && d.measurement_noise() < 12.0);
+        assert!(TwoStageAime::new(1e-3, 5, 4, 1e-3, 0.99)
+            .unwrap()
+            .with_decimation(0, 4.0)
+            .is_err());
+        assert!(TwoStageAime::new(1e-3, 5, 4, 1e-3, 0.99)
+            .unwrap()
+            .with_decimation(5, f64::NAN)
+            .is_err());
     }
 }

@@ -101,7 +101,7 @@ pub fn spec_cells(spec: &ScenarioSpec) -> Vec<Cell> {
     let mut out = Vec::new();
     for (si, sf) in spec.channels().iter().enumerate() {
         let faults: Vec<usize> = (0..spec.faults.len())
-            .filter(|&f| spec.faults[f].sensor == sf.sensor)
+            .filter(|&f| sf.sees(&spec.faults[f]))
             .collect();
         for di in 0..sf.detectors.len() {
             for &f in &faults {
@@ -130,9 +130,9 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         let sub = &rec.subs[c.subfilter];
         let det = &sub.detectors[c.detector];
         let channels = spec.channels();
-        let sensor = channels[c.subfilter].sensor;
+        let channel = &channels[c.subfilter];
         let mut faults: Vec<&crate::sim::spec::FaultSpec> =
-            spec.faults.iter().filter(|f| f.sensor == sensor).collect();
+            spec.faults.iter().filter(|f| channel.sees(f)).collect();
         faults.sort_by(|a, b| a.start.total_cmp(&b.start));
         let ivs = intervals(&det.alarm);
         let mut m = CellMetrics {

@@ -24,6 +24,11 @@ pub struct Simulated {
     /// (m/s) of the satellites in view, sharing the noise of `z` (empty when not taken or
     /// without such a sensor).
     pub raw: Vec<DVector<f64>>,
+    /// The run's seed and stream (architectures that draw more noise of their own, such as
+    /// the ultra-tight discriminators, derive their generator from them).
+    pub seed: u64,
+    /// See [`Simulated::seed`].
+    pub stream: u64,
 }
 
 /// Stream offset of the per-run sensor offsets.
@@ -112,5 +117,11 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         }
         x_true.push(x.clone());
     }
-    Simulated { x_true, z, raw }
+    Simulated {
+        x_true,
+        z,
+        raw,
+        seed,
+        stream,
+    }
 }

@@ -26,7 +26,7 @@ pub struct DetectorRecord {
 /// Per-epoch record of one sub-filter.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SubRecord {
-    /// Sensor name.
+    /// Sensor name (the satellite's, e.g. `G17`, for an ultra-tight channel).
     pub sensor: String,
     /// `λ` of the innovation.
     pub statistic: Vec<f64>,
@@ -323,7 +323,7 @@ impl RunRecord {
                 .channels()
                 .iter()
                 .map(|ch| SubRecord {
-                    sensor: ch.sensor.to_string(),
+                    sensor: ch.name().to_string(),
                     statistic: Vec::with_capacity(epochs),
                     dof: Vec::with_capacity(epochs),
                     isolated: Vec::with_capacity(epochs),
@@ -412,5 +412,8 @@ pub fn run_architecture(
             crate::arch::centralized::run_centralized(prep, sim, isolation && isolate, full, cancel)
         }
         Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, full, cancel),
+        Architecture::UltraTight => {
+            crate::arch::ultra_tight::run_ultra_tight(prep, sim, isolation, full, cancel)
+        }
     }
 }

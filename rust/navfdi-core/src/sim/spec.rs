@@ -40,6 +40,9 @@ pub struct ScenarioSpec {
     /// Tightly coupled filter configuration (architecture `tight`).
     #[serde(default)]
     pub tight: Option<TightSpec>,
+    /// Ultra-tight (vector-tracking) configuration (architecture `ultra_tight`).
+    #[serde(default)]
+    pub ultra_tight: Option<UltraTightSpec>,
     /// Terrain under the trajectory (radio altimeters); flat when absent.
     #[serde(default)]
     pub terrain: Option<TerrainSpec>,
@@ -149,6 +152,119 @@ pub enum Architecture {
     /// INS error state plus receiver clock (17 states) updated with the pseudoranges and
     /// pseudorange rates of the satellites in view, with satellite FDE (paper 001).
     Tight,
+    /// The 17-state filter at the navigation rate on pseudorange and rate residuals averaged
+    /// from per-channel prefilters at 50 Hz, with vector tracking and AIME (paper 004).
+    UltraTight,
+}
+
+/// Which AIME the ultra-tight channels run (paper 004's three methods).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AimeMethod {
+    /// M1: AIME on the navigation filter's innovations, per satellite (ρ and ρ̇ residual),
+    /// at the navigation rate.
+    M1,
+    /// M2: AIME on the channel prefilter's innovations (code and frequency discriminator),
+    /// at the prefilter rate.
+    M2,
+    /// M3: two-stage AIME on the prefilter innovations.
+    M3,
+}
+
+impl AimeMethod {
+    /// The detector's name in records: `m1`, `m2`, `m3`.
+    pub fn name(self) -> &'static str {
+        match self {
+            AimeMethod::M1 => "m1",
+            AimeMethod::M2 => "m2",
+            AimeMethod::M3 => "m3",
+        }
+    }
+}
+
+/// Ultra-tight (vector-tracking) configuration (paper 004, METHODS §11). Times in s, C/N0 in
+/// dB-Hz, prefilter densities in chips²/s and Hz²/s³.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UltraTightSpec {
+    /// Name of the `gnss_ranges` sensor.
+    pub sensor: String,
+    /// Tracked satellites (one channel each), e.g. `["G01", "G05"]`.
+    pub satellites: Vec<String>,
+    /// Detection method.
+    pub method: AimeMethod,
+    /// False-alarm probability per test of the method's AIME.
+    pub pf: f64,
+    /// Carrier-to-noise density of every channel (dB-Hz).
+    pub cn0: f64,
+    /// Coherent integration time = prefilter step (s; default 0.02).
+    #[serde(default = "default_integration")]
+    pub integration: f64,
+    /// M1 window (s; default 20).
+    #[serde(default = "default_window20")]
+    pub nav_window: f64,
+    /// M2 window (s; default 20).
+    #[serde(default = "default_window20")]
+    pub prefilter_window: f64,
+    /// M3 stage-1 window (s; default 2).
+    #[serde(default = "default_stage1")]
+    pub stage1_window: f64,
+    /// M3 stage-2 window (s; default 10).
+    #[serde(default = "default_stage2")]
+    pub stage2_window: f64,
+    /// M3 random-walk variance of the statistic filter per prefilter step (default 1e-3).
+    #[serde(default = "default_stage_q")]
+    pub stage_q: f64,
+    /// M3 fading factor of the Allan-variance estimate, in [0.9, 0.999] (default 0.99).
+    #[serde(default = "default_fading_b")]
+    pub fading_b: f64,
+    /// Prefilter frequency-rate random-walk density (Hz²/s³; default 1).
+    #[serde(default = "default_jerk_psd")]
+    pub jerk_psd: f64,
+    /// Prefilter code-phase random-walk density (chips²/s; default 0).
+    #[serde(default)]
+    pub code_psd: f64,
+    /// Early-late spacing of the delay discriminator (chips; default 1).
+    #[serde(default = "default_spacing")]
+    pub spacing: f64,
+    /// A channel whose AIME alarms stops feeding the navigation filter for the rest of the
+    /// run (default true); false: detection reports only.
+    #[serde(default = "default_true")]
+    pub exclude: bool,
+    /// Time from the start before which statistics are recorded but never alarm (s; default
+    /// 30): the acquisition and convergence transient of the prefilters and of the
+    /// navigation filter from its initial uncertainty.
+    #[serde(default = "default_arm_after")]
+    pub arm_after: f64,
+}
+
+fn default_arm_after() -> f64 {
+    30.0
+}
+
+fn default_integration() -> f64 {
+    0.02
+}
+fn default_window20() -> f64 {
+    20.0
+}
+fn default_stage1() -> f64 {
+    2.0
+}
+fn default_stage2() -> f64 {
+    10.0
+}
+fn default_stage_q() -> f64 {
+    1e-3
+}
+fn default_fading_b() -> f64 {
+    0.99
+}
+fn default_jerk_psd() -> f64 {
+    1.0
+}
+fn default_spacing() -> f64 {
+    1.0
 }
 
 /// Where a tightly coupled filter detects and excludes faulty satellites (paper 001).
@@ -346,6 +462,24 @@ pub struct Channel<'a> {
     pub detectors: Cow<'a, [DetectorSpec]>,
     /// Detector whose alarm isolates / excludes (None: none).
     pub decision: Option<&'a str>,
+    /// The satellite of an ultra-tight channel (None: the channel is the whole sensor).
+    pub satellite: Option<&'a str>,
+}
+
+impl Channel<'_> {
+    /// The channel's name in records and tables: its satellite (ultra-tight), else its sensor.
+    pub fn name(&self) -> &str {
+        self.satellite.unwrap_or(self.sensor)
+    }
+
+    /// Whether fault `f` is one this channel should detect: on its sensor and, for a
+    /// satellite channel, on its satellite.
+    pub fn sees(&self, f: &FaultSpec) -> bool {
+        f.sensor == self.sensor
+            && self
+                .satellite
+                .is_none_or(|s| f.satellite.as_deref() == Some(s))
+    }
 }
 
 /// Start state and flight segments.
@@ -747,6 +881,7 @@ impl ScenarioSpec {
                         sensor: &sf.sensor,
                         detectors: Cow::Borrowed(&sf.detectors),
                         decision: sf.isolation.as_deref(),
+                        satellite: None,
                     })
                     .collect()
             }),
@@ -757,6 +892,7 @@ impl ScenarioSpec {
                         sensor: &cs.sensor,
                         detectors: Cow::Borrowed(&cs.detectors),
                         decision: cs.decision.as_deref(),
+                        satellite: None,
                     })
                     .collect()
             }),
@@ -772,7 +908,26 @@ impl ScenarioSpec {
                         min_samples: None,
                     }]),
                     decision: (t.fde != FdePlacement::None).then_some(TIGHT_DETECTOR),
+                    satellite: None,
                 }]
+            }),
+            Architecture::UltraTight => self.ultra_tight.as_ref().map_or_else(Vec::new, |u| {
+                u.satellites
+                    .iter()
+                    .map(|sat| Channel {
+                        sensor: &u.sensor,
+                        detectors: Cow::Owned(vec![DetectorSpec {
+                            name: u.method.name().into(),
+                            kind: DetectorKind::Chi2,
+                            pf: u.pf,
+                            pm: None,
+                            variance: None,
+                            min_samples: None,
+                        }]),
+                        decision: u.exclude.then_some(u.method.name()),
+                        satellite: Some(sat),
+                    })
+                    .collect()
             }),
         }
     }
@@ -782,6 +937,13 @@ impl ScenarioSpec {
         self.tight
             .as_ref()
             .ok_or_else(|| bad("tight", "missing (architecture = \"tight\")"))
+    }
+
+    /// The ultra-tight configuration (validated to exist for that architecture).
+    pub fn ultra_tight(&self) -> Result<&UltraTightSpec> {
+        self.ultra_tight
+            .as_ref()
+            .ok_or_else(|| bad("ultra_tight", "missing (architecture = \"ultra_tight\")"))
     }
 
     /// Number of filter states: 15 (INS error), 17 with a receiver clock (a `gnss_ranges`
@@ -1131,6 +1293,7 @@ impl ScenarioSpec {
                             Architecture::Federated => "sub-filter",
                             Architecture::Centralized => "centralized.sensors entry",
                             Architecture::Tight => "tight filter (tight.sensor)",
+                            Architecture::UltraTight => "ultra-tight filter (ultra_tight.sensor)",
                         },
                         f.sensor
                     ),
@@ -1141,11 +1304,13 @@ impl ScenarioSpec {
             ("federated", self.federated.is_some()),
             ("centralized", self.centralized.is_some()),
             ("tight", self.tight.is_some()),
+            ("ultra_tight", self.ultra_tight.is_some()),
         ];
         let arch = match self.architecture {
             Architecture::Federated => "federated",
             Architecture::Centralized => "centralized",
             Architecture::Tight => "tight",
+            Architecture::UltraTight => "ultra_tight",
         };
         for (name, given) in others {
             if given && name != arch {
@@ -1155,7 +1320,7 @@ impl ScenarioSpec {
                 ));
             }
         }
-        if arch != "tight" {
+        if arch != "tight" && arch != "ultra_tight" {
             if let Some((i, _)) = self
                 .sensors
                 .iter()
@@ -1164,7 +1329,7 @@ impl ScenarioSpec {
             {
                 return Err(bad(
                     format!("sensors[{i}].kind"),
-                    format!("gnss_ranges (satellite pseudoranges) needs architecture = \"tight\", not {arch:?}"),
+                    format!("gnss_ranges (satellite pseudoranges) needs architecture = \"tight\" or \"ultra_tight\", not {arch:?}"),
                 ));
             }
         }
@@ -1243,6 +1408,7 @@ impl ScenarioSpec {
         }
         match self.architecture {
             Architecture::Tight => self.validate_tight(),
+            Architecture::UltraTight => self.validate_ultra_tight(),
             Architecture::Federated => self.validate_federated(),
             Architecture::Centralized => self.validate_centralized(),
         }
@@ -1325,6 +1491,144 @@ impl ScenarioSpec {
             positive("tight.k", k)?;
         }
         positive("tight.accel_psd", t.accel_psd)?;
+        Ok(())
+    }
+
+    fn validate_ultra_tight(&self) -> Result<()> {
+        let u = self.ultra_tight()?;
+        self.check_sensor_ref("ultra_tight", &u.sensor, false, "")?;
+        let si = self.sensor_index(&u.sensor).unwrap_or(0);
+        let Some(ranges) = self.sensors[si].ranges.as_ref() else {
+            return Err(bad(
+                "ultra_tight.sensor",
+                format!(
+                    "{:?} is a {:?} sensor; an ultra-tight filter tracks the satellites of a gnss_ranges sensor",
+                    u.sensor, self.sensors[si].kind
+                ),
+            ));
+        };
+        if let Some((i, o)) = self.sensors.iter().enumerate().find(|(i, _)| *i != si) {
+            return Err(bad(
+                format!("sensors[{i}]"),
+                format!(
+                    "{:?}: an ultra-tight filter uses only its gnss_ranges sensor; remove it",
+                    o.name
+                ),
+            ));
+        }
+        if u.satellites.is_empty() {
+            return Err(bad(
+                "ultra_tight.satellites",
+                "track at least one satellite",
+            ));
+        }
+        let names: Vec<String> = ranges.orbits().into_iter().map(|o| o.name).collect();
+        for (i, sat) in u.satellites.iter().enumerate() {
+            if !names.contains(sat) {
+                return Err(bad(
+                    format!("ultra_tight.satellites[{i}]"),
+                    format!(
+                        "{sat:?} is not a satellite of the constellation ({} … {})",
+                        names[0],
+                        names[names.len() - 1]
+                    ),
+                ));
+            }
+            if u.satellites[..i].contains(sat) {
+                return Err(bad(
+                    format!("ultra_tight.satellites[{i}]"),
+                    format!("{sat:?} is listed twice"),
+                ));
+            }
+        }
+        for (i, f) in self.faults.iter().enumerate() {
+            if f.sensor == u.sensor {
+                match &f.satellite {
+                    Some(s) if u.satellites.contains(s) => {}
+                    _ => {
+                        return Err(bad(
+                            format!("faults[{i}].satellite"),
+                            format!("{:?} is not a tracked channel (ultra_tight.satellites), so the fault would never be seen", f.satellite.as_deref().unwrap_or("(none)")),
+                        ))
+                    }
+                }
+            }
+        }
+        crate::validate::check_probability("ultra_tight.pf", u.pf)
+            .map_err(|e| Error::Invalid(e.to_string()))?;
+        if !(u.cn0.is_finite() && (15.0..=70.0).contains(&u.cn0)) {
+            return Err(bad(
+                "ultra_tight.cn0",
+                format!(
+                    "{} dB-Hz: use 15 … 70 dB-Hz (a tracked signal)",
+                    crate::error::num(u.cn0)
+                ),
+            ));
+        }
+        if !(u.integration >= 1e-3 && u.integration <= 0.1) {
+            return Err(bad(
+                "ultra_tight.integration",
+                format!("{} s: use 1 … 100 ms", crate::error::num(u.integration)),
+            ));
+        }
+        let steps = self.dt / u.integration;
+        if (steps - steps.round()).abs() > 1e-6 || steps.round() < 1.0 {
+            return Err(bad(
+                "ultra_tight.integration",
+                format!(
+                    "{} s must divide the filter period dt = {} s into whole steps",
+                    crate::error::num(u.integration),
+                    crate::error::num(self.dt)
+                ),
+            ));
+        }
+        for (name, v, step) in [
+            ("nav_window", u.nav_window, self.dt),
+            ("prefilter_window", u.prefilter_window, u.integration),
+            ("stage1_window", u.stage1_window, u.integration),
+            ("stage2_window", u.stage2_window, u.integration),
+        ] {
+            let n = v / step;
+            if !(v.is_finite() && n >= 1.0 - 1e-9 && n <= crate::detect::aime::MAX_WINDOW as f64) {
+                return Err(bad(
+                    format!("ultra_tight.{name}"),
+                    format!(
+                        "{} s must hold 1 … {} steps of {} s",
+                        crate::error::num(v),
+                        crate::detect::aime::MAX_WINDOW,
+                        crate::error::num(step)
+                    ),
+                ));
+            }
+        }
+        positive("ultra_tight.stage_q", u.stage_q)?;
+        if !(u.arm_after >= 0.0 && u.arm_after <= self.duration) {
+            return Err(bad(
+                "ultra_tight.arm_after",
+                format!(
+                    "{} s must be in [0, duration = {} s]",
+                    crate::error::num(u.arm_after),
+                    crate::error::num(self.duration)
+                ),
+            ));
+        }
+        if !(u.fading_b >= 0.9 && u.fading_b <= 0.999) {
+            return Err(bad(
+                "ultra_tight.fading_b",
+                format!(
+                    "{}: the paper's range is 0.9 … 0.999",
+                    crate::error::num(u.fading_b)
+                ),
+            ));
+        }
+        non_negative("ultra_tight.jerk_psd", u.jerk_psd)?;
+        non_negative("ultra_tight.code_psd", u.code_psd)?;
+        if !(u.spacing > 0.0 && u.spacing < 2.0) {
+            return Err(bad(
+                "ultra_tight.spacing",
+                format!("{} chips must be in (0, 2)", crate::error::num(u.spacing)),
+            ));
+        }
         Ok(())
     }
 
