@@ -25,6 +25,8 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
       sensor's height measurement error, the fused altitude's error and the weights;
     * ``altitude_statistics.png`` (altitude fusion, paper 003's Fig. 11): residual and state
       chi-square statistics of every fused sensor;
+    * ``channel_statistics.png`` (ultra-tight): every channel's statistic against the
+      threshold, faulty channels highlighted, exclusions marked (paper 004's Fig. 11–15);
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
       isolation.
 
@@ -118,6 +120,8 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
         paths.append(p)
     if "fusion" in run.record:
         paths += _plot_altitude(run, out, prefix, plt)
+    if run.scenario.core.get("architecture") == "ultra_tight":
+        paths.append(_plot_channels(run, out, prefix, plt))
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     arcsec = np.degrees(1.0) * 3600
     sigma = run.record["sigma"]
@@ -139,6 +143,46 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     plt.close(fig)
     paths.append(p)
     return paths
+
+
+def _plot_channels(run: ScenarioRun, out: Path, prefix: str, plt: Any) -> Path:
+    """``channel_statistics.png`` (ultra-tight; paper 004's Fig. 11–15): every tracked
+    channel's statistic (log scale) against the threshold, faulty channels in colour and
+    healthy ones in grey, a cross where a channel was excluded."""
+    t = run.t
+    faults = run.scenario.faults()
+    fig, ax = plt.subplots(figsize=(9, 4.2), constrained_layout=True)
+    thr = None
+    ci = 0
+    for s in run.record["subfilters"]:
+        sub = s["sensor"]
+        d = s["detectors"][0]
+        st = np.asarray(d["statistic"], float)
+        faulty = any(fault_on(f, sub) for f in faults)
+        kw: dict[str, Any] = {"lw": 1.2, "color": f"C{ci % 10}", "label": f"{sub} (faulty)"} if faulty else {"lw": 0.7, "color": "0.6", "alpha": 0.8, "label": sub}
+        ci += int(faulty)
+        ax.plot(t, np.where(st > 0, st, np.nan), **kw)
+        iso = np.asarray(s["isolated"])
+        if iso.any():
+            k = int(np.argmax(iso))
+            ax.plot(t[k], max(st[k], 1e-3) if np.isfinite(st[k]) else 1.0, "x", color=kw["color"], ms=8)
+        thr = np.asarray(d["threshold"], float)
+    if thr is not None:
+        ax.plot(t, thr, "k--", lw=1.0, label="threshold")
+    for f in faults:
+        ax.axvline(f["start"], color="tab:red", lw=0.8, alpha=0.6)
+    ax.set_yscale("log")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("statistic")
+    var = f", variant {run.variant}" if prefix else ""
+    u = run.scenario.core["ultra_tight"]
+    ax.set_title(f"{run.scenario.name}{var}: {u['method']} per channel (seed {run.seed}); x = excluded, red line = fault start")
+    ax.legend(loc="upper left", fontsize=7, ncol=5)
+    ax.grid(alpha=0.3)
+    p = out / f"{prefix}channel_statistics.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p
 
 
 def _state_detector(run: ScenarioRun, sub: str) -> str | None:

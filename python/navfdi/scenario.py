@@ -183,7 +183,7 @@ def _ultra_tight(u: Any) -> dict[str, Any]:
     _check_keys(
         u,
         {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_window", "prefilter_window", "stage1_window",
-         "stage2_window", "stage_q", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
+         "stage2_window", "stage_q", "stage_period", "stage_r0", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
         p,
     )
     method = _str(_need(u, "method", p), f"{p}.method")
@@ -201,7 +201,9 @@ def _ultra_tight(u: Any) -> dict[str, Any]:
         "prefilter_window": _unit(u.get("prefilter_window", "20 s"), "time", f"{p}.prefilter_window"),
         "stage1_window": _unit(u.get("stage1_window", "2 s"), "time", f"{p}.stage1_window"),
         "stage2_window": _unit(u.get("stage2_window", "10 s"), "time", f"{p}.stage2_window"),
-        "stage_q": _number(u.get("stage_q", 1e-3), f"{p}.stage_q"),
+        "stage_q": _number(u.get("stage_q", 10.0), f"{p}.stage_q"),
+        "stage_period": _unit(u.get("stage_period", "1 s"), "time", f"{p}.stage_period"),
+        "stage_r0": _number(u.get("stage_r0", 1.0), f"{p}.stage_r0"),
         "fading_b": _number(u.get("fading_b", 0.99), f"{p}.fading_b"),
         "jerk_psd": _unit(u.get("jerk_psd", "1 Hz^2/s^3"), "frequency2_per_time3", f"{p}.jerk_psd"),
         "code_psd": _unit(u.get("code_psd", "0 chips^2/s"), "chips2_per_time", f"{p}.code_psd"),

@@ -25,7 +25,8 @@
 //!   prefilter's state is shifted by `−h(x̂⁺ − x̂⁻)`: an error absorbed by the navigation
 //!   solution reaches every channel (the paper's fault propagation).
 //! * **Detection** per channel ([`AimeMethod`]): `m1` AIME on the navigation filter's
-//!   innovation of the satellite (2 components, window `nav_window`), `m2` AIME on the
+//!   innovation of the satellite (2 components, window `nav_window`; an excluded channel
+//!   keeps being tested on its innovation, which no longer updates the filter), `m2` AIME on the
 //!   prefilter innovations (window `prefilter_window`), `m3` two-stage AIME on them
 //!   (`stage1_window` + `stage2_window`). With `exclude`, a channel in alarm stops feeding the
 //!   navigation filter for the rest of the run (it keeps being tracked and tested).
@@ -51,7 +52,7 @@ use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{RunRecord, SatRecord};
 use crate::sim::spec::{AimeMethod, UltraTightSpec};
-use nalgebra::{DMatrix, DVector, Matrix2, Matrix3, Vector2, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -69,7 +70,7 @@ const NO_MEASUREMENT: u8 = 5;
 
 /// A channel's detector.
 enum ChannelTest {
-    Aime(Aime),
+    Aime(Box<Aime>),
     TwoStage(Box<TwoStageAime>),
 }
 
@@ -77,33 +78,36 @@ impl ChannelTest {
     fn new(u: &UltraTightSpec, dt: f64) -> Result<Self> {
         let steps = |s: f64, step: f64| (s / step).round().max(1.0) as usize;
         Ok(match u.method {
-            AimeMethod::M1 => ChannelTest::Aime(Aime::new(u.pf, steps(u.nav_window, dt))?),
-            AimeMethod::M2 => {
-                ChannelTest::Aime(Aime::new(u.pf, steps(u.prefilter_window, u.integration))?)
+            AimeMethod::M1 => {
+                ChannelTest::Aime(Box::new(Aime::new(u.pf, steps(u.nav_window, dt))?))
             }
+            AimeMethod::M2 => ChannelTest::Aime(Box::new(Aime::new(
+                u.pf,
+                steps(u.prefilter_window, u.integration),
+            )?)),
             AimeMethod::M3 => {
-                // Stage 2 takes one stage-1 statistic per stage-1 window (non-overlapping,
-                // independent under no fault); its window counts those. R₀ = 4, the variance
-                // of the χ²(2) stage-1 statistic under no fault.
-                let w1 = steps(u.stage1_window, u.integration);
+                // The statistic filter and stage 2 take one stage-1 statistic per
+                // `stage_period`; stage 2's window counts those samples.
+                let every = steps(u.stage_period, u.integration);
                 ChannelTest::TwoStage(Box::new(
                     TwoStageAime::new(
                         u.pf,
-                        w1,
-                        steps(u.stage2_window, u.stage1_window),
+                        steps(u.stage1_window, u.integration),
+                        steps(u.stage2_window, u.stage_period),
                         u.stage_q,
                         u.fading_b,
                     )?
-                    .with_decimation(w1, 4.0)?,
+                    .with_decimation(every, u.stage_r0)?,
                 ))
             }
         })
     }
 
-    fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<crate::detect::Decision> {
+    /// Test a fully available residual `r` (m) with covariance `a` (m × m column-major).
+    fn test(&mut self, r: &[f64], a: &[f64]) -> Result<crate::detect::Decision> {
         match self {
-            ChannelTest::Aime(d) => d.test(r, a),
-            ChannelTest::TwoStage(d) => d.test(r, a),
+            ChannelTest::Aime(d) => Ok(d.test_trusted(r, a)),
+            ChannelTest::TwoStage(d) => d.test_trusted(r, a),
         }
     }
 }
@@ -145,6 +149,22 @@ fn quad_row(h: &DMatrix<f64>, row: usize, p: &DMatrix<f64>) -> f64 {
         }
         for j in 0..n {
             s += hi * p[(i, j)] * h[(row, j)];
+        }
+    }
+    s
+}
+
+/// `h_a P h_bᵀ` for rows `a`, `b` of `h`.
+fn quad_rows(h: &DMatrix<f64>, a: usize, b: usize, p: &DMatrix<f64>) -> f64 {
+    let n = h.ncols();
+    let mut s = 0.0;
+    for i in 0..n {
+        let hi = h[(a, i)];
+        if hi == 0.0 {
+            continue;
+        }
+        for j in 0..n {
+            s += hi * p[(i, j)] * h[(b, j)];
         }
     }
     s
@@ -279,11 +299,9 @@ pub fn run_ultra_tight(
                 ch.sums[3] += p[(1, 1)];
                 ch.steps += 1;
                 if u.method != AimeMethod::M1 {
-                    let r = DVector::from_column_slice(st.residual.as_slice());
-                    let cov = DMatrix::from_column_slice(2, 2, st.covariance.as_slice());
                     let d = ch
                         .test
-                        .test(&r, &cov)
+                        .test(st.residual.as_slice(), st.covariance.as_slice())
                         .map_err(|e| crate::run::at_epoch(k, e))?;
                     if d.statistic.is_finite() && !(d.statistic <= ch.stat) {
                         ch.stat = d.statistic;
@@ -293,72 +311,65 @@ pub fn run_ultra_tight(
                 }
             }
         }
-        // Navigation update from the averaged prefilter estimates.
+        // Navigation update from the averaged prefilter estimates: per channel the averaged
+        // residual of the replica (which follows x̂⁻) is the filter's innovation.
         let mut used = 0u32;
         let mut fused = vec![false; s_count];
         if k > 0 && measured {
             let mut z = DVector::from_element(2 * m, f64::NAN);
             let mut r_diag = vec![1.0; 2 * m];
             let pred = &ep.h * kf.x();
-            for (c, ch) in chans.iter().enumerate() {
+            for (c, ch) in chans.iter_mut().enumerate() {
                 if ch.steps == 0 {
                     continue;
                 }
                 let Some(j) = rows_of(ep, ch.sat) else {
                     continue;
                 };
+                let n_steps = ch.steps as f64;
+                let res = [
+                    LAMBDA_CODE * ch.sums[0] / n_steps,
+                    LAMBDA_L1 * ch.sums[1] / n_steps,
+                ];
+                let var = [
+                    LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / n_steps,
+                    LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / n_steps,
+                ];
+                if u.method == AimeMethod::M1 {
+                    // M1: the satellite's innovation and its covariance H_c P⁻ H_cᵀ + R_c,
+                    // also for an excluded channel (tested, not used).
+                    let p = kf.p();
+                    let cross = quad_rows(&ep.h, j, m + j, p);
+                    let a = [
+                        quad_row(&ep.h, j, p) + var[0],
+                        cross,
+                        cross,
+                        quad_row(&ep.h, m + j, p) + var[1],
+                    ];
+                    let d = ch
+                        .test
+                        .test(&res, &a)
+                        .map_err(|e| crate::run::at_epoch(k, e))?;
+                    ch.stat = d.statistic;
+                    ch.thr = d.threshold;
+                    ch.alarm = d.alarm;
+                }
                 if ch.excluded && exclude {
                     continue;
                 }
-                let s = ch.steps as f64;
-                z[j] = pred[j] + LAMBDA_CODE * ch.sums[0] / s;
-                z[m + j] = pred[m + j] + LAMBDA_L1 * ch.sums[1] / s;
-                r_diag[j] = LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / s;
-                r_diag[m + j] = LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / s;
+                z[j] = pred[j] + res[0];
+                z[m + j] = pred[m + j] + res[1];
+                r_diag[j] = var[0];
+                r_diag[m + j] = var[1];
                 fused[c] = true;
                 used += 1;
             }
             if used > 0 {
                 let x_prior = kf.x().clone();
-                if u.method == AimeMethod::M1 {
-                    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
-                    let (inn, pending) = kf
-                        .innovation_pending(&z, &ep.h, &r)
-                        .map_err(|e| crate::run::at_epoch(k, e))?;
-                    for ch in chans.iter_mut() {
-                        let Some(j) = rows_of(ep, ch.sat) else {
-                            continue;
-                        };
-                        let rc =
-                            DVector::from_column_slice(&[inn.residual[j], inn.residual[m + j]]);
-                        let ac = Matrix2::new(
-                            inn.covariance[(j, j)],
-                            inn.covariance[(j, m + j)],
-                            inn.covariance[(m + j, j)],
-                            inn.covariance[(m + j, m + j)],
-                        );
-                        if rc.iter().all(|v| v.is_nan()) {
-                            continue;
-                        }
-                        let ac = DMatrix::from_column_slice(2, 2, ac.as_slice());
-                        let d = ch
-                            .test
-                            .test(&rc, &ac)
-                            .map_err(|e| crate::run::at_epoch(k, e))?;
-                        ch.stat = d.statistic;
-                        ch.thr = d.threshold;
-                        ch.alarm = d.alarm;
-                    }
-                    if let Some(p) = pending {
-                        kf.apply_pending(p, &r)
-                            .map_err(|e| crate::run::at_epoch(k, e))?;
-                    }
-                } else {
-                    kf.sequential_pending(&z, &ep.h, &r_diag, &mut seq)
-                        .map_err(|e| crate::run::at_epoch(k, e))?;
-                    kf.commit_sequential(&mut seq)
-                        .map_err(|e| crate::run::at_epoch(k, e))?;
-                }
+                kf.sequential_pending(&z, &ep.h, &r_diag, &mut seq)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                kf.commit_sequential(&mut seq)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
                 // Vector tracking: the replicas jump with the solution.
                 let dx = kf.x() - &x_prior;
                 for ch in chans.iter_mut() {

@@ -38,6 +38,103 @@ pub struct Aime {
     m: usize,
     since_resum: usize,
     alarm: bool,
+    /// Scratch (not part of the state): A⁻¹, A⁻¹r of the epoch being added, the Cholesky
+    /// factor of the decision, the kept components.
+    #[serde(skip)]
+    scratch: Scratch,
+}
+
+#[derive(Debug, Clone, Default)]
+struct Scratch {
+    ainv: Vec<f64>,
+    ainv_r: Vec<f64>,
+    l: Vec<f64>,
+    v: Vec<f64>,
+    keep: Vec<usize>,
+}
+
+/// Lower Cholesky factor of the k × k symmetric matrix in `a` (column-major, only the lower
+/// triangle read), in place; false when it is not positive definite.
+fn cholesky_in_place(a: &mut [f64], k: usize) -> bool {
+    for j in 0..k {
+        let mut d = a[j + j * k];
+        for p in 0..j {
+            d -= a[j + p * k] * a[j + p * k];
+        }
+        if !(d > 0.0) || !d.is_finite() {
+            return false;
+        }
+        let d = d.sqrt();
+        a[j + j * k] = d;
+        for i in j + 1..k {
+            let mut v = a[i + j * k];
+            for p in 0..j {
+                v -= a[i + p * k] * a[j + p * k];
+            }
+            a[i + j * k] = v / d;
+        }
+    }
+    true
+}
+
+/// `‖L⁻¹v‖²` for the lower factor `l` (k × k) — `vᵀA⁻¹v` — overwriting `v`.
+fn whitened_norm2(l: &[f64], k: usize, v: &mut [f64]) -> f64 {
+    let mut s = 0.0;
+    for i in 0..k {
+        let mut x = v[i];
+        for p in 0..i {
+            x -= l[i + p * k] * v[p];
+        }
+        x /= l[i + i * k];
+        v[i] = x;
+        s += x * x;
+    }
+    s
+}
+
+/// `A⁻¹` (k × k, column-major) of a symmetric positive definite `a` into `out`, using `l`
+/// as scratch; false when `a` is not positive definite.
+fn spd_inverse(a: &[f64], k: usize, l: &mut Vec<f64>, out: &mut [f64]) -> bool {
+    if k == 2 {
+        // Closed form (a prefilter's or a satellite's two components: the hot case).
+        let (a00, a10, a11) = (a[0], a[1], a[3]);
+        let det = a00 * a11 - a10 * a10;
+        if !(a00 > 0.0 && det > 0.0 && det.is_finite()) {
+            return false;
+        }
+        let inv = 1.0 / det;
+        out[0] = a11 * inv;
+        out[1] = -a10 * inv;
+        out[2] = -a10 * inv;
+        out[3] = a00 * inv;
+        return true;
+    }
+    l.clear();
+    l.extend_from_slice(&a[..k * k]);
+    if !cholesky_in_place(l, k) {
+        return false;
+    }
+    // Columns of A⁻¹: solve L y = e_j, then Lᵀ x = y.
+    for j in 0..k {
+        let col = &mut out[j * k..(j + 1) * k];
+        col.iter_mut().for_each(|v| *v = 0.0);
+        col[j] = 1.0;
+        for i in 0..k {
+            let mut x = col[i];
+            for p in 0..i {
+                x -= l[i + p * k] * col[p];
+            }
+            col[i] = x / l[i + i * k];
+        }
+        for i in (0..k).rev() {
+            let mut x = col[i];
+            for p in i + 1..k {
+                x -= l[p + i * k] * col[p];
+            }
+            col[i] = x / l[i + i * k];
+        }
+    }
+    true
 }
 
 impl Aime {
@@ -61,6 +158,7 @@ impl Aime {
             m: 0,
             since_resum: 0,
             alarm: false,
+            scratch: Scratch::default(),
         })
     }
 
@@ -125,8 +223,12 @@ impl Aime {
                 dof: 0,
             });
         };
-        let mut ainv = vec![0.0; m * m];
-        let mut ainv_r = vec![0.0; m];
+        let mut ainv = std::mem::take(&mut self.scratch.ainv);
+        let mut ainv_r = std::mem::take(&mut self.scratch.ainv_r);
+        ainv.clear();
+        ainv.resize(m * m, 0.0);
+        ainv_r.clear();
+        ainv_r.resize(m, 0.0);
         {
             let idx = &checked.idx;
             let inv = chol.inverse();
@@ -139,32 +241,80 @@ impl Aime {
                 ainv_r[i] = idx.iter().map(|&j| ainv[i + j * m] * r[j]).sum();
             }
         }
-        Ok(self.push(m, ainv, ainv_r))
+        let d = self.push(m, &ainv, &ainv_r);
+        self.scratch.ainv = ainv;
+        self.scratch.ainv_r = ainv_r;
+        Ok(d)
     }
 
-    fn push(&mut self, m: usize, ainv: Vec<f64>, ainv_r: Vec<f64>) -> Decision {
+    /// [`Aime::test`] for callers that validated their inputs (inside whole runs): every
+    /// component of `r` (m) present and finite, `a` (m × m, column-major) symmetric. An `a`
+    /// that is not positive definite counts as an epoch without any component (state
+    /// unchanged, previous alarm repeated); a change of dimension empties the window. No
+    /// allocation once the window is full.
+    pub fn test_trusted(&mut self, r: &[f64], a: &[f64]) -> Decision {
+        let m = r.len();
+        if !self.entries.is_empty() && m != self.m {
+            self.reset();
+        }
+        let mut ainv = std::mem::take(&mut self.scratch.ainv);
+        let mut ainv_r = std::mem::take(&mut self.scratch.ainv_r);
+        ainv.resize(m * m, 0.0);
+        ainv_r.resize(m, 0.0);
+        let ok = spd_inverse(a, m, &mut self.scratch.l, &mut ainv[..m * m]);
+        let d = if ok {
+            for i in 0..m {
+                ainv_r[i] = (0..m).map(|j| ainv[i + j * m] * r[j]).sum();
+            }
+            self.push(m, &ainv[..m * m], &ainv_r[..m])
+        } else {
+            Decision {
+                statistic: f64::NAN,
+                threshold: f64::NAN,
+                alarm: self.alarm,
+                dof: 0,
+            }
+        };
+        self.scratch.ainv = ainv;
+        self.scratch.ainv_r = ainv_r;
+        d
+    }
+
+    /// Add one epoch's `A⁻¹` and `A⁻¹r` to the window (reusing the buffers of the epoch that
+    /// leaves it) and decide.
+    fn push(&mut self, m: usize, ainv: &[f64], ainv_r: &[f64]) -> Decision {
         if self.m != m || self.info.len() != m * m {
             self.m = m;
             self.info = vec![0.0; m * m];
             self.info_r = vec![0.0; m];
         }
-        for (s, v) in self.info.iter_mut().zip(&ainv) {
-            *s += v;
-        }
-        for (s, v) in self.info_r.iter_mut().zip(&ainv_r) {
-            *s += v;
-        }
-        self.entries.push_back((ainv, ainv_r));
-        if self.entries.len() > self.window {
-            if let Some((old, old_r)) = self.entries.pop_front() {
-                for (s, v) in self.info.iter_mut().zip(&old) {
-                    *s -= v;
+        let (mut a_buf, mut r_buf) = if self.entries.len() >= self.window {
+            match self.entries.pop_front() {
+                Some((old, old_r)) => {
+                    for (s, v) in self.info.iter_mut().zip(&old) {
+                        *s -= v;
+                    }
+                    for (s, v) in self.info_r.iter_mut().zip(&old_r) {
+                        *s -= v;
+                    }
+                    (old, old_r)
                 }
-                for (s, v) in self.info_r.iter_mut().zip(&old_r) {
-                    *s -= v;
-                }
+                None => (Vec::new(), Vec::new()),
             }
+        } else {
+            (Vec::with_capacity(m * m), Vec::with_capacity(m))
+        };
+        a_buf.clear();
+        a_buf.extend_from_slice(ainv);
+        r_buf.clear();
+        r_buf.extend_from_slice(ainv_r);
+        for (s, v) in self.info.iter_mut().zip(&a_buf) {
+            *s += v;
         }
+        for (s, v) in self.info_r.iter_mut().zip(&r_buf) {
+            *s += v;
+        }
+        self.entries.push_back((a_buf, r_buf));
         self.since_resum += 1;
         if self.since_resum >= self.window {
             self.resum();
@@ -212,20 +362,44 @@ impl Aime {
         let m = self.m;
         // Components with information in the window.
         let max_diag = (0..m).map(|i| self.info[i + i * m]).fold(0.0, f64::max);
-        let keep: Vec<usize> = (0..m)
-            .filter(|&i| self.info[i + i * m] > 1e-12 * max_diag && self.info[i + i * m] > 0.0)
-            .collect();
-        let k = keep.len();
-        let s = DMatrix::from_fn(k, k, |p, q| self.info[keep[p] + keep[q] * m]);
-        let v = DVector::from_fn(k, |p, _| self.info_r[keep[p]]);
-        let statistic = if k == 0 {
-            f64::NAN
-        } else {
-            match Cholesky::new(s) {
-                Some(c) => v.dot(&c.solve(&v)),
-                None => f64::NAN,
+        let sc = &mut self.scratch;
+        sc.keep.clear();
+        sc.keep
+            .extend((0..m).filter(|&i| {
+                self.info[i + i * m] > 1e-12 * max_diag && self.info[i + i * m] > 0.0
+            }));
+        let k = sc.keep.len();
+        if k == 2 && m == 2 {
+            // Closed form of sᵀS⁻¹s for two components.
+            let (s00, s10, s11) = (self.info[0], self.info[1], self.info[3]);
+            let (v0, v1) = (self.info_r[0], self.info_r[1]);
+            let det = s00 * s11 - s10 * s10;
+            let statistic = if s00 > 0.0 && det > 0.0 {
+                (s11 * v0 * v0 - 2.0 * s10 * v0 * v1 + s00 * v1 * v1) / det
+            } else {
+                f64::NAN
+            };
+            return self.decision(statistic, 2);
+        }
+        sc.l.clear();
+        for q in 0..k {
+            for p in 0..k {
+                sc.l.push(self.info[sc.keep[p] + sc.keep[q] * m]);
             }
+        }
+        sc.v.clear();
+        sc.v.extend(sc.keep.iter().map(|&i| self.info_r[i]));
+        // r̄ᵀĀ⁻¹r̄ = sᵀS⁻¹s with S = Σ A⁻¹, s = Σ A⁻¹r.
+        let statistic = if k > 0 && cholesky_in_place(&mut sc.l, k) {
+            whitened_norm2(&sc.l, k, &mut sc.v)
+        } else {
+            f64::NAN
         };
+        self.decision(statistic, k)
+    }
+
+    /// The decision for `statistic` on `k` components (sets the alarm state).
+    fn decision(&mut self, statistic: f64, k: usize) -> Decision {
         let threshold = self.threshold(k).unwrap_or(f64::NAN);
         self.alarm = statistic.is_finite() && statistic >= threshold;
         Decision {
@@ -288,8 +462,7 @@ pub struct TwoStageAime {
     /// The last stage-2 decision (repeated between the statistics taken).
     #[serde(skip)]
     last: Option<Decision>,
-    /// Starting R (1 unless [`TwoStageAime::with_decimation`] sets it); the statistic
-    /// filter then starts with `P = R₀` instead of `q`.
+    /// Starting R (1 unless [`TwoStageAime::with_decimation`] sets it).
     #[serde(default = "one_f")]
     r0: f64,
 }
@@ -344,9 +517,7 @@ impl TwoStageAime {
     /// window then counts those samples. Between them [`TwoStageAime::test`] repeats the last
     /// decision.
     ///
-    /// `r0` (> 0) is the starting R and the statistic filter's starting P (the first sample
-    /// initialises it with that sample's own variance): under no fault a stage-1 statistic is
-    /// χ²(m), of variance 2m, which is the natural `r0`.
+    /// `r0` (> 0) is the starting R of the Allan-variance estimate (METHODS §11: 1).
     pub fn with_decimation(mut self, every: usize, r0: f64) -> Result<Self> {
         if !(r0 > 0.0 && r0.is_finite()) {
             return Err(Error::InvalidParameter {
@@ -434,7 +605,11 @@ impl TwoStageAime {
     /// Test one epoch (validated like [`Aime::test`]; a rejected epoch changes nothing).
     pub fn test(&mut self, r: &DVector<f64>, a: &DMatrix<f64>) -> Result<Decision> {
         let d1 = self.stage1.test(r, a)?;
-        let s = d1.statistic;
+        self.after_stage1(d1.statistic)
+    }
+
+    /// Decimation, statistic filter and stage 2 after a stage-1 statistic `s`.
+    fn after_stage1(&mut self, s: f64) -> Result<Decision> {
         let threshold = self.stage2.threshold(1)?;
         if !s.is_finite() {
             return Ok(Decision {
@@ -460,11 +635,17 @@ impl TwoStageAime {
         Ok(d)
     }
 
+    /// [`TwoStageAime::test`] on validated inputs ([`Aime::test_trusted`]'s contract).
+    pub fn test_trusted(&mut self, r: &[f64], a: &[f64]) -> Result<Decision> {
+        let d1 = self.stage1.test_trusted(r, a);
+        self.after_stage1(d1.statistic)
+    }
+
     /// The statistic filter and stage 2 on one taken stage-1 statistic `s`.
     fn filter_and_test(&mut self, s: f64, threshold: f64) -> Result<Decision> {
         let Some(prev) = self.prev.replace(s) else {
             self.x = s;
-            self.p = if self.r0 != 1.0 { self.r0 } else { self.q };
+            self.p = self.q;
             return Ok(Decision {
                 statistic: f64::NAN,
                 threshold,

@@ -212,9 +212,17 @@ pub struct UltraTightSpec {
     /// M3 stage-2 window (s; default 10).
     #[serde(default = "default_stage2")]
     pub stage2_window: f64,
-    /// M3 random-walk variance of the statistic filter per prefilter step (default 1e-3).
+    /// M3 random-walk variance of the statistic filter per sample it takes (default 10, the
+    /// paper's value).
     #[serde(default = "default_stage_q")]
     pub stage_q: f64,
+    /// M3: the statistic filter and stage 2 take one stage-1 statistic per `stage_period`
+    /// (s, a multiple of the integration time; default 1 s); stage 2's window counts those.
+    #[serde(default = "default_stage_period")]
+    pub stage_period: f64,
+    /// M3: starting measurement noise R₀ of the statistic filter (default 1, METHODS §11).
+    #[serde(default = "default_stage_r0")]
+    pub stage_r0: f64,
     /// M3 fading factor of the Allan-variance estimate, in [0.9, 0.999] (default 0.99).
     #[serde(default = "default_fading_b")]
     pub fading_b: f64,
@@ -255,7 +263,13 @@ fn default_stage2() -> f64 {
     10.0
 }
 fn default_stage_q() -> f64 {
-    1e-3
+    10.0
+}
+fn default_stage_period() -> f64 {
+    1.0
+}
+fn default_stage_r0() -> f64 {
+    1.0
 }
 fn default_fading_b() -> f64 {
     0.99
@@ -1602,6 +1616,22 @@ impl ScenarioSpec {
             }
         }
         positive("ultra_tight.stage_q", u.stage_q)?;
+        positive("ultra_tight.stage_r0", u.stage_r0)?;
+        let per = u.stage_period / u.integration;
+        if !(u.stage_period.is_finite()
+            && per.round() >= 1.0
+            && (per - per.round()).abs() < 1e-6
+            && per <= crate::detect::aime::MAX_WINDOW as f64)
+        {
+            return Err(bad(
+                "ultra_tight.stage_period",
+                format!(
+                    "{} s must be a whole number of integration times ({} s)",
+                    crate::error::num(u.stage_period),
+                    crate::error::num(u.integration)
+                ),
+            ));
+        }
         if !(u.arm_after >= 0.0 && u.arm_after <= self.duration) {
             return Err(bad(
                 "ultra_tight.arm_after",
