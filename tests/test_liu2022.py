@@ -114,6 +114,7 @@ def test_two_satellites_bundled():
         ({"ultra_tight.stage1_window": "1 ms"}, "ultra_tight.stage1_window"),
         ({"ultra_tight.arm_after": "-1 s"}, "ultra_tight.arm_after"),
         ({"ultra_tight.cn0": 48}, "ultra_tight.cn0"),
+        ({"sensors[0].rate": "0.5 Hz"}, r"sensors[0].rate"),
     ],
 )
 def test_bad_settings_are_named(values, field):

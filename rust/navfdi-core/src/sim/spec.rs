@@ -1530,6 +1530,16 @@ impl ScenarioSpec {
                 ),
             ));
         }
+        if (self.sensors[si].rate * self.dt - 1.0).abs() > 1e-9 {
+            return Err(bad(
+                format!("sensors[{si}].rate"),
+                format!(
+                    "{} Hz: in the ultra-tight architecture the channels are tracked continuously and the sensor's rate is the navigation update rate, which must be 1/dt = {} Hz (outages are signal losses)",
+                    crate::error::num(self.sensors[si].rate),
+                    crate::error::num(1.0 / self.dt)
+                ),
+            ));
+        }
         if u.satellites.is_empty() {
             return Err(bad(
                 "ultra_tight.satellites",
