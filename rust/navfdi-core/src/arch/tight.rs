@@ -53,7 +53,7 @@ use crate::sim::run::{RunRecord, SatRecord};
 use crate::sim::spec::FdePlacement;
 use nalgebra::{DMatrix, DVector, Vector3};
 
-const NO_MEASUREMENT: u8 = 5;
+use crate::sim::run::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
 const ALARM: u8 = 4;
 
 /// Run the tight filter over one simulated run (`isolation = false`: FDE reports, never

@@ -46,6 +46,7 @@ use crate::error::{Error, Result};
 use crate::gnss::prefilter::{
     dll_variance, fll_variance, Prefilter, PrefilterConfig, F_CARRIER_L1, F_CODE_L1CA,
 };
+use crate::gnss::snapshot::FdeStatus;
 use crate::kalman::{KalmanFilter, Sequential};
 use crate::sim::metrics::{satellite_metrics, SatFault};
 use crate::sim::noise::Simulated;
@@ -66,7 +67,7 @@ pub const LAMBDA_L1: f64 = C / F_CARRIER_L1;
 /// Stream offset of the discriminator noise.
 const DISCRIMINATOR_STREAM: u64 = 0x0D15_C0DE_0050;
 
-const NO_MEASUREMENT: u8 = 5;
+use crate::sim::run::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
 
 /// A channel's detector.
 enum ChannelTest {
@@ -412,9 +413,9 @@ pub fn run_ultra_tight(
         sat.status.push(if !measured {
             NO_MEASUREMENT
         } else if any_excluded {
-            1
+            FdeStatus::Excluded.code()
         } else {
-            0
+            FdeStatus::Passed.code()
         });
         sat.used.push(used);
         rec.sources.push(u32::from(used > 0));

@@ -79,6 +79,10 @@ pub const SAT_STATUS: [&str; 6] = [
     "no_measurement",
 ];
 
+/// [`SatRecord::status`] of an epoch without a measurement (index of `no_measurement` in
+/// [`SAT_STATUS`]).
+pub const SAT_NO_MEASUREMENT: u8 = 5;
+
 /// Names of the 9 navigation-error columns of [`RunRecord::error`].
 pub const ERROR_COLUMNS: [&str; 9] = [
     "att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u",
