@@ -131,3 +131,28 @@ def test_run_writes_channel_figures_and_satellite_table(fast_ramp, tmp_path):
     tab = fast_ramp.satellite_table()
     g17 = tab[(tab.variant == "m2") & (tab.fault_id == "ramp_g17")].iloc[0]
     assert g17["satellite"] == "G17" and g17["detection_rate"] > 0.5
+
+
+def test_campaign_weak_signal_is_slower_for_every_method():
+    """A small campaign (20 runs per point) through ``navfdi.montecarlo``: at 0.2 m/s M1 and M2
+    detect the ramp on G17 in every run at both C/N0, and every method's mean delay is larger
+    at 28 dB-Hz than at 48 dB-Hz (M3 at 0.5 m/s, the slope it detects; docs/liu2022.md)."""
+    camp = navfdi.montecarlo(
+        "liu2022",
+        runs=20,
+        sweep={"faults[0].magnitude": ["0.2 m/s", "0.5 m/s"], "ultra_tight.cn0": ["48 dB-Hz", "28 dB-Hz"]},
+        progress=False,
+    )
+    s = camp.summary()
+    g17 = s[(s.subfilter == "G17") & (s.fault_id == "ramp_g17")]
+
+    def cell(v, slope, cn0):
+        return g17[(g17.variant == v) & (g17["faults[0].magnitude"] == slope) & (g17["ultra_tight.cn0"] == cn0)].iloc[0]
+
+    for v in ("m1", "m2"):
+        for cn0 in ("48 dB-Hz", "28 dB-Hz"):
+            assert cell(v, "0.2 m/s", cn0).detection_probability == 1.0, (v, cn0)
+        assert cell(v, "0.2 m/s", "28 dB-Hz").delay_mean > cell(v, "0.2 m/s", "48 dB-Hz").delay_mean, v
+    strong, weak = cell("m3", "0.5 m/s", "48 dB-Hz"), cell("m3", "0.5 m/s", "28 dB-Hz")
+    assert strong.detection_probability >= 0.8
+    assert weak.detection_probability < strong.detection_probability or weak.delay_mean > strong.delay_mean
