@@ -136,3 +136,42 @@ def test_two_stage_matches_numpy(q, b):
         navfdi.TwoStageAime(0.01, 2, 10, b=1.0)
     with pytest.raises(ValueError, match="window2"):
         navfdi.TwoStageAime(0.01, 2, 0)
+
+
+def test_two_stage_decimation_from_python():
+    """``every``: the statistic filter and stage 2 take every N-th stage-1 statistic; the
+    decision is repeated in between; bad values are named; pickling keeps the setting."""
+    import pickle
+
+    rng = np.random.default_rng(4)
+    d = navfdi.TwoStageAime(1e-3, 5, 4, q=1e-3, b=0.99, every=5, r0=4.0)
+    a = np.eye(2)
+    decisions = [d.test(rng.normal(size=2), a) for _ in range(60)]
+    for i, dec in enumerate(decisions):
+        if (i + 1) % 5 != 0 and i > 5:
+            prev = decisions[i - 1]
+            assert (dec.statistic == prev.statistic or (np.isnan(dec.statistic) and np.isnan(prev.statistic))) and dec.alarm == prev.alarm
+    e = pickle.loads(pickle.dumps(d))
+    r = rng.normal(size=2)
+    assert e.test(r, a).statistic == pytest.approx(d.test(r, a).statistic, nan_ok=True)
+    with pytest.raises(ValueError, match="every"):
+        navfdi.TwoStageAime(1e-3, 5, 4, every=0)
+    with pytest.raises(ValueError, match="r0"):
+        navfdi.TwoStageAime(1e-3, 5, 4, every=2, r0=float("nan"))
+
+
+def test_fresh_two_stage_pickles():
+    """A TwoStageAime whose stage-1 statistic is still NaN (fresh, or right after the filter's
+    initialisation) survives pickling (JSON has no NaN: written as null, read back as NaN)."""
+    import pickle
+
+    for every in (1, 5):
+        d = navfdi.TwoStageAime(1e-3, 5, 4, every=every)
+        e = pickle.loads(pickle.dumps(d))
+        assert np.isnan(e.stage1_statistic)
+        for _ in range(every):
+            d.test(np.ones(2), np.eye(2))
+        e = pickle.loads(pickle.dumps(d))
+        r = np.array([0.3, -0.2])
+        a, b = d.test(r, np.eye(2)), e.test(r, np.eye(2))
+        assert (np.isnan(a.statistic) and np.isnan(b.statistic)) or a.statistic == b.statistic

@@ -352,9 +352,15 @@ class TwoStageAime:
         Random-walk variance of the statistic filter (> 0).
     b : float
         Fading factor of the Allan-variance estimate, in (0, 1) (paper: 0.9–0.999).
+    every : int
+        The statistic filter and stage 2 take every ``every``-th stage-1 statistic (1: each;
+        the stage-1 window makes the samples non-overlapping); stage 2's window counts those.
+        Between them :meth:`test` repeats the last decision.
+    r0 : float
+        Starting R of the Allan-variance estimate (> 0; METHODS §11: 1).
     """
 
-    def __new__(cls, pf: float, window1: int, window2: int, q: float = 10.0, b: float = 0.99) -> TwoStageAime: ...
+    def __new__(cls, pf: float, window1: int, window2: int, q: float = 10.0, b: float = 0.99, every: int = 1, r0: float = 1.0) -> TwoStageAime: ...
     def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
         """Pickle support: ``(_restore, (class name, JSON state))``."""
     def test(self, residual: ArrayLike, covariance: ArrayLike) -> Decision:

@@ -507,17 +507,27 @@ impl PyTwoStageAime {
 #[pymethods]
 impl PyTwoStageAime {
     #[new]
-    #[pyo3(signature = (pf, window1, window2, q = 10.0, b = 0.99))]
-    fn new(pf: f64, window1: i64, window2: i64, q: f64, b: f64) -> PyResult<Self> {
-        for (name, w) in [("window1", window1), ("window2", window2)] {
+    #[pyo3(signature = (pf, window1, window2, q = 10.0, b = 0.99, every = 1, r0 = 1.0))]
+    fn new(
+        pf: f64,
+        window1: i64,
+        window2: i64,
+        q: f64,
+        b: f64,
+        every: i64,
+        r0: f64,
+    ) -> PyResult<Self> {
+        for (name, w) in [("window1", window1), ("window2", window2), ("every", every)] {
             if w < 1 {
                 return Err(PyValueError::new_err(format!(
-                    "{name} = {w}: an AIME window must be at least 1 epoch"
+                    "{name} = {w}: must be at least 1 (epochs)"
                 )));
             }
         }
         Ok(PyTwoStageAime {
-            inner: TwoStageAime::new(pf, window1 as usize, window2 as usize, q, b).py()?,
+            inner: TwoStageAime::new(pf, window1 as usize, window2 as usize, q, b)
+                .and_then(|d| d.with_decimation(every as usize, r0))
+                .py()?,
         })
     }
     /// Test one epoch.

@@ -452,6 +452,7 @@ pub struct TwoStageAime {
     p: f64,
     r: f64,
     prev: Option<f64>,
+    #[serde(with = "super::nan_f64")]
     last_stage1: f64,
     /// The statistic filter and stage 2 take every `every`-th stage-1 statistic (1: each).
     #[serde(default = "one")]
@@ -460,7 +461,7 @@ pub struct TwoStageAime {
     #[serde(default)]
     count: usize,
     /// The last stage-2 decision (repeated between the statistics taken).
-    #[serde(skip)]
+    #[serde(default)]
     last: Option<Decision>,
     /// Starting R (1 unless [`TwoStageAime::with_decimation`] sets it).
     #[serde(default = "one_f")]

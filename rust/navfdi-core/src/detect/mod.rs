@@ -34,14 +34,36 @@ pub(crate) fn cached_chi2_threshold(cache: &mut Vec<f64>, pf: f64, dof: usize) -
     Ok(cache[dof - 1])
 }
 
+/// Serde for an `f64` that may be NaN (JSON has no NaN: it is written as `null` and read
+/// back as NaN), for detector states that are pickled through JSON.
+pub mod nan_f64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    /// Write NaN as `null`.
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> std::result::Result<S::Ok, S::Error> {
+        if v.is_nan() {
+            s.serialize_none()
+        } else {
+            s.serialize_f64(*v)
+        }
+    }
+
+    /// Read `null` as NaN.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+}
+
 /// One epoch's decision of a detector.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Decision {
     /// Test statistic (chi-square: `λ = rᵀA⁻¹r`; SPRT: the largest per-component `λ_j`).
     /// NaN when no component was available.
+    #[serde(with = "nan_f64")]
     pub statistic: f64,
     /// Threshold the statistic is compared with (NaN when no component was available to the
     /// chi-square test, whose threshold depends on the number of components).
+    #[serde(with = "nan_f64")]
     pub threshold: f64,
     /// Fault declared this epoch.
     pub alarm: bool,
