@@ -163,9 +163,11 @@ def _dispatch(args: argparse.Namespace) -> int:
     elif args.command == "scenarios":
         from navfdi.scenario import bundled_scenarios, load_scenario
 
-        for name in bundled_scenarios():
+        names = bundled_scenarios()
+        width = max((len(n) for n in names), default=0)
+        for name in names:
             desc = load_scenario(name).raw.get("description", "")
-            print(f"{name:<14} {desc}")
+            print(f"{name:<{width}}  {desc}")
     elif args.command == "run":
         from navfdi.runs import run_scenario
 
