@@ -17,16 +17,7 @@ import time
 
 import navfdi
 from navfdi import _core
-
-
-def best(f, rounds: int = 7) -> float:
-    """Best wall time of ``rounds`` calls (s)."""
-    out = []
-    for _ in range(rounds):
-        t0 = time.perf_counter()
-        f()
-        out.append(time.perf_counter() - t0)
-    return min(out)
+from problem import best
 
 
 def main() -> None:

@@ -46,7 +46,6 @@ use crate::gnss::snapshot::{
 };
 use crate::ins::{earth, POS};
 use crate::kalman::{KalmanFilter, Sequential};
-use crate::sim::metrics::{satellite_metrics, SatFault};
 use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{RunRecord, SatRecord};
@@ -236,29 +235,7 @@ pub fn run_tight(
         rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
     }
     // Satellite-FDE counts per fault on the sensor.
-    let sensor = &spec.sensors[si].name;
-    let faults: Vec<SatFault> = spec
-        .faults
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| &f.sensor == sensor)
-        .filter_map(|(i, f)| {
-            let s = rp
-                .names
-                .iter()
-                .position(|x| Some(x) == f.satellite.as_ref())?;
-            Some((i, s, f.start, f.end))
-        })
-        .collect();
-    let measured: Vec<bool> = sat.status.iter().map(|&s| s != NO_MEASUREMENT).collect();
-    sat.metrics = satellite_metrics(
-        &rec.t,
-        &measured,
-        &sat.in_view,
-        &sat.excluded,
-        s_count,
-        &faults,
-    );
+    sat.score(&rec.t, &spec.faults, &spec.sensors[si].name);
     rec.sats = Some(sat);
     Ok(rec)
 }

@@ -47,8 +47,8 @@ use crate::gnss::prefilter::{
     dll_variance, fll_variance, Prefilter, PrefilterConfig, F_CARRIER_L1, F_CODE_L1CA,
 };
 use crate::gnss::snapshot::FdeStatus;
+use crate::gnss::C;
 use crate::kalman::{KalmanFilter, Sequential};
-use crate::sim::metrics::{satellite_metrics, SatFault};
 use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{RunRecord, SatRecord};
@@ -58,8 +58,6 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-/// Speed of light (m/s).
-const C: f64 = 299_792_458.0;
 /// GPS L1 C/A chip length (m).
 pub const LAMBDA_CODE: f64 = C / F_CODE_L1CA;
 /// GPS L1 carrier wavelength (m).
@@ -141,18 +139,7 @@ fn dot_row(h: &DMatrix<f64>, row: usize, x: &DVector<f64>) -> f64 {
 
 /// `h P hᵀ` for row `row` of `h`.
 fn quad_row(h: &DMatrix<f64>, row: usize, p: &DMatrix<f64>) -> f64 {
-    let n = h.ncols();
-    let mut s = 0.0;
-    for i in 0..n {
-        let hi = h[(row, i)];
-        if hi == 0.0 {
-            continue;
-        }
-        for j in 0..n {
-            s += hi * p[(i, j)] * h[(row, j)];
-        }
-    }
-    s
+    quad_rows(h, row, row, p)
 }
 
 /// `h_a P h_bᵀ` for rows `a`, `b` of `h`.
@@ -421,28 +408,7 @@ pub fn run_ultra_tight(
         rec.sources.push(u32::from(used > 0));
         rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
     }
-    let faults: Vec<SatFault> = spec
-        .faults
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| f.sensor == spec.sensors[si].name)
-        .filter_map(|(i, f)| {
-            let s = u
-                .satellites
-                .iter()
-                .position(|x| Some(x) == f.satellite.as_ref())?;
-            Some((i, s, f.start, f.end))
-        })
-        .collect();
-    let measured: Vec<bool> = sat.status.iter().map(|&s| s != NO_MEASUREMENT).collect();
-    sat.metrics = satellite_metrics(
-        &rec.t,
-        &measured,
-        &sat.in_view,
-        &sat.excluded,
-        s_count,
-        &faults,
-    );
+    sat.score(&rec.t, &spec.faults, &spec.sensors[si].name);
     rec.sats = Some(sat);
     Ok(rec)
 }

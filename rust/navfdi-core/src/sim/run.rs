@@ -67,6 +67,39 @@ pub struct SatRecord {
     pub metrics: Vec<super::metrics::SatFaultMetrics>,
 }
 
+impl SatRecord {
+    /// Fill [`SatRecord::metrics`]: satellite-FDE counts per fault of `faults` on sensor
+    /// `sensor` whose satellite is one of [`SatRecord::names`], then outside faults, over the
+    /// epochs `t` with a measurement.
+    pub fn score(&mut self, t: &[f64], faults: &[super::spec::FaultSpec], sensor: &str) {
+        let sat_faults: Vec<super::metrics::SatFault> = faults
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.sensor == sensor)
+            .filter_map(|(i, f)| {
+                let s = self
+                    .names
+                    .iter()
+                    .position(|x| Some(x) == f.satellite.as_ref())?;
+                Some((i, s, f.start, f.end))
+            })
+            .collect();
+        let measured: Vec<bool> = self
+            .status
+            .iter()
+            .map(|&s| s != SAT_NO_MEASUREMENT)
+            .collect();
+        self.metrics = super::metrics::satellite_metrics(
+            t,
+            &measured,
+            &self.in_view,
+            &self.excluded,
+            self.names.len(),
+            &sat_faults,
+        );
+    }
+}
+
 /// Names of the per-epoch FDE outcomes of [`SatRecord::status`]: the four of
 /// [`crate::gnss::snapshot::FdeStatus`], `alarm` (placement `none`: the global test failed,
 /// nothing is excluded) and `no_measurement`.
