@@ -182,13 +182,19 @@ def _ultra_tight(u: Any) -> dict[str, Any]:
     p = "ultra_tight"
     _check_keys(
         u,
-        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_window", "prefilter_window", "stage1_window",
+        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_input", "nav_window", "prefilter_window", "stage1_window",
          "stage2_window", "stage_q", "stage_period", "stage_r0", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
         p,
     )
     method = _str(_need(u, "method", p), f"{p}.method")
     if method not in ("m1", "m2", "m3"):
         raise ScenarioError(f"{p}.method = {method!r}: use m1 (navigation-filter AIME), m2 (prefilter AIME) or m3 (two-stage AIME)")
+    nav_input = _str(u.get("nav_input", "discriminator"), f"{p}.nav_input")
+    if nav_input not in ("discriminator", "prefilter"):
+        raise ScenarioError(
+            f"{p}.nav_input = {nav_input!r}: use discriminator (the epoch's discriminator outputs averaged, "
+            "paper eq. 2) or prefilter (the prefilter estimates averaged)"
+        )
     sats = [_name(s, f"{p}.satellites[{i}]") for i, s in enumerate(_list(_need(u, "satellites", p), f"{p}.satellites"))]
     return {
         "sensor": _str(_need(u, "sensor", p), f"{p}.sensor"),
@@ -197,6 +203,7 @@ def _ultra_tight(u: Any) -> dict[str, Any]:
         "pf": _number(_need(u, "pf", p), f"{p}.pf"),
         "cn0": _unit(_need(u, "cn0", p), "carrier_to_noise", f"{p}.cn0"),
         "integration": _unit(u.get("integration", "20 ms"), "time", f"{p}.integration"),
+        "nav_input": nav_input,
         "nav_window": _unit(u.get("nav_window", "20 s"), "time", f"{p}.nav_window"),
         "prefilter_window": _unit(u.get("prefilter_window", "20 s"), "time", f"{p}.prefilter_window"),
         "stage1_window": _unit(u.get("stage1_window", "2 s"), "time", f"{p}.stage1_window"),

@@ -17,13 +17,21 @@
 //!   `z = [τ + v_τ, δf + v_f]`, their noise σ from the channel's C/N0 ([`dll_variance`],
 //!   [`fll_variance`]: Kaplan & Hegarty 2006, eq. 5.71 and 5.64) drawn from the run's own
 //!   random stream, so every variant sees the same discriminator noise.
-//! * **Navigation measurement**: per channel the prefilter's posterior `τ̂`, `δf̂` averaged over
-//!   the epoch's steps (averaging, not resampling), as pseudorange and rate residuals
-//!   `λ_code·mean τ̂`, `λ_L1·mean δf̂` of the replica, i.e. the innovation of the navigation
-//!   filter, with variances `λ²·mean P` (an upper bound for the variance of an average of
-//!   correlated estimates). After the update the replicas move from `x̂⁻` to `x̂⁺`, and each
-//!   prefilter's state is shifted by `−h(x̂⁺ − x̂⁻)`: an error absorbed by the navigation
-//!   solution reaches every channel (the paper's fault propagation).
+//! * **Navigation measurement** ([`NavInput`]): per channel, averaged over the epoch's steps
+//!   (averaging, not resampling: paper eq. 1–2), as pseudorange and rate residuals of the
+//!   replica (m, m/s), i.e. the innovation of the navigation filter:
+//!   - `discriminator` (default, the paper's): the discriminator outputs `λ_code·mean z_τ`,
+//!     `λ_L1·mean z_f`, variances `λ²σ²/N` — exact, and independent from epoch to epoch
+//!     because the discriminator noise is white. The average refers to the middle of the
+//!     epoch; it is used as the residual at its end (a lag of half an epoch: a few cm of
+//!     range for the range-rate errors here, against 0.58 m of noise at 48 dB-Hz).
+//!   - `prefilter`: the prefilter's posteriors `λ_code·mean τ̂`, `λ_L1·mean δf̂`, variances
+//!     `λ²·mean P` — correlated from epoch to epoch through the prefilter's memory, which
+//!     the navigation filter and M1 take as independent (docs/liu2022.md).
+//!
+//!   After the update the replicas move from `x̂⁻` to `x̂⁺`, and each prefilter's state is
+//!   shifted by `−h(x̂⁺ − x̂⁻)`: an error absorbed by the navigation solution reaches every
+//!   channel (the paper's fault propagation).
 //! * **Detection** per channel ([`AimeMethod`]): `m1` AIME on the navigation filter's
 //!   innovation of the satellite (2 components, window `nav_window`; an excluded channel
 //!   keeps being tested on its innovation, which no longer updates the filter), `m2` AIME on the
@@ -52,7 +60,7 @@ use crate::kalman::{KalmanFilter, Sequential};
 use crate::sim::noise::Simulated;
 use crate::sim::prepare::Prepared;
 use crate::sim::run::{RunRecord, SatRecord};
-use crate::sim::spec::{AimeMethod, UltraTightSpec};
+use crate::sim::spec::{AimeMethod, NavInput, UltraTightSpec};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -118,7 +126,8 @@ struct Channel {
     prefilter: Option<Prefilter>,
     test: ChannelTest,
     excluded: bool,
-    /// Sums over the epoch's steps: τ̂, δf̂, P_ττ, P_ff.
+    /// Sums over the epoch's steps of the navigation input: code (chips) and frequency (Hz)
+    /// and their variances (chips², Hz²).
     sums: [f64; 4],
     steps: usize,
     /// The epoch's largest statistic, its threshold, any alarm.
@@ -279,12 +288,17 @@ pub fn run_ultra_tight(
                 let v2: f64 = StandardNormal.sample(&mut rng);
                 let z = Vector2::new(er / LAMBDA_CODE + sd[0] * v1, ed / LAMBDA_L1 + sd[1] * v2);
                 let st = pf.step_with(z, r_disc);
-                let x = pf.x();
-                let p = pf.p();
-                ch.sums[0] += x[0];
-                ch.sums[1] += x[1];
-                ch.sums[2] += p[(0, 0)];
-                ch.sums[3] += p[(1, 1)];
+                let (v, var) = match u.nav_input {
+                    NavInput::Discriminator => ([z[0], z[1]], [r_disc[0], r_disc[1]]),
+                    NavInput::Prefilter => {
+                        let (x, p) = (pf.x(), pf.p());
+                        ([x[0], x[1]], [p[(0, 0)], p[(1, 1)]])
+                    }
+                };
+                ch.sums[0] += v[0];
+                ch.sums[1] += v[1];
+                ch.sums[2] += var[0];
+                ch.sums[3] += var[1];
                 ch.steps += 1;
                 if u.method != AimeMethod::M1 {
                     let d = ch
@@ -299,7 +313,7 @@ pub fn run_ultra_tight(
                 }
             }
         }
-        // Navigation update from the averaged prefilter estimates: per channel the averaged
+        // Navigation update from the averaged channel outputs: per channel the averaged
         // residual of the replica (which follows x̂⁻) is the filter's innovation.
         let mut used = 0u32;
         let mut fused = vec![false; s_count];
@@ -319,9 +333,15 @@ pub fn run_ultra_tight(
                     LAMBDA_CODE * ch.sums[0] / n_steps,
                     LAMBDA_L1 * ch.sums[1] / n_steps,
                 ];
+                // Variance of the average: σ²/N for white discriminator outputs; the mean P
+                // (an upper bound) for correlated prefilter estimates.
+                let per = match u.nav_input {
+                    NavInput::Discriminator => n_steps * n_steps,
+                    NavInput::Prefilter => n_steps,
+                };
                 let var = [
-                    LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / n_steps,
-                    LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / n_steps,
+                    LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / per,
+                    LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / per,
                 ];
                 if u.method == AimeMethod::M1 {
                     // M1: the satellite's innovation and its covariance H_c P⁻ H_cᵀ + R_c,

@@ -182,6 +182,30 @@ impl AimeMethod {
     }
 }
 
+/// What the ultra-tight navigation filter takes from a channel once per epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NavInput {
+    /// The epoch's code and frequency discriminator outputs averaged (paper 004 eq. 1–2:
+    /// "averaging, not upsampling"), variance σ²/N: independent from epoch to epoch.
+    #[default]
+    Discriminator,
+    /// The prefilter's posterior estimates averaged over the epoch, variance the mean of its
+    /// P: correlated from epoch to epoch through the prefilter's memory (the first design,
+    /// kept for comparison; docs/liu2022.md).
+    Prefilter,
+}
+
+impl NavInput {
+    /// The name used in scenario files: `discriminator`, `prefilter`.
+    pub fn name(self) -> &'static str {
+        match self {
+            NavInput::Discriminator => "discriminator",
+            NavInput::Prefilter => "prefilter",
+        }
+    }
+}
+
 /// Ultra-tight (vector-tracking) configuration (paper 004, METHODS §11). Times in s, C/N0 in
 /// dB-Hz, prefilter densities in chips²/s and Hz²/s³.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -200,6 +224,10 @@ pub struct UltraTightSpec {
     /// Coherent integration time = prefilter step (s; default 0.02).
     #[serde(default = "default_integration")]
     pub integration: f64,
+    /// What the navigation filter takes from each channel per epoch (default the averaged
+    /// discriminator outputs, as the paper).
+    #[serde(default)]
+    pub nav_input: NavInput,
     /// M1 window (s; default 20).
     #[serde(default = "default_window20")]
     pub nav_window: f64,
