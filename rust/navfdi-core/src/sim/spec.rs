@@ -257,7 +257,11 @@ pub struct UltraTightSpec {
     /// Prefilter frequency-rate random-walk density (Hz²/s³; default 1).
     #[serde(default = "default_jerk_psd")]
     pub jerk_psd: f64,
-    /// Prefilter code-phase random-walk density (chips²/s; default 0).
+    /// Prefilter code-phase random-walk density (chips²/s; default 0). The simulated truth
+    /// interpolates the tracking errors linearly inside an epoch, so the code changes by
+    /// the clock drift's integral while the frequency does not follow the drift's random
+    /// walk: below `drift_psd·dt²/12` (converted to chips²) the prefilter is inconsistent
+    /// with the simulation (docs/liu2022.md).
     #[serde(default)]
     pub code_psd: f64,
     /// Early-late spacing of the delay discriminator (chips; default 1).
