@@ -230,3 +230,41 @@ def test_campaign_weak_signal_is_slower_for_every_method():
     strong, weak = cell("m3", "0.5 m/s", "48 dB-Hz"), cell("m3", "0.5 m/s", "28 dB-Hz")
     assert strong.detection_probability >= 0.8
     assert weak.detection_probability < strong.detection_probability or weak.delay_mean > strong.delay_mean
+
+
+def _matched_script():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "docs" / "scripts" / "liu2022_matched.py"
+    spec = importlib.util.spec_from_file_location("liu2022_matched", path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_matched_rate_calibration_and_first_crossing():
+    """docs/scripts/liu2022_matched.py: the calibrated threshold is exceeded by the requested
+    fraction of armed channel-epochs (NaN = no test = no alarm), and the delay is read at the
+    first crossing at or after the fault's start; then on one real run of each method."""
+    m = _matched_script()
+    rng = np.random.default_rng(0)
+    t = np.arange(250.0)
+    free = []
+    for _ in range(20):
+        chans = {s: rng.chisquare(2, t.size) for s in ("A", "B")}
+        chans["A"][:60] = np.nan
+        free.append({"m1": {**chans, "t": t}})
+    thr = m.calibrate(free, "m1", 0.01, arm=50.0)
+    pooled = np.concatenate([np.nan_to_num(r["m1"][s][t >= 50], nan=-np.inf) for r in free for s in ("A", "B")])
+    assert abs(np.mean(pooled > thr) - 0.01) < 0.002
+    st = np.zeros(t.size)
+    st[65] = st[90] = 100.0
+    assert m.first_crossing(t, st, 10.0) == 20.0  # the crossing at 65 s is before the fault
+    assert m.first_crossing(t, np.full(t.size, np.nan), 10.0) is None
+    stats_ = m.statistics(navfdi.load_scenario("liu2022").with_value("faults[0].magnitude", "0.5 m/s"), 1)
+    for v in ("m1", "m2", "m3"):
+        assert set(stats_[v]) == set(CHANNELS) | {"t"}
+        d = m.first_crossing(stats_[v]["t"], stats_[v]["G17"], stats.chi2.isf(1e-4, 1 if v == "m3" else 2))
+        assert d is not None and 0 <= d < 40, (v, d)

@@ -38,8 +38,24 @@ def statistics(sc: navfdi.Scenario, seed: int) -> dict[str, dict[str, np.ndarray
     return out
 
 
+def calibrate(free: list[dict[str, dict[str, np.ndarray]]], method: str, rate: float, arm: float) -> float:
+    """The threshold that a fraction ``rate`` of the method's fault-free channel-epochs at
+    t ≥ ``arm`` exceed (a statistic that is NaN, i.e. no test, counts as not exceeding)."""
+    pooled = np.concatenate(
+        [np.nan_to_num(r[method][s][r[method]["t"] >= arm], nan=-np.inf) for r in free for s in r[method] if s != "t"]
+    )
+    return float(np.quantile(pooled, 1.0 - rate))
+
+
+def first_crossing(t: np.ndarray, statistic: np.ndarray, threshold: float, start: float = FAULT_START) -> float | None:
+    """Seconds from ``start`` to the first epoch at or after it whose statistic exceeds the
+    threshold, or None."""
+    hit = np.flatnonzero((t >= start) & (np.nan_to_num(statistic, nan=-np.inf) > threshold))
+    return float(t[hit[0]] - start) if hit.size else None
+
+
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     ap.add_argument("--runs", type=int, default=100, help="faulty runs per slope")
     ap.add_argument("--free-runs", type=int, default=200, help="fault-free runs for the thresholds")
     ap.add_argument("--rate", type=float, nargs="+", default=[1e-3, 1e-4], help="false-alarm rates per channel-epoch")
@@ -61,18 +77,10 @@ def main() -> None:
         print(f"\nmeasured false-alarm rate per channel-epoch {rate:g}")
         print("method | threshold | " + " | ".join(SLOPES))
         for v in METHODS:
-            pooled = np.concatenate(
-                [np.nan_to_num(r[v][s][r[v]["t"] >= a.arm], nan=-np.inf) for r in free for s in r[v] if s != "t"]
-            )
-            thr = float(np.quantile(pooled, 1.0 - rate))
+            thr = calibrate(free, v, rate, a.arm)
             cells = []
             for slope in SLOPES:
-                delays = []
-                for r in faulty[slope]:
-                    t, st = r[v]["t"], r[v]["G17"]
-                    hit = np.flatnonzero((t >= FAULT_START) & (np.nan_to_num(st, nan=-np.inf) > thr))
-                    if hit.size:
-                        delays.append(t[hit[0]] - FAULT_START)
+                delays = [d for r in faulty[slope] if (d := first_crossing(r[v]["t"], r[v]["G17"], thr)) is not None]
                 frac = len(delays) / len(faulty[slope])
                 cells.append(f"{np.mean(delays):.1f} ({frac:.2f})" if delays else "— (0.00)")
             print(f"{v} | {thr:.4g} | " + " | ".join(cells))
