@@ -30,6 +30,7 @@ FAULT_START = 70.0
 def statistics(sc: navfdi.Scenario, seed: int) -> dict[str, dict[str, np.ndarray]]:
     """Per method and channel, the recorded per-epoch statistic (NaN before a channel tests)."""
     r = navfdi.run_scenario(sc, seed=seed)
+    assert isinstance(r, navfdi.VariantRuns), "liu2022 has variants m1, m2, m3"
     out: dict[str, dict[str, np.ndarray]] = {}
     for v in METHODS:
         run = r.runs[v]
