@@ -126,8 +126,9 @@ struct Channel {
     prefilter: Option<Prefilter>,
     test: ChannelTest,
     excluded: bool,
-    /// Sums over the epoch's steps of the navigation input: code (chips) and frequency (Hz)
-    /// and their variances (chips², Hz²).
+    /// Sums over the epoch's steps of the navigation input, code (chips) and frequency (Hz),
+    /// and of a per-step variance term (chips², Hz²) whose mean is the variance of the
+    /// input's mean: divided by the step count, the mean and its variance.
     sums: [f64; 4],
     steps: usize,
     /// The epoch's largest statistic, its threshold, any alarm.
@@ -289,7 +290,12 @@ pub fn run_ultra_tight(
                 let z = Vector2::new(er / LAMBDA_CODE + sd[0] * v1, ed / LAMBDA_L1 + sd[1] * v2);
                 let st = pf.step_with(z, r_disc);
                 let (v, var) = match u.nav_input {
-                    NavInput::Discriminator => ([z[0], z[1]], [r_disc[0], r_disc[1]]),
+                    // White outputs: the mean's variance is σ²/N.
+                    NavInput::Discriminator => {
+                        let n = steps as f64;
+                        ([z[0], z[1]], [r_disc[0] / n, r_disc[1] / n])
+                    }
+                    // Correlated estimates: the mean P, an upper bound.
                     NavInput::Prefilter => {
                         let (x, p) = (pf.x(), pf.p());
                         ([x[0], x[1]], [p[(0, 0)], p[(1, 1)]])
@@ -333,15 +339,9 @@ pub fn run_ultra_tight(
                     LAMBDA_CODE * ch.sums[0] / n_steps,
                     LAMBDA_L1 * ch.sums[1] / n_steps,
                 ];
-                // Variance of the average: σ²/N for white discriminator outputs; the mean P
-                // (an upper bound) for correlated prefilter estimates.
-                let per = match u.nav_input {
-                    NavInput::Discriminator => n_steps * n_steps,
-                    NavInput::Prefilter => n_steps,
-                };
                 let var = [
-                    LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / per,
-                    LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / per,
+                    LAMBDA_CODE * LAMBDA_CODE * ch.sums[2] / n_steps,
+                    LAMBDA_L1 * LAMBDA_L1 * ch.sums[3] / n_steps,
                 ];
                 if u.method == AimeMethod::M1 {
                     // M1: the satellite's innovation and its covariance H_c P⁻ H_cᵀ + R_c,

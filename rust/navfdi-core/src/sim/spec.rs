@@ -196,16 +196,6 @@ pub enum NavInput {
     Prefilter,
 }
 
-impl NavInput {
-    /// The name used in scenario files: `discriminator`, `prefilter`.
-    pub fn name(self) -> &'static str {
-        match self {
-            NavInput::Discriminator => "discriminator",
-            NavInput::Prefilter => "prefilter",
-        }
-    }
-}
-
 /// Ultra-tight (vector-tracking) configuration (paper 004, METHODS §11). Times in s, C/N0 in
 /// dB-Hz, prefilter densities in chips²/s and Hz²/s³.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
