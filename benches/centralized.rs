@@ -11,12 +11,12 @@
 //! Targets: a centralized run ≤ 1.3 × `run_filter`; three variants ≤ 3.5 × one variant.
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use navfdi_core::arch::run_architecture;
 use navfdi_core::cancel::NEVER;
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::run::run_architecture;
-use navfdi_core::sim::spec::ScenarioSpec;
+use navfdi_core::spec::ScenarioSpec;
 use std::hint::black_box;
 
 fn spec(json: &str) -> ScenarioSpec {
@@ -38,28 +38,39 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20);
     for (name, prep) in &preps {
         g.bench_function(format!("centralized_{name}"), |b| {
-            b.iter(|| black_box(run_architecture(prep, &sim, true, false, &NEVER).expect("run")))
+            b.iter(|| {
+                black_box(
+                    run_architecture(&prep.spec, &sim.streams(&preps[0].1), true, false, &NEVER)
+                        .expect("run"),
+                )
+            })
         });
     }
     g.bench_function("three_variants", |b| {
         b.iter(|| {
             for (_, prep) in &preps {
-                black_box(run_architecture(prep, &sim, true, false, &NEVER).expect("run"));
+                black_box(
+                    run_architecture(&prep.spec, &sim.streams(&preps[0].1), true, false, &NEVER)
+                        .expect("run"),
+                );
             }
         })
     });
     let prep = &preps[0].1;
-    let phi = MatrixSeq::PerEpoch(prep.phi.clone());
-    let q = MatrixSeq::PerEpoch(prep.q.clone());
-    let zs: Vec<f64> = sim.z[0].iter().flat_map(|z| z.iter().copied()).collect();
-    let h = MatrixSeq::PerEpoch(prep.h[0].clone());
-    let r = MatrixSeq::Const(prep.r[0].clone());
+    let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
+    let q = MatrixSeq::PerEpoch(prep.models.q.clone());
+    let zs: Vec<f64> = sim.meas.z[0]
+        .iter()
+        .flat_map(|z| z.iter().copied())
+        .collect();
+    let h = MatrixSeq::PerEpoch(prep.models.h[0].clone());
+    let r = MatrixSeq::Const(prep.models.r[0].clone());
     g.bench_function("run_filter_m6", |b| {
         b.iter(|| {
             black_box(
                 run_filter(
                     nalgebra::DVector::zeros(15),
-                    prep.p0.clone(),
+                    prep.models.p0.clone(),
                     &phi,
                     &q,
                     &zs,

@@ -10,12 +10,12 @@
 //! Target: federated ≤ 2 × (m3 + m6).
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use navfdi_core::arch::federated::run_federated;
 use navfdi_core::cancel::NEVER;
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::run::run_federated;
-use navfdi_core::sim::spec::ScenarioSpec;
+use navfdi_core::spec::ScenarioSpec;
 use std::hint::black_box;
 
 fn yang2013() -> ScenarioSpec {
@@ -31,15 +31,20 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("federated");
     g.sample_size(20);
     g.bench_function("federated_run", |b| {
-        b.iter(|| black_box(run_federated(&prep, &sim, true, &NEVER).expect("run")))
+        b.iter(|| {
+            black_box(run_federated(&prep.spec, &sim.streams(&prep), true, &NEVER).expect("run"))
+        })
     });
-    let phi = MatrixSeq::PerEpoch(prep.phi.clone());
-    let q = MatrixSeq::PerEpoch(prep.q.clone());
+    let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
+    let q = MatrixSeq::PerEpoch(prep.models.q.clone());
     for (label, si) in [("run_filter_m3", 0usize), ("run_filter_m6", 1usize)] {
-        let zs: Vec<f64> = sim.z[si].iter().flat_map(|z| z.iter().copied()).collect();
-        let h = MatrixSeq::PerEpoch(prep.h[si].clone());
-        let r = MatrixSeq::Const(prep.r[si].clone());
-        let p0 = prep.p0.clone();
+        let zs: Vec<f64> = sim.meas.z[si]
+            .iter()
+            .flat_map(|z| z.iter().copied())
+            .collect();
+        let h = MatrixSeq::PerEpoch(prep.models.h[si].clone());
+        let r = MatrixSeq::Const(prep.models.r[si].clone());
+        let p0 = prep.models.p0.clone();
         g.bench_function(label, |b| {
             b.iter(|| {
                 black_box(

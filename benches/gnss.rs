@@ -21,6 +21,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
+use navfdi_core::arch::run_architecture;
 use navfdi_core::cancel::NEVER;
 use navfdi_core::gnss::innovation::innovation_fde;
 use navfdi_core::gnss::prefilter::{dll_variance, fll_variance, Prefilter, PrefilterConfig};
@@ -28,15 +29,14 @@ use navfdi_core::gnss::snapshot::{snapshot_fde, FdeConfig, ObsCov};
 use navfdi_core::kalman::{KalmanFilter, Sequential};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::run::run_architecture;
-use navfdi_core::sim::spec::{FdePlacement, ScenarioSpec};
+use navfdi_core::spec::{FdePlacement, ScenarioSpec};
 use std::hint::black_box;
 
 fn bench(c: &mut Criterion) {
     let spec = ScenarioSpec::from_json(include_str!("shao2018.json")).expect("valid scenario");
     let prep = Prepared::new(spec.clone()).expect("prepared");
     let sim = simulate(&prep, 1, 0);
-    let rp = prep.ranges.as_ref().expect("ranges");
+    let rp = prep.models.ranges.as_ref().expect("ranges");
     let n = spec.n_states();
     let cfg = FdeConfig::new(0.05, Some(1.6449)).expect("cfg");
     let r_of = |e: &navfdi_core::gnss::ranges::RangeEpoch| {
@@ -48,17 +48,17 @@ fn bench(c: &mut Criterion) {
     // The filter of the run up to epoch k − 1, faulty observations left out (as FDE would);
     // k: the first epoch with exactly 10 satellites, no fault and a passing innovation test
     // (the common case).
-    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.p0.clone()).expect("kf");
+    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.models.p0.clone()).expect("kf");
     let mut k = 0;
     for j in 0..prep.epochs() {
         let e = &rp.epochs[j];
         let rj = r_of(e);
         if j > 0 && e.len() == 10 && e.fault.iter().all(|f| *f == 0.0) {
             let mut f = kf.clone();
-            f.predict_trusted(&prep.phi[j], &prep.q[j], 1.0)
+            f.predict_trusted(&prep.models.phi[j], &prep.models.q[j], 1.0)
                 .expect("predict");
             let (inn, _) = f
-                .innovation_pending(&sim.z[rp.sensor][j], &e.h, &rj)
+                .innovation_pending(&sim.meas.z[rp.sensor][j], &e.h, &rj)
                 .expect("innovation");
             let o = innovation_fde(&inn.residual, &inn.covariance, 10, true, None, true, &cfg)
                 .expect("fde");
@@ -67,9 +67,9 @@ fn bench(c: &mut Criterion) {
                 break;
             }
         }
-        kf.predict_trusted(&prep.phi[j], &prep.q[j], 1.0)
+        kf.predict_trusted(&prep.models.phi[j], &prep.models.q[j], 1.0)
             .expect("predict");
-        let mut zj = sim.z[rp.sensor][j].clone();
+        let mut zj = sim.meas.z[rp.sensor][j].clone();
         for (i, f) in e.fault.iter().enumerate() {
             if *f != 0.0 {
                 zj[i] = f64::NAN;
@@ -78,10 +78,10 @@ fn bench(c: &mut Criterion) {
         kf.update_trusted(&zj, &e.h, &rj).expect("update");
     }
     assert!(k > 0, "no epoch with 10 satellites and a passing test");
-    eprintln!("benchmark epoch k = {k} (t = {} s)", prep.t[k]);
+    eprintln!("benchmark epoch k = {k} (t = {} s)", prep.models.t[k]);
     let ep = &rp.epochs[k];
     let m = ep.len();
-    let rho: Vec<f64> = sim.raw[k].as_slice()[..m].to_vec();
+    let rho: Vec<f64> = sim.meas.raw[k].as_slice()[..m].to_vec();
     let cov = ObsCov::Sigma(ep.sigma.clone());
     let first = snapshot_fde(&ep.sat_pos, &rho, &cov, &cfg, None).expect("solves");
     let p = first.position.expect("solution");
@@ -100,7 +100,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     // One tight epoch, innovation FDE, from the run's state.
-    let z: DVector<f64> = sim.z[rp.sensor][k].clone();
+    let z: DVector<f64> = sim.meas.z[rp.sensor][k].clone();
     let h: DMatrix<f64> = ep.h.clone();
     let r = r_of(ep);
     let state = kf.clone();
@@ -114,7 +114,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("tight_epoch_17x20", |b| {
         b.iter(|| {
             let mut f = state.clone();
-            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+            f.predict_trusted(&prep.models.phi[k], &prep.models.q[k], 1.0)
                 .expect("predict");
             f.sequential_pending(&z, &h, &r_diag, &mut seq)
                 .expect("sequential");
@@ -127,7 +127,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("tight_epoch_17x20_batch", |b| {
         b.iter(|| {
             let mut f = state.clone();
-            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+            f.predict_trusted(&prep.models.phi[k], &prep.models.q[k], 1.0)
                 .expect("predict");
             let (inn, pending) = f.innovation_pending(&z, &h, &r).expect("innovation");
             let out = innovation_fde(
@@ -148,7 +148,7 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("kalman_clone_17", |b| b.iter(|| black_box(state.clone())));
     let mut s0 = state.clone();
-    s0.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+    s0.predict_trusted(&prep.models.phi[k], &prep.models.q[k], 1.0)
         .expect("predict");
     let (inn0, _) = s0
         .clone()
@@ -157,7 +157,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("tight_predict_17", |b| {
         b.iter(|| {
             let mut f = state.clone();
-            f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+            f.predict_trusted(&prep.models.phi[k], &prep.models.q[k], 1.0)
                 .expect("predict");
             black_box(f)
         })
@@ -212,9 +212,10 @@ fn bench(c: &mut Criterion) {
         if let Some(t) = s.tight.as_mut() {
             t.fde = fde;
         }
-        let p = prep.for_variant(s).expect("variant");
+        prep.spec.check_variant(&s).expect("variant");
+        let src = sim.streams(&prep);
         g.bench_function(format!("shao2018_{name}"), |b| {
-            b.iter(|| run_architecture(&p, &sim, true, false, &NEVER).expect("run"))
+            b.iter(|| run_architecture(&s, &src, true, false, &NEVER).expect("run"))
         });
     }
     g.finish();

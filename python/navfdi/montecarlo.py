@@ -9,7 +9,7 @@ Reproducibility: run ``i`` draws its noise from ``(seed, i)`` and every sweep po
 same run indices (common random numbers), so results are bit-identical whatever the number
 of threads, the chunk size or the backend (in-process or Dask).
 
-Metric definitions: see :mod:`navfdi_core::sim::montecarlo` (Rust docs) and docs/montecarlo.md.
+Metric definitions: see :mod:`navfdi_core::montecarlo` (Rust docs) and docs/montecarlo.md.
 """
 
 from __future__ import annotations
@@ -66,7 +66,7 @@ RUN_COLUMNS = [
 
 
 #: Satellite-FDE counts per run and cell (tight architecture; zero otherwise), see
-#: ``navfdi_core::sim::metrics::SatFaultMetrics``.
+#: ``navfdi_core::metrics::SatFaultMetrics``.
 FDE_COUNTS = [c for c in RUN_COLUMNS if c.startswith("fde_")]
 
 #: Figures of :meth:`Campaign.summary` after the key columns and ``runs``.

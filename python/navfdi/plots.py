@@ -10,10 +10,10 @@ import numpy as np
 from navfdi.scenario import fault_on
 
 if TYPE_CHECKING:
-    from navfdi.runs import ScenarioRun
+    from navfdi.record import RunRecord
 
 
-def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
+def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     """Write PNG figures for a run into ``out``:
 
     * ``detector_{sub}_{det}.png``: statistic (log scale) against threshold, alarm epochs, fault
@@ -145,7 +145,7 @@ def plot_run(run: ScenarioRun, out: Path, prefix: str = "") -> list[Path]:
     return paths
 
 
-def _plot_channels(run: ScenarioRun, out: Path, prefix: str, plt: Any) -> Path:
+def _plot_channels(run: RunRecord, out: Path, prefix: str, plt: Any) -> Path:
     """``channel_statistics.png`` (ultra-tight; paper 004's Fig. 11–15): every tracked
     channel's statistic (log scale) against the threshold, faulty channels in colour and
     healthy ones in grey, a cross where a channel was excluded."""
@@ -185,7 +185,7 @@ def _plot_channels(run: ScenarioRun, out: Path, prefix: str, plt: Any) -> Path:
     return p
 
 
-def _state_detector(run: ScenarioRun, sub: str) -> str | None:
+def _state_detector(run: RunRecord, sub: str) -> str | None:
     """Name of a sensor's ``state_chi2`` detector (centralized architecture), if any."""
     for cs in run.scenario.core.get("centralized", {}).get("sensors", []):
         if cs["sensor"] == sub:
@@ -195,7 +195,7 @@ def _state_detector(run: ScenarioRun, sub: str) -> str | None:
     return None
 
 
-def _plot_altitude(run: ScenarioRun, out: Path, prefix: str, plt: Any) -> list[Path]:
+def _plot_altitude(run: RunRecord, out: Path, prefix: str, plt: Any) -> list[Path]:
     """The altitude-fusion figures of :func:`plot_run`."""
     t = run.t
     fu = run.record["fusion"]
@@ -251,7 +251,7 @@ def _statistic_axes(ax: Any, t: np.ndarray, d: dict[str, Any], faults: list[dict
     return stat
 
 
-def _isolating_detector(run: ScenarioRun, sub: str) -> str | None:
+def _isolating_detector(run: RunRecord, sub: str) -> str | None:
     """Name of the detector whose alarm isolates (federated) or excludes (centralized) the
     channel of sensor ``sub`` (None if none does)."""
     core = run.scenario.core

@@ -6,7 +6,7 @@ with isolation and, on the same measurements, without isolation, and returns a
 :meth:`ScenarioRun.timeseries`) and :meth:`ScenarioRun.write` for the files of ``navfdi run``.
 
 Event matching (``events.csv``, the tables) is the Rust engine that Monte-Carlo campaigns
-use too (``navfdi_core::sim::metrics``): an alarm interval of a detector on a channel belongs
+use too (``navfdi_core::metrics``): an alarm interval of a detector on a channel belongs
 to a fault on that channel's sensor when it overlaps the fault window ``[start, end]`` and
 began after the end of the previous fault window on the same sensor (an alarm still raised from
 an earlier fault is not a new detection). ``delay = alarm_start − fault_start``, or 0 when a
@@ -25,9 +25,9 @@ import numpy as np
 
 from navfdi import _core
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events
+from navfdi.record import ERROR_COLUMNS, RunRecord
 from navfdi.scenario import Scenario, fault_on, load_scenario
 
-ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
 
 
 @dataclass(frozen=True)
@@ -67,92 +67,10 @@ class FaultMatch:
     note: str
 
 
-class ScenarioRun:
-    """Result of :func:`run_scenario`.
-
-    Attributes
-    ----------
-    scenario : Scenario
-        The scenario as run.
-    seed : int
-        Random seed.
-    t : ndarray, shape (T,)
-        Epoch times (s).
-    record : dict
-        Raw record of the run with isolation (arrays from the Rust core).
-    baseline : dict or None
-        Raw record of the same run without isolation (None if not computed).
-    variant : str
-        Variant name (``"base"`` for a scenario without variants).
-    """
-
-    def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None, variant: str = "base"):
-        self.scenario = scenario
-        self.seed = seed
-        self.record = record
-        self.baseline = baseline
-        self.variant = variant
-        self.t: np.ndarray = record["t"]
-
-    # ---- per sub-filter access -------------------------------------------------------------
-    def subfilters(self) -> list[str]:
-        """Sub-filter (sensor) names in configuration order."""
-        return [s["sensor"] for s in self.record["subfilters"]]
-
-    def detector(self, subfilter: str, name: str) -> dict[str, np.ndarray]:
-        """Arrays ``statistic, threshold, alarm`` (shape (T,)) of one detector."""
-        for s in self.record["subfilters"]:
-            if s["sensor"] == subfilter:
-                for d in s["detectors"]:
-                    if d["name"] == name:
-                        return d
-        raise KeyError(f"no detector {name!r} on sub-filter {subfilter!r}")
-
-    def isolated(self, subfilter: str) -> np.ndarray:
-        """Isolation flag per epoch of a sub-filter, shape (T,)."""
-        for s in self.record["subfilters"]:
-            if s["sensor"] == subfilter:
-                return s["isolated"]
-        raise KeyError(f"no sub-filter {subfilter!r}")
-
-    def error(self, isolation: bool = True) -> np.ndarray:
-        """Master navigation error ``x_true − x_g``, shape (T, 9): attitude east/north/up (rad),
-        velocity (m/s), position east/north/up (m). ``isolation=False``: the run without."""
-        rec = self.record if isolation else self.baseline
-        if rec is None:
-            raise ValueError("this run was made without the no-isolation baseline")
-        return rec["error"]
-
-    def components(self, subfilter: str) -> list[str]:
-        """Measurement component names of a channel's sensor (e.g. ``pos_e ... vel_u``)."""
-        from navfdi.scenario import SENSOR_COMPONENTS
-
-        kind = next(s["kind"] for s in self.scenario.core["sensors"] if s["name"] == subfilter)
-        return [c for c, _ in SENSOR_COMPONENTS[kind]]
-
-    def mdb_note(self) -> str:
-        """Which λ0 the MDB uses, beside paper 002's 17.872 (METHODS §6); empty without MDB."""
-        core = self.scenario.core
-        if core.get("architecture") != "centralized":
-            return ""
-        lines = []
-        for cs, s in zip(core["centralized"]["sensors"], self.record["subfilters"]):
-            if "mdb" not in s:
-                continue
-            dets = {d["name"]: d for d in cs["detectors"]}
-            det = dets.get(cs.get("decision") or "", cs["detectors"][0] if cs["detectors"] else None)
-            if det is None:
-                continue
-            pf, pm, m = det["pf"], det["pm"] if det["pm"] is not None else det["pf"], s["mdb"].shape[1]
-            lam = _core.noncentrality(pf, pm, m)
-            med = np.nanmedian(s["mdb"], axis=0)
-            comps = ", ".join(f"{c} {v:.3g}" for c, v in zip(self.components(s["sensor"]), med))
-            lines.append(
-                f"MDB on {s['sensor']}: λ0 = {lam:.3f} (used; standard definition, m = {m}, Pf = {pf:g}, Pm = {pm:g}); "
-                f"paper 002 reports λ0 = 17.872, which is m = 6, Pf = 0.1, Pm = 0.05 ({_core.noncentrality(0.1, 0.05, 6):.3f}). "
-                f"Median MDB: {comps}"
-            )
-        return "\n".join(lines)
+class ScenarioRun(RunRecord):
+    """Result of :func:`run_scenario`: one run's records (:class:`~navfdi.record.RunRecord`:
+    ``scenario``, ``seed``, ``t``, ``record``, ``baseline``, ``variant`` and the accessors
+    by channel and detector) with its tables, time series, figures and files."""
 
     # ---- satellite FDE (tight architecture) -----------------------------------------------
     def satellite_table(self):

@@ -1,7 +1,7 @@
 //! Co-operative cancellation of long loops.
 //!
-//! Whole-run functions ([`crate::run::run_filter`], [`crate::sim::run::run_federated`],
-//! [`crate::sim::montecarlo::run_chunk`]) take a [`Cancel`] and check it once per epoch (a
+//! Whole-run functions ([`crate::run::run_filter`], [`crate::arch::federated::run_federated`],
+//! [`crate::montecarlo::run_chunk`]) take a [`Cancel`] and check it once per epoch (a
 //! relaxed atomic load). A binding sets it when the user interrupts (Ctrl-C), and the loop then
 //! returns [`crate::Error::Cancelled`] within one epoch instead of running to its end.
 

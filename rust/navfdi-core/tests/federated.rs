@@ -3,7 +3,7 @@
 use nalgebra::{DMatrix, DVector};
 use navfdi_core::detect::{Detector, ResidualChi2};
 use navfdi_core::fusion::{FederatedFilter, SubFilterConfig};
-use navfdi_core::sim::spec::FusionMode;
+use navfdi_core::spec::FusionMode;
 use navfdi_core::KalmanFilter;
 
 /// Small deterministic pseudo-random numbers (no RNG dependency in the test).
@@ -214,7 +214,7 @@ fn step_rejects_bad_input_and_keeps_state() {
 
 #[test]
 fn isolated_modes_track_predict_update() {
-    use navfdi_core::sim::spec::IsolatedMode;
+    use navfdi_core::spec::IsolatedMode;
     let run = |mode: IsolatedMode| {
         let mut rng = Lcg(11);
         let n = 2;

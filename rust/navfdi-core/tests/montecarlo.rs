@@ -1,9 +1,9 @@
 //! Monte-Carlo determinism: results depend only on (seed, run index).
 
 use navfdi_core::cancel::NEVER;
-use navfdi_core::sim::montecarlo::{cells, run_chunk, RunMetrics};
+use navfdi_core::montecarlo::{cells, run_chunk, RunMetrics};
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::spec::ScenarioSpec;
+use navfdi_core::spec::ScenarioSpec;
 
 fn prep() -> Prepared {
     let mut spec = ScenarioSpec::from_json(include_str!("../../../benches/yang2013.json")).unwrap();

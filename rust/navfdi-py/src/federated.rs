@@ -3,9 +3,9 @@
 use crate::convert::{matrix, matrix_to_numpy, vector, vector_to_numpy};
 use crate::detect::PyDecision;
 use crate::errors::IntoPyResult;
+use navfdi_core::arch::common::make_detector;
 use navfdi_core::fusion::{FederatedFilter, StepReport, SubFilterConfig};
-use navfdi_core::sim::run::make_detector;
-use navfdi_core::sim::spec::{DetectorKind, FusionMode, IsolatedMode};
+use navfdi_core::spec::{DetectorKind, FusionMode, IsolatedMode};
 use numpy::{IxDyn, PyArray};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;

@@ -13,6 +13,7 @@ mod interrupt;
 mod montecarlo;
 mod pickling;
 mod prefilter;
+mod restore;
 mod rinex;
 mod scenario;
 mod weighted;
@@ -146,7 +147,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(ncx2_cdf, m)?)?;
     m.add_function(wrap_pyfunction!(mdb, m)?)?;
     m.add_function(wrap_pyfunction!(memory_available, m)?)?;
-    m.add_function(wrap_pyfunction!(pickling::_restore, m)?)?;
+    m.add_function(wrap_pyfunction!(restore::_restore, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::validate_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::scenario_trajectory, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::run_scenario, m)?)?;

@@ -3,9 +3,9 @@
 
 use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
-use navfdi_core::sim::montecarlo::{cells, run_chunk, Cell};
+use navfdi_core::montecarlo::{cells, run_chunk, Cell};
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::spec::ScenarioSpec;
+use navfdi_core::spec::ScenarioSpec;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -85,10 +85,10 @@ impl PyPreparedScenario {
             "run",
             to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?,
         )?;
-        let grid = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
+        let grid = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
             rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
         };
-        let grid_i = |f: &dyn Fn(&navfdi_core::sim::montecarlo::CellMetrics) -> i64| -> Vec<i64> {
+        let grid_i = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> i64| -> Vec<i64> {
             rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
         };
         d.set_item(
@@ -121,7 +121,7 @@ impl PyPreparedScenario {
         for (key, f) in [
             (
                 "fde_faulty_epochs",
-                (|m| m.sat.faulty_epochs) as fn(&navfdi_core::sim::montecarlo::CellMetrics) -> u32,
+                (|m| m.sat.faulty_epochs) as fn(&navfdi_core::montecarlo::CellMetrics) -> u32,
             ),
             ("fde_detected_epochs", |m| m.sat.detected_epochs),
             ("fde_exclusion_epochs", |m| m.sat.exclusion_epochs),
@@ -136,7 +136,7 @@ impl PyPreparedScenario {
         for (key, f) in [
             (
                 "att_rms",
-                (|r| r.att_rms) as fn(&navfdi_core::sim::montecarlo::RunMetrics) -> f64,
+                (|r| r.att_rms) as fn(&navfdi_core::montecarlo::RunMetrics) -> f64,
             ),
             ("att_max", |r| r.att_max),
             ("pos_rms", |r| r.pos_rms),
@@ -171,5 +171,5 @@ pub fn check_campaign_memory(
     row_bytes: f64,
 ) -> PyResult<()> {
     let spec = ScenarioSpec::from_json(spec_json).py()?;
-    navfdi_core::sim::montecarlo::check_campaign_memory(&spec, runs, points, kept, row_bytes).py()
+    navfdi_core::montecarlo::check_campaign_memory(&spec, runs, points, kept, row_bytes).py()
 }

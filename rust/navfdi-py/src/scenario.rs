@@ -3,11 +3,12 @@
 
 use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
+use navfdi_core::arch::run_architecture;
+use navfdi_core::record::{RunRecord, ERROR_COLUMNS};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
-use navfdi_core::sim::run::{run_architecture, RunRecord, ERROR_COLUMNS};
-use navfdi_core::sim::spec::ScenarioSpec;
 use navfdi_core::sim::trajectory::generate;
+use navfdi_core::spec::ScenarioSpec;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -121,7 +122,7 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         sd.set_item("excluded", to_numpy(py, sr.excluded, &[t, n])?)?;
         sd.set_item("w", to_numpy(py, sr.w, &[t, n])?)?;
         sd.set_item("status", to_numpy(py, sr.status, &[t])?)?;
-        sd.set_item("status_names", navfdi_core::sim::run::SAT_STATUS.to_vec())?;
+        sd.set_item("status_names", navfdi_core::record::SAT_STATUS.to_vec())?;
         sd.set_item("used", to_numpy(py, sr.used, &[t])?)?;
         let ms = PyList::empty(py);
         for m in sr.metrics {
@@ -163,9 +164,10 @@ pub fn run_scenario<'py>(
             let prep = Prepared::new(spec)?;
             cancel.check()?;
             let sim = simulate(&prep, seed, stream);
+            let src = sim.streams(&prep);
             isolation
                 .iter()
-                .map(|&iso| run_architecture(&prep, &sim, iso, true, cancel))
+                .map(|&iso| run_architecture(&prep.spec, &src, iso, true, cancel))
                 .collect()
         })?;
     let out = PyList::empty(py);
@@ -206,10 +208,11 @@ pub fn run_variants<'py>(
             let prep = Prepared::new(first)?;
             cancel.check()?;
             let sim = simulate(&prep, seed, stream);
-            let mut out = vec![run_architecture(&prep, &sim, true, true, cancel)?];
+            let src = sim.streams(&prep);
+            let mut out = vec![run_architecture(&prep.spec, &src, true, true, cancel)?];
             for spec in specs {
-                let p = prep.for_variant(spec)?;
-                out.push(run_architecture(&p, &sim, true, true, cancel)?);
+                prep.spec.check_variant(&spec)?;
+                out.push(run_architecture(&spec, &src, true, true, cancel)?);
             }
             Ok(out)
         })?;
@@ -227,7 +230,7 @@ type Matched<'py> = (
 );
 
 /// Alarm intervals of `alarm` (times `t`) and the fault each detects, by the one matching rule
-/// (`navfdi_core::sim::metrics`). `windows`: fault windows `(start, end)` in s, sorted by start.
+/// (`navfdi_core::metrics`). `windows`: fault windows `(start, end)` in s, sorted by start.
 /// Returns `(start_index, end_index, fault_index)` arrays; `-1` for "never ended" / "no fault".
 #[pyfunction]
 pub fn match_alarms<'py>(
@@ -242,7 +245,7 @@ pub fn match_alarms<'py>(
             "windows: must be sorted by start",
         ));
     }
-    let ev = navfdi_core::sim::metrics::events(t.as_slice(), &alarm, &windows);
+    let ev = navfdi_core::metrics::events(t.as_slice(), &alarm, &windows);
     let n = ev.len();
     let starts = ev.iter().map(|((s, _), _)| *s as i64).collect();
     let ends = ev

@@ -23,15 +23,15 @@
 //! detector's `alarm` is the policy's fault state (for `fading`: a component is faulty), so
 //! event matching scores what the policy decided.
 
+use super::common::{channel_sensors, make_detector, varying_h};
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
 use crate::ins::N_STATES;
 use crate::kalman::KalmanFilter;
-use crate::sim::noise::Simulated;
-use crate::sim::prepare::Prepared;
-use crate::sim::run::{channel_sensors, make_detector, varying_h, RunRecord};
-use crate::sim::spec::{DetectorKind, Policy};
+use crate::record::{FusionRecord, RunRecord};
+use crate::spec::{DetectorKind, Policy, ScenarioSpec};
+use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector};
 
 /// Per-component state of the `fading` policy.
@@ -47,23 +47,23 @@ enum SensorTest {
     State(f64),
 }
 
-/// Run the centralized filter over one simulated run. `isolation = false`: the detectors run
+/// Run the centralized filter of scenario `spec` over one run's streams. `isolation = false`: the detectors run
 /// and report but the policy never acts (every measurement is used).
 ///
 /// `mdb`: also record the minimal detectable bias per epoch (a factorisation and inverse of
 /// each sensor block per epoch; Monte-Carlo runs that keep no series skip it).
 pub fn run_centralized(
-    prep: &Prepared,
-    sim: &Simulated,
+    spec: &ScenarioSpec,
+    src: &Streams,
     isolation: bool,
     mdb: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
-    let spec = &prep.spec;
+    let models = src.models;
     let c = spec.centralized()?;
     let channels = spec.channels();
-    let sensor_idx = channel_sensors(prep);
-    let varying = varying_h(prep, &sensor_idx);
+    let sensor_idx = channel_sensors(spec);
+    let varying = varying_h(spec, &sensor_idx);
     let dims: Vec<usize> = sensor_idx
         .iter()
         .map(|&si| spec.sensors[si].kind.dim())
@@ -95,7 +95,7 @@ pub fn run_centralized(
             // A proportional σ's prior is its value at the first epoch.
             let prior: Vec<f64> = rows
                 .iter()
-                .map(|&(i, row)| match prep.r_epoch[sensor_idx[i]].first() {
+                .map(|&(i, row)| match models.r_epoch[sensor_idx[i]].first() {
                     Some(var) => var.sqrt(),
                     None => spec.sensors[sensor_idx[i]].noise[row - offsets[i]],
                 })
@@ -106,15 +106,12 @@ pub fn run_centralized(
         }
         None => None,
     };
-    let mut rec = RunRecord::empty(prep);
+    let mut rec = RunRecord::empty(spec, models);
     let extra = usize::from(fusion.is_some());
-    rec.fusion = c
-        .altitude_fusion
-        .as_ref()
-        .map(|af| crate::sim::run::FusionRecord {
-            sensors: af.sensors.clone(),
-            ..Default::default()
-        });
+    rec.fusion = c.altitude_fusion.as_ref().map(|af| FusionRecord {
+        sensors: af.sensors.clone(),
+        ..Default::default()
+    });
     let mut h = DMatrix::zeros(m + extra, N_STATES);
     let mut r = DMatrix::zeros(m + extra, m + extra);
     if extra == 1 {
@@ -123,10 +120,11 @@ pub fn run_centralized(
     }
     for (i, &si) in sensor_idx.iter().enumerate() {
         let (o, d) = (offsets[i], dims[i]);
-        h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][0]);
-        r.view_mut((o, o), (d, d)).copy_from(&prep.r[si]);
+        h.view_mut((o, 0), (d, N_STATES))
+            .copy_from(&models.h[si][0]);
+        r.view_mut((o, o), (d, d)).copy_from(&models.r[si]);
     }
-    let mut kf = KalmanFilter::new(DVector::zeros(N_STATES), prep.p0.clone())?;
+    let mut kf = KalmanFilter::new(DVector::zeros(N_STATES), models.p0.clone())?;
     // Each sensor's tests: innovation detectors, and state tests with their thresholds.
     let tested = rec
         .state
@@ -183,15 +181,16 @@ pub fn run_centralized(
         cancel.check()?;
         let s = if fading_left > 0 { c.fading } else { 1.0 };
         fading_left = fading_left.saturating_sub(1);
-        kf.predict_trusted(&prep.phi[k], &prep.q[k], s)
+        kf.predict_trusted(&models.phi[k], &models.q[k], s)
             .map_err(|e| crate::run::at_epoch(k, e))?;
         for (i, &si) in sensor_idx.iter().enumerate() {
             let (o, d) = (offsets[i], dims[i]);
-            z.rows_mut(o, d).copy_from(&sim.z[si][k]);
+            z.rows_mut(o, d).copy_from(&src.meas.z[si][k]);
             if varying[i] {
-                h.view_mut((o, 0), (d, N_STATES)).copy_from(&prep.h[si][k]);
+                h.view_mut((o, 0), (d, N_STATES))
+                    .copy_from(&models.h[si][k]);
             }
-            if let Some(var) = prep.r_epoch[si].get(k) {
+            if let Some(var) = models.r_epoch[si].get(k) {
                 r[(o, o)] = *var;
             }
         }
@@ -201,7 +200,7 @@ pub fn run_centralized(
             .innovation_pending(&z, &h, &r)
             .map_err(|e| crate::run::at_epoch(k, e))?;
         if let Some(st) = rec.state.as_mut() {
-            st.detector.advance(&prep.phi[k], &prep.q[k]);
+            st.detector.advance(&models.phi[k], &models.q[k]);
         }
         // Paper 003's sensor sub-filters: each runs on its own sensor's measurement alone.
         for (i, pair) in pairs.iter_mut().enumerate() {
@@ -213,7 +212,7 @@ pub fn run_centralized(
             let hi: DMatrix<f64> = h.rows(o, d).into_owned();
             let ri: DMatrix<f64> = r.view((o, o), (d, d)).into_owned();
             for f in pair.iter_mut().flatten() {
-                f.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+                f.predict_trusted(&models.phi[k], &models.q[k], 1.0)
                     .map_err(|e| crate::run::at_epoch(k, e))?;
                 if zi.iter().any(|v| !v.is_nan()) {
                     f.update_trusted(&zi, &hi, &ri)
@@ -358,7 +357,9 @@ pub fn run_centralized(
                 z_used[row] = f64::NAN;
             }
             // Fused-altitude error against the true height error (the measurement's error).
-            let truth = sim.x_true[k][crate::ins::POS + 2];
+            let truth = src
+                .reference
+                .map_or(f64::NAN, |r| r.x_true[k][crate::ins::POS + 2]);
             if let Some(fr) = rec.fusion.as_mut() {
                 fr.error.extend(values.iter().map(|v| v - truth));
                 fr.weight.extend_from_slice(&out.weights);
@@ -381,7 +382,7 @@ pub fn run_centralized(
         .map_err(|e| crate::run::at_epoch(k, e))?;
         rec.sources.push(sources);
         let due = rec.state.as_ref().and_then(|st| st.detector.reset_due());
-        rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+        rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
         // Sensor sub-filters restart with their propagator, from the same filter output.
         if let Some(q) = due {
             for (pair, tests) in pairs.iter_mut().zip(&detectors) {

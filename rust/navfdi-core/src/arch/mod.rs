@@ -1,9 +1,46 @@
-//! One epoch loop per integration architecture. Each drives its filters, detectors and
-//! fault-handling policy over a prepared scenario and a simulated run, and fills the same
-//! [`crate::sim::run::RunRecord`] (one channel per tested sensor), so metrics, Monte-Carlo,
-//! outputs and plots serve every architecture. The federated loop lives in
-//! [`crate::sim::run::run_federated`].
+//! One epoch loop per integration architecture, one file each. Each drives its filters,
+//! detectors and fault-handling policy over one run's measurement streams
+//! ([`crate::stream::Streams`]: whatever source produced them) and fills the same
+//! [`crate::record::RunRecord`] (one channel per tested sensor), so metrics, Monte-Carlo,
+//! outputs and plots serve every architecture. No architecture imports the simulator.
+//!
+//! This module is the dispatcher above them: [`run_architecture`] picks the loop the scenario
+//! names. Shared helpers are in [`common`].
 
 pub mod centralized;
+pub mod common;
+pub mod federated;
 pub mod tight;
 pub mod ultra_tight;
+
+use crate::cancel::Cancel;
+use crate::error::Result;
+use crate::record::RunRecord;
+use crate::spec::{Architecture, ScenarioSpec};
+use crate::stream::Streams;
+
+/// Run the architecture of scenario `spec` over one run's streams (`isolation = false`:
+/// detectors report but never act). `full`: record everything, including quantities only
+/// figures and time series use (the MDB); Monte-Carlo runs that keep no series pass false.
+pub fn run_architecture(
+    spec: &ScenarioSpec,
+    src: &Streams,
+    isolation: bool,
+    full: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    match spec.architecture {
+        Architecture::Federated => {
+            let isolate = spec.federated.as_ref().is_none_or(|f| f.isolate);
+            federated::run_federated(spec, src, isolation && isolate, cancel)
+        }
+        Architecture::Centralized => {
+            let isolate = spec.centralized.as_ref().is_none_or(|c| c.isolate);
+            centralized::run_centralized(spec, src, isolation && isolate, full, cancel)
+        }
+        Architecture::Tight => tight::run_tight(spec, src, isolation, full, cancel),
+        Architecture::UltraTight => {
+            ultra_tight::run_ultra_tight(spec, src, isolation, full, cancel)
+        }
+    }
+}

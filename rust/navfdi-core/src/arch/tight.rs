@@ -37,48 +37,46 @@
 
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::gnss::geodesy::ecef_to_enu;
 use crate::gnss::innovation::{innovation_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
 use crate::gnss::snapshot::{
     fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
 };
-use crate::ins::{earth, POS};
-use crate::kalman::{KalmanFilter, Sequential};
-use crate::sim::noise::Simulated;
-use crate::sim::prepare::Prepared;
-use crate::sim::run::{RunRecord, SatRecord};
-use crate::sim::spec::FdePlacement;
-use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::sim::run::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
+use crate::kalman::{KalmanFilter, Sequential};
+use crate::record::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
+use crate::record::{RunRecord, SatRecord};
+use crate::spec::{FdePlacement, ScenarioSpec};
+use crate::stream::Streams;
+use nalgebra::{DMatrix, DVector};
+
 const ALARM: u8 = 4;
 
-/// Run the tight filter over one simulated run (`isolation = false`: FDE reports, never
+/// Run the tight filter of scenario `spec` over one run's streams (`isolation = false`: FDE reports, never
 /// excludes). `full`: also compute the innovation w-test of epochs whose global test passes
 /// (for the record; Monte-Carlo runs that keep no series pass false). `cancel` is checked
 /// every epoch.
 pub fn run_tight(
-    prep: &Prepared,
-    sim: &Simulated,
+    spec: &ScenarioSpec,
+    src: &Streams,
     isolation: bool,
     full: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
-    let spec = &prep.spec;
+    let models = src.models;
     let t = spec.tight()?;
-    let rp = prep
+    let rp = models
         .ranges
         .as_ref()
         .ok_or_else(|| Error::Invalid("tight: the scenario has no gnss_ranges sensor".into()))?;
     let si = rp.sensor;
     let n = spec.n_states();
     let cfg = FdeConfig::new(t.alpha, t.k)?;
-    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.p0.clone())?;
+    let mut kf = KalmanFilter::new(DVector::zeros(n), models.p0.clone())?;
     let s_count = rp.names.len();
-    let epochs = prep.epochs();
-    let mut rec = RunRecord::empty(prep);
+    let epochs = src.epochs();
+    let mut rec = RunRecord::empty(spec, models);
     let mut sat = SatRecord {
         names: rp.names.clone(),
         in_view: vec![false; epochs * s_count],
@@ -97,7 +95,7 @@ pub fn run_tight(
     let mut r_diag: Vec<f64> = Vec::new();
     for k in 0..epochs {
         cancel.check()?;
-        kf.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+        kf.predict_trusted(&models.phi[k], &models.q[k], 1.0)
             .map_err(|e| crate::run::at_epoch(k, e))?;
         if let Some(pv) = &mut pv {
             pv.predict().map_err(|e| crate::run::at_epoch(k, e))?;
@@ -109,7 +107,7 @@ pub fn run_tight(
         }
         let sub = &mut rec.subs[0];
         let det = &mut sub.detectors[0];
-        if !(prep.available[si][k] && m > 0) {
+        if !(models.available[si][k] && m > 0) {
             sub.statistic.push(f64::NAN);
             sub.dof.push(0);
             sub.isolated.push(false);
@@ -121,11 +119,11 @@ pub fn run_tight(
             sat.status.push(NO_MEASUREMENT);
             sat.used.push(0);
             rec.sources.push(0);
-            rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+            rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
             continue;
         }
         let rows = if t.rates { 2 * m } else { m };
-        let z: DVector<f64> = sim.z[si][k].rows(0, rows).into_owned();
+        let z: DVector<f64> = src.meas.z[si][k].rows(0, rows).into_owned();
         let h: DMatrix<f64> = ep.h.rows(0, rows).into_owned();
         r_diag.clear();
         r_diag.extend(
@@ -138,7 +136,7 @@ pub fn run_tight(
         let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
         let mut sequential = false;
         let (out, pending) = match t.fde {
-            FdePlacement::LsPrecheck => (ls_precheck(prep, sim, k, kf.x(), t.rates, &cfg)?, None),
+            FdePlacement::LsPrecheck => (ls_precheck(src, k, kf.x(), t.rates, &cfg)?, None),
             // Fast path (no per-satellite w wanted): the update row by row, which yields the
             // global statistic; only an epoch whose test fails (and that may exclude) goes on
             // to the batch innovation and the w-test.
@@ -158,7 +156,7 @@ pub fn run_tight(
                 (out, None)
             }
             FdePlacement::GnssFilter => {
-                let raw = sim.raw[k].as_slice();
+                let raw = src.meas.raw[k].as_slice();
                 let pv = pv
                     .as_mut()
                     .ok_or_else(|| Error::Invalid("tight: no GNSS filter".into()))?;
@@ -232,7 +230,7 @@ pub fn run_tight(
         sub.fused.push(updated > 0);
         sat.used.push(updated as u32);
         rec.sources.push(u32::from(updated > 0));
-        rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+        rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
     }
     // Satellite-FDE counts per fault on the sensor.
     sat.score(&rec.t, &spec.faults, &spec.sensors[si].name);
@@ -258,28 +256,23 @@ fn seq_passes(
 
 /// Method 1: snapshot FDE on the raw pseudoranges (and rates) of epoch `k`.
 fn ls_precheck(
-    prep: &Prepared,
-    sim: &Simulated,
+    src: &Streams,
     k: usize,
     x_hat: &DVector<f64>,
     rates: bool,
     cfg: &FdeConfig,
 ) -> Result<SatFde> {
-    let rp = prep
+    let rp = src
+        .models
         .ranges
         .as_ref()
         .ok_or_else(|| Error::Invalid("no ranges".into()))?;
     let ep = &rp.epochs[k];
     let m = ep.len();
-    let raw = &sim.raw[k];
-    // Start value: the INS position (truth + the INS error of this run) and the filter's clock
-    // estimate, as a receiver-side implementation would have them.
-    let tr = &prep.truth[k];
-    let x = &sim.x_true[k];
-    let rm = earth::r_meridian(tr.lat) + tr.h;
-    let rn = earth::r_normal(tr.lat) + tr.h;
-    let d_enu = Vector3::new(x[POS + 1] * rn * tr.lat.cos(), x[POS] * rm, x[POS + 2]);
-    let r_ins = ep.rx + ecef_to_enu(tr.lat, tr.lon).transpose() * d_enu;
+    let raw = &src.meas.raw[k];
+    // Start value: the INS position and the filter's clock estimate, as a receiver-side
+    // implementation would have them.
+    let r_ins = src.meas.ins_position[k];
     let x0 = [r_ins.x, r_ins.y, r_ins.z, x_hat[CLOCK_BIAS]];
     let rho = &raw.as_slice()[..m];
     let model = PositionModel::new(&ep.sat_pos, rho, x0);

@@ -57,10 +57,9 @@ use crate::gnss::prefilter::{
 use crate::gnss::snapshot::FdeStatus;
 use crate::gnss::C;
 use crate::kalman::{KalmanFilter, Sequential};
-use crate::sim::noise::Simulated;
-use crate::sim::prepare::Prepared;
-use crate::sim::run::{RunRecord, SatRecord};
-use crate::sim::spec::{AimeMethod, NavInput, UltraTightSpec};
+use crate::record::{RunRecord, SatRecord};
+use crate::spec::{AimeMethod, NavInput, ScenarioSpec, UltraTightSpec};
+use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector2, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -73,7 +72,7 @@ pub const LAMBDA_L1: f64 = C / F_CARRIER_L1;
 /// Stream offset of the discriminator noise.
 const DISCRIMINATOR_STREAM: u64 = 0x0D15_C0DE_0050;
 
-use crate::sim::run::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
+use crate::record::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
 
 /// A channel's detector.
 enum ChannelTest {
@@ -168,19 +167,31 @@ fn quad_rows(h: &DMatrix<f64>, a: usize, b: usize, p: &DMatrix<f64>) -> f64 {
     s
 }
 
-/// Run the ultra-tight architecture over one simulated run (`isolation = false`: detectors
-/// report, channels are never excluded). `full` is accepted for symmetry (everything is
-/// recorded either way). `cancel` is checked every epoch.
+/// Run the ultra-tight architecture of scenario `spec` over one run's streams
+/// (`isolation = false`: detectors report, channels are never excluded). `full` is accepted
+/// for symmetry (everything is recorded either way). `cancel` is checked every epoch.
+///
+/// The tracking loops are simulated here: each channel's discriminators see the true tracking
+/// error, so the streams must carry the reference error state (a simulated source); their
+/// noise comes from the run's seed and stream.
 pub fn run_ultra_tight(
-    prep: &Prepared,
-    sim: &Simulated,
+    spec: &ScenarioSpec,
+    src: &Streams,
     isolation: bool,
     _full: bool,
     cancel: &Cancel,
 ) -> Result<RunRecord> {
-    let spec = &prep.spec;
+    let models = src.models;
     let u = spec.ultra_tight()?;
-    let rp = prep.ranges.as_ref().ok_or_else(|| {
+    let x_true = &src
+        .reference
+        .ok_or_else(|| {
+            Error::Invalid(
+                "ultra_tight: the tracking loops need the signal's truth (the reference error state), which only a simulated source provides".into(),
+            )
+        })?
+        .x_true;
+    let rp = models.ranges.as_ref().ok_or_else(|| {
         Error::Invalid("ultra_tight: the scenario has no gnss_ranges sensor".into())
     })?;
     let si = rp.sensor;
@@ -220,13 +231,13 @@ pub fn run_ultra_tight(
             alarm: false,
         });
     }
-    let mut rng = ChaCha8Rng::seed_from_u64(sim.seed);
-    rng.set_stream(sim.stream ^ DISCRIMINATOR_STREAM);
-    let mut kf = KalmanFilter::new(DVector::zeros(n), prep.p0.clone())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(src.seed);
+    rng.set_stream(src.stream ^ DISCRIMINATOR_STREAM);
+    let mut kf = KalmanFilter::new(DVector::zeros(n), models.p0.clone())?;
     let mut seq = Sequential::new(n);
-    let epochs = prep.epochs();
+    let epochs = src.epochs();
     let s_count = chans.len();
-    let mut rec = RunRecord::empty(prep);
+    let mut rec = RunRecord::empty(spec, models);
     let mut sat = SatRecord {
         names: u.satellites.clone(),
         in_view: vec![false; epochs * s_count],
@@ -242,9 +253,9 @@ pub fn run_ultra_tight(
         cancel.check()?;
         let ep = &rp.epochs[k];
         let m = ep.len();
-        let measured = prep.available[si][k] && m > 0;
+        let measured = models.available[si][k] && m > 0;
         if k > 0 {
-            kf.predict_trusted(&prep.phi[k], &prep.q[k], 1.0)
+            kf.predict_trusted(&models.phi[k], &models.q[k], 1.0)
                 .map_err(|e| crate::run::at_epoch(k, e))?;
         }
         // Fine steps over (t_{k−1}, t_k]: the replicas move from x̂⁺_{k−1} to x̂⁻_k.
@@ -277,10 +288,10 @@ pub fn run_ultra_tight(
             let f_prev = jp.map_or((0.0, 0.0), |i| (prev.fault[i], prev.fault[prev.len() + i]));
             let (f_now_r, f_now_d) = (ep.fault[hr], ep.fault[hd]);
             // Tracking errors at the epoch boundaries (truth − replica), m and m/s.
-            let e0r = dot_row(&ep.h, hr, &sim.x_true[k - 1]) - dot_row(&ep.h, hr, &x_post);
-            let e1r = dot_row(&ep.h, hr, &sim.x_true[k]) - dot_row(&ep.h, hr, kf.x());
-            let e0d = dot_row(&ep.h, hd, &sim.x_true[k - 1]) - dot_row(&ep.h, hd, &x_post);
-            let e1d = dot_row(&ep.h, hd, &sim.x_true[k]) - dot_row(&ep.h, hd, kf.x());
+            let e0r = dot_row(&ep.h, hr, &x_true[k - 1]) - dot_row(&ep.h, hr, &x_post);
+            let e1r = dot_row(&ep.h, hr, &x_true[k]) - dot_row(&ep.h, hr, kf.x());
+            let e0d = dot_row(&ep.h, hd, &x_true[k - 1]) - dot_row(&ep.h, hd, &x_post);
+            let e1d = dot_row(&ep.h, hd, &x_true[k]) - dot_row(&ep.h, hd, kf.x());
             for l in 1..=steps {
                 let a = l as f64 / steps as f64;
                 let er = (1.0 - a) * (e0r + f_prev.0) + a * (e1r + f_now_r);
@@ -396,7 +407,7 @@ pub fn run_ultra_tight(
         x_post.copy_from(kf.x());
         // Decisions and records.
         let mut any_excluded = false;
-        let armed = prep.t[k] >= u.arm_after;
+        let armed = models.t[k] >= u.arm_after;
         for (c, ch) in chans.iter_mut().enumerate() {
             ch.alarm &= armed;
             if ch.alarm && exclude {
@@ -426,7 +437,7 @@ pub fn run_ultra_tight(
         });
         sat.used.push(used);
         rec.sources.push(u32::from(used > 0));
-        rec.push_navigation(prep, sim, k, kf.x(), kf.p(), &mut sig);
+        rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
     }
     sat.score(&rec.t, &spec.faults, &spec.sensors[si].name);
     rec.sats = Some(sat);

@@ -36,11 +36,11 @@
 use crate::detect::{Decision, Detector};
 use crate::error::{Error, Result};
 use crate::kalman::KalmanFilter;
-use crate::sim::spec::{FusionMode, IsolatedMode};
 use crate::validate::{
     check_covariance, check_finite_matrix, check_len, check_no_inf, check_shape,
 };
 use nalgebra::{Cholesky, DMatrix, DVector};
+use serde::{Deserialize, Serialize};
 
 /// Configuration of one sub-filter.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -475,4 +475,28 @@ fn ctx(name: &str, e: Error) -> Error {
         },
         other => Error::Invalid(format!("sub-filter {name}: {other}")),
     }
+}
+
+/// Federated fusion mode (METHODS §5).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FusionMode {
+    /// After fusion each healthy sub-filter is reset to `x_g`, `P_g/β_i` (Carlson).
+    Reset,
+    /// Sub-filters run independently; the master only fuses.
+    NoReset,
+}
+
+/// Behaviour of an isolated sub-filter (it never feeds the master in any mode).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum IsolatedMode {
+    /// After each fusion take the global solution (`x_g`, `P_g/β_i`); its detectors then test
+    /// the sensor against the fault-free navigation solution.
+    #[default]
+    Track,
+    /// Predict only (no update, no reset) until reinstated.
+    Predict,
+    /// Keep updating with its own sensor (absorbs the fault).
+    Update,
 }

@@ -2,6 +2,10 @@
 //! exclusion (METHODS §10).
 //!
 //! * [`geodesy`]: WGS-84 geodetic ⇄ ECEF, local ENU frame, elevation and azimuth.
+//! * [`clock`]: the receiver clock model (bias and drift) of the tight filters.
+//! * [`ranges`]: the measurement stream of a `gnss_ranges` sensor (satellites in view per
+//!   epoch, their tight-coupling rows); [`innovation`], [`pv_filter`]: innovation FDE and the
+//!   GNSS-only filter of the tight architecture.
 //! * [`constellation`]: nominal circular-orbit constellations (GPS and Galileo as Walker
 //!   patterns), satellite positions and velocities in ECEF.
 //! * [`rinex`]: RINEX 3 observation and navigation files (read with the `rinex` crate).
@@ -16,6 +20,7 @@
 
 pub mod atmosphere;
 pub mod broadcast;
+pub mod clock;
 pub mod constellation;
 pub mod geodesy;
 pub mod innovation;

@@ -9,11 +9,11 @@
 //! least-squares solution (position, clock, velocity, drift), with σ 10 m, 1 m/s, 10 m,
 //! 1 m/s.
 
+use super::clock::ClockSpec;
 use super::innovation::{innovation_fde, update_without, SatFde};
 use super::snapshot::{fde, FdeConfig, ObsCov, PositionModel, RateModel};
 use crate::error::Result;
 use crate::kalman::KalmanFilter;
-use crate::sim::spec::ClockSpec;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// The filter and its models.

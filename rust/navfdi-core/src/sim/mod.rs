@@ -1,14 +1,14 @@
-//! Scenario simulation: trajectory, sensors, faults, and the one-run executor.
+//! The simulator: one source of measurement streams ([`crate::stream`]).
 //!
-//! A scenario ([`spec::ScenarioSpec`], SI units) is prepared once ([`prepare::Prepared`]: the
-//! truth trajectory and everything that does not depend on the random seed: `Φ_k`, `Q_k`,
-//! measurement models), then any number of runs draw their noise from a generator seeded by
-//! `(seed, run index)` ([`noise::simulate`]) and filter it ([`run::run_federated`]).
+//! A scenario ([`crate::spec::ScenarioSpec`], SI units) is prepared once ([`prepare::Prepared`]:
+//! the truth trajectory ([`trajectory`]), the satellites in view along it ([`ranges`]) and the
+//! streams' models, which do not depend on the random seed); then any number of runs draw
+//! their noise from a generator seeded by `(seed, run index)` ([`noise::simulate`]), giving
+//! each run's measurements and its reference (the true error state). The architectures
+//! ([`crate::arch`]) consume the result through [`noise::Simulated::streams`] and never import
+//! this module.
 
-pub mod metrics;
-pub mod montecarlo;
 pub mod noise;
 pub mod prepare;
-pub mod run;
-pub mod spec;
+pub mod ranges;
 pub mod trajectory;

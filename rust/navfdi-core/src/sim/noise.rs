@@ -6,7 +6,10 @@
 //! numbers depend only on `(seed, stream)`.
 
 use super::prepare::Prepared;
-use nalgebra::DVector;
+use crate::gnss::geodesy::ecef_to_enu;
+use crate::ins::{earth, POS};
+use crate::stream::{Measurements, Reference, Streams};
+use nalgebra::{DVector, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -14,21 +17,41 @@ use rand_distr::{Distribution, StandardNormal};
 /// Simulated truth and measurements of one run.
 #[derive(Debug, Clone)]
 pub struct Simulated {
-    /// True INS error state per epoch (15).
-    pub x_true: Vec<DVector<f64>>,
-    /// Per sensor and epoch: the measurement (NaN when not taken). For a `gnss_ranges` sensor
-    /// the tight measurement `z = H x + ε + f` of the satellites in view (pseudoranges, then
-    /// rates; empty when not taken).
-    pub z: Vec<Vec<DVector<f64>>>,
-    /// Raw observations of the `gnss_ranges` sensor per epoch: pseudoranges (m), then rates
-    /// (m/s) of the satellites in view, sharing the noise of `z` (empty when not taken or
-    /// without such a sensor).
-    pub raw: Vec<DVector<f64>>,
+    /// The measurements: per sensor `z = H x + f + ε` (NaN when not taken); for a
+    /// `gnss_ranges` sensor the tight measurements of the satellites in view, the raw
+    /// pseudoranges and rates (sharing their noise) and the INS position they are predicted
+    /// from (truth + the run's INS error).
+    pub meas: Measurements,
+    /// True INS error state per epoch (15 or 17).
+    pub reference: Reference,
     /// The run's seed and stream (architectures that draw more noise of their own, such as
     /// the ultra-tight discriminators, derive their generator from them).
     pub seed: u64,
     /// See [`Simulated::seed`].
     pub stream: u64,
+}
+
+impl Simulated {
+    /// The run's measurement streams over the prepared models, with the truth as reference.
+    pub fn streams<'a>(&'a self, prep: &'a Prepared) -> Streams<'a> {
+        Streams {
+            models: &prep.models,
+            meas: &self.meas,
+            reference: Some(&self.reference),
+            seed: self.seed,
+            stream: self.stream,
+        }
+    }
+}
+
+/// The INS position (ECEF, m) of a run at epoch `k`: the truth displaced by the run's true
+/// INS position error `x` (δL, δλ, δh).
+fn ins_position(prep: &Prepared, k: usize, x: &DVector<f64>, rx: &Vector3<f64>) -> Vector3<f64> {
+    let tr = &prep.truth[k];
+    let rm = earth::r_meridian(tr.lat) + tr.h;
+    let rn = earth::r_normal(tr.lat) + tr.h;
+    let d_enu = Vector3::new(x[POS + 1] * rn * tr.lat.cos(), x[POS] * rm, x[POS + 2]);
+    rx + ecef_to_enu(tr.lat, tr.lon).transpose() * d_enu
 }
 
 /// Stream offset of the per-run sensor offsets.
@@ -42,7 +65,7 @@ fn normals(rng: &mut ChaCha8Rng, n: usize) -> DVector<f64> {
 pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(stream);
-    let n = prep.p0.nrows();
+    let n = prep.models.p0.nrows();
     let epochs = prep.epochs();
     let mut x = &prep.p0_factor * normals(&mut rng, n);
     let mut x_true = Vec::with_capacity(epochs);
@@ -53,6 +76,7 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         .map(|_| Vec::with_capacity(epochs))
         .collect();
     let mut raw = Vec::new();
+    let mut ins = Vec::new();
     // Per-run constant sensor offsets, from their own stream so that runs without them draw
     // exactly what they drew before offsets existed.
     let bias: Vec<DVector<f64>> = {
@@ -70,16 +94,17 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
     for k in 0..epochs {
         if k > 0 {
             let w = &prep.q_factor[k] * normals(&mut rng, n);
-            x = &prep.phi[k] * &x + w;
+            x = &prep.models.phi[k] * &x + w;
         }
         for (si, s) in prep.spec.sensors.iter().enumerate() {
-            if let Some(rp) = prep.ranges.as_ref().filter(|r| r.sensor == si) {
+            if let Some(rp) = prep.models.ranges.as_ref().filter(|r| r.sensor == si) {
                 // Two draws per satellite of the constellation, in view or not, so a run's
                 // numbers do not depend on the geometry.
                 let v = normals(&mut rng, 2 * rp.names.len());
                 let ep = &rp.epochs[k];
                 let m = ep.len();
-                if prep.available[si][k] && m > 0 {
+                ins.push(ins_position(prep, k, &x, &ep.rx));
+                if prep.models.available[si][k] && m > 0 {
                     let mut zk = &ep.h * &x;
                     let mut rk = DVector::zeros(2 * m);
                     for j in 0..m {
@@ -101,10 +126,10 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
             }
             let m = s.noise.len();
             let v = normals(&mut rng, m);
-            if prep.available[si][k] {
-                let mut zk = &prep.h[si][k] * &x + &prep.fault[si][k];
+            if prep.models.available[si][k] {
+                let mut zk = &prep.models.h[si][k] * &x + &prep.fault[si][k];
                 for c in 0..m {
-                    let sd = match prep.r_epoch[si].get(k) {
+                    let sd = match prep.models.r_epoch[si].get(k) {
                         Some(var) if c == 0 => var.sqrt(),
                         _ => s.noise[c],
                     };
@@ -118,9 +143,12 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         x_true.push(x.clone());
     }
     Simulated {
-        x_true,
-        z,
-        raw,
+        meas: Measurements {
+            z,
+            raw,
+            ins_position: ins,
+        },
+        reference: Reference { x_true },
         seed,
         stream,
     }

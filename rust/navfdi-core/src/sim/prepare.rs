@@ -1,10 +1,14 @@
-//! Everything about a scenario that does not depend on the random seed, computed once.
+//! Everything about a simulated scenario that does not depend on the random seed, computed
+//! once: the truth trajectory, the measurement streams' models along it ([`Models`]), and what
+//! the simulator needs to draw a run (factors of `Q_k` and `P0`, the systematic errors).
 
-use super::spec::{ScenarioSpec, SensorKind};
+use super::ranges::ranges_along;
 use super::trajectory::{generate, TruthEpoch};
 use crate::error::{Error, Result};
-use crate::gnss::ranges::{PreparedRanges, CLOCK_BIAS};
+use crate::gnss::ranges::CLOCK_BIAS;
 use crate::ins::{earth, ErrorModel, ATT, N_STATES, POS, VEL};
+use crate::spec::{ScenarioSpec, SensorKind};
+use crate::stream::{inject, Models, Nominal};
 use nalgebra::{Cholesky, DMatrix, DVector};
 
 /// A prepared scenario.
@@ -12,37 +16,19 @@ use nalgebra::{Cholesky, DMatrix, DVector};
 pub struct Prepared {
     /// The scenario (validated).
     pub spec: ScenarioSpec,
-    /// Epoch times `k·dt` (s).
-    pub t: Vec<f64>,
     /// Truth trajectory per epoch.
     pub truth: Vec<TruthEpoch>,
-    /// Transition into epoch k (`Φ_0 = I`).
-    pub phi: Vec<DMatrix<f64>>,
-    /// Process noise into epoch k (`Q_0 = 0`).
-    pub q: Vec<DMatrix<f64>>,
+    /// The measurement streams' models (epoch times `k·dt`, linearised about the truth).
+    pub models: Models,
     /// A factor `L_k` with `L_k L_kᵀ = Q_k`, for drawing the true process noise.
     pub q_factor: Vec<DMatrix<f64>>,
-    /// Initial covariance P0 and a factor of it.
-    pub p0: DMatrix<f64>,
     /// Factor of P0.
     pub p0_factor: DMatrix<f64>,
-    /// Per sensor: measurement matrix per epoch (position sensors depend on latitude).
-    pub h: Vec<Vec<DMatrix<f64>>>,
-    /// Per sensor: `R` (diagonal of the noise variances).
-    pub r: Vec<DMatrix<f64>>,
-    /// Per sensor: the variance of its single component per epoch when its noise scales with
-    /// the height above the terrain (`proportional_noise`), replacing `r` then; empty otherwise.
-    pub r_epoch: Vec<Vec<f64>>,
-    /// Per sensor and epoch: a measurement is taken (rate and outages).
-    pub available: Vec<Vec<bool>>,
-    /// Per sensor and epoch: the fault added to each component (all zero without faults).
-    /// Empty vectors (and empty `h`, `r`) for a `gnss_ranges` sensor, whose per-satellite
-    /// models are in `ranges`.
+    /// Per sensor and epoch: the systematic error added to each component: the terrain under
+    /// a radio altimeter, then the injected faults ([`inject`]); all zero without them.
+    /// Empty vectors for a `gnss_ranges` sensor, whose per-satellite faults are in
+    /// [`Models::ranges`].
     pub fault: Vec<Vec<DVector<f64>>>,
-    /// Satellites in view per epoch of the `gnss_ranges` sensor, if any.
-    pub ranges: Option<PreparedRanges>,
-    /// Navigation mode per epoch (1, 2, 3 for q1, q2, q3; empty without `modes`).
-    pub mode: Vec<u8>,
 }
 
 /// East and north (m) of each truth epoch from the first, with the radii of curvature at the
@@ -60,7 +46,7 @@ pub fn local_en(truth: &[TruthEpoch]) -> Vec<(f64, f64)> {
 }
 
 /// Measurement matrix of a sensor at a kinematic state (m × 15; a `gnss_ranges` sensor's
-/// matrices depend on the satellites in view and are in [`PreparedRanges`]: 0 × 15 here).
+/// matrices depend on the satellites in view and are in [`crate::gnss::ranges::RangeStream`]: 0 × 15 here).
 pub fn measurement_matrix(kind: SensorKind, lat: f64, h: f64) -> DMatrix<f64> {
     if kind == SensorKind::GnssRanges {
         return DMatrix::zeros(0, N_STATES);
@@ -219,9 +205,7 @@ impl Prepared {
             };
             if let Some(rs) = &s.ranges {
                 let faults: Vec<_> = spec.faults.iter().filter(|f| f.sensor == s.name).collect();
-                ranges = Some(PreparedRanges::new(
-                    si, rs, &s.noise, &truth, &t, n, &faults,
-                ));
+                ranges = Some(ranges_along(si, rs, &s.noise, &truth, &t, n, &faults));
             }
             h.push(
                 truth
@@ -281,11 +265,7 @@ impl Prepared {
                         if m > 0 {
                             v[0] += th;
                         }
-                        for f in &faults {
-                            for &c in &f.components {
-                                v[c] += f.value(tk);
-                            }
-                        }
+                        inject(&faults, tk, &mut v);
                         v
                     })
                     .collect(),
@@ -316,62 +296,46 @@ impl Prepared {
                 }
             }
         }
+        let nominal = truth
+            .iter()
+            .map(|e| Nominal {
+                lat: e.lat,
+                lon: e.lon,
+                h: e.h,
+            })
+            .collect();
         Ok(Prepared {
             spec,
-            t,
             truth,
-            phi,
-            q,
+            models: Models {
+                t,
+                nominal,
+                phi,
+                q,
+                p0,
+                h,
+                r,
+                r_epoch,
+                available,
+                ranges,
+                mode,
+            },
             q_factor,
-            p0,
             p0_factor,
-            h,
-            r,
-            r_epoch,
-            available,
             fault,
-            ranges,
-            mode,
         })
-    }
-
-    /// The same prepared data for a variant of the scenario, which may differ only in its
-    /// filter (`architecture`, `federated`, `centralized`): variants run on the same simulated
-    /// measurements. Anything else differing is an error naming the field.
-    pub fn for_variant(&self, spec: ScenarioSpec) -> Result<Prepared> {
-        spec.validate()?;
-        let base = &self.spec;
-        let same = [
-            ("duration", base.duration == spec.duration),
-            ("dt", base.dt == spec.dt),
-            ("trajectory", base.trajectory == spec.trajectory),
-            ("ins", base.ins == spec.ins),
-            ("sensors", base.sensors == spec.sensors),
-            ("faults", base.faults == spec.faults),
-            ("terrain", base.terrain == spec.terrain),
-            ("modes", base.modes == spec.modes),
-        ];
-        if let Some((field, _)) = same.iter().find(|(_, eq)| !eq) {
-            return Err(Error::Invalid(format!(
-                "variant {:?}: its {field} differ from the base scenario's; variants may only change the filter (architecture, federated, centralized, tight) so that they run on the same simulated measurements",
-                spec.name
-            )));
-        }
-        let mut out = self.clone();
-        out.spec = spec;
-        Ok(out)
     }
 
     /// Number of epochs.
     pub fn epochs(&self) -> usize {
-        self.t.len()
+        self.models.epochs()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::spec::{SensorSpec, TerrainSpec, TerrainWave};
+    use crate::spec::{SensorSpec, TerrainSpec, TerrainWave};
 
     #[test]
     fn radio_altimeter_error_is_the_terrain_under_the_vehicle() {

@@ -9,9 +9,9 @@
 //! `ω_ib^b = C_n^b(ω_ie + ω_en) + ω_nb^b`, with `ω_nb^b` from the attitude change over the epoch.
 //! Transitions between segments are instantaneous.
 
-use super::spec::{SegmentSpec, TrajectorySpec};
 use crate::ins::earth;
 use crate::ins::error_model::Kinematics;
+use crate::spec::{SegmentSpec, TrajectorySpec};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// Truth at one epoch.

@@ -1,6 +1,6 @@
 //! Monte-Carlo runs of a prepared scenario, reduced to per-run metrics (METHODS §12).
 //!
-//! Run `i` draws its noise from `(seed, stream = i)` ([`super::noise::simulate`]) and is
+//! Run `i` draws its noise from `(seed, stream = i)` ([`crate::sim::noise::simulate`]) and is
 //! filtered with isolation active, so its metrics depend on nothing but `(seed, i)`: the
 //! results are bit-identical whatever the number of threads, the chunking of runs or the
 //! machine that executes a chunk.
@@ -20,13 +20,14 @@
 //! * per run: master attitude error RMS and maximum (rad, all axes) and position error RMS and
 //!   maximum (m, horizontal and vertical together).
 
-use super::metrics::{intervals, match_interval, Interval};
-use super::noise::simulate;
-use super::prepare::Prepared;
-use super::run::{run_architecture, RunRecord};
+use crate::arch::run_architecture;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::sim::spec::ScenarioSpec;
+use crate::metrics::{intervals, match_interval, Interval};
+use crate::record::RunRecord;
+use crate::sim::noise::simulate;
+use crate::sim::prepare::Prepared;
+use crate::spec::ScenarioSpec;
 use rayon::prelude::*;
 
 /// Seconds after a fault's end excluded from false-alarm counting.
@@ -59,8 +60,8 @@ pub struct CellMetrics {
     /// Isolation intervals overlapping no fault (`none` cell of the isolating detector).
     pub wrong_isolations: u32,
     /// Satellite-FDE counts (tight architecture; all zero otherwise): for a fault cell the
-    /// fault's, for the `none` cell the outside epochs' ([`super::metrics::SatFaultMetrics`]).
-    pub sat: super::metrics::SatFaultMetrics,
+    /// fault's, for the `none` cell the outside epochs' ([`crate::metrics::SatFaultMetrics`]).
+    pub sat: crate::metrics::SatFaultMetrics,
 }
 
 /// Metrics of one run.
@@ -131,7 +132,7 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         let det = &sub.detectors[c.detector];
         let channels = spec.channels();
         let channel = &channels[c.subfilter];
-        let mut faults: Vec<&crate::sim::spec::FaultSpec> =
+        let mut faults: Vec<&crate::spec::FaultSpec> =
             spec.faults.iter().filter(|f| channel.sees(f)).collect();
         faults.sort_by(|a, b| a.start.total_cmp(&b.start));
         let ivs = intervals(&det.alarm);
@@ -242,10 +243,12 @@ pub fn one_run(
 ) -> Result<RunMetrics> {
     cancel.check()?;
     let sim = simulate(prep, seed, run);
-    let rec = run_architecture(prep, &sim, true, keep, cancel).map_err(|e| match e {
-        Error::Cancelled => Error::Cancelled,
-        e => Error::Invalid(format!("run {run}: {e}")),
-    })?;
+    let rec = run_architecture(&prep.spec, &sim.streams(prep), true, keep, cancel).map_err(
+        |e| match e {
+            Error::Cancelled => Error::Cancelled,
+            e => Error::Invalid(format!("run {run}: {e}")),
+        },
+    )?;
     let mut m = metrics(prep, run, &rec, cells);
     if keep {
         m.record = Some(rec);

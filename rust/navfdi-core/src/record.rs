@@ -1,13 +1,11 @@
-//! One federated run of a prepared scenario over simulated measurements.
+//! What one run of an architecture records, per epoch: the navigation error and its 1σ, each
+//! channel's statistics and decisions, satellite FDE, the state chi-square test and the
+//! altitude fusion. Below the architectures, which fill it, and above the metrics engine
+//! ([`crate::metrics`]) that scores it.
 
-use super::noise::Simulated;
-use super::prepare::Prepared;
-use super::spec::{Architecture, DetectorKind, SensorKind};
-use crate::cancel::Cancel;
-use crate::detect::{Detector, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
-use crate::error::Result;
-use crate::fusion::{FederatedFilter, SubFilterConfig};
 use crate::ins::{earth, ATT, N_STATES, POS, VEL};
+use crate::spec::ScenarioSpec;
+use crate::stream::{Models, Streams};
 use nalgebra::DVector;
 
 /// Per-epoch record of one detector.
@@ -64,15 +62,15 @@ pub struct SatRecord {
     /// Satellites that updated the filter per epoch.
     pub used: Vec<u32>,
     /// Satellite-FDE counts per fault on the sensor, then outside faults.
-    pub metrics: Vec<super::metrics::SatFaultMetrics>,
+    pub metrics: Vec<crate::metrics::SatFaultMetrics>,
 }
 
 impl SatRecord {
     /// Fill [`SatRecord::metrics`]: satellite-FDE counts per fault of `faults` on sensor
     /// `sensor` whose satellite is one of [`SatRecord::names`], then outside faults, over the
     /// epochs `t` with a measurement.
-    pub fn score(&mut self, t: &[f64], faults: &[super::spec::FaultSpec], sensor: &str) {
-        let sat_faults: Vec<super::metrics::SatFault> = faults
+    pub fn score(&mut self, t: &[f64], faults: &[crate::spec::FaultSpec], sensor: &str) {
+        let sat_faults: Vec<crate::metrics::SatFault> = faults
             .iter()
             .enumerate()
             .filter(|(_, f)| f.sensor == sensor)
@@ -89,7 +87,7 @@ impl SatRecord {
             .iter()
             .map(|&s| s != SAT_NO_MEASUREMENT)
             .collect();
-        self.metrics = super::metrics::satellite_metrics(
+        self.metrics = crate::metrics::satellite_metrics(
             t,
             &measured,
             &self.in_view,
@@ -179,45 +177,6 @@ pub struct StateRecord {
     pub ill_conditioned: Vec<bool>,
 }
 
-/// Build a detector from its spec (validated by the scenario). `min_samples` (SPRT and joint)
-/// overrides the default minimum sample count of the SPRT.
-pub fn make_detector(
-    kind: DetectorKind,
-    pf: f64,
-    pm: Option<f64>,
-    variance: Option<&str>,
-    min_samples: Option<u64>,
-) -> Result<Detector> {
-    let var = if variance == Some("sample") {
-        SprtVariance::Sample
-    } else {
-        SprtVariance::Known
-    };
-    let pm = pm.unwrap_or(pf);
-    Ok(match kind {
-        DetectorKind::Chi2 => Detector::Chi2(ResidualChi2::new(pf)?),
-        DetectorKind::Sprt => {
-            let d = ImprovedSprt::new(pf, pm, var)?;
-            Detector::Sprt(match min_samples {
-                Some(n) => d.with_min_samples(n)?,
-                None => d,
-            })
-        }
-        DetectorKind::Joint => {
-            let d = JointChi2Sprt::new(pf, pm, var)?;
-            Detector::Joint(match min_samples {
-                Some(n) => d.with_min_samples(n)?,
-                None => d,
-            })
-        }
-        DetectorKind::StateChi2 => {
-            return Err(crate::error::Error::Invalid(
-                "a state_chi2 detector tests sub-filter states, not innovations (centralized architecture only)".into(),
-            ))
-        }
-    })
-}
-
 fn to_nav(x: &DVector<f64>, lat: f64, h: f64, out: &mut Vec<f64>) {
     let rm = earth::r_meridian(lat) + h;
     let rn = earth::r_normal(lat) + h;
@@ -232,131 +191,17 @@ fn to_nav(x: &DVector<f64>, lat: f64, h: f64, out: &mut Vec<f64>) {
     out.push(x[POS + 2]);
 }
 
-/// Build the federated filter of a prepared scenario.
-pub fn build_filter(prep: &Prepared, isolation: bool) -> Result<FederatedFilter> {
-    let spec = &prep.spec;
-    let mut subs = Vec::new();
-    let fspec = spec.federated()?;
-    for sf in &fspec.subfilters {
-        let si = spec.sensor_index(&sf.sensor).unwrap_or(0);
-        let mut detectors = Vec::new();
-        for d in &sf.detectors {
-            detectors.push((
-                d.name.clone(),
-                make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples)?,
-            ));
-        }
-        let isolation_idx = sf
-            .isolation
-            .as_ref()
-            .and_then(|n| sf.detectors.iter().position(|d| &d.name == n));
-        subs.push(SubFilterConfig {
-            name: sf.sensor.clone(),
-            h: prep.h[si][0].clone(),
-            r: prep.r[si].clone(),
-            share: sf.share,
-            detectors,
-            isolation: isolation_idx,
-        });
-    }
-    let mut fed = FederatedFilter::new(
-        DVector::zeros(N_STATES),
-        prep.p0.clone(),
-        subs,
-        fspec.mode,
-        fspec.master_share,
-        isolation,
-    )?;
-    fed.set_isolated_mode(fspec.isolated);
-    Ok(fed)
-}
-
-/// Run the federated filter over one simulated run. `isolation = false` runs the same filter
-/// with isolation disabled (the detectors still run and report).
-///
-/// `cancel` is checked every epoch ([`crate::Error::Cancelled`]).
-pub fn run_federated(
-    prep: &Prepared,
-    sim: &Simulated,
-    isolation: bool,
-    cancel: &Cancel,
-) -> Result<RunRecord> {
-    let mut fed = build_filter(prep, isolation)?;
-    let epochs = prep.epochs();
-    let sensor_idx = channel_sensors(prep);
-    let varying_h = varying_h(prep, &sensor_idx);
-    let mut rec = RunRecord::empty(prep);
-    let mut zs: Vec<DVector<f64>> = sensor_idx.iter().map(|&si| sim.z[si][0].clone()).collect();
-    let mut sig = DVector::zeros(N_STATES);
-    for k in 0..epochs {
-        cancel.check()?;
-        for (i, &si) in sensor_idx.iter().enumerate() {
-            zs[i].copy_from(&sim.z[si][k]);
-            if varying_h[i] {
-                fed.set_h_trusted(i, &prep.h[si][k]);
-            }
-            if let Some(var) = prep.r_epoch[si].get(k) {
-                fed.set_r_trusted(i, &nalgebra::DMatrix::from_element(1, 1, *var));
-            }
-        }
-        let rep = fed
-            .step_trusted(&prep.phi[k], &prep.q[k], &zs)
-            .map_err(|e| crate::run::at_epoch(k, e))?;
-        rec.sources.push(rep.sources as u32);
-        for (sub, r) in rec.subs.iter_mut().zip(&rep.subs) {
-            sub.statistic.push(r.statistic);
-            sub.dof.push(r.dof as u32);
-            sub.isolated.push(r.isolated);
-            sub.reinstated.push(r.reinstated);
-            sub.fused.push(r.fused);
-            for (d, dec) in sub.detectors.iter_mut().zip(&r.decisions) {
-                d.statistic.push(dec.statistic);
-                d.threshold.push(dec.threshold);
-                d.alarm.push(dec.alarm);
-            }
-        }
-        rec.push_navigation(prep, sim, k, fed.x(), fed.p(), &mut sig);
-    }
-    Ok(rec)
-}
-
-/// Sensor index of each detection channel.
-pub fn channel_sensors(prep: &Prepared) -> Vec<usize> {
-    let spec = &prep.spec;
-    spec.channels()
-        .iter()
-        .map(|ch| spec.sensor_index(ch.sensor).unwrap_or(0))
-        .collect()
-}
-
-/// Whether each channel's measurement matrix changes along the trajectory (position sensors).
-pub fn varying_h(prep: &Prepared, sensor_idx: &[usize]) -> Vec<bool> {
-    sensor_idx
-        .iter()
-        .map(|&si| {
-            !matches!(
-                prep.spec.sensors[si].kind,
-                SensorKind::Cns
-                    | SensorKind::GnssVelocity
-                    | SensorKind::Baro
-                    | SensorKind::RadioAltimeter
-                    | SensorKind::GnssRanges
-            )
-        })
-        .collect()
-}
-
 impl RunRecord {
-    /// An empty record with one channel per detection channel of the scenario.
-    pub fn empty(prep: &Prepared) -> Self {
-        let epochs = prep.epochs();
+    /// An empty record with one channel per detection channel of the scenario `spec`, over
+    /// the epochs of `models`.
+    pub fn empty(spec: &ScenarioSpec, models: &Models) -> Self {
+        let epochs = models.epochs();
         RunRecord {
-            t: prep.t.clone(),
+            t: models.t.clone(),
             error: Vec::with_capacity(epochs * 9),
             sigma: Vec::with_capacity(epochs * 9),
             sources: Vec::with_capacity(epochs),
-            subs: prep
-                .spec
+            subs: spec
                 .channels()
                 .iter()
                 .map(|ch| SubRecord {
@@ -380,13 +225,13 @@ impl RunRecord {
                 })
                 .collect(),
             sats: None,
-            mode: prep.mode.clone(),
+            mode: models.mode.clone(),
             fused_alt: Vec::new(),
             fusion: None,
             // Parameters validated by the scenario, so the detector can always be built.
-            state: prep.spec.state_chi2.as_ref().and_then(|sc| {
-                let (r, a) = sc.epochs(prep.spec.dt);
-                crate::detect::StateChi2::new(sc.pf, prep.spec.n_states(), r, a, sc.states.clone())
+            state: spec.state_chi2.as_ref().and_then(|sc| {
+                let (r, a) = sc.epochs(spec.dt);
+                crate::detect::StateChi2::new(sc.pf, spec.n_states(), r, a, sc.states.clone())
                     .ok()
                     .map(|detector| StateRecord {
                         detector,
@@ -400,57 +245,38 @@ impl RunRecord {
         }
     }
 
-    /// Append epoch `k`'s navigation error `x_true − x` and 1σ from `p`, and step the state
-    /// chi-square test (if configured) on `x`, `p` with the epoch's Φ and Q.
+    /// Append epoch `k`'s navigation error `x_true − x` (NaN without a reference) and 1σ from
+    /// `p`, and step the state chi-square test (if configured) on `x`, `p` with the epoch's Φ
+    /// and Q.
     pub fn push_navigation(
         &mut self,
-        prep: &Prepared,
-        sim: &Simulated,
+        src: &Streams,
         k: usize,
         x: &DVector<f64>,
         p: &nalgebra::DMatrix<f64>,
         sig: &mut DVector<f64>,
     ) {
         if let Some(st) = self.state.as_mut() {
-            let d = st.detector.step_trusted(x, p, &prep.phi[k], &prep.q[k]);
+            let d = st
+                .detector
+                .step_trusted(x, p, &src.models.phi[k], &src.models.q[k]);
             st.statistic.push(d.statistic);
             st.threshold.push(d.threshold);
             st.alarm.push(d.alarm);
             st.ready.push(d.ready);
             st.ill_conditioned.push(d.ill_conditioned);
         }
-        let tr = &prep.truth[k];
-        let e = &sim.x_true[k] - x;
-        to_nav(&e, tr.lat, tr.h, &mut self.error);
+        let tr = &src.models.nominal[k];
+        match src.reference {
+            Some(r) => {
+                let e = &r.x_true[k] - x;
+                to_nav(&e, tr.lat, tr.h, &mut self.error);
+            }
+            None => self.error.extend([f64::NAN; 9]),
+        }
         for i in 0..N_STATES {
             sig[i] = p[(i, i)].max(0.0).sqrt();
         }
         to_nav(sig, tr.lat, tr.h, &mut self.sigma);
-    }
-}
-
-/// Run the scenario's architecture over one simulated run (`isolation = false`: detectors
-/// report but never act). `full`: record everything, including quantities only figures and
-/// time series use (the MDB); Monte-Carlo runs that keep no series pass false.
-pub fn run_architecture(
-    prep: &Prepared,
-    sim: &Simulated,
-    isolation: bool,
-    full: bool,
-    cancel: &Cancel,
-) -> Result<RunRecord> {
-    match prep.spec.architecture {
-        Architecture::Federated => {
-            let isolate = prep.spec.federated.as_ref().is_none_or(|f| f.isolate);
-            run_federated(prep, sim, isolation && isolate, cancel)
-        }
-        Architecture::Centralized => {
-            let isolate = prep.spec.centralized.as_ref().is_none_or(|c| c.isolate);
-            crate::arch::centralized::run_centralized(prep, sim, isolation && isolate, full, cancel)
-        }
-        Architecture::Tight => crate::arch::tight::run_tight(prep, sim, isolation, full, cancel),
-        Architecture::UltraTight => {
-            crate::arch::ultra_tight::run_ultra_tight(prep, sim, isolation, full, cancel)
-        }
     }
 }

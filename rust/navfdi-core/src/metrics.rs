@@ -1,5 +1,5 @@
 //! The one event-matching engine: alarm intervals and the fault each belongs to. `navfdi run`
-//! (events and per-fault tables), `navfdi montecarlo` (per-run metrics, [`super::montecarlo`])
+//! (events and per-fault tables), `navfdi montecarlo` (per-run metrics, [`crate::montecarlo`])
 //! and `navfdi demo` all use it.
 //!
 //! Rule: an alarm interval `[start, end)` (end = first epoch without alarm, or never) belongs

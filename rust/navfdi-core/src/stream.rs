@@ -1,0 +1,121 @@
+//! Measurement streams: what an architecture consumes, whatever produced it.
+//!
+//! A source — the simulator ([`crate::sim`]) today, recorded logs next — produces, per epoch and
+//! sensor, the measurement, its noise model and availability, the models the filter needs
+//! (the INS error model's `Φ_k`, `Q_k` along the trajectory, each sensor's `H_k` and `R`), and
+//! optionally a reference (the true error state) used only for scoring. Faults are injected
+//! into the measurements by [`inject`], the same step for any source. The architectures
+//! ([`crate::arch`]) read only these types: none of them knows where the numbers came from.
+//!
+//! Split by lifetime: [`Models`] do not depend on the run's noise and are built once;
+//! [`Measurements`] and [`Reference`] are per run; [`Streams`] borrows the three for one run.
+
+use crate::spec::FaultSpec;
+use nalgebra::{DMatrix, DVector, Vector3};
+
+use crate::gnss::ranges::RangeStream;
+
+/// The point each epoch's error states are linearised about: latitude (rad), longitude
+/// (rad) and height (m) of the navigation solution (or, in simulation, of the truth). Error
+/// states in radians convert to metres there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Nominal {
+    /// Latitude (rad).
+    pub lat: f64,
+    /// Longitude (rad).
+    pub lon: f64,
+    /// Height (m).
+    pub h: f64,
+}
+
+/// Everything about a run's measurements that does not depend on its noise.
+#[derive(Debug, Clone)]
+pub struct Models {
+    /// Epoch times (s from the run's time 0).
+    pub t: Vec<f64>,
+    /// Linearisation point per epoch.
+    pub nominal: Vec<Nominal>,
+    /// Error-state transition into epoch k (`Φ_0 = I`), n × n.
+    pub phi: Vec<DMatrix<f64>>,
+    /// Process noise into epoch k (`Q_0 = 0`), n × n.
+    pub q: Vec<DMatrix<f64>>,
+    /// Initial error covariance, n × n.
+    pub p0: DMatrix<f64>,
+    /// Per sensor: measurement matrix per epoch (m × n; 0 × n for a `gnss_ranges` sensor,
+    /// whose rows are in [`Models::ranges`]).
+    pub h: Vec<Vec<DMatrix<f64>>>,
+    /// Per sensor: `R` (diagonal of the noise variances; 0 × 0 for `gnss_ranges`).
+    pub r: Vec<DMatrix<f64>>,
+    /// Per sensor: the variance of its single component per epoch when it changes along the
+    /// run (replacing `r` then); empty otherwise.
+    pub r_epoch: Vec<Vec<f64>>,
+    /// Per sensor and epoch: a measurement is taken (rate, outages, modes).
+    pub available: Vec<Vec<bool>>,
+    /// The satellites in view per epoch of the `gnss_ranges` sensor, if any.
+    pub ranges: Option<RangeStream>,
+    /// Navigation mode per epoch (1, 2, 3 for q1, q2, q3; empty without modes).
+    pub mode: Vec<u8>,
+}
+
+impl Models {
+    /// Number of epochs.
+    pub fn epochs(&self) -> usize {
+        self.t.len()
+    }
+}
+
+/// One run's measurements.
+#[derive(Debug, Clone, Default)]
+pub struct Measurements {
+    /// Per sensor and epoch: the measurement (NaN when not taken). For a `gnss_ranges` sensor
+    /// the tight measurement `z = ρ − ρ̂_INS` of the satellites in view (pseudoranges, then
+    /// rates; empty when not taken).
+    pub z: Vec<Vec<DVector<f64>>>,
+    /// Raw observations of the `gnss_ranges` sensor per epoch: pseudoranges (m), then rates
+    /// (m/s) of the satellites in view (empty when not taken or without such a sensor).
+    pub raw: Vec<DVector<f64>>,
+    /// The INS position (ECEF, m) per epoch, where the `gnss_ranges` sensor's ranges are
+    /// predicted from (empty without such a sensor).
+    pub ins_position: Vec<Vector3<f64>>,
+}
+
+/// The reference a run is scored against (never an input of the filters).
+#[derive(Debug, Clone, Default)]
+pub struct Reference {
+    /// True error state `x_INS − x_true` per epoch (n).
+    pub x_true: Vec<DVector<f64>>,
+}
+
+/// One run's streams: its models, measurements and optional reference.
+#[derive(Debug, Clone, Copy)]
+pub struct Streams<'a> {
+    /// Noise-free models.
+    pub models: &'a Models,
+    /// Measurements.
+    pub meas: &'a Measurements,
+    /// Reference for scoring, when the source has one (errors are NaN without it).
+    pub reference: Option<&'a Reference>,
+    /// Seed and stream of the run: an architecture that simulates more of its own (the
+    /// ultra-tight tracking loops' discriminator noise) derives its generator from them.
+    pub seed: u64,
+    /// See [`Streams::seed`].
+    pub stream: u64,
+}
+
+impl Streams<'_> {
+    /// Number of epochs.
+    pub fn epochs(&self) -> usize {
+        self.models.epochs()
+    }
+}
+
+/// Fault injection, one step for every source: the value each fault adds at time `t` (s) to
+/// the components of a measurement vector `v` (the faults of one sensor). The simulator adds
+/// it before the noise, a recorded-data source to the recorded measurement.
+pub fn inject(faults: &[&FaultSpec], t: f64, v: &mut DVector<f64>) {
+    for f in faults {
+        for &c in &f.components {
+            v[c] += f.value(t);
+        }
+    }
+}
