@@ -36,7 +36,8 @@ CORE_LAYERS = [
 ]
 
 PY_LAYERS = [
-    {"_core", "units", "_intervals", "_filter"},
+    {"_core", "units", "_intervals", "_filter", "_json", "_errors"},
+    {"_terrain"},
     {"scenario"},
     {"record", "demo", "gnss"},
     {"plots"},

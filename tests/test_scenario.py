@@ -169,7 +169,7 @@ def test_every_sensor_kind_fault_shape_and_outage_runs():
     # A velocity ramp is in velocity per second; "0.02 m/s" reads as length per second.
     bad = copy.deepcopy(raw)
     bad["faults"][2]["magnitude"] = "0.02 m/s"
-    with pytest.raises(navfdi.ScenarioError, match=r"faults\[2\]\.magnitude = '0\.02 m/s': unknown unit 'm' for velocity"):
+    with pytest.raises(navfdi.ScenarioError, match=r"faults\[2\]\.magnitude = '0\.02 m/s': unknown unit 'm' for velocity per second: a ramp on gvel's velocity component\(s\) takes m/s2"):
         navfdi.load_scenario(bad)
     sc = navfdi.load_scenario(raw)
     assert sc.faults()[0]["magnitude"] == pytest.approx(0.01)

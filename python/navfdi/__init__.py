@@ -74,7 +74,7 @@ from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
-from navfdi.scenario import Scenario, ScenarioError, bundled_scenarios, load_scenario
+from navfdi.scenario import NeverAppliedWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 
 __all__ = [
@@ -90,6 +90,7 @@ __all__ = [
     "FusedValue",
     "FilterRun",
     "GnssFault",
+    "NeverAppliedWarning",
     "GnssSolution",
     "ImprovedSprt",
     "Innovation",

@@ -651,6 +651,11 @@ class PreparedScenario:
 
     def __new__(cls, spec_json: str) -> PreparedScenario: ...
     @property
+    def faults_applied(self) -> list[bool]:
+        """Per fault of the scenario: whether it ever reaches a measurement (its sensor
+        measures inside the window and, for a satellite fault, the satellite is in view then).
+        Seed-free."""
+    @property
     def epochs(self) -> int:
         """Epochs per run."""
     @property

@@ -189,7 +189,7 @@ def _gnss(args: argparse.Namespace) -> int:
     from navfdi.gnss import GnssFault, gnss_solve, read_truth_file
 
     mask = units.parse(args.mask if " " in args.mask.strip() else f"{args.mask} deg", "angle", "--mask")
-    faults = [GnssFault.parse(f) for f in args.fault]
+    faults = [GnssFault.parse(f, "--fault") for f in args.fault]
     truth = read_truth_file(args.truth_file) if args.truth_file else args.truth
     factors = {}
     for item in args.noise_factor:

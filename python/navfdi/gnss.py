@@ -14,10 +14,10 @@ Times are GPST. ``time`` columns are pandas timestamps in GPST (no leap seconds 
 from __future__ import annotations
 
 import gzip
-import json
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
@@ -25,7 +25,8 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from navfdi import _core
+from navfdi import _core, _json
+from navfdi.scenario import NeverAppliedWarning
 
 GPS_EPOCH = pd.Timestamp("1980-01-06")
 _A = 6_378_137.0
@@ -95,8 +96,7 @@ def read_rinex(path: str | os.PathLike[str]) -> pd.DataFrame:
     ``ValueError``) naming the line for malformed, truncated or unsupported files.
     """
     p = os.fspath(path)
-    if not os.path.isfile(p):
-        raise FileNotFoundError(2, "no such file", p)
+    check_input_file(p, "path")
     kind = _kind(p)
     if kind == "N":
         d = _core.read_rinex_nav(p)
@@ -131,21 +131,33 @@ class GnssFault:
     end: float
 
     @staticmethod
-    def parse(text: str) -> GnssFault:
+    def parse(text: str, what: str = "fault") -> GnssFault:
         """Parse ``SAT:SHAPE:SIZE:START:END``, e.g. ``G13:step:20m:100s:200s`` or
-        ``G29:ramp:0.5m/s:100s:300s`` (quadratic sizes in ``m/s2``; times in s, min or h;
-        ``END`` may be ``end`` for the end of the file)."""
+        ``G29:ramp:0.5m/s:100s:300s`` (quadratic sizes in ``m/s2``; times in s, min or h, at
+        most 1e9 s; ``END`` may be ``end`` for the end of the file). ``what`` names the
+        argument in errors (``--fault`` on the command line, ``faults[i]`` in the API)."""
         m = _FAULT.match(text)
         if not m:
-            raise ValueError(f"--fault {text!r}: expected SAT:SHAPE:SIZE:START:END, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s")
+            raise ValueError(f"{what} {text!r}: expected SAT:SHAPE:SIZE:START:END, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s")
         sat, shape, size, start, end = m.groups()
-        mag = _with_unit(size, _MAG_UNITS[shape], f"--fault {text!r}: size")
+        mag = _with_unit(size, _MAG_UNITS[shape], f"{what} {text!r}: size")
         t_units = {"s": 1.0, "min": 60.0, "h": 3600.0}
-        t0 = _with_unit(start, t_units, f"--fault {text!r}: start")
-        t1 = math.inf if end.strip() == "end" else _with_unit(end, t_units, f"--fault {text!r}: end")
+        t0 = _with_unit(start, t_units, f"{what} {text!r}: start")
+        t1 = math.inf if end.strip() == "end" else _with_unit(end, t_units, f"{what} {text!r}: end")
+        for name, v in (("start", t0), ("end", t1)):
+            if math.isfinite(v) and v > MAX_FAULT_TIME:
+                raise ValueError(f"{what} {text!r}: {name} {v:g} s is beyond any observation file (at most {MAX_FAULT_TIME:g} s, about 30 years)")
         if not (0 <= t0 < t1):
-            raise ValueError(f"--fault {text!r}: needs 0 <= start < end")
+            raise ValueError(f"{what} {text!r}: needs 0 <= start < end")
         return GnssFault(sat.upper() if len(sat) == 3 else f"{sat[0].upper()}{int(sat[1:]):02d}", shape, mag, t0, t1)
+
+    def label(self) -> str:
+        """``SAT:SHAPE:SIZE:START:END`` in SI units (m, m/s, m/s², s)."""
+        return _fault_label(self)
+
+
+def _fault_label(f: GnssFault) -> str:
+    return f"{f.satellite}:{f.shape}:{f.magnitude:g}:{f.start:g}:{f.end:g}"
 
 
 def _with_unit(text: str, units: dict[str, float], what: str) -> float:
@@ -159,6 +171,36 @@ def _with_unit(text: str, units: dict[str, float], what: str) -> float:
     if not math.isfinite(v):
         raise ValueError(f"{what} {text.strip()!r}: must be finite")
     return v * units[m.group(2)]
+
+
+#: Latest fault start or end accepted (s after the first epoch): about 30 years.
+MAX_FAULT_TIME = 1e9
+
+
+def check_input_file(path: str | os.PathLike[str], name: str) -> None:
+    """Raise an ``OSError`` naming ``name`` unless ``path`` is an existing regular file: "no
+    such file", "is a directory", or "not a regular file" (a device, pipe or socket)."""
+    p = os.fspath(path)
+    if os.path.isdir(p):
+        raise IsADirectoryError(21, f"{name}: is a directory, not a RINEX file", p)
+    if not os.path.exists(p):
+        raise FileNotFoundError(2, f"{name}: no such file", p)
+    if not os.path.isfile(p):
+        raise OSError(f"{name}: {p}: not a regular file (a device, pipe or socket); give the path of a RINEX file")
+
+
+def check_ecef_truth(t_ecef: np.ndarray) -> None:
+    """Raise ``ValueError`` unless ``t_ecef`` is (3,) finite ECEF metres within 100 km of the
+    Earth's surface (the range the ``LAT,LON,H`` form accepts); a latitude/longitude/height
+    given as numbers is named as such."""
+    if t_ecef.shape != (3,) or not np.all(np.isfinite(t_ecef)):
+        raise ValueError("truth: expected ECEF (3,) in m or 'LAT,LON,H'")
+    r = float(np.linalg.norm(t_ecef))
+    if not 6.25e6 <= r <= 6.48e6:
+        hint = ""
+        if abs(t_ecef[0]) <= 90 and abs(t_ecef[1]) <= 360:
+            hint = f"; for latitude, longitude and height give the string '{t_ecef[0]:g},{t_ecef[1]:g},{t_ecef[2]:g}' (deg, deg, m)"
+        raise ValueError(f"truth {t_ecef.tolist()}: {r / 1e3:.3f} km from the Earth's centre is not an ECEF position within 100 km of the surface (6 357–6 478 km){hint}")
 
 
 def parse_truth(text: str) -> np.ndarray:
@@ -204,6 +246,27 @@ class GnssSolution:
     config: dict[str, Any]
     faults: list[GnssFault] = field(default_factory=list)
 
+    def fault_note(self, f: GnssFault) -> str:
+        """Why fault ``f`` never reached a tested pseudorange ("" when it did): its system not
+        selected, its satellite never observed, its window outside the file, or the satellite
+        never used inside the window (below the mask, no ephemeris, …)."""
+        sol, sats = self.solution, self.satellites
+        t = sol["gps_seconds"].to_numpy()
+        tau = t - t[0] if len(t) else t
+        active = np.flatnonzero((tau >= f.start) & (tau < f.end))
+        rows = sats[(sats["satellite"] == f.satellite) & sats["epoch"].isin(active)]
+        if rows["status"].isin(["used", "excluded"]).any():
+            return ""
+        systems = self.config["systems"]
+        if f.satellite[:1] not in systems:
+            return f"system {f.satellite[:1]} is not among the selected systems ({', '.join(systems)})"
+        if not (sats["satellite"] == f.satellite).any():
+            return f"{f.satellite} is never observed in {Path(self.config['obs']).name}"
+        if len(tau) and f.start > tau[-1]:
+            return f"its window starts at {f.start:g} s, after the last epoch ({tau[-1]:g} s)"
+        counts = ", ".join(f"{k} {v}" for k, v in rows["status"].value_counts().items() if v > 0) or "not observed"
+        return f"{f.satellite} is never used inside its window ({counts})"
+
     def summary(self) -> dict[str, Any]:
         """Counts and rates: epochs solved, horizontal/vertical RMS and maxima against the truth
         (m), exclusions per satellite, false exclusions per clean epoch against α, the
@@ -244,6 +307,10 @@ class GnssSolution:
             out[f"{det}_false_alarm_rate"] = float(a.mean()) if len(a) else math.nan
         per_fault = []
         for f in self.faults:
+            note = self.fault_note(f)
+            if note:
+                per_fault.append({"fault": _fault_label(f), "satellite": f.satellite, "applied": False, "note": note, "epochs": 0})
+                continue
             active = (tau >= f.start) & (tau < f.end)
             rows = sats[(sats["satellite"] == f.satellite) & sats["epoch"].isin(np.flatnonzero(active))]
             tested = rows[rows["status"].isin(["used", "excluded"])]
@@ -264,8 +331,9 @@ class GnssSolution:
                 seq[f"first_{det}_after"] = float(tau[hits[0]] - f.start) if hits else math.nan
             per_fault.append(
                 {
-                    "fault": f"{f.satellite}:{f.shape}:{f.magnitude:g}:{f.start:g}:{f.end:g}",
+                    "fault": _fault_label(f),
                     "satellite": f.satellite,
+                    "applied": True,
                     "epochs": int(len(epochs_tested)),
                     "excluded_exactly": int(sum(exact)),
                     "excluded_rate": float(np.mean(exact)) if exact else math.nan,
@@ -291,6 +359,9 @@ class GnssSolution:
         lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
         for f in s["faults"]:
+            if not f["applied"]:
+                lines.append(f"fault {f['fault']}: never applied ({f['note']}); left out of the statistics")
+                continue
             lines.append(
                 f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, AIME {f['first_aime_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
             )
@@ -306,7 +377,7 @@ class GnssSolution:
         sats = self.satellites.copy()
         sats["satellite"] = sats["satellite"].astype(str)
         sats.to_parquet(paths[1], index=False)
-        paths[2].write_text(json.dumps({"summary": self.summary(), "config": self.config}, indent=2, default=_json_default) + "\n")
+        paths[2].write_text(_json.dumps({"summary": self.summary(), "config": self.config}, default=_json_default) + "\n")
         if figures:
             paths += _plot(self, d)
         return paths
@@ -390,9 +461,8 @@ def gnss_solve(
     if not systems:
         raise ValueError("systems: give at least one of G, E, C, J")
     for p, name in ((obs, "obs"), (nav, "nav")):
-        if not os.path.isfile(os.fspath(p)):
-            raise FileNotFoundError(2, f"{name}: no such file", os.fspath(p))
-    parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f) for f in faults]
+        check_input_file(p, name)
+    parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f, f"faults[{i}]") for i, f in enumerate(faults)]
     if not (isinstance(mask_deg, (int, float)) and math.isfinite(mask_deg) and 0 <= mask_deg < 90):
         raise ValueError(f"mask: {mask_deg} deg; the elevation mask must be in [0, 90) deg")
     if chunk < 1:
@@ -400,8 +470,8 @@ def gnss_solve(
     if isinstance(truth, str):
         truth = parse_truth(truth)
     t_ecef = None if truth is None else np.asarray(truth, dtype=float).reshape(-1)
-    if t_ecef is not None and (t_ecef.shape != (3,) or not np.all(np.isfinite(t_ecef))):
-        raise ValueError("truth: expected ECEF (3,) in m or 'LAT,LON,H'")
+    if t_ecef is not None:
+        check_ecef_truth(t_ecef)
     run = _core.GnssRun(
         os.fspath(obs),
         os.fspath(nav),
@@ -483,7 +553,12 @@ def gnss_solve(
         "dropped_observation_types": run.dropped,
         "receiver": run.receiver,
     }
-    return GnssSolution(sol, sats, t_ecef, config, parsed)
+    out = GnssSolution(sol, sats, t_ecef, config, parsed)
+    for f in parsed:
+        note = out.fault_note(f)
+        if note:
+            warnings.warn(f"fault {f.label()}: never applied: {note}; it is left out of the detection statistics", NeverAppliedWarning, stacklevel=2)
+    return out
 
 
 def _plot(s: GnssSolution, d: Path) -> list[Path]:

@@ -16,11 +16,11 @@ from __future__ import annotations
 
 import functools
 import itertools
-import json
 import math
 import platform
 import statistics
 import sys
+import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,8 +28,8 @@ from typing import Any
 
 import numpy as np
 
-from navfdi import _core
-from navfdi.scenario import Scenario, ScenarioError, ScenarioTooLarge, load_scenario
+from navfdi import _core, _json
+from navfdi.scenario import NeverAppliedWarning, Scenario, ScenarioError, ScenarioTooLarge, load_scenario
 
 Z95 = statistics.NormalDist().inv_cdf(0.975)
 
@@ -187,6 +187,7 @@ class Campaign:
     series: dict[tuple[int, int], dict[str, Any]] = field(default_factory=dict)
     cells: list[list[tuple[str, str, str, float]]] = field(default_factory=list)
     variants: list[str] = field(default_factory=list)
+    never_applied: list[set[str]] = field(default_factory=list)
 
     def runs_per_point(self) -> list[int]:
         """Finished runs of each sweep point, in point order (all equal ``runs_requested``
@@ -235,7 +236,12 @@ class Campaign:
             n = len(g)
             rec["runs"] = n
             is_fault = rec["fault_id"] != "none"
-            if is_fault:
+            skipped = is_fault and self.never_applied and rec["fault_id"] in self.never_applied[int(rec["point"])]
+            if skipped:
+                # Never reached a measurement: no detection figure (it would count alarms that
+                # have nothing to do with the fault).
+                rec.update({k: math.nan for k in ("detection_probability", "detection_ci_low", "detection_ci_high", "delay_mean", "delay_median", "delay_p95", "clear_delay_mean", "false_alarm_rate", "false_alarm_ci_low", "false_alarm_ci_high", "wrong_isolations")})
+            elif is_fault:
                 det = int(g["detected"].sum())
                 lo, hi = wilson(np.array([det]), np.array([n]))
                 d = g.loc[g["detected"], "delay"].to_numpy()
@@ -367,7 +373,7 @@ class Campaign:
             runs[c] = runs[c].astype(str)
         runs.to_parquet(paths[0], index=False)
         self.summary().to_csv(paths[1], index=False)
-        paths[2].write_text(json.dumps(self.campaign_info(), indent=2, default=str), encoding="utf-8")
+        paths[2].write_text(_json.dumps(self.campaign_info(), default=str), encoding="utf-8")
         if figures and len(self.runs):
             from navfdi.plots import plot_campaign
 
@@ -521,7 +527,13 @@ def montecarlo(
         raise ValueError(f"chunk_size = {chunk_size}: must be at least 1")
     tasks = [(p, s, min(chunk_size, runs - s)) for p in range(len(points)) for s in range(0, runs, chunk_size)]
     jsons = [sc.to_json() for sc in scenarios]
-    cells = [_prepared(j).cells for j in jsons] if client is None else [_core.PreparedScenario(j).cells for j in jsons]
+    prepared = [_prepared(j) if client is None else _core.PreparedScenario(j) for j in jsons]
+    cells = [pr.cells for pr in prepared]
+    never = [{f["id"] for f, ok in zip(sc.faults(), pr.faults_applied) if not ok} for sc, pr in zip(scenarios, prepared)]
+    for pi, ids in enumerate(never):
+        for fid in sorted(ids):
+            at = f" at sweep point {points[pi]}" if points[pi] else ""
+            warnings.warn(f"fault {fid}{at}: never applied (its sensor takes no measurement, or its satellite is not in view, inside its window); it is left out of the detection figures", NeverAppliedWarning, stacklevel=2)
     show = sys.stderr.isatty() if progress is None else progress
     bar = None
     if show:
@@ -561,4 +573,4 @@ def montecarlo(
             bar.close()
     series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
     runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points)
-    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names)
+    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names, never)

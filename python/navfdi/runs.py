@@ -15,18 +15,21 @@ false alarm was already raised when the fault began.
 
 from __future__ import annotations
 
-import json
 import platform
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from navfdi import _core
+from navfdi import _core, _json
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events
 from navfdi.record import ERROR_COLUMNS, RunRecord
-from navfdi.scenario import Scenario, fault_on, load_scenario
+from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
+
+#: Note of a fault that never reached a measurement (left out of the detection figures).
+NEVER_APPLIED = "never applied: no measurement of its sensor (or satellite) in its window"
 
 
 
@@ -136,6 +139,13 @@ class ScenarioRun(RunRecord):
         return lines
 
     # ---- tables ----------------------------------------------------------------------------
+    def fault_applied(self, fault_id: str) -> bool:
+        """Whether the fault ``fault_id`` ever reached a measurement (its sensor measured inside
+        its window and, for a satellite fault, the satellite was in view)."""
+        applied = self.record.get("faults_applied")
+        ids = [f["id"] for f in self.scenario.faults()]
+        return applied is None or fault_id not in ids or bool(applied[ids.index(fault_id)])
+
     def _faults_on(self, sensor: str) -> list[dict[str, Any]]:
         return sorted((f for f in self.scenario.faults() if fault_on(f, sensor)), key=lambda f: f["start"])
 
@@ -194,6 +204,9 @@ class ScenarioRun(RunRecord):
                     det: float | None
                     clr: float | None
                     delay: float | None
+                    if not self.fault_applied(f["id"]):
+                        out.append(FaultMatch(f["id"], s["sensor"], d["name"], f["start"], f["end"], None, None, None, None, NEVER_APPLIED))
+                        continue
                     if ivs:
                         det, clr = ivs[0].start, ivs[-1].end
                         delay = max(det - f["start"], 0.0)
@@ -372,7 +385,7 @@ class ScenarioRun(RunRecord):
         paths = [out / "events.csv", out / "timeseries.parquet", out / "summary.json"]
         self.events().to_csv(paths[0], index=False)
         self.timeseries().to_parquet(paths[1], index=False)
-        paths[2].write_text(json.dumps(self.summary(), indent=2, default=float), encoding="utf-8")
+        paths[2].write_text(_json.dumps(self.summary(), default=float), encoding="utf-8")
         if figures:
             from navfdi.plots import plot_run
 
@@ -489,7 +502,7 @@ class VariantRuns:
         self.events().to_csv(paths[0], index=False)
         self.timeseries().to_parquet(paths[1], index=False)
         self.errors().to_csv(paths[2], index=False)
-        paths[3].write_text(json.dumps(self.summary(), indent=2, default=float), encoding="utf-8")
+        paths[3].write_text(_json.dumps(self.summary(), default=float), encoding="utf-8")
         sats = self.satellite_table()
         if len(sats):
             paths.append(out / "satellites.csv")
@@ -530,6 +543,20 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     if sc.variant_names():
         variants = sc.variants()
         recs = _core.run_variants([v.to_json() for _, v in variants], int(seed))
+        _warn_never_applied(sc, recs[0])
         return VariantRuns(sc, int(seed), {name: ScenarioRun(v, int(seed), rec, None, name) for (name, v), rec in zip(variants, recs)})
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
+    _warn_never_applied(sc, recs[0])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
+
+
+def _warn_never_applied(sc: Scenario, record: dict[str, Any]) -> None:
+    for f, applied in zip(sc.faults(), record.get("faults_applied", [])):
+        if not applied:
+            where = f" (satellite {f['satellite']})" if f.get("satellite") else ""
+            warnings.warn(
+                f"fault {f['id']} on {f['sensor']}{where}: never applied: the sensor takes no measurement"
+                f"{' with the satellite in view' if where else ''} inside [{f['start']:g}, {f['end']:g}) s; it is left out of the detection tables",
+                NeverAppliedWarning,
+                stacklevel=3,
+            )

@@ -27,7 +27,10 @@ from pathlib import Path
 from typing import Any
 
 from navfdi import _core
+from navfdi._errors import NeverAppliedWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
+from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, parse, split
+
 
 #: Component names and dimensions per sensor kind (order = measurement order).
 SENSOR_COMPONENTS: dict[str, list[tuple[str, str]]] = {
@@ -241,21 +244,6 @@ _INS = {
     "init_velocity": "velocity",
     "init_position": "length",
 }
-
-
-class ScenarioError(ValueError):
-    """A scenario that cannot be run; the message names the field path and the value."""
-
-
-class ScenarioTooLarge(ScenarioError, MemoryError):
-    """A scenario (or campaign) that would need more memory than is available; the message
-    says how much and which fields to change. Both a :class:`ScenarioError` and a
-    ``MemoryError``."""
-
-
-class ScenarioWarning(UserWarning):
-    """Something in a scenario that runs but may not be what was meant (e.g. a trajectory
-    shorter than the run, whose last segment is then held)."""
 
 
 def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
@@ -575,6 +563,11 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         except UnitError as e:
             raise ScenarioError(str(e)) from None
         suffix = per[kind]
+        dims_early = {d for _, d in (comps[j] for j in idx)}
+        if dims_early == {"velocity"} and kind != "step":
+            # A velocity ramp (quadratic) is a velocity per second (squared): m/s² (m/s³).
+            alias = {"ramp": {"m/s2": "m/s/s", "m/s^2": "m/s/s", "m/s²": "m/s/s"}, "quadratic": {"m/s3": "m/s/s2", "m/s^3": "m/s/s2", "m/s³": "m/s/s2"}}[kind]
+            unit = alias.get(unit, unit)
         if not unit.endswith(suffix) or (suffix == "/s" and unit.endswith("/s2")):
             raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: a {kind} needs a unit ending in {suffix!r}" if suffix else f"{p}.magnitude = {mag_raw!r}: a step takes a plain unit (no /s)")
         base = unit[: len(unit) - len(suffix)] if suffix else unit
@@ -589,7 +582,14 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
                 raise ScenarioError(f"{p}.components: mixes {', '.join(sorted(dims))}; split the fault or use a sigma magnitude")
             dim = dims.pop()
             if base not in UNITS[dim]:
-                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {dim} (use one of: {', '.join(UNITS[dim])}, or sigma)")
+                if kind == "step":
+                    want = ", ".join(UNITS[dim])
+                elif dim == "velocity":
+                    want = "m/s2" if kind == "ramp" else "m/s3"
+                else:
+                    want = ", ".join(f"{u}{suffix}" for u in UNITS[dim])
+                what = {"step": dim, "ramp": f"{dim} per second", "quadratic": f"{dim} per second squared"}[kind]
+                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {what}: a {kind} on {sensor}'s {dim} component(s) takes {want} (or sigma{suffix})")
             magnitude = number * UNITS[dim][base]
         fault: dict[str, Any] = {
                 "id": _name(_need(f, "id", p), f"{p}.id"),
@@ -798,6 +798,8 @@ def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
         raise ScenarioTooLarge(str(e)) from None
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+    if core.get("terrain"):
+        check_terrain(core, text)
     return Scenario(raw=copy.deepcopy(dict(raw)), core=core, source=source, _json=text)
 
 

@@ -21,7 +21,10 @@ pub enum Error {
         got: String,
     },
     /// An array holds NaN or infinity where only finite numbers are allowed.
-    #[error("{name}: element {index} is {value}; only finite numbers are allowed")]
+    #[error(
+        "{name}: {} is {value}; only finite numbers are allowed",
+        element(index)
+    )]
     NonFinite {
         /// Argument name.
         name: String,
@@ -107,3 +110,12 @@ pub fn num(v: f64) -> String {
 
 /// Result alias of the core.
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// `element [i, j]` in a message, or `the value` for a scalar (empty index).
+fn element(index: &str) -> String {
+    if index.is_empty() {
+        "the value".into()
+    } else {
+        format!("element {index}")
+    }
+}

@@ -146,6 +146,9 @@ pub struct RunRecord {
     /// measurement error (m, NaN when absent) and normalised weight `w_i M_i / Σ w_j M_j`
     /// (T × sensors row-major); empty without altitude fusion.
     pub fusion: Option<FusionRecord>,
+    /// Per fault of the scenario: whether it ever reached a measurement
+    /// ([`crate::stream::faults_applied`]).
+    pub faults_applied: Vec<bool>,
 }
 
 /// Per-epoch inputs of the altitude fusion (see [`RunRecord::fusion`]).
@@ -228,6 +231,7 @@ impl RunRecord {
             mode: models.mode.clone(),
             fused_alt: Vec::new(),
             fusion: None,
+            faults_applied: crate::stream::faults_applied(spec, models),
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

@@ -10,7 +10,7 @@
 //! Split by lifetime: [`Models`] do not depend on the run's noise and are built once;
 //! [`Measurements`] and [`Reference`] are per run; [`Streams`] borrows the three for one run.
 
-use crate::spec::FaultSpec;
+use crate::spec::{FaultSpec, ScenarioSpec};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::gnss::ranges::RangeStream;
@@ -118,4 +118,39 @@ pub fn inject(faults: &[&FaultSpec], t: f64, v: &mut DVector<f64>) {
             v[c] += f.value(t);
         }
     }
+}
+
+/// Per fault of `spec`: whether it ever reaches a measurement of `models` — its sensor takes
+/// a measurement inside the window (rate, outages, modes) and, for a satellite fault, the
+/// satellite is in view then. A fault that never does says nothing about the detectors:
+/// records carry this so tables and campaigns leave it out of the detection statistics.
+pub fn faults_applied(spec: &ScenarioSpec, models: &Models) -> Vec<bool> {
+    spec.faults
+        .iter()
+        .map(|f| {
+            let Some(si) = spec.sensor_index(&f.sensor) else {
+                return false;
+            };
+            let sat = match (&models.ranges, &f.satellite) {
+                (Some(rp), Some(name)) if rp.sensor == si => {
+                    match rp.names.iter().position(|n| n == name) {
+                        Some(s) => Some(s),
+                        None => return false,
+                    }
+                }
+                _ => None,
+            };
+            models.t.iter().enumerate().any(|(k, &t)| {
+                t >= f.start
+                    && t < f.end
+                    && models.available.get(si).is_some_and(|a| a[k])
+                    && sat.is_none_or(|s| {
+                        models
+                            .ranges
+                            .as_ref()
+                            .is_some_and(|rp| rp.epochs[k].sats.contains(&s))
+                    })
+            })
+        })
+        .collect()
 }

@@ -218,3 +218,83 @@ pub fn vector_to_numpy<'py>(
 ) -> PyResult<Bound<'py, PyArray<f64, IxDyn>>> {
     to_numpy(py, v.as_slice().to_vec(), &[v.len()])
 }
+
+/// A float as Python would show it in a repr: `nan`, `inf`, `-inf`, or up to 6 significant
+/// digits (`1.01203`, `9.21034`, `5e+159`), never Rust's 160-digit expansion of a huge value.
+pub fn py_float(v: f64) -> String {
+    if v.is_nan() {
+        return "nan".into();
+    }
+    if v.is_infinite() {
+        return if v > 0.0 { "inf".into() } else { "-inf".into() };
+    }
+    if v == 0.0 {
+        return "0.0".into();
+    }
+    let a = v.abs();
+    if (1e-4..1e6).contains(&a) {
+        let digits = (5 - a.log10().floor() as i32).clamp(0, 10) as usize;
+        let s = format!("{v:.digits$}");
+        let s = if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        };
+        if s.contains('.') {
+            s
+        } else {
+            format!("{s}.0")
+        }
+    } else {
+        let s = format!("{v:.5e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = if m.contains('.') {
+            m.trim_end_matches('0').trim_end_matches('.')
+        } else {
+            m
+        };
+        let e: i32 = e.parse().unwrap_or(0);
+        format!("{m}e{}{:02}", if e < 0 { '-' } else { '+' }, e.abs())
+    }
+}
+
+/// `True` / `False`.
+pub fn py_bool(b: bool) -> &'static str {
+    if b {
+        "True"
+    } else {
+        "False"
+    }
+}
+
+/// An optional value as Python shows it: the value, or `None`.
+pub fn py_opt<T: std::fmt::Display>(v: Option<T>) -> String {
+    v.map_or_else(|| "None".into(), |x| x.to_string())
+}
+
+/// A list of floats as Python shows it: `[1.0, nan]`.
+pub fn py_floats(v: &[f64]) -> String {
+    format!(
+        "[{}]",
+        v.iter()
+            .map(|x| py_float(*x))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn floats_print_like_python() {
+        assert_eq!(py_float(1.0), "1.0");
+        assert_eq!(py_float(9.210340371976182), "9.21034");
+        assert_eq!(py_float(f64::NAN), "nan");
+        assert_eq!(py_float(f64::INFINITY), "inf");
+        assert_eq!(py_float(5e159), "5e+159");
+        assert_eq!(py_float(-2.5e-7), "-2.5e-07");
+        assert_eq!(py_float(123456.7), "123457.0");
+    }
+}

@@ -50,8 +50,8 @@ impl PyInnovation {
 
     fn __repr__(&self) -> String {
         format!(
-            "Innovation(statistic={:.6}, dof={}, m={})",
-            self.inner.statistic,
+            "Innovation(statistic={}, dof={}, m={})",
+            crate::convert::py_float(self.inner.statistic),
             self.inner.dof(),
             self.inner.used.len()
         )

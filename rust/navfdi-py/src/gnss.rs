@@ -11,10 +11,60 @@ use pyo3::prelude::*;
 #[pyclass(name = "SnapshotFde", module = "navfdi._core", frozen)]
 pub struct PySnapshotFde {
     inner: snapshot::SnapshotResult,
+    /// The inputs (copies), so that pickling can recompute the identical result.
+    args: SnapshotArgs,
+}
+
+/// Inputs of one [`snapshot_fde`] call: `sat_pos` row-major (n × 3), pseudoranges, σ (n) or
+/// covariance (n × n, row-major) with its shape, α, k, x0.
+#[derive(Clone)]
+struct SnapshotArgs {
+    sat_pos: Vec<f64>,
+    rho: Vec<f64>,
+    sigma: Vec<f64>,
+    sigma_shape: Vec<usize>,
+    alpha: f64,
+    k: Option<f64>,
+    x0: Option<[f64; 4]>,
 }
 
 #[pymethods]
 impl PySnapshotFde {
+    /// Pickle as the call that made it (the computation is deterministic): `(snapshot_fde,
+    /// (sat_pos, pseudoranges, sigma, alpha, k, x0))`.
+    #[allow(clippy::type_complexity)]
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(
+        Bound<'py, PyAny>,
+        (
+            Bound<'py, PyAny>,
+            Bound<'py, PyAny>,
+            Bound<'py, PyAny>,
+            f64,
+            Option<f64>,
+            Option<Bound<'py, PyAny>>,
+        ),
+    )> {
+        let a = &self.args;
+        let n = a.rho.len();
+        let f = py.import("navfdi._core")?.getattr("snapshot_fde")?;
+        Ok((
+            f,
+            (
+                to_numpy(py, a.sat_pos.clone(), &[n, 3])?.into_any(),
+                to_numpy(py, a.rho.clone(), &[n])?.into_any(),
+                to_numpy(py, a.sigma.clone(), &a.sigma_shape)?.into_any(),
+                a.alpha,
+                a.k,
+                a.x0.map(|x| to_numpy(py, x.to_vec(), &[4]))
+                    .transpose()?
+                    .map(|x| x.into_any()),
+            ),
+        ))
+    }
+
     /// ECEF position (3,) in m, or None when there is no solution (``status == "no_solution"``).
     #[getter]
     fn position<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
@@ -89,11 +139,11 @@ impl PySnapshotFde {
 
     fn __repr__(&self) -> String {
         format!(
-            "SnapshotFde(status={:?}, excluded={:?}, statistic={:.4}, threshold={:.4}, dof={})",
+            "SnapshotFde(status='{}', excluded={:?}, statistic={}, threshold={}, dof={})",
             self.status(),
             self.inner.fde.excluded,
-            self.inner.fde.statistic,
-            self.inner.fde.threshold,
+            crate::convert::py_float(self.inner.fde.statistic),
+            crate::convert::py_float(self.inner.fde.threshold),
             self.inner.fde.dof
         )
     }
@@ -135,6 +185,7 @@ pub fn snapshot_fde(
         .collect();
     let rho = crate::convert::vector("pseudoranges", pseudoranges, Some(n))?;
     let s = read("sigma", sigma)?;
+    let (sigma_copy, sigma_shape) = (s.data.clone(), s.shape.clone());
     let cov = match s.shape.len() {
         1 if s.shape[0] == n => ObsCov::Sigma(s.data),
         2 if s.shape == [n, n] => ObsCov::Full(navfdi_core::linalg::from_row_major(n, n, &s.data)),
@@ -163,10 +214,19 @@ pub fn snapshot_fde(
     };
     let cfg = FdeConfig::new(alpha, k).py()?;
     let rho = rho.as_slice().to_vec();
+    let args = SnapshotArgs {
+        sat_pos: sp.data.clone(),
+        rho: rho.clone(),
+        sigma: sigma_copy,
+        sigma_shape,
+        alpha,
+        k,
+        x0,
+    };
     let inner = py
         .detach(move || snapshot::snapshot_fde(&sats, &rho, &cov, &cfg, x0))
         .py()?;
-    Ok(PySnapshotFde { inner })
+    Ok(PySnapshotFde { inner, args })
 }
 
 /// The linear test of METHODS §10 on a given model `l = B x + ε`, `ε ~ N(0, D)`: `B` (n, u),
@@ -205,21 +265,7 @@ pub fn py_ls_test<'py>(
         }
     };
     cov.validate("D", n).py()?;
-    let dm = match &cov {
-        ObsCov::Sigma(s) => nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
-            n,
-            s.iter().map(|v| v * v),
-        )),
-        ObsCov::Full(m) => m.clone(),
-    };
-    let dinv = nalgebra::Cholesky::new(dm.clone())
-        .map(|c| c.inverse())
-        .ok_or_else(|| PyValueError::new_err("D: not positive definite"))?;
-    let t = snapshot::ls_test(&bm, &lv, &dm, &dinv).ok_or_else(|| {
-        crate::errors::LinAlgError::new_err(
-            "B: BᵀD⁻¹B is singular (the unknowns are not determined by the observations)",
-        )
-    })?;
+    let t = snapshot::ls_test_cov(&bm, &lv, &cov).py()?;
     let out = pyo3::types::PyDict::new(py);
     out.set_item("x", crate::convert::vector_to_numpy(py, &t.x)?)?;
     out.set_item("v", crate::convert::vector_to_numpy(py, &t.v)?)?;

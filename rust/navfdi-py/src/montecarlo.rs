@@ -20,6 +20,13 @@ pub struct PyPreparedScenario {
 
 #[pymethods]
 impl PyPreparedScenario {
+    /// Per fault of the scenario: whether it ever reaches a measurement (its sensor measures
+    /// inside the window and, for a satellite fault, the satellite is in view then). Seed-free.
+    #[getter]
+    fn faults_applied(&self) -> Vec<bool> {
+        navfdi_core::stream::faults_applied(&self.prep.spec, &self.prep.models)
+    }
+
     #[new]
     fn new(py: Python<'_>, spec_json: &str) -> PyResult<Self> {
         let spec = ScenarioSpec::from_json(spec_json).py()?;

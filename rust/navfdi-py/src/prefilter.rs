@@ -55,8 +55,10 @@ impl PyPrefilterStep {
     }
     fn __repr__(&self) -> String {
         format!(
-            "PrefilterStep(residual=[{:.6}, {:.6}], statistic={:.4}, dof={})",
-            self.inner.residual[0], self.inner.residual[1], self.inner.statistic, self.inner.dof
+            "PrefilterStep(residual={}, statistic={}, dof={})",
+            crate::convert::py_floats(&[self.inner.residual[0], self.inner.residual[1]]),
+            crate::convert::py_float(self.inner.statistic),
+            self.inner.dof
         )
     }
 }

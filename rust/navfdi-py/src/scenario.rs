@@ -59,6 +59,7 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
     let t = rec.t.len();
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, rec.t, &[t])?)?;
+    d.set_item("faults_applied", rec.faults_applied)?;
     d.set_item("error", to_numpy(py, rec.error, &[t, 9])?)?;
     d.set_item("sigma", to_numpy(py, rec.sigma, &[t, 9])?)?;
     d.set_item("error_columns", ERROR_COLUMNS.to_vec())?;

@@ -37,8 +37,10 @@ impl PyFused {
     }
     fn __repr__(&self) -> String {
         format!(
-            "FusedValue(value={:?}, variance={:.4}, weights={:?})",
-            self.inner.value, self.inner.variance, self.inner.weights
+            "FusedValue(value={}, variance={}, weights={})",
+            crate::convert::py_opt(self.inner.value.map(crate::convert::py_float)),
+            crate::convert::py_float(self.inner.variance),
+            crate::convert::py_floats(&self.inner.weights)
         )
     }
 }

@@ -316,7 +316,12 @@ impl Aime {
         }
         self.entries.push_back((a_buf, r_buf));
         self.since_resum += 1;
-        if self.since_resum >= self.window {
+        // A non-finite sum (an overflowing epoch entered, or left and inf − inf remained) is
+        // recomputed from the stored window at once, so it lasts exactly as long as the
+        // overflowing epoch stays in the window.
+        if self.since_resum >= self.window
+            || self.info.iter().chain(&self.info_r).any(|v| !v.is_finite())
+        {
             self.resum();
         }
         self.decide()
@@ -362,51 +367,81 @@ impl Aime {
         let m = self.m;
         // Components with information in the window.
         let max_diag = (0..m).map(|i| self.info[i + i * m]).fold(0.0, f64::max);
+        let mut keep = std::mem::take(&mut self.scratch.keep);
+        keep.clear();
+        keep.extend(
+            (0..m)
+                .filter(|&i| self.info[i + i * m] > 1e-12 * max_diag && self.info[i + i * m] > 0.0),
+        );
+        let k = keep.len();
+        // The window's sums overflowed (a residual near the largest float, or a covariance so
+        // small that its inverse summed over the window exceeds it): the largest possible
+        // evidence of a fault, never a silent pass.
+        let overflow = keep.iter().any(|&i| {
+            !self.info_r[i].is_finite() || keep.iter().any(|&j| !self.info[i + j * m].is_finite())
+        });
+        let statistic = if overflow {
+            f64::INFINITY
+        } else {
+            let s = self.statistic(&keep, 1.0);
+            if s.is_finite() || k == 0 || max_diag <= 0.0 {
+                s
+            } else {
+                // Intermediate products overflowed (e.g. A = 1e-160 I): the same statistic with
+                // S scaled by 1/c and s by 1/√c, c = the largest diagonal of S.
+                self.statistic(&keep, max_diag)
+            }
+        };
+        self.scratch.keep = keep;
+        self.decision(statistic, k)
+    }
+
+    /// `sᵀS⁻¹s` over the `keep` components with `S = Σ A⁻¹ / c` and `s = Σ A⁻¹r / √c` (the
+    /// same value for any `c > 0`; `c = 1` leaves the arithmetic as it always was). NaN when
+    /// S is not numerically positive definite.
+    fn statistic(&mut self, keep: &[usize], c: f64) -> f64 {
+        let m = self.m;
+        let k = keep.len();
+        let sq = c.sqrt();
         let sc = &mut self.scratch;
-        sc.keep.clear();
-        sc.keep
-            .extend((0..m).filter(|&i| {
-                self.info[i + i * m] > 1e-12 * max_diag && self.info[i + i * m] > 0.0
-            }));
-        let k = sc.keep.len();
         if k == 2 && m == 2 {
             // Closed form of sᵀS⁻¹s for two components.
-            let (s00, s10, s11) = (self.info[0], self.info[1], self.info[3]);
-            let (v0, v1) = (self.info_r[0], self.info_r[1]);
+            let (s00, s10, s11) = (self.info[0] / c, self.info[1] / c, self.info[3] / c);
+            let (v0, v1) = (self.info_r[0] / sq, self.info_r[1] / sq);
             let det = s00 * s11 - s10 * s10;
-            let statistic = if s00 > 0.0 && det > 0.0 {
+            return if s00 > 0.0 && det > 0.0 {
                 (s11 * v0 * v0 - 2.0 * s10 * v0 * v1 + s00 * v1 * v1) / det
             } else {
                 f64::NAN
             };
-            return self.decision(statistic, 2);
         }
         sc.l.clear();
         for q in 0..k {
             for p in 0..k {
-                sc.l.push(self.info[sc.keep[p] + sc.keep[q] * m]);
+                sc.l.push(self.info[keep[p] + keep[q] * m] / c);
             }
         }
         sc.v.clear();
-        sc.v.extend(sc.keep.iter().map(|&i| self.info_r[i]));
+        sc.v.extend(keep.iter().map(|&i| self.info_r[i] / sq));
         // r̄ᵀĀ⁻¹r̄ = sᵀS⁻¹s with S = Σ A⁻¹, s = Σ A⁻¹r.
-        let statistic = if k > 0 && cholesky_in_place(&mut sc.l, k) {
+        if k > 0 && cholesky_in_place(&mut sc.l, k) {
             whitened_norm2(&sc.l, k, &mut sc.v)
         } else {
             f64::NAN
-        };
-        self.decision(statistic, k)
+        }
     }
 
-    /// The decision for `statistic` on `k` components (sets the alarm state).
+    /// The decision for `statistic` on `k` components (sets the alarm state). A statistic
+    /// that overflowed to +inf alarms; NaN (S numerically singular) is no test.
     fn decision(&mut self, statistic: f64, k: usize) -> Decision {
         let threshold = self.threshold(k).unwrap_or(f64::NAN);
-        self.alarm = statistic.is_finite() && statistic >= threshold;
+        let tested = k > 0 && !statistic.is_nan();
+        self.alarm = tested && statistic >= threshold;
         Decision {
             statistic,
             threshold,
             alarm: self.alarm,
-            dof: if statistic.is_finite() { k } else { 0 },
+            dof: if tested { k } else { 0 },
         }
     }
 
@@ -612,6 +647,18 @@ impl TwoStageAime {
     /// Decimation, statistic filter and stage 2 after a stage-1 statistic `s`.
     fn after_stage1(&mut self, s: f64) -> Result<Decision> {
         let threshold = self.stage2.threshold(1)?;
+        if s == f64::INFINITY {
+            // Stage 1 overflowed: the largest possible evidence of a fault. The statistic
+            // filter is left as it was (an infinite sample would poison its R for good).
+            let d = Decision {
+                statistic: f64::INFINITY,
+                threshold,
+                alarm: true,
+                dof: 1,
+            };
+            self.last = Some(d.clone());
+            return Ok(d);
+        }
         if !s.is_finite() {
             return Ok(Decision {
                 statistic: f64::NAN,
@@ -654,10 +701,21 @@ impl TwoStageAime {
                 dof: 0,
             });
         };
-        self.r = self.b * self.r + (1.0 - self.b) * 0.5 * (s - prev) * (s - prev);
+        let r = self.b * self.r + (1.0 - self.b) * 0.5 * (s - prev) * (s - prev);
         let p_pred = self.p + self.q;
         let nu = s - self.x;
-        let var = p_pred + self.r;
+        let var = p_pred + r;
+        if !(var.is_finite() && nu.is_finite()) {
+            // A stage-1 statistic so large that its squared jump overflows: alarm, and keep
+            // the filter's R, x and P as they were.
+            return Ok(Decision {
+                statistic: f64::INFINITY,
+                threshold,
+                alarm: true,
+                dof: 1,
+            });
+        }
+        self.r = r;
         let d2 = self.stage2.test(
             &DVector::from_element(1, nu),
             &DMatrix::from_element(1, 1, var),

@@ -95,14 +95,26 @@ impl ResidualChi2 {
 
 /// `rᵀA⁻¹r` as ‖L⁻¹r‖² with `A = LLᵀ`.
 pub(crate) fn whitened_norm2(chol: &Cholesky<f64, Dyn>, r: &DVector<f64>) -> Result<f64> {
-    let w = chol
-        .l_dirty()
-        .solve_lower_triangular(r)
-        .ok_or_else(|| Error::Numerical {
-            context: "chi-square statistic".into(),
-            detail: "triangular solve failed".into(),
-        })?;
-    Ok(w.norm_squared())
+    let solve = |r: &DVector<f64>| {
+        chol.l_dirty()
+            .solve_lower_triangular(r)
+            .ok_or_else(|| Error::Numerical {
+                context: "chi-square statistic".into(),
+                detail: "triangular solve failed".into(),
+            })
+    };
+    let stat = solve(r)?.norm_squared();
+    if stat.is_finite() {
+        return Ok(stat);
+    }
+    // Overflow inside the solve (a residual near the largest float over a tiny variance can
+    // give inf − inf = NaN): the same with r scaled by its largest magnitude, so the
+    // statistic is +inf, never NaN.
+    let c = r.amax();
+    if !(c > 0.0 && c.is_finite()) {
+        return Ok(f64::INFINITY);
+    }
+    Ok(c * c * solve(&(r / c))?.norm_squared())
 }
 
 #[cfg(test)]

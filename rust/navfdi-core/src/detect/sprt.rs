@@ -167,6 +167,7 @@ impl ImprovedSprt {
             self.acc = vec![Accumulator::default(); m];
         }
         let mut dof = 0;
+        let mut overflow = false;
         for (j, acc) in self.acc.iter_mut().enumerate() {
             let raw = r[j];
             if raw.is_nan() {
@@ -177,20 +178,32 @@ impl ImprovedSprt {
                 SprtVariance::Known => raw / a[(j, j)].sqrt(),
                 SprtVariance::Sample => raw,
             };
-            acc.count += 1;
-            let k = acc.count as f64;
-            let d = x - acc.mean;
-            acc.m2 += (k - 1.0) / k * d * d;
-            acc.mean += d / k;
+            let mut next = *acc;
+            next.count += 1;
+            let k = next.count as f64;
+            let d = x - next.mean;
+            next.m2 += (k - 1.0) / k * d * d;
+            next.mean += d / k;
             let s2 = match self.variance {
                 SprtVariance::Known => 1.0,
-                SprtVariance::Sample => acc.m2 / k,
+                SprtVariance::Sample => next.m2 / k,
             };
-            acc.lambda = if s2 > 0.0 {
-                k * acc.mean * acc.mean / (2.0 * s2)
+            next.lambda = if s2 > 0.0 {
+                k * next.mean * next.mean / (2.0 * s2)
+            } else if k >= 2.0 && next.mean != 0.0 {
+                // Two or more identical non-zero samples: a mean with no spread at all.
+                f64::INFINITY
             } else {
                 0.0
             };
+            if next.m2.is_finite() && next.mean.is_finite() && !next.lambda.is_nan() {
+                *acc = next;
+            } else {
+                // The sample overflows the accumulator (a residual near the largest float or
+                // a variance near the smallest): the largest possible evidence of a fault.
+                // The accumulator is left as it was, so it is not poisoned for later epochs.
+                overflow = true;
+            }
         }
         if dof == 0 {
             return Decision {
@@ -200,12 +213,17 @@ impl ImprovedSprt {
                 dof: 0,
             };
         }
-        let statistic = self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max);
+        let statistic = if overflow {
+            f64::INFINITY
+        } else {
+            self.acc.iter().map(|a| a.lambda).fold(0.0, f64::max)
+        };
         let min = self.min_samples;
-        self.alarm = self
-            .acc
-            .iter()
-            .any(|a| a.count >= min && a.lambda >= self.threshold);
+        self.alarm = overflow
+            || self
+                .acc
+                .iter()
+                .any(|a| a.count >= min && a.lambda >= self.threshold);
         Decision {
             statistic,
             threshold: self.threshold,

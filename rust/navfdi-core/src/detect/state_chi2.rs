@@ -370,7 +370,17 @@ fn whitened_statistic(beta: &DVector<f64>, v: &DMatrix<f64>) -> Option<f64> {
     let b = DVector::from_fn(d, |i, _| beta[i] / s[i]);
     let w = l.solve_lower_triangular(&b)?;
     let stat = w.norm_squared();
-    stat.is_finite().then_some(stat)
+    if stat.is_finite() {
+        return Some(stat);
+    }
+    // Overflow (a state difference near the largest float): the same with β scaled by its
+    // largest magnitude; the statistic is then +inf, the largest evidence of a fault.
+    let c = b.amax();
+    if !(c > 0.0 && c.is_finite()) {
+        return Some(f64::INFINITY);
+    }
+    let w = l.solve_lower_triangular(&(b / c))?;
+    Some(c * c * w.norm_squared())
 }
 
 #[cfg(test)]

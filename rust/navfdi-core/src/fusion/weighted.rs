@@ -80,12 +80,12 @@ impl WeightedFusion {
         if let Some((i, v)) = prior_sigma
             .iter()
             .enumerate()
-            .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
+            .find(|(_, v)| !(**v >= 1e-150 && **v <= 1e150))
         {
             return Err(Error::InvalidParameter {
                 name: format!("prior_sigma[{i}]"),
                 value: *v,
-                requirement: "a standard deviation must be positive and finite".into(),
+                requirement: "a standard deviation must be positive, finite and within 1e-150 … 1e150 (its square and inverse weight must be representable)".into(),
             });
         }
         if !(2..=1_000_000).contains(&window) {

@@ -19,10 +19,16 @@
 //! 3. **Health and clocks are interpreted here**: its `sv_healthy()` reports every Galileo
 //!    record unhealthy, and its clock correction returns nothing before t_oc; see
 //!    [`super::broadcast`].
+//!
+//! Reading the text and the structure checks of guard 2 are in [`super::rinex_text`].
 
 use super::atmosphere::Klobuchar;
 use super::broadcast::{Ephemeris, GpsTime, Sat, Sys};
-use crate::error::{Error, Result};
+pub use super::rinex_text::read_text;
+use super::rinex_text::{
+    check_nav_body, check_obs_body, check_version, format_err, header_end, label,
+};
+use crate::error::Result;
 use nalgebra::Vector3;
 use rinex::navigation::NavMessageType;
 use rinex::prelude::{Constellation, Rinex, TimeScale};
@@ -91,143 +97,6 @@ pub struct NavData {
     /// Records skipped because a required orbit field is missing or the orbit is impossible
     /// (√A outside 1000–10 000 √m, eccentricity ≥ 0.9).
     pub incomplete: usize,
-}
-
-fn format_err(path: &str, line: Option<usize>, what: impl std::fmt::Display) -> Error {
-    Error::Format(match line {
-        Some(l) => format!("{path}, line {l}: {what}"),
-        None => format!("{path}: {what}"),
-    })
-}
-
-/// Label of a header line (columns 61–80), trimmed.
-fn label(line: &str) -> &str {
-    line.get(60..).map(str::trim).unwrap_or("")
-}
-
-/// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
-/// corrupt gzip, not text, Hatanaka-compressed).
-pub fn read_text(path: &str) -> Result<String> {
-    let size = std::fs::metadata(path)
-        .map_err(|e| Error::Io(format!("{path}: {e}")))?
-        .len() as f64;
-    // Text, its lines, the normalised copy and the parser's records: about 12 × the text
-    // (a gzip file expands about 4 ×).
-    let factor = if path.ends_with(".gz") { 48.0 } else { 12.0 };
-    crate::memory::check(
-        &format!("reading {path}"),
-        size * factor,
-        &format!("a {} file", crate::memory::human(size)),
-        "split the file (e.g. with gfzrnx or teqc) and process the parts",
-    )?;
-    let mut bytes = std::fs::read(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
-    if bytes.starts_with(&[0x1f, 0x8b]) {
-        use std::io::Read;
-        let mut out = Vec::new();
-        flate2::read::MultiGzDecoder::new(bytes.as_slice())
-            .read_to_end(&mut out)
-            .map_err(|e| format_err(path, None, format!("corrupt or truncated gzip data: {e}")))?;
-        bytes = out;
-    }
-    if bytes.is_empty() {
-        return Err(format_err(path, None, "the file is empty"));
-    }
-    if bytes.starts_with(b"1.0                 COMPACT RINEX")
-        || bytes.starts_with(b"3.0                 COMPACT RINEX")
-    {
-        return Err(format_err(
-            path,
-            Some(1),
-            "Hatanaka-compressed (Compact RINEX); expand it first with CRX2RNX",
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| {
-        format_err(
-            path,
-            None,
-            format!(
-                "not a text file (invalid UTF-8 at byte {})",
-                e.utf8_error().valid_up_to()
-            ),
-        )
-    })
-}
-
-/// Check the first header line: version 3.xx and the file type letter `kind` (`O` or `N`).
-fn check_version(path: &str, text: &str, kind: char) -> Result<String> {
-    let first = text.lines().next().unwrap_or("");
-    if label(first) != "RINEX VERSION / TYPE" {
-        return Err(format_err(
-            path,
-            Some(1),
-            "expected the 'RINEX VERSION / TYPE' header line: not a RINEX file",
-        ));
-    }
-    let version = first.get(..9).unwrap_or("").trim().to_string();
-    let major = version.split('.').next().unwrap_or("");
-    if major != "3" {
-        return Err(format_err(
-            path,
-            Some(1),
-            format!("RINEX version '{version}' is not supported (only 3.xx); convert the file to RINEX 3 (e.g. gfzrnx or RTKLIB convbin)"),
-        ));
-    }
-    let t = first
-        .get(20..21)
-        .unwrap_or(" ")
-        .chars()
-        .next()
-        .unwrap_or(' ');
-    if t != kind {
-        let what = match t {
-            'O' => "an observation file",
-            'N' => "a navigation file",
-            'M' => "a meteorological file",
-            _ => "a file of another kind",
-        };
-        let want = if kind == 'O' {
-            "an observation file (type O)"
-        } else {
-            "a navigation file (type N)"
-        };
-        return Err(format_err(
-            path,
-            Some(1),
-            format!("this is {what} (type '{t}'); expected {want}"),
-        ));
-    }
-    Ok(version)
-}
-
-/// Index of the line after `END OF HEADER` (0-based), or an error. Every header line must
-/// carry its label in columns 61–80.
-fn header_end(path: &str, lines: &[&str]) -> Result<usize> {
-    let end = lines
-        .iter()
-        .position(|l| label(l) == "END OF HEADER")
-        .map(|i| i + 1)
-        .ok_or_else(|| {
-            format_err(
-                path,
-                Some(lines.len()),
-                "no 'END OF HEADER' line: the header is truncated or the file is not RINEX",
-            )
-        })?;
-    if let Some(i) = lines[..end].iter().position(|l| label(l).is_empty()) {
-        return Err(format_err(
-            path,
-            Some(i + 1),
-            "header line without its label in columns 61–80 (truncated or malformed line)",
-        ));
-    }
-    if let Some(i) = lines[..end].iter().position(|l| l.trim_end().len() > 80) {
-        return Err(format_err(
-            path,
-            Some(i + 1),
-            "header line longer than 80 characters (two lines run together?)",
-        ));
-    }
-    Ok(end)
 }
 
 /// The `rinex` crate's parser, with a panic inside it (it has some on malformed input, e.g.
@@ -304,128 +173,6 @@ fn normalise_obs_header(path: &str, lines: &[&str], end: usize) -> Result<Normal
         out.push('\n');
     }
     Ok((out, renamed, counts))
-}
-
-/// The structure check of an observation body (see the module docs). Returns the number of
-/// epochs with flag 0 or 1.
-fn check_obs_body(
-    path: &str,
-    lines: &[&str],
-    start: usize,
-    counts: &HashMap<char, usize>,
-) -> Result<usize> {
-    let mut i = start;
-    let mut epochs = 0;
-    while i < lines.len() {
-        let line = lines[i];
-        if line.trim().is_empty() {
-            i += 1;
-            continue;
-        }
-        if !line.starts_with('>') {
-            return Err(format_err(
-                path,
-                Some(i + 1),
-                format!(
-                    "expected an epoch line starting with '>', found '{}'",
-                    line.trim_end()
-                ),
-            ));
-        }
-        let flag = line.get(31..32).unwrap_or("").trim();
-        let n: usize = line.get(32..35).unwrap_or("").trim().parse().map_err(|_| {
-            format_err(
-                path,
-                Some(i + 1),
-                "epoch line: the number of satellites (columns 33–35) is missing or not an integer",
-            )
-        })?;
-        let fields: Vec<&str> = line.get(1..29).unwrap_or("").split_whitespace().collect();
-        if fields.len() != 6 || fields.iter().any(|f| f.parse::<f64>().is_err()) {
-            return Err(format_err(
-                path,
-                Some(i + 1),
-                "epoch line: expected 'year month day hour minute second' in columns 3–29",
-            ));
-        }
-        let epoch_line = i + 1;
-        i += 1;
-        match flag {
-            "0" | "1" => {
-                epochs += 1;
-                for j in 0..n {
-                    let Some(sl) = lines.get(i) else {
-                        return Err(format_err(
-                            path,
-                            Some(lines.len()),
-                            format!("the file ends inside the epoch of line {epoch_line}: {n} satellite lines announced, {j} found (truncated file?)"),
-                        ));
-                    };
-                    let sys = sl.chars().next().unwrap_or(' ');
-                    let prn_ok = sl
-                        .get(1..3)
-                        .map(|p| p.trim().parse::<u8>().is_ok())
-                        .unwrap_or(false);
-                    if !prn_ok || !sys.is_ascii_alphabetic() {
-                        return Err(format_err(
-                            path,
-                            Some(i + 1),
-                            format!("expected satellite line {} of {n} of the epoch of line {epoch_line} (e.g. 'G05 …'), found '{}'", j + 1, sl.trim_end()),
-                        ));
-                    }
-                    let nobs = counts.get(&sys).copied().ok_or_else(|| {
-                        format_err(path, Some(i + 1), format!("satellite system '{sys}' has no 'SYS / # / OBS TYPES' line in the header"))
-                    })?;
-                    let body = sl.get(3..).unwrap_or("");
-                    let nf = body.len().div_ceil(16);
-                    if nf > nobs {
-                        return Err(format_err(
-                            path,
-                            Some(i + 1),
-                            format!("{nf} observation fields, but the header lists {nobs} types for system '{sys}'"),
-                        ));
-                    }
-                    for f in 0..nf {
-                        let a = 3 + 16 * f;
-                        let v = sl.get(a..(a + 14).min(sl.len())).unwrap_or("").trim();
-                        if !v.is_empty() && v.parse::<f64>().is_err() {
-                            return Err(format_err(
-                                path,
-                                Some(i + 1),
-                                format!("column {}: '{v}' is not a number", a + 1),
-                            ));
-                        }
-                    }
-                    i += 1;
-                }
-            }
-            "2" | "3" | "4" | "5" | "6" => {
-                if i + n > lines.len() {
-                    return Err(format_err(
-                        path,
-                        Some(lines.len()),
-                        format!("the file ends inside the event of line {epoch_line} ({n} lines announced)"),
-                    ));
-                }
-                i += n;
-            }
-            _ => {
-                return Err(format_err(
-                    path,
-                    Some(epoch_line),
-                    format!("epoch flag '{flag}' (column 32) is not 0–6"),
-                ))
-            }
-        }
-    }
-    if epochs == 0 {
-        return Err(format_err(
-            path,
-            None,
-            "no observation epochs after the header",
-        ));
-    }
-    Ok(epochs)
 }
 
 fn to_sat(sv: &rinex::prelude::SV) -> Option<Sat> {
@@ -533,65 +280,6 @@ pub fn parse_obs(path: &str, text: &str) -> Result<ObsData> {
         receiver,
         epochs,
     })
-}
-
-/// Continuation lines of a navigation record of system `sys` (RINEX 3.04), or None to accept
-/// 3–7 (systems not positioned, whose layout changed between 3.0x revisions).
-fn nav_lines(sys: char) -> Option<usize> {
-    match sys {
-        'G' | 'E' | 'C' | 'J' | 'I' => Some(7),
-        _ => None,
-    }
-}
-
-fn check_nav_body(path: &str, lines: &[&str], start: usize) -> Result<usize> {
-    let mut i = start;
-    let mut records = 0;
-    while i < lines.len() {
-        let line = lines[i];
-        if line.trim().is_empty() {
-            i += 1;
-            continue;
-        }
-        let sys = line.chars().next().unwrap_or(' ');
-        let prn_ok = line
-            .get(1..3)
-            .map(|p| p.trim().parse::<u8>().is_ok())
-            .unwrap_or(false);
-        if !sys.is_ascii_alphabetic() || !prn_ok {
-            return Err(format_err(
-                path,
-                Some(i + 1),
-                format!("expected the first line of a navigation record (e.g. 'G05 2024 06 24 …'), found '{}'", line.trim_end()),
-            ));
-        }
-        let first = i + 1;
-        i += 1;
-        let mut k = 0;
-        while i < lines.len() && lines[i].starts_with("    ") && !lines[i].trim().is_empty() {
-            k += 1;
-            i += 1;
-        }
-        let ok = match nav_lines(sys) {
-            Some(n) => k == n,
-            None => (3..=7).contains(&k),
-        };
-        if !ok {
-            let want = nav_lines(sys).map_or("3–7".to_string(), |n| n.to_string());
-            let at_end = i >= lines.len();
-            return Err(format_err(
-                path,
-                Some(first),
-                format!(
-                    "the record of {} has {k} continuation lines, expected {want}{}",
-                    line.get(..3).unwrap_or("").trim(),
-                    if at_end { " (truncated file?)" } else { "" }
-                ),
-            ));
-        }
-        records += 1;
-    }
-    Ok(records)
 }
 
 fn orbit(e: &rinex::navigation::Ephemeris, key: &str) -> Option<f64> {
@@ -769,6 +457,7 @@ pub fn read_nav(path: &str) -> Result<NavData> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::Error;
 
     const OBS: &str =
         "     3.04           OBSERVATION DATA    M                   RINEX VERSION / TYPE

@@ -20,268 +20,16 @@
 //! Two models: [`PositionModel`] (pseudoranges → ECEF position and clock bias, iterative
 //! Gauss-Newton) and [`RateModel`] (pseudorange rates → ECEF velocity and clock drift, linear).
 //! The exclusion loop [`fde`] is shared.
+//!
+//! The least-squares machinery (covariances, the linear test, Gauss-Newton) is in
+//! [`super::lsq`], re-exported here.
 
+pub use super::lsq::{
+    check_size, gauss_newton, ls_test, ls_test_cov, two_sided_quantile, FdeConfig, FdeModel,
+    FdeStatus, LsTest, ObsCov,
+};
 use crate::error::{Error, Result};
-use crate::stats::chi2_threshold;
 use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
-use statrs::distribution::{ContinuousCDF, Normal};
-
-/// Observation covariance: independent observations with standard deviations σ_i, or a full
-/// symmetric positive-definite matrix.
-#[derive(Debug, Clone, PartialEq)]
-pub enum ObsCov {
-    /// σ per observation (same unit as the observations).
-    Sigma(Vec<f64>),
-    /// Full covariance (n × n).
-    Full(DMatrix<f64>),
-}
-
-impl ObsCov {
-    /// Number of observations it describes.
-    pub fn len(&self) -> usize {
-        match self {
-            ObsCov::Sigma(s) => s.len(),
-            ObsCov::Full(m) => m.nrows(),
-        }
-    }
-
-    /// True when it describes no observation.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Check values: positive finite σ, or a symmetric positive-definite matrix.
-    pub fn validate(&self, name: &str, n: usize) -> Result<()> {
-        match self {
-            ObsCov::Sigma(s) => {
-                if s.len() != n {
-                    return Err(Error::Shape {
-                        name: name.into(),
-                        expected: format!("({n},) or ({n}, {n})"),
-                        got: format!("({},)", s.len()),
-                    });
-                }
-                if let Some((i, v)) = s
-                    .iter()
-                    .enumerate()
-                    .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
-                {
-                    return Err(Error::InvalidParameter {
-                        name: format!("{name}[{i}]"),
-                        value: *v,
-                        requirement: "a standard deviation must be positive and finite".into(),
-                    });
-                }
-                Ok(())
-            }
-            ObsCov::Full(m) => {
-                crate::validate::check_shape(name, m, n, n)?;
-                crate::validate::check_finite_matrix(name, m)?;
-                crate::validate::check_symmetric(name, m)?;
-                if Cholesky::new(m.clone()).is_none() {
-                    return Err(Error::NotPositiveDefinite {
-                        name: name.into(),
-                        detail: "an observation covariance must be positive definite".into(),
-                    });
-                }
-                Ok(())
-            }
-        }
-    }
-
-    /// `D⁻¹` restricted to the observations `idx` (the inverse of the sub-matrix).
-    fn inverse_sub(&self, idx: &[usize]) -> Option<DMatrix<f64>> {
-        match self {
-            ObsCov::Sigma(s) => Some(DMatrix::from_diagonal(&DVector::from_iterator(
-                idx.len(),
-                idx.iter().map(|&i| 1.0 / (s[i] * s[i])),
-            ))),
-            ObsCov::Full(m) => {
-                let sub = m.select_rows(idx).select_columns(idx);
-                Cholesky::new(sub).map(|c| c.inverse())
-            }
-        }
-    }
-
-    fn sub(&self, idx: &[usize]) -> DMatrix<f64> {
-        match self {
-            ObsCov::Sigma(s) => DMatrix::from_diagonal(&DVector::from_iterator(
-                idx.len(),
-                idx.iter().map(|&i| s[i] * s[i]),
-            )),
-            ObsCov::Full(m) => m.select_rows(idx).select_columns(idx),
-        }
-    }
-}
-
-/// The two-sided standard-normal quantile `N⁻¹(1 − α/2)` (the default w-test critical value).
-pub fn two_sided_quantile(alpha: f64) -> Result<f64> {
-    crate::validate::check_probability("alpha", alpha)?;
-    let n = Normal::new(0.0, 1.0).map_err(|e| Error::Numerical {
-        context: "normal quantile".into(),
-        detail: e.to_string(),
-    })?;
-    Ok(n.inverse_cdf(1.0 - alpha / 2.0))
-}
-
-/// Settings of the exclusion loop.
-#[derive(Debug, Clone)]
-pub struct FdeConfig {
-    /// False-alarm probability of the global test.
-    pub alpha: f64,
-    /// Critical value of the w-test.
-    pub k: f64,
-    /// Gauss-Newton iterations allowed per solution.
-    pub max_iterations: usize,
-    /// Convergence: step norm below this (m).
-    pub tolerance: f64,
-    thresholds: Vec<std::sync::OnceLock<f64>>,
-}
-
-/// Degrees of freedom whose thresholds are computed once (on first use) and kept.
-const CACHED_DOF: usize = 64;
-
-impl FdeConfig {
-    /// `alpha` ∈ (0, 1); `k` > 0 (default: [`two_sided_quantile`] of `alpha`).
-    pub fn new(alpha: f64, k: Option<f64>) -> Result<Self> {
-        crate::validate::check_probability("alpha", alpha)?;
-        let k = match k {
-            Some(k) => {
-                if !(k > 0.0 && k.is_finite()) {
-                    return Err(Error::InvalidParameter {
-                        name: "k".into(),
-                        value: k,
-                        requirement: "the w-test critical value must be positive and finite".into(),
-                    });
-                }
-                k
-            }
-            None => two_sided_quantile(alpha)?,
-        };
-        let thresholds = (0..CACHED_DOF)
-            .map(|_| std::sync::OnceLock::new())
-            .collect();
-        Ok(FdeConfig {
-            alpha,
-            k,
-            max_iterations: 20,
-            tolerance: 1e-7,
-            thresholds,
-        })
-    }
-
-    /// Global-test threshold `F⁻¹_{χ²(dof)}(1 − α)`.
-    pub fn threshold(&self, dof: usize) -> Result<f64> {
-        match self.thresholds.get(dof.wrapping_sub(1)) {
-            Some(cell) => match cell.get() {
-                Some(t) => Ok(*t),
-                None => {
-                    let t = chi2_threshold(self.alpha, dof)?;
-                    Ok(*cell.get_or_init(|| t))
-                }
-            },
-            None => chi2_threshold(self.alpha, dof),
-        }
-    }
-}
-
-/// How the exclusion loop ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FdeStatus {
-    /// The global test passed with every observation.
-    Passed,
-    /// The global test passed after excluding one or more observations.
-    Excluded,
-    /// The global test fails but no |w| exceeds K; the solution is kept.
-    Unidentified,
-    /// Fewer than u + 1 observations, a singular geometry or no convergence: no solution.
-    NoSolution,
-}
-
-impl FdeStatus {
-    /// Lower-case name (`passed`, `excluded`, `unidentified`, `no_solution`).
-    pub fn as_str(self) -> &'static str {
-        match self {
-            FdeStatus::Passed => "passed",
-            FdeStatus::Excluded => "excluded",
-            FdeStatus::Unidentified => "unidentified",
-            FdeStatus::NoSolution => "no_solution",
-        }
-    }
-
-    /// Small integer code (0–3 in the order above), as recorded per epoch.
-    pub fn code(self) -> u8 {
-        self as u8
-    }
-}
-
-/// One linear(ised) test: estimate, residuals and statistics (see the module docs).
-#[derive(Debug, Clone, PartialEq)]
-pub struct LsTest {
-    /// Estimated correction x̂ (u).
-    pub x: DVector<f64>,
-    /// Residuals V = B x̂ − l (n).
-    pub v: DVector<f64>,
-    /// Residual covariance D_V (n × n).
-    pub dv: DMatrix<f64>,
-    /// VᵀD⁻¹V.
-    pub statistic: f64,
-    /// w per observation (NaN where the observation has no redundancy).
-    pub w: DVector<f64>,
-}
-
-/// The test of `l = B x + ε`, `D⁻¹` given (`d` is `D`). None when `BᵀD⁻¹B` is singular.
-pub fn ls_test(
-    b: &DMatrix<f64>,
-    l: &DVector<f64>,
-    d: &DMatrix<f64>,
-    dinv: &DMatrix<f64>,
-) -> Option<LsTest> {
-    let f = dinv * b; // D⁻¹B (n × u)
-    let n_mat = b.transpose() * &f;
-    let n_inv = Cholesky::new(n_mat)?.inverse();
-    let x = &n_inv * (f.transpose() * l);
-    let v = b * &x - l;
-    let bn = b * &n_inv; // B N⁻¹ (n × u)
-    let dv = d - &bn * b.transpose();
-    let g = dinv * &v;
-    let statistic = v.dot(&g);
-    let fn_ = &f * &n_inv; // D⁻¹B N⁻¹
-    let n = v.len();
-    let w = DVector::from_fn(n, |i, _| {
-        // e_iᵀ D⁻¹ D_V D⁻¹ e_i = (D⁻¹)_ii − (D⁻¹B N⁻¹ BᵀD⁻¹)_ii
-        let q = dinv[(i, i)] - fn_.row(i).dot(&f.row(i));
-        if q > 1e-12 * dinv[(i, i)] {
-            g[i] / q.sqrt()
-        } else {
-            f64::NAN
-        }
-    });
-    Some(LsTest {
-        x,
-        v,
-        dv,
-        statistic,
-        w,
-    })
-}
-
-/// A measurement model the exclusion loop can solve on any subset of its observations.
-pub trait FdeModel {
-    /// Number of unknowns u.
-    fn unknowns(&self) -> usize;
-    /// Solve on the observations `idx` (with `D⁻¹` of that subset) and return `(B, l)`
-    /// linearised at the solution (so that `x̂ ≈ 0`); None when the geometry is singular or
-    /// the iteration does not converge. The solution is kept in the model.
-    fn solve(
-        &mut self,
-        idx: &[usize],
-        dinv: &DMatrix<f64>,
-        cfg: &FdeConfig,
-    ) -> Option<(DMatrix<f64>, DVector<f64>)>;
-    /// The current solution (u).
-    fn solution(&self) -> DVector<f64>;
-}
 
 /// Result of [`fde`].
 #[derive(Debug, Clone, PartialEq)]
@@ -324,8 +72,14 @@ pub fn fde<M: FdeModel>(
 ) -> Result<FdeOutcome> {
     let n = usable.len();
     let u = model.unknowns();
+    // Solve in a scaled form when the σ would over- or underflow when squared; statistics
+    // and w are scaled back, so they are those of the σ given.
+    let (cov, c) = cov.normalised();
+    let cov = cov.as_ref();
     let mut active: Vec<usize> = (0..n).filter(|&i| usable[i]).collect();
     let mut out = FdeOutcome::empty(n);
+    // The all-observation solution, kept in case exclusion runs out of observations.
+    let mut first_solution: Option<(DVector<f64>, Vec<f64>)> = None;
     loop {
         if active.len() < u + 1 {
             out.reason = format!(
@@ -340,14 +94,41 @@ pub fn fde<M: FdeModel>(
             return Ok(out.no_solution(n));
         };
         let Some((b, l)) = model.solve(&active, &dinv, cfg) else {
+            // A gross observation (a pseudorange of 1e12 m or below zero, a satellite at the
+            // receiver) can stop the iteration: find the one observation whose removal lets
+            // the rest converge with the smallest test ratio, exclude it and go on.
+            if active.len() >= u + 2 {
+                if let Some(j) = leave_one_out(model, cov, &active, groups, cfg)? {
+                    if out.excluded.is_empty() {
+                        // The set with every observation failed to converge: its global test
+                        // counts as failed (statistic +inf).
+                        let dof = active.len() - u;
+                        out.first = (f64::INFINITY, cfg.threshold(dof)?, dof);
+                    }
+                    let i = active[j];
+                    out.excluded.push(i);
+                    out.excluded_w.push(f64::INFINITY);
+                    match groups {
+                        Some(g) => active.retain(|&a| g[a] != g[i]),
+                        None => {
+                            active.remove(j);
+                        }
+                    }
+                    continue;
+                }
+            }
             out.reason = "singular geometry or no convergence".into();
             return Ok(out.no_solution(n));
         };
         let d = cov.sub(&active);
-        let Some(test) = ls_test(&b, &l, &d, &dinv) else {
+        let Some(mut test) = ls_test(&b, &l, &d, &dinv) else {
             out.reason = "singular geometry".into();
             return Ok(out.no_solution(n));
         };
+        if c != 1.0 {
+            test.statistic = test.statistic / c / c;
+            test.w.iter_mut().for_each(|w| *w /= c);
+        }
         let dof = active.len() - u;
         let threshold = cfg.threshold(dof)?;
         if out.excluded.is_empty() {
@@ -361,6 +142,9 @@ pub fn fde<M: FdeModel>(
             out.w[i] = test.w[j];
         }
         out.solution = Some(model.solution());
+        if first_solution.is_none() {
+            first_solution = Some((model.solution(), out.w.clone()));
+        }
         if test.statistic < threshold {
             out.status = if out.excluded.is_empty() {
                 out.reason = "global test passed".into();
@@ -382,6 +166,32 @@ pub fn fde<M: FdeModel>(
             .max_by(|a, b| test.w[a.0].abs().total_cmp(&test.w[b.0].abs()));
         match worst {
             Some((j, &i)) if test.w[j].abs() > cfg.k => {
+                let left = match groups {
+                    Some(g) => active.iter().filter(|&&a| g[a] != g[i]).count(),
+                    None => active.len() - 1,
+                };
+                if left < u + 1 {
+                    // Excluding would leave too few to solve and test: the fault is detected
+                    // but cannot be identified. Report the solution of every observation
+                    // (what scaling every σ by one factor cannot change) as unidentified.
+                    if let Some((x, w)) = first_solution.take() {
+                        out.solution = Some(x);
+                        out.w = w;
+                        out.statistic = out.first.0;
+                        out.threshold = out.first.1;
+                        out.dof = out.first.2;
+                    }
+                    out.status = FdeStatus::Unidentified;
+                    out.reason = format!(
+                        "global test fails ({:.4} ≥ {:.4}) and no subset passes before too few observations would remain ({} excluded); the solution of every observation is kept",
+                        test.statistic,
+                        threshold,
+                        out.excluded.len()
+                    );
+                    out.excluded.clear();
+                    out.excluded_w.clear();
+                    return Ok(out);
+                }
                 out.excluded.push(i);
                 out.excluded_w.push(test.w[j].abs());
                 match groups {
@@ -401,6 +211,43 @@ pub fn fde<M: FdeModel>(
             }
         }
     }
+}
+
+/// The position in `active` of the observation (with its group) whose removal lets the rest
+/// solve with the smallest global-test ratio (statistic / threshold); None when no single
+/// removal does. Used when the whole set does not converge.
+fn leave_one_out<M: FdeModel>(
+    model: &mut M,
+    cov: &ObsCov,
+    active: &[usize],
+    groups: Option<&[usize]>,
+    cfg: &FdeConfig,
+) -> Result<Option<usize>> {
+    let u = model.unknowns();
+    let mut best: Option<(usize, f64)> = None;
+    for (j, &i) in active.iter().enumerate() {
+        let rest: Vec<usize> = match groups {
+            Some(g) => active.iter().copied().filter(|&a| g[a] != g[i]).collect(),
+            None => active.iter().copied().filter(|&a| a != i).collect(),
+        };
+        if rest.len() < u + 1 {
+            continue;
+        }
+        let Some(dinv) = cov.inverse_sub(&rest) else {
+            continue;
+        };
+        let Some((b, l)) = model.solve(&rest, &dinv, cfg) else {
+            continue;
+        };
+        let Some(test) = ls_test(&b, &l, &cov.sub(&rest), &dinv) else {
+            continue;
+        };
+        let ratio = test.statistic / cfg.threshold(rest.len() - u)?;
+        if ratio.is_finite() && best.is_none_or(|(_, r)| ratio < r) {
+            best = Some((j, ratio));
+        }
+    }
+    Ok(best.map(|(j, _)| j))
 }
 
 impl FdeOutcome {
@@ -486,37 +333,6 @@ fn position_linearise(
         l[j] = rho[i] - (range + x[3]);
     }
     (b, l)
-}
-
-/// Gauss-Newton for a nonlinear [`FdeModel`]: from `x` (updated in place), `lin(x)` gives
-/// `(B, l)` with `l` = observed − predicted; step `(BᵀD⁻¹B)⁻¹BᵀD⁻¹l` until its norm is below
-/// `tolerance`, at most `iterations` times. Returns `(B, l)` at the solution; None when the
-/// normal matrix is singular, a step is not finite or the iteration does not converge.
-pub fn gauss_newton<F>(
-    x: &mut [f64],
-    mut lin: F,
-    dinv: &DMatrix<f64>,
-    iterations: usize,
-    tolerance: f64,
-) -> Option<(DMatrix<f64>, DVector<f64>)>
-where
-    F: FnMut(&[f64]) -> (DMatrix<f64>, DVector<f64>),
-{
-    for _ in 0..iterations {
-        let (b, l) = lin(x);
-        let f = dinv * &b;
-        let dx = Cholesky::new(b.transpose() * &f)?.solve(&(f.transpose() * &l));
-        if !dx.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        for (xi, d) in x.iter_mut().zip(dx.iter()) {
-            *xi += d;
-        }
-        if dx.norm() < tolerance {
-            return Some(lin(x));
-        }
-    }
-    None
 }
 
 impl FdeModel for PositionModel<'_> {
@@ -662,18 +478,6 @@ impl FdeModel for StackedModel<'_> {
     }
 }
 
-/// Refuse (`MemoryError` in Python) a least-squares problem of `n` observations whose n × n
-/// work matrices (about six: D, D⁻¹, D_V and temporaries) would not fit in memory.
-pub fn check_size(what: &str, n: usize) -> Result<()> {
-    let n = n as f64;
-    crate::memory::check(
-        what,
-        6.0 * n * n * 8.0,
-        &format!("{n} observations need n × n work matrices"),
-        "give fewer observations per epoch",
-    )
-}
-
 /// Result of [`snapshot_fde`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct SnapshotResult {
@@ -807,6 +611,18 @@ mod tests {
         .unwrap();
         assert_eq!(r.fde.status, FdeStatus::NoSolution);
         assert!(r.position.is_none());
+        // Five satellites: the fault is detected (one degree of freedom) but excluding one
+        // would leave four, too few to test: unidentified, with the all-satellite solution.
+        let r = snapshot_fde(
+            &sats[..5],
+            &rho[..5],
+            &ObsCov::Sigma(vec![1.0; 5]),
+            &cfg,
+            None,
+        )
+        .unwrap();
+        assert_eq!(r.fde.status, FdeStatus::Unidentified);
+        assert!(r.position.is_some() && r.fde.excluded.is_empty());
     }
 
     #[test]

@@ -32,6 +32,10 @@ use super::rinex::{NavData, ObsData};
 use super::sequential::{SatDetectors, SeqConfig, SeqOutput};
 use super::snapshot::{fde, gauss_newton, FdeConfig, FdeModel, FdeOutcome, ObsCov};
 use super::C;
+
+/// Travel distance (m) of a medium-orbit satellite's signal, for a pseudorange outside
+/// 1e7 … 1e8 m (no receiver measures one there).
+const NOMINAL_RANGE: f64 = 2.3e7;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -551,7 +555,16 @@ pub fn solve(
                     out.sats.push(sr);
                 }
                 Ok(eph) => {
-                    let ttx = eph.transmission_time(&ep.time, rho);
+                    // A pseudorange no receiver can measure (a tracking glitch, an injected
+                    // gross fault) would put the satellite at a meaningless transmission
+                    // time; its position is taken at a nominal travel time instead and the
+                    // observation is left to the FDE, which excludes it.
+                    let rho_tx = if (1e7..=1e8).contains(&rho) {
+                        rho
+                    } else {
+                        NOMINAL_RANGE
+                    };
+                    let ttx = eph.transmission_time(&ep.time, rho_tx);
                     let st = eph.state(&ttx);
                     let r = st.pos.norm();
                     if !(r > 1e7 && r < 6e7 && st.clock.is_finite() && st.clock.abs() < 1.0) {

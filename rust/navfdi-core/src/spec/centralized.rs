@@ -129,6 +129,23 @@ impl ScenarioSpec {
             ));
         }
         non_negative("centralized.fading_duration", c.fading_duration)?;
+        // P grows by S every epoch the fading factor applies: S^(epochs) must stay far from
+        // overflow (1e300 used to pass and overflow the filter at epoch 314). Checked whatever
+        // the policy, so a variant that switches the policy on cannot fail mid-run.
+        let epochs = (c.fading_duration / self.dt).ceil().max(1.0);
+        let growth = epochs * c.fading.log10();
+        if growth > 150.0 {
+            return Err(bad(
+                "centralized.fading",
+                format!(
+                    "{}: the covariance would grow by S^{} = 1e{:.0} over fading_duration = {} s, overflowing the filter; use S closer to 1 (paper 002: 1.1–2) or a shorter fading_duration",
+                    crate::error::num(c.fading),
+                    crate::error::num(epochs),
+                    growth,
+                    crate::error::num(c.fading_duration)
+                ),
+            ));
+        }
         if let Some(af) = &c.altitude_fusion {
             if af.sensors.len() < 2 {
                 return Err(bad(

@@ -160,6 +160,9 @@ impl ScenarioSpec {
                 ));
             }
             if !self.channels().iter().any(|ch| ch.sensor == f.sensor) {
+                // A misspelt sensor in the filter's configuration (or no satellite to track) is
+                // the cause to name, not the fault.
+                self.check_channel_sensors()?;
                 return Err(bad(
                     format!("{p}.sensor"),
                     format!(
@@ -172,6 +175,65 @@ impl ScenarioSpec {
                         },
                         f.sensor
                     ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Every sensor the architecture's configuration names exists (and an ultra-tight filter
+    /// tracks at least one satellite); errors name the configuration field.
+    pub(super) fn check_channel_sensors(&self) -> Result<()> {
+        let names: Vec<(String, &str)> = match self.architecture {
+            Architecture::Federated => self
+                .federated
+                .iter()
+                .flat_map(|f| {
+                    f.subfilters.iter().enumerate().map(|(i, s)| {
+                        (
+                            format!("federated.subfilters[{i}].sensor"),
+                            s.sensor.as_str(),
+                        )
+                    })
+                })
+                .collect(),
+            Architecture::Centralized => self
+                .centralized
+                .iter()
+                .flat_map(|c| {
+                    c.sensors.iter().enumerate().map(|(i, s)| {
+                        (
+                            format!("centralized.sensors[{i}].sensor"),
+                            s.sensor.as_str(),
+                        )
+                    })
+                })
+                .collect(),
+            Architecture::Tight => self
+                .tight
+                .iter()
+                .map(|t| ("tight.sensor".to_string(), t.sensor.as_str()))
+                .collect(),
+            Architecture::UltraTight => {
+                if let Some(u) = &self.ultra_tight {
+                    if u.satellites.is_empty() {
+                        return Err(bad(
+                            "ultra_tight.satellites",
+                            "at least one satellite to track is required",
+                        ));
+                    }
+                }
+                self.ultra_tight
+                    .iter()
+                    .map(|u| ("ultra_tight.sensor".to_string(), u.sensor.as_str()))
+                    .collect()
+            }
+        };
+        for (path, name) in names {
+            if self.sensor_index(name).is_none() {
+                return Err(bad(
+                    path,
+                    format!("{name:?} is not a sensor (known: {})", self.sensor_names()),
                 ));
             }
         }

@@ -186,8 +186,8 @@ impl ScenarioSpec {
             return Err(bad(
                 format!("{p}.ranges.elevation_mask"),
                 format!(
-                    "{} rad must be in [0°, 80°)",
-                    crate::error::num(r.elevation_mask)
+                    "{} deg must be in [0, 80) deg",
+                    crate::error::num(r.elevation_mask.to_degrees())
                 ),
             ));
         }

@@ -216,7 +216,7 @@ impl PyImprovedSprt {
     }
     fn __repr__(&self) -> String {
         format!(
-            "ImprovedSprt(pf={}, pm={}, variance={:?})",
+            "ImprovedSprt(pf={}, pm={}, variance='{}')",
             self.inner.pf(),
             self.inner.pm(),
             variance_name(self.inner.variance())
@@ -315,7 +315,7 @@ impl PyJointChi2Sprt {
     }
     fn __repr__(&self) -> String {
         format!(
-            "JointChi2Sprt(pf={}, pm={}, variance={:?})",
+            "JointChi2Sprt(pf={}, pm={}, variance='{}')",
             self.inner.sprt().pf(),
             self.inner.sprt().pm(),
             variance_name(self.inner.sprt().variance())

@@ -97,11 +97,11 @@ impl PyDecision {
     fn __repr__(&self) -> String {
         let d = &self.report.decision;
         format!(
-            "Decision(alarm={}, statistic={:.6}, threshold={:.6}, ratio={:.4}, dof={})",
-            if d.alarm { "True" } else { "False" },
-            d.statistic,
-            d.threshold,
-            d.ratio(),
+            "Decision(alarm={}, statistic={}, threshold={}, ratio={}, dof={})",
+            crate::convert::py_bool(d.alarm),
+            crate::convert::py_float(d.statistic),
+            crate::convert::py_float(d.threshold),
+            crate::convert::py_float(d.ratio()),
             d.dof
         )
     }

@@ -1,5 +1,6 @@
 //! `StateChi2` binding (paper 003's dual-propagator state chi-square test).
 
+use super::common::positive_count;
 use crate::errors::IntoPyResult;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -59,14 +60,14 @@ impl PyStateDecision {
     }
     fn __repr__(&self) -> String {
         format!(
-            "StateDecision(statistic={:.4}, threshold={:.4}, alarm={}, propagator={:?}, age={}, ready={}, ill_conditioned={})",
-            self.inner.statistic,
-            self.inner.threshold,
-            self.inner.alarm,
-            self.inner.propagator,
+            "StateDecision(statistic={}, threshold={}, alarm={}, propagator={}, age={}, ready={}, ill_conditioned={})",
+            crate::convert::py_float(self.inner.statistic),
+            crate::convert::py_float(self.inner.threshold),
+            crate::convert::py_bool(self.inner.alarm),
+            crate::convert::py_opt(self.inner.propagator),
             self.inner.age,
-            self.inner.ready,
-            self.inner.ill_conditioned
+            crate::convert::py_bool(self.inner.ready),
+            crate::convert::py_bool(self.inner.ill_conditioned)
         )
     }
 }
@@ -95,14 +96,11 @@ impl PyStateChi2 {
         min_age: Option<i64>,
         states: Option<Vec<i64>>,
     ) -> PyResult<Self> {
-        let nonneg = |name: &str, v: i64| -> PyResult<u64> {
-            u64::try_from(v)
-                .map_err(|_| PyValueError::new_err(format!("{name} = {v}: must be >= 0")))
-        };
-        let n = nonneg("n", n)? as usize;
-        let reset_every = nonneg("reset_every", reset_every)?;
+        // Counts of at least 1, the same requirement (and message) whatever the sign.
+        let n = positive_count("n", n)? as usize;
+        let reset_every = positive_count("reset_every", reset_every)?;
         let min_age = match min_age {
-            Some(a) => nonneg("min_age", a)?,
+            Some(a) => positive_count("min_age", a)?,
             None => reset_every,
         };
         let states = states

@@ -1,0 +1,26 @@
+"""The exceptions and warnings of scenarios and fault injection (re-exported by
+:mod:`navfdi.scenario` and :mod:`navfdi`)."""
+
+from __future__ import annotations
+
+
+class ScenarioError(ValueError):
+    """A scenario that cannot be run; the message names the field path and the value."""
+
+
+class ScenarioTooLarge(ScenarioError, MemoryError):
+    """A scenario (or campaign) that would need more memory than is available; the message
+    says how much and which fields to change. Both a :class:`ScenarioError` and a
+    ``MemoryError``."""
+
+
+class ScenarioWarning(UserWarning):
+    """Something in a scenario that runs but may not be what was meant (e.g. a trajectory
+    shorter than the run, whose last segment is then held)."""
+
+
+class NeverAppliedWarning(UserWarning):
+    """An injected fault that never reached a measurement (its sensor never measures inside
+    the window, its satellite is never in view or never observed, its system is not
+    selected, its window is outside the file): it says nothing about the detectors and is
+    left out of the detection statistics."""

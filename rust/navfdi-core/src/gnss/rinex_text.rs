@@ -1,0 +1,478 @@
+//! Reading a RINEX file's text and checking its structure before the `rinex` crate parses it
+//! ([`super::rinex`]): gzip, NUL bytes, non-ASCII data, the version line, the header's end,
+//! and the body line by line (epoch and record layout, numbers, time order), so that a
+//! malformed file stops with its line and what was expected instead of being dropped or
+//! re-ordered silently.
+
+use crate::error::{Error, Result};
+use std::collections::HashMap;
+
+pub(crate) fn format_err(path: &str, line: Option<usize>, what: impl std::fmt::Display) -> Error {
+    Error::Format(match line {
+        Some(l) => format!("{path}, line {l}: {what}"),
+        None => format!("{path}: {what}"),
+    })
+}
+
+/// Label of a header line (columns 61–80), trimmed.
+pub(crate) fn label(line: &str) -> &str {
+    line.get(60..).map(str::trim).unwrap_or("")
+}
+
+/// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
+/// corrupt gzip, not text, Hatanaka-compressed).
+pub fn read_text(path: &str) -> Result<String> {
+    let meta = std::fs::metadata(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    if meta.is_dir() {
+        return Err(Error::Io(format!(
+            "{path}: is a directory, not a RINEX file"
+        )));
+    }
+    if !meta.is_file() {
+        return Err(Error::Io(format!(
+            "{path}: not a regular file (a device, pipe or socket); give the path of a RINEX file"
+        )));
+    }
+    let size = meta.len() as f64;
+    // Text, its lines, the normalised copy and the parser's records: about 12 × the text
+    // (a gzip file expands about 4 ×).
+    let factor = if path.ends_with(".gz") { 48.0 } else { 12.0 };
+    crate::memory::check(
+        &format!("reading {path}"),
+        size * factor,
+        &format!("a {} file", crate::memory::human(size)),
+        "split the file (e.g. with gfzrnx or teqc) and process the parts",
+    )?;
+    let file = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    let mut head = [0u8; 2];
+    let gz = {
+        use std::io::Read;
+        let mut f = &file;
+        let got = f
+            .read(&mut head)
+            .map_err(|e| Error::Io(format!("{path}: {e}")))?;
+        got == 2 && head == [0x1f, 0x8b]
+    };
+    let file = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    let bytes = if gz {
+        read_until_nul(path, flate2::read::MultiGzDecoder::new(file), true)?
+    } else {
+        read_until_nul(path, file, false)?
+    };
+    if bytes.is_empty() {
+        return Err(format_err(path, None, "the file is empty"));
+    }
+    if bytes.starts_with(b"1.0                 COMPACT RINEX")
+        || bytes.starts_with(b"3.0                 COMPACT RINEX")
+    {
+        return Err(format_err(
+            path,
+            Some(1),
+            "Hatanaka-compressed (Compact RINEX); expand it first with CRX2RNX",
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        format_err(
+            path,
+            None,
+            format!(
+                "not a text file (invalid UTF-8 at byte {})",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+/// Read all of `src`, stopping at the first NUL byte with an error that names its line and
+/// byte offset (a file padded or overwritten with zeros is not text; reading on would cost
+/// the whole padding in time and memory).
+pub(crate) fn read_until_nul(path: &str, mut src: impl std::io::Read, gz: bool) -> Result<Vec<u8>> {
+    let mut out: Vec<u8> = Vec::new();
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        let got = src.read(&mut buf).map_err(|e| {
+            if gz {
+                format_err(path, None, format!("corrupt or truncated gzip data: {e}"))
+            } else {
+                Error::Io(format!("{path}: {e}"))
+            }
+        })?;
+        if got == 0 {
+            return Ok(out);
+        }
+        if let Some(p) = buf[..got].iter().position(|&b| b == 0) {
+            let at = out.len() + p;
+            out.extend_from_slice(&buf[..p]);
+            let line = out.iter().filter(|&&b| b == b'\n').count() + 1;
+            return Err(format_err(
+                path,
+                Some(line),
+                format!(
+                    "NUL bytes from byte {at}{}: not a text file (padded with zeros or corrupted)",
+                    if gz { " of the decompressed data" } else { "" }
+                ),
+            ));
+        }
+        out.extend_from_slice(&buf[..got]);
+    }
+}
+
+/// Refuse a non-ASCII character in the data section (`lines[start..]`), naming its line and
+/// column: RINEX data are ASCII, and a corrupted byte would otherwise shift the fixed columns
+/// and be reported as a wrong number at the wrong place (or make a parser drop a record).
+pub(crate) fn check_ascii(path: &str, lines: &[&str], start: usize) -> Result<()> {
+    for (i, line) in lines.iter().enumerate().skip(start) {
+        if let Some((c, ch)) = line.chars().enumerate().find(|(_, ch)| !ch.is_ascii()) {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!(
+                    "column {}: non-ASCII character {ch:?} in the data (RINEX data are ASCII: a corrupted byte?)",
+                    c + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A navigation-record number field (`D19.12`, `D` or `E` exponent): blank, or a finite number.
+pub(crate) fn nav_field_ok(v: &str) -> bool {
+    let v = v.trim();
+    v.is_empty()
+        || v.replace(['D', 'd'], "E")
+            .parse::<f64>()
+            .is_ok_and(f64::is_finite)
+}
+
+/// Check the first header line: version 3.xx and the file type letter `kind` (`O` or `N`).
+pub(crate) fn check_version(path: &str, text: &str, kind: char) -> Result<String> {
+    let first = text.lines().next().unwrap_or("");
+    if label(first) != "RINEX VERSION / TYPE" {
+        return Err(format_err(
+            path,
+            Some(1),
+            "expected the 'RINEX VERSION / TYPE' header line: not a RINEX file",
+        ));
+    }
+    let version = first.get(..9).unwrap_or("").trim().to_string();
+    let major = version.split('.').next().unwrap_or("");
+    if major != "3" {
+        return Err(format_err(
+            path,
+            Some(1),
+            format!("RINEX version '{version}' is not supported (only 3.xx); convert the file to RINEX 3 (e.g. gfzrnx or RTKLIB convbin)"),
+        ));
+    }
+    let t = first
+        .get(20..21)
+        .unwrap_or(" ")
+        .chars()
+        .next()
+        .unwrap_or(' ');
+    if t != kind {
+        let what = match t {
+            'O' => "an observation file",
+            'N' => "a navigation file",
+            'M' => "a meteorological file",
+            _ => "a file of another kind",
+        };
+        let want = if kind == 'O' {
+            "an observation file (type O)"
+        } else {
+            "a navigation file (type N)"
+        };
+        return Err(format_err(
+            path,
+            Some(1),
+            format!("this is {what} (type '{t}'); expected {want}"),
+        ));
+    }
+    Ok(version)
+}
+
+/// Index of the line after `END OF HEADER` (0-based), or an error. Every header line must
+/// carry its label in columns 61–80.
+pub(crate) fn header_end(path: &str, lines: &[&str]) -> Result<usize> {
+    let end = lines
+        .iter()
+        .position(|l| label(l) == "END OF HEADER")
+        .map(|i| i + 1)
+        .ok_or_else(|| {
+            format_err(
+                path,
+                Some(lines.len()),
+                "no 'END OF HEADER' line: the header is truncated or the file is not RINEX",
+            )
+        })?;
+    if let Some(i) = lines[..end].iter().position(|l| label(l).is_empty()) {
+        return Err(format_err(
+            path,
+            Some(i + 1),
+            "header line without its label in columns 61–80 (truncated or malformed line)",
+        ));
+    }
+    if let Some(i) = lines[..end].iter().position(|l| l.trim_end().len() > 80) {
+        return Err(format_err(
+            path,
+            Some(i + 1),
+            "header line longer than 80 characters (two lines run together?)",
+        ));
+    }
+    Ok(end)
+}
+
+/// The structure check of an observation body (see the module docs). Returns the number of
+/// epochs with flag 0 or 1.
+pub(crate) fn check_obs_body(
+    path: &str,
+    lines: &[&str],
+    start: usize,
+    counts: &HashMap<char, usize>,
+) -> Result<usize> {
+    check_ascii(path, lines, start)?;
+    let mut i = start;
+    let mut epochs = 0;
+    // The previous observation epoch: its time fields and line.
+    let mut prev: Option<([f64; 6], usize)> = None;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.trim().is_empty() {
+            i += 1;
+            continue;
+        }
+        if !line.starts_with('>') {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!(
+                    "expected an epoch line starting with '>', found '{}'",
+                    line.trim_end()
+                ),
+            ));
+        }
+        let flag = line.get(31..32).unwrap_or("").trim();
+        let n: usize = line.get(32..35).unwrap_or("").trim().parse().map_err(|_| {
+            format_err(
+                path,
+                Some(i + 1),
+                "epoch line: the number of satellites (columns 33–35) is missing or not an integer",
+            )
+        })?;
+        let fields: Vec<&str> = line.get(1..29).unwrap_or("").split_whitespace().collect();
+        if fields.len() != 6 || fields.iter().any(|f| f.parse::<f64>().is_err()) {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                "epoch line: expected 'year month day hour minute second' in columns 3–29",
+            ));
+        }
+        let epoch_line = i + 1;
+        i += 1;
+        match flag {
+            "0" | "1" => {
+                let mut time = [0.0; 6];
+                for (t, f) in time.iter_mut().zip(&fields) {
+                    *t = f.parse().unwrap_or(f64::NAN);
+                }
+                if let Some((p, pl)) = prev {
+                    let show = |t: &[f64; 6]| {
+                        format!(
+                            "{:04}-{:02}-{:02} {:02}:{:02}:{:010.7}",
+                            t[0], t[1], t[2], t[3], t[4], t[5]
+                        )
+                    };
+                    match time.partial_cmp(&p) {
+                        Some(std::cmp::Ordering::Equal) => {
+                            return Err(format_err(
+                                path,
+                                Some(epoch_line),
+                                format!("epoch {} repeats the epoch of line {pl} (duplicate epoch)", show(&time)),
+                            ))
+                        }
+                        Some(std::cmp::Ordering::Less) => {
+                            return Err(format_err(
+                                path,
+                                Some(epoch_line),
+                                format!(
+                                    "epoch {} is before the epoch of line {pl} ({}): the epochs are not in time order",
+                                    show(&time),
+                                    show(&p)
+                                ),
+                            ))
+                        }
+                        _ => {}
+                    }
+                }
+                prev = Some((time, epoch_line));
+                epochs += 1;
+                for j in 0..n {
+                    let Some(sl) = lines.get(i) else {
+                        return Err(format_err(
+                            path,
+                            Some(lines.len()),
+                            format!("the file ends inside the epoch of line {epoch_line}: {n} satellite lines announced, {j} found (truncated file?)"),
+                        ));
+                    };
+                    let sys = sl.chars().next().unwrap_or(' ');
+                    let prn_ok = sl
+                        .get(1..3)
+                        .map(|p| p.trim().parse::<u8>().is_ok())
+                        .unwrap_or(false);
+                    if !prn_ok || !sys.is_ascii_alphabetic() {
+                        return Err(format_err(
+                            path,
+                            Some(i + 1),
+                            format!("expected satellite line {} of {n} of the epoch of line {epoch_line} (e.g. 'G05 …'), found '{}'", j + 1, sl.trim_end()),
+                        ));
+                    }
+                    let nobs = counts.get(&sys).copied().ok_or_else(|| {
+                        format_err(path, Some(i + 1), format!("satellite system '{sys}' has no 'SYS / # / OBS TYPES' line in the header"))
+                    })?;
+                    let body = sl.get(3..).unwrap_or("");
+                    let nf = body.len().div_ceil(16);
+                    if nf > nobs {
+                        return Err(format_err(
+                            path,
+                            Some(i + 1),
+                            format!("{nf} observation fields, but the header lists {nobs} types for system '{sys}'"),
+                        ));
+                    }
+                    for f in 0..nf {
+                        let a = 3 + 16 * f;
+                        let v = sl.get(a..(a + 14).min(sl.len())).unwrap_or("").trim();
+                        if !v.is_empty() && v.parse::<f64>().is_err() {
+                            return Err(format_err(
+                                path,
+                                Some(i + 1),
+                                format!("column {}: '{v}' is not a number", a + 1),
+                            ));
+                        }
+                    }
+                    i += 1;
+                }
+            }
+            "2" | "3" | "4" | "5" | "6" => {
+                if i + n > lines.len() {
+                    return Err(format_err(
+                        path,
+                        Some(lines.len()),
+                        format!("the file ends inside the event of line {epoch_line} ({n} lines announced)"),
+                    ));
+                }
+                i += n;
+            }
+            _ => {
+                return Err(format_err(
+                    path,
+                    Some(epoch_line),
+                    format!("epoch flag '{flag}' (column 32) is not 0–6"),
+                ))
+            }
+        }
+    }
+    if epochs == 0 {
+        return Err(format_err(
+            path,
+            None,
+            "no observation epochs after the header",
+        ));
+    }
+    Ok(epochs)
+}
+
+/// Continuation lines of a navigation record of system `sys` (RINEX 3.04), or None to accept
+/// 3–7 (systems not positioned, whose layout changed between 3.0x revisions).
+pub(crate) fn nav_lines(sys: char) -> Option<usize> {
+    match sys {
+        'G' | 'E' | 'C' | 'J' | 'I' => Some(7),
+        _ => None,
+    }
+}
+
+pub(crate) fn check_nav_body(path: &str, lines: &[&str], start: usize) -> Result<usize> {
+    check_ascii(path, lines, start)?;
+    let mut i = start;
+    let mut records = 0;
+    while i < lines.len() {
+        let line = lines[i];
+        if line.trim().is_empty() {
+            i += 1;
+            continue;
+        }
+        let sys = line.chars().next().unwrap_or(' ');
+        let prn_ok = line
+            .get(1..3)
+            .map(|p| p.trim().parse::<u8>().is_ok())
+            .unwrap_or(false);
+        if !sys.is_ascii_alphabetic() || !prn_ok {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!("expected the first line of a navigation record (e.g. 'G05 2024 06 24 …'), found '{}'", line.trim_end()),
+            ));
+        }
+        let first = i + 1;
+        let sv = line.get(..3).unwrap_or("").trim();
+        // Epoch: year month day hour minute second in columns 5–23.
+        let epoch_ok = {
+            let f: Vec<&str> = line.get(3..23).unwrap_or("").split_whitespace().collect();
+            f.len() == 6 && f.iter().all(|x| x.parse::<u32>().is_ok())
+        };
+        if !epoch_ok {
+            return Err(format_err(
+                path,
+                Some(first),
+                format!(
+                    "columns 5–23: '{}' is not an epoch 'year month day hour minute second' (navigation record of {sv})",
+                    line.get(3..23).unwrap_or("").trim()
+                ),
+            ));
+        }
+        let bad_field = |l: &str, from: usize| -> Option<(usize, String)> {
+            (from..80).step_by(19).find_map(|a| {
+                let v = l.get(a..(a + 19).min(l.len())).unwrap_or("");
+                (!nav_field_ok(v)).then(|| (a + 1, v.trim().to_string()))
+            })
+        };
+        if let Some((col, v)) = bad_field(line, 23) {
+            return Err(format_err(
+                path,
+                Some(first),
+                format!("column {col}: '{v}' is not a number (navigation record of {sv})"),
+            ));
+        }
+        i += 1;
+        let mut k = 0;
+        while i < lines.len() && lines[i].starts_with("    ") && !lines[i].trim().is_empty() {
+            if let Some((col, v)) = bad_field(lines[i], 4) {
+                return Err(format_err(
+                    path,
+                    Some(i + 1),
+                    format!("column {col}: '{v}' is not a number (navigation record of {sv} at line {first})"),
+                ));
+            }
+            k += 1;
+            i += 1;
+        }
+        let ok = match nav_lines(sys) {
+            Some(n) => k == n,
+            None => (3..=7).contains(&k),
+        };
+        if !ok {
+            let want = nav_lines(sys).map_or("3–7".to_string(), |n| n.to_string());
+            let at_end = i >= lines.len();
+            return Err(format_err(
+                path,
+                Some(first),
+                format!(
+                    "the record of {} has {k} continuation lines, expected {want}{}",
+                    line.get(..3).unwrap_or("").trim(),
+                    if at_end { " (truncated file?)" } else { "" }
+                ),
+            ));
+        }
+        records += 1;
+    }
+    Ok(records)
+}
