@@ -109,7 +109,8 @@ def test_mdb_is_sqrt_lambda0_sigma_for_a_diagonal_covariance(runs):
     s = runs[0]["fading"].record["subfilters"][0]
     steady = s["mdb"][1000]
     assert np.all(steady >= np.sqrt(lam) * sig * 0.999) and np.all(steady <= np.sqrt(lam) * sig * 1.05)
-    assert "λ0 = 41.040 (used; standard definition" in runs[0]["fading"].format_tables()
+    assert "λ0 = 41.040 (m = 6, Pf = 0.005, Pm = 0.005)" in runs[0]["fading"].format_tables()
+    assert "navfdi: standard λ0 above" in runs[0]["fading"].format_tables()
     assert "17.872" in runs[0]["fading"].format_tables()
 
 

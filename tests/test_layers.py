@@ -36,7 +36,7 @@ CORE_LAYERS = [
 ]
 
 PY_LAYERS = [
-    {"_core", "units", "_intervals", "_filter", "_json", "_errors"},
+    {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text"},
     {"_terrain"},
     {"scenario"},
     {"record", "demo", "gnss"},

@@ -110,7 +110,9 @@ def test_delay_falls_as_ramp_slope_grows(slope_sweep):
         d = ramp_delays(slope_sweep, det)
         assert np.all(np.diff(d) < 0), (det, d)
         g = slope_sweep[(slope_sweep.detector == det) & (slope_sweep.fault_id == "cns-ramp")]
-        assert (g.detection_probability == 1.0).all()
+        # Every run either raised an alarm inside the ramp or was already in alarm when it began
+        # (a false alarm before the fault: not counted as a detection).
+        assert (g.detection_probability + g.in_alarm_at_onset >= 1.0 - 1e-12).all(), g[["detection_probability", "in_alarm_at_onset"]]
 
 
 @pytest.mark.xfail(strict=True, reason="not reproduced: with pf = 0.1 chi-square's first alarm is mostly a false alarm, and the SPRT is diluted by 300 s of fault-free data (docs/montecarlo.md)")

@@ -53,8 +53,14 @@ def test_joint_detects_both_faults_and_clears(runs):
         assert joint[800] or joint[801], r.seed
         end = next(iv.end for iv in alarm_intervals(joint, t) if iv.start <= 849 < (iv.end or np.inf))
         assert end is not None and 850 <= end <= 855, (r.seed, end)
+        # Each fault is detected (an alarm raised inside its window), or the joint detector was
+        # already in alarm when it began (pf = 0.1: a false alarm just before; reported as such,
+        # not as a detection) and stays in alarm through it.
         rows = {m.fault_id: m for m in r.fault_table() if m.detector == "joint"}
-        assert rows["cns-ramp"].detected_at is not None and rows["cns-step"].detected_at is not None
+        for fid in ("cns-ramp", "cns-step"):
+            m = rows[fid]
+            assert m.detected_at is not None or (m.in_alarm_at_onset and m.alarm_fraction > 0.9), (r.seed, m)
+            assert (m.detected_at is None) == m.note.startswith("missed"), m
 
 
 def test_chi2_lasting_alarm_matches_papers_delay(runs):

@@ -48,6 +48,7 @@ __all__ = [
     "ncx2_cdf",
     "mdb",
     "validate_scenario",
+    "window_alarm",
     "scenario_trajectory",
     "run_scenario",
     "FederatedFilter",
@@ -524,9 +525,15 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
 def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """The one event-matching rule (used by ``run``, ``montecarlo`` and ``demo``): alarm
     intervals of ``alarm`` (times ``t`` (T,), s) and the fault each detects. ``windows``: fault
-    windows ``(start, end)`` (s) sorted by start. An interval belongs to the first fault it
-    overlaps that began after the previous fault ended. Returns ``(start_index, end_index,
-    fault_index)``, each (K,), with -1 for "never ended" and "no fault"."""
+    windows ``(start, end)`` (s) sorted by start. An interval detects a fault when its onset
+    lies in ``[start, end + 1 s]`` (the latest-starting such fault); an alarm raised before a
+    fault began detects nothing. Returns ``(start_index, end_index, fault_index)``, each (K,),
+    with -1 for "never ended" and "no fault"."""
+
+def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float) -> tuple[bool, float]:
+    """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,):
+    whether the alarm was already raised when the window began (before the fault: reported,
+    not a detection), and the fraction of the window's epochs in alarm (NaN when none)."""
 
 def validate_scenario(spec_json: str) -> None:
     """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises

@@ -59,10 +59,10 @@ def alarm_intervals(alarm: ArrayLike, t: ArrayLike | None = None) -> list[AlarmI
 def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, float]]) -> list[tuple[AlarmInterval, int | None]]:
     """Alarm intervals with the index (into ``windows``, sorted by start) of the fault each
     detects, or None: the one matching rule of ``navfdi run``, ``montecarlo`` and ``demo``,
-    computed in Rust (``navfdi._core.match_alarms``). An interval belongs to the first fault,
-    in start order, whose window ``[start, end]`` it overlaps and that began after the
-    previous fault's window ended (an alarm still raised from an earlier fault is not a new
-    detection)."""
+    computed in Rust (``navfdi._core.match_alarms``). An interval detects a fault when its
+    onset lies inside the fault's window or up to :data:`GRACE` s after it (the latest-starting
+    such fault); an alarm raised before a fault began and still running detects nothing (see
+    :func:`window_alarm`)."""
     from navfdi import _core
 
     a = np.asarray(alarm, dtype=bool)
@@ -73,3 +73,19 @@ def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, 
         for s, e, f in zip(starts, ends, faults)
     ]
 
+
+
+#: Seconds after a fault's end within which an alarm onset still detects it (Rust
+#: ``navfdi_core::metrics::GRACE``).
+GRACE = 1.0
+
+
+def window_alarm(alarm: ArrayLike, t: ArrayLike, start: float, end: float) -> tuple[bool, float]:
+    """``(in_alarm_at_onset, alarm_fraction)`` of a fault window ``[start, end)`` (s): whether
+    the alarm was already raised before the fault began and still on at its first epoch (not a
+    detection), and the share of the window's epochs in alarm (NaN when no epoch lies in it).
+    Computed in Rust (``navfdi._core.window_alarm``)."""
+    from navfdi import _core
+
+    a = np.asarray(alarm, dtype=bool)
+    return _core.window_alarm(np.asarray(t, dtype=float), a.tolist(), float(start), float(end))

@@ -98,7 +98,10 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    sub.add_parser("scenarios", help="list the bundled scenarios")
+    sc = sub.add_parser("scenarios", help="list the bundled scenarios, show or export one as TOML")
+    show = sc.add_mutually_exclusive_group()
+    show.add_argument("--show", metavar="NAME", default=None, help="print a bundled scenario's TOML")
+    show.add_argument("--export", nargs=2, metavar=("NAME", "PATH"), default=None, help="write a bundled scenario's TOML to PATH (to edit and run with `navfdi run PATH`)")
     mc = sub.add_parser("montecarlo", help="Monte-Carlo campaign: runs × sweep points, run in parallel in Rust")
     mc.add_argument("scenario", help="bundled scenario name or a TOML file")
     mc.add_argument("--runs", type=_positive, required=True, help="runs per sweep point")
@@ -130,6 +133,11 @@ def main(argv: list[str] | None = None) -> int:
     _one_line_warnings()
     try:
         return _dispatch(args)
+    except BrokenPipeError:
+        # The reader went away (e.g. `navfdi run … | head`): stop quietly, like other tools.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
     except KeyboardInterrupt:
         print("navfdi: interrupted", file=sys.stderr)
         return 130
@@ -161,13 +169,29 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         print(report(seed=args.seed, pf=args.pf, pm=args.pm))
     elif args.command == "scenarios":
-        from navfdi.scenario import bundled_scenarios, load_scenario
+        from navfdi.scenario import bundled_scenarios, bundled_toml, load_scenario
 
-        names = bundled_scenarios()
-        width = max((len(n) for n in names), default=0)
-        for name in names:
-            desc = load_scenario(name).raw.get("description", "")
-            print(f"{name:<{width}}  {desc}")
+        if args.show:
+            print(bundled_toml(args.show), end="")
+        elif args.export:
+            name, path = args.export
+            text = bundled_toml(name)
+            target = Path(path)
+            if target.is_dir():
+                target = target / f"{name}.toml"
+            if target.exists():
+                raise ValueError(f"--export: {target} exists; remove it or choose another path")
+            target.write_text(text, encoding="utf-8")
+            print(f"wrote {target} (run it with: navfdi run {target})")
+        else:
+            from navfdi._text import fit
+
+            names = bundled_scenarios()
+            width = max((len(n) for n in names), default=0)
+            for name in names:
+                desc = load_scenario(name).raw.get("description", "")
+                print(fit(f"{name:<{width}}  {desc}"))
+            print("\nnavfdi scenarios --show NAME prints one; --export NAME PATH writes it to edit.")
     elif args.command == "run":
         from navfdi.runs import run_scenario
 
@@ -176,12 +200,21 @@ def _dispatch(args: argparse.Namespace) -> int:
         print(result.format_tables(), end="")
         if args.out:
             paths = result.write(args.out, figures=not args.no_figures)
-            print(f"\nwrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
+            print("\n" + _wrote(paths, args.out))
+        else:
+            print(f"\nnothing written: add --out DIR for events.csv, timeseries.parquet, errors.csv, summary.json and figures")
     elif args.command == "montecarlo":
         return _montecarlo(args)
     elif args.command == "gnss":
         return _gnss(args)
     return 0
+
+
+def _wrote(paths: list[Path], out: str) -> str:
+    """``wrote N files to OUT/: a, b, …`` wrapped at 100 characters."""
+    from navfdi._text import fit
+
+    return fit(f"wrote {len(paths)} files to {out}/: " + ", ".join(p.name for p in paths))
 
 
 def _gnss(args: argparse.Namespace) -> int:
@@ -215,7 +248,9 @@ def _gnss(args: argparse.Namespace) -> int:
     print(sol.format_summary(), end="")
     if args.out:
         paths = sol.write(args.out, figures=not args.no_figures)
-        print(f"wrote {len(paths)} files to {args.out}/: " + ", ".join(p.name for p in paths))
+        print(_wrote(paths, args.out))
+    else:
+        print("nothing written: add --out DIR for solution.csv, satellites.parquet, summary.json and figures")
     return 0
 
 
@@ -253,7 +288,9 @@ def _montecarlo(args: argparse.Namespace) -> int:
             path = Path(args.out) / f"series_p{p}_r{r}.parquet"
             pd.DataFrame(cols).to_parquet(path, index=False)
             paths.append(path)
-        print(f"\nwrote {len(paths)} files to {args.out}/" + (" (partial campaign)" if camp.partial else ""))
+        print("\n" + _wrote(paths, args.out) + (" (partial campaign)" if camp.partial else ""))
+    else:
+        print("\nnothing written: add --out DIR for runs.parquet, summary.csv, campaign.json and plots")
     if camp.partial:
         print("navfdi: interrupted; the finished runs are kept (marked partial)", file=sys.stderr)
         return 130

@@ -365,7 +365,9 @@ class GnssSolution:
             lines.append(
                 f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, AIME {f['first_aime_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
             )
-        return "\n".join(lines) + "\n"
+        from navfdi._text import fit
+
+        return fit("\n".join(lines)) + "\n"
 
     def write(self, out: str | os.PathLike[str], figures: bool = True) -> list[Path]:
         """Write ``solution.csv``, ``satellites.parquet``, ``summary.json`` and (``figures``)

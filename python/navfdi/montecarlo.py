@@ -43,6 +43,8 @@ RUN_COLUMNS = [
     "detected",
     "delay",
     "clear_delay",
+    "at_onset",
+    "alarm_fraction",
     "false_alarm_epochs",
     "outside_epochs",
     "wrong_isolations",
@@ -74,6 +76,8 @@ SUMMARY_FIGURES = [
     "detection_probability",
     "detection_ci_low",
     "detection_ci_high",
+    "in_alarm_at_onset",
+    "alarm_fraction",
     "delay_mean",
     "delay_median",
     "delay_p95",
@@ -205,7 +209,10 @@ class Campaign:
         """One row per sweep point × sub-filter × detector × fault (pandas DataFrame).
 
         Columns: swept fields, ``subfilter, detector, fault_id, pf, runs,
-        detection_probability, detection_ci_low, detection_ci_high`` (Wilson 95 %),
+        detection_probability, detection_ci_low, detection_ci_high`` (Wilson 95 %; a detection is
+        an alarm onset inside the fault window or up to 1 s after it), ``in_alarm_at_onset``
+        (share of runs already in alarm when the fault began: not detections),
+        ``alarm_fraction`` (mean share of the fault's epochs in alarm),
         ``delay_mean, delay_median, delay_p95`` (s, over detected runs), ``clear_delay_mean``,
         ``false_alarm_rate, false_alarm_ci_low, false_alarm_ci_high`` (per epoch outside the
         faults; Wilson 95 % treating epochs as independent trials, which understates the
@@ -240,7 +247,7 @@ class Campaign:
             if skipped:
                 # Never reached a measurement: no detection figure (it would count alarms that
                 # have nothing to do with the fault).
-                rec.update({k: math.nan for k in ("detection_probability", "detection_ci_low", "detection_ci_high", "delay_mean", "delay_median", "delay_p95", "clear_delay_mean", "false_alarm_rate", "false_alarm_ci_low", "false_alarm_ci_high", "wrong_isolations")})
+                rec.update({k: math.nan for k in ("detection_probability", "detection_ci_low", "detection_ci_high", "in_alarm_at_onset", "alarm_fraction", "delay_mean", "delay_median", "delay_p95", "clear_delay_mean", "false_alarm_rate", "false_alarm_ci_low", "false_alarm_ci_high", "wrong_isolations")})
             elif is_fault:
                 det = int(g["detected"].sum())
                 lo, hi = wilson(np.array([det]), np.array([n]))
@@ -249,6 +256,8 @@ class Campaign:
                     detection_probability=det / n,
                     detection_ci_low=float(lo[0]),
                     detection_ci_high=float(hi[0]),
+                    in_alarm_at_onset=float(g["at_onset"].mean()),
+                    alarm_fraction=float(np.nanmean(g["alarm_fraction"])) if g["alarm_fraction"].notna().any() else math.nan,
                     delay_mean=float(d.mean()) if d.size else math.nan,
                     delay_median=float(np.median(d)) if d.size else math.nan,
                     delay_p95=float(np.percentile(d, 95)) if d.size else math.nan,
@@ -265,6 +274,8 @@ class Campaign:
                     detection_probability=math.nan,
                     detection_ci_low=math.nan,
                     detection_ci_high=math.nan,
+                    in_alarm_at_onset=math.nan,
+                    alarm_fraction=math.nan,
                     delay_mean=math.nan,
                     delay_median=math.nan,
                     delay_p95=math.nan,
@@ -303,7 +314,12 @@ class Campaign:
         return out.drop(columns=["point"])
 
     def format_table(self) -> str:
-        """The summary as printed by ``navfdi montecarlo``."""
+        """The summary as printed by ``navfdi montecarlo``: one block per sweep point (and
+        variant) with its navigation error, then one row per channel × detector × fault, at
+        most 100 characters wide. A detection is an alarm raised inside the fault window (or
+        one epoch after it); ``at onset`` is the share of runs already in alarm when the fault
+        began (not detections), ``in alarm`` the mean share of the fault's epochs in alarm.
+        Channels with identical outside-fault rows (ultra-tight satellites) are pooled."""
         s = self.summary()
         per_point = self.runs_per_point()
         if len(set(per_point)) == 1:
@@ -314,37 +330,60 @@ class Campaign:
         if self.partial:
             head += "  [PARTIAL: interrupted]"
         lines = [head, ""]
-        cols = [*self.sweep_columns, "subfilter", "detector", "fault_id", "pf", "runs"]
-        width = {c: 24 if c in self.sweep_columns else max(10, 2 + max((len(str(v)) for v in s[c]), default=0)) for c in cols}
-        hdr = "".join(f"{c[-22:]:>{width[c]}}" for c in cols)
-        hdr += f"{'P(det) [95% CI]':>22}{'delay mean/med/p95 [s]':>26}{'false alarms/epoch [95% CI]':>34}{'att RMS [arcsec]':>18}"
-        lines.append(hdr)
         arcsec = math.degrees(1) * 3600
-        for _, r in s.iterrows():
-            line = "".join(f"{str(r[c]):>{width[c]}}" for c in cols)
-            if r["runs"] == 0:
-                lines.append(line + "   (no finished runs)")
-                continue
-            if r["fault_id"] != "none":
-                line += f"{r['detection_probability']:>8.3f} [{r['detection_ci_low']:.3f},{r['detection_ci_high']:.3f}]"
-                line += f"{r['delay_mean']:>10.1f}/{r['delay_median']:.1f}/{r['delay_p95']:.1f}".rjust(26)
-                line += " " * 34
-            else:
-                line += " " * 22 + " " * 26
-                line += f"{r['false_alarm_rate']:>14.5f} [{r['false_alarm_ci_low']:.5f},{r['false_alarm_ci_high']:.5f}]"
-            line += f"{r['error_rms'] * arcsec:>18.2f}"
-            lines.append(line)
-        fde = s[s["detection_rate"].notna() | s["false_exclusion_rate"].notna()] if len(s) else s
-        if len(fde):
-            pct = lambda v: "-" if v != v else f"{100 * v:.2f} %"  # noqa: E731
-            lines += ["", "satellite FDE (pooled over runs):"]
-            keys = [*self.sweep_columns, "fault_id"]
-            lines.append("".join(f"{c[-22:]:>24}" if c in self.sweep_columns else f"{c:>10}" for c in keys) + f"{'detection':>12}{'identification':>16}{'after-fault alarms':>20}{'false excl./epoch':>19}")
-            for _, r in fde.iterrows():
-                line = "".join(f"{str(r[c]):>24}" if c in self.sweep_columns else f"{str(r[c]):>10}" for c in keys)
-                fe = r["false_exclusion_rate"]
-                line += f"{pct(r['detection_rate']):>12}{pct(r['identification_rate']):>16}{pct(r['after_fault_alarm_rate']):>20}{'-' if fe != fe else format(fe, '.4f'):>19}"
-                lines.append(line)
+        sat_of = {f["id"]: f.get("satellite") or "" for f in self.scenario.faults()}
+        cut = lambda v, n: v if len(v) <= n else v[: n - 1] + "…"  # noqa: E731
+        f3 = lambda v: "-" if v != v else f"{v:.2f}"  # noqa: E731
+        pct = lambda v: "-" if v != v else f"{100 * v:.0f} %"  # noqa: E731
+        keys = self.sweep_columns
+        groups = s.groupby(keys, sort=False, dropna=False) if keys else [((), s)]
+        for key, g in groups:
+            key = key if isinstance(key, tuple) else (key,)
+            if keys:
+                lines.append("· " + ", ".join(f"{k} = {v}" for k, v in zip(keys, key)))
+            r0 = g.iloc[0]
+            err = f"  error RMS: attitude {r0['error_rms'] * arcsec:.2f} arcsec, position {r0['position_error_rms']:.3f} m, latitude {r0['latitude_error_rms']:.3f} m"
+            if r0["fused_alt_rms"] == r0["fused_alt_rms"]:
+                err += f", fused altitude {r0['fused_alt_rms']:.3f} m"
+            lines.append(err)
+            lines.append(f"  {'channel':<11} {'detector':<8} {'fault':<10} {'runs':>5} {'P(det) [95% CI]':>17} {'onset':>6} {'alarm':>6} {'delay med/p95 [s]':>18}")
+            faults = g[g["fault_id"] != "none"]
+            outside = g[g["fault_id"] == "none"]
+            for _, r in faults.iterrows():
+                row = f"  {cut(str(r['subfilter']), 11):<11} {cut(str(r['detector']), 8):<8} {cut(str(r['fault_id']), 10):<10} {int(r['runs']):>5}"
+                if r["runs"] == 0:
+                    lines.append(row + "  (no finished runs)")
+                    continue
+                if r["detection_probability"] != r["detection_probability"]:
+                    lines.append(row + "  never applied (no measurement in its window)")
+                    continue
+                ci = f"{r['detection_probability']:.2f} [{r['detection_ci_low']:.2f},{r['detection_ci_high']:.2f}]"
+                delay = f"{f3(r['delay_median'])}/{f3(r['delay_p95'])}"
+                lines.append(row + f" {ci:>17} {pct(r['in_alarm_at_onset']):>6} {pct(r['alarm_fraction']):>6} {delay:>18}")
+            if len(outside):
+                by_det = outside.groupby("detector", sort=False)
+                for det, o in by_det:
+                    pooled = len(o) > 3
+                    rows = [(f"{len(o)} channels", o)] if pooled else [(str(r["subfilter"]), o.loc[[i]]) for i, r in o.iterrows()]
+                    for name, oo in rows:
+                        fa = float((oo["false_alarm_rate"] * oo["runs"]).sum() / max(oo["runs"].sum(), 1)) if pooled else float(oo["false_alarm_rate"].iloc[0])
+                        ci = "" if pooled else f" [{oo['false_alarm_ci_low'].iloc[0]:.5f},{oo['false_alarm_ci_high'].iloc[0]:.5f}]"
+                        lines.append(f"  {cut(name, 11):<11} {cut(str(det), 8):<8} {'none':<10} {int(oo['runs'].iloc[0]):>5}  false alarms/epoch {fa:.5f}{ci}")
+            fde = g[g["detection_rate"].notna() | g["false_exclusion_rate"].notna()]
+            if len(fde):
+                lines.append(f"  satellite FDE (pooled): {'fault':<10} {'sat':<4} {'detection':>9} {'identif.':>9} {'after':>7} {'false excl./epoch':>18}")
+                seen = set()
+                for _, r in fde.iterrows():
+                    fe = r["false_exclusion_rate"]
+                    vals = (r["fault_id"], sat_of.get(r["fault_id"], ""), pct(r["detection_rate"]), pct(r["identification_rate"]), pct(r["after_fault_alarm_rate"]), "-" if fe != fe else f"{fe:.4f}")
+                    if vals in seen:
+                        continue
+                    seen.add(vals)
+                    lines.append(f"  {'':<23} {cut(vals[0], 10):<10} {vals[1]:<4} {vals[2]:>9} {vals[3]:>9} {vals[4]:>7} {vals[5]:>18}")
+            lines.append("")
+        lines.append("P(det): share of runs with an alarm raised inside the fault window (or 1 s after);")
+        lines.append("onset: share already in alarm when the fault began (not detections); alarm: mean share")
+        lines.append("of the fault's epochs in alarm. summary.csv has every figure with its interval.")
         return "\n".join(lines) + "\n"
 
     def campaign_info(self) -> dict[str, Any]:
@@ -397,7 +436,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             "fault_id": np.tile(fid, n),
             "pf": np.tile(pf.astype(float), n),
         }
-        for k in ("detected", "delay", "clear_delay", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
+        for k in ("detected", "delay", "clear_delay", "at_onset", "alarm_fraction", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
             cols[k] = ch[k].reshape(-1)
         for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max", "fused_alt_rms", "fused_alt_max"):
             cols[k] = np.repeat(ch[k], c)

@@ -24,9 +24,17 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core, _json
-from navfdi._intervals import AlarmInterval, alarm_intervals, match_events
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, window_alarm
+from navfdi._text import fit
 from navfdi.record import ERROR_COLUMNS, RunRecord
 from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
+
+#: What the columns of the per-fault tables mean (printed once after them).
+FAULT_TABLE_LEGEND = [
+    "detected: the alarm raised inside the fault window (or 1 s after); onset: already in alarm",
+    "when the fault began (a false or earlier alarm, not a detection); in alarm: share of the",
+    "fault's epochs in alarm; lasting from: start of the alarm still raised at its last epoch.",
+]
 
 #: Note of a fault that never reached a measurement (left out of the detection figures).
 NEVER_APPLIED = "never applied: no measurement of its sensor (or satellite) in its window"
@@ -54,8 +62,16 @@ class FaultMatch:
         when the detector's alarm became lasting (with a large ``pf`` the first alarm is often
         a false alarm). None when not in alarm then.
     note : str
-        E.g. ``"in alarm since 326 s (earlier fault)"`` when a detector never raised a new
-        alarm because it was still in alarm.
+        E.g. ``"missed: in alarm since 326 s (before the fault)"`` when a detector raised no
+        new alarm because it was already in alarm.
+    in_alarm_at_onset : bool
+        The detector was already in alarm when the fault began (an alarm raised before it:
+        not a detection).
+    alarm_fraction : float
+        Share of the fault's epochs in alarm (NaN when no epoch lies in the window).
+
+    A detection is an alarm onset inside the fault window or up to 1 s after its end
+    (:data:`navfdi._intervals.GRACE`), the rule of ``run``, ``montecarlo`` and ``demo``.
     """
 
     fault_id: str
@@ -68,6 +84,8 @@ class FaultMatch:
     delay: float | None
     lasting_from: float | None
     note: str
+    in_alarm_at_onset: bool = False
+    alarm_fraction: float = float("nan")
 
 
 class ScenarioRun(RunRecord):
@@ -123,9 +141,9 @@ class ScenarioRun(RunRecord):
         core = self.scenario.core
         if core.get("architecture") == "ultra_tight":
             u = core["ultra_tight"]
-            how = f"{u['method']} AIME, {'excluding' if u['exclude'] else 'reporting only'}; {int(n.min())}–{int(n.max())} tracked channels in view"
+            how = f"{u['method']} AIME, {'excluding' if u['exclude'] else 'reporting only'}; {_span(n)} tracked channels in view"
         else:
-            how = f"{core['tight']['fde']}; {int(n.min())}–{int(n.max())} satellites in view"
+            how = f"{core['tight']['fde']}; {_span(n)} satellites in view"
         lines = [f"satellite FDE ({how}):"]
         lines.append(f"  {'fault':<10} {'sat':<5} {'detection':>10} {'identification':>15} {'after-fault alarms':>19} {'false excl./epoch':>18}")
         pct = lambda v: "-" if v != v else f"{100 * v:.2f} %"  # noqa: E731
@@ -214,12 +232,11 @@ class ScenarioRun(RunRecord):
                             note = "not cleared by the end of the run"
                     else:
                         det = clr = delay = None
-                        k = int(np.searchsorted(self.t, f["start"]))
-                        if k < self.t.size and d["alarm"][k]:
-                            since = [iv.start for iv in alarm_intervals(d["alarm"], self.t) if iv.start <= f["start"] and (iv.end is None or iv.end > f["start"])]
-                            note = f"missed: in alarm since {since[0]:g} s (earlier fault)" if since else "missed"
-                        else:
-                            note = "missed"
+                        note = "missed"
+                    at_onset, fraction = window_alarm(d["alarm"], self.t, f["start"], f["end"])
+                    if at_onset and not ivs:
+                        since = [iv.start for iv in alarm_intervals(d["alarm"], self.t) if iv.start < f["start"] and (iv.end is None or iv.end > f["start"])]
+                        note = f"missed: in alarm since {since[0]:g} s (before the fault)" if since else "missed: in alarm before the fault"
                     lasting = None
                     last = self.t[self.t < f["end"]]
                     if last.size:
@@ -227,11 +244,16 @@ class ScenarioRun(RunRecord):
                         for iv in alarm_intervals(d["alarm"], self.t):
                             if iv.start <= tl and (iv.end is None or iv.end > tl):
                                 lasting = iv.start
-                    out.append(FaultMatch(f["id"], s["sensor"], d["name"], f["start"], f["end"], det, clr, delay, lasting, note))
+                    out.append(FaultMatch(f["id"], s["sensor"], d["name"], f["start"], f["end"], det, clr, delay, lasting, note, at_onset, fraction))
         return out
 
-    def format_tables(self) -> str:
-        """The per-fault tables as printed by ``navfdi run``."""
+    def format_tables(self, legend: bool = True) -> str:
+        """The per-fault tables as printed by ``navfdi run`` (at most 100 characters wide): per
+        fault and detector when the alarm was raised (``detected``: inside the window or 1 s
+        after), the delay, when it cleared, whether the detector was already in alarm when
+        the fault began (``onset``; not a detection), the share of the fault's epochs in alarm,
+        and when the alarm still raised at the window's end began (``lasting``); notes on
+        their own lines. ``legend``: end with the columns' meaning (once per output)."""
         fmt = lambda v: "-" if v is None else f"{v:g}"  # noqa: E731
         lines = []
         by_fault: dict[str, list[FaultMatch]] = {}
@@ -240,15 +262,17 @@ class ScenarioRun(RunRecord):
         for fid, rows in by_fault.items():
             r0 = rows[0]
             lines.append(f"fault {fid} on {r0.subfilter}: {r0.fault_start:g}–{r0.fault_end:g} s")
-            lines.append(f"  {'detector':<10} {'start [s]':>9} {'detected at [s]':>15} {'cleared at [s]':>14} {'delay [s]':>9} {'lasting from [s]':>16}  note")
+            lines.append(f"  {'detector':<10} {'detected [s]':>12} {'delay [s]':>9} {'cleared [s]':>11} {'onset':>6} {'in alarm':>9} {'lasting from [s]':>16}")
             for m in rows:
+                frac = "-" if m.alarm_fraction != m.alarm_fraction else f"{100 * m.alarm_fraction:.0f} %"
                 lines.append(
-                    f"  {m.detector:<10} {m.fault_start:>9g} {fmt(m.detected_at):>15} {fmt(m.cleared_at):>14} {fmt(m.delay):>9} {fmt(m.lasting_from):>16}  {m.note}"
+                    f"  {m.detector:<10} {fmt(m.detected_at):>12} {fmt(m.delay):>9} {fmt(m.cleared_at):>11} {'yes' if m.in_alarm_at_onset else 'no':>6} {frac:>9} {fmt(m.lasting_from):>16}"
                 )
+                if m.note:
+                    lines.append(f"    {m.detector}: {m.note}")
             lines.append("")
-        lines.append("detected at: first alarm interval overlapping the window (with a large pf often a false alarm);")
-        lines.append("lasting from: start of the alarm still raised at the window's last epoch.")
-        lines.append("")
+        if legend and by_fault:
+            lines += FAULT_TABLE_LEGEND + [""]
         note = self.mdb_note()
         if note:
             lines.append(note)
@@ -258,7 +282,7 @@ class ScenarioRun(RunRecord):
             lines += sat_lines + [""]
         if self.baseline is not None:
             lines.append(self._error_summary())
-        return "\n".join(lines).rstrip() + "\n"
+        return fit("\n".join(lines).rstrip() + "\n")
 
     def attitude_rms(self, t0: float, t1: float, isolation: bool = True) -> float:
         """RMS of the master attitude error (all three axes) over ``[t0, t1)`` in rad."""
@@ -451,8 +475,15 @@ class VariantRuns:
     def format_tables(self) -> str:
         """Per-variant fault tables and the error comparison, as printed by ``navfdi run``."""
         parts = []
+        seen_notes: set[str] = set()
         for name, r in self.runs.items():
-            parts.append(f"== variant {name} ==\n{r.format_tables()}")
+            text = r.format_tables(legend=False)
+            # Lines identical in every variant (the MDB's λ0 remark) are printed once.
+            kept = [ln for ln in text.split("\n") if not (ln.startswith("MDB note") and ln in seen_notes)]
+            seen_notes.update(ln for ln in kept if ln.startswith("MDB note"))
+            parts.append(f"== variant {name} ==\n" + "\n".join(kept))
+        if any(r.fault_table() for r in self.runs.values()):
+            parts.append("\n".join(FAULT_TABLE_LEGEND) + "\n")
         err = self.errors()
         lines = ["navigation error per variant (whole run): RMS / max"]
         lines.append(f"  {'variant':<14} {'lat [m]':>16} {'east [m]':>16} {'up [m]':>16} {'vel N [m/s]':>16}")
@@ -472,7 +503,7 @@ class VariantRuns:
             for _, row in err.iterrows():
                 lines.append(f"  {row['variant']:<14} {row['fused_alt_rms']:>7.3f} / {row['fused_alt_max']:<6.2f} {row['fused_alt_predict_only']:>6.1%}")
         parts.append("\n".join(lines) + "\n")
-        return "\n".join(parts)
+        return fit("\n".join(parts))
 
     def summary(self) -> dict[str, Any]:
         """Scenario, seed, versions and per-variant fault tables and errors."""
@@ -548,6 +579,12 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
     _warn_never_applied(sc, recs[0])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
+
+
+def _span(n: np.ndarray) -> str:
+    """``"8"`` or ``"7–9"``: the range of a count over the run."""
+    lo, hi = int(n.min()), int(n.max())
+    return str(lo) if lo == hi else f"{lo}–{hi}"
 
 
 def _warn_never_applied(sc: Scenario, record: dict[str, Any]) -> None:

@@ -803,6 +803,15 @@ def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
     return Scenario(raw=copy.deepcopy(dict(raw)), core=core, source=source, _json=text)
 
 
+def bundled_toml(name: str) -> str:
+    """The TOML text of the bundled scenario ``name`` (to read, or to copy and edit). Raises
+    ``ValueError`` naming the bundled scenarios for an unknown name."""
+    names = bundled_scenarios()
+    if name not in names:
+        raise ValueError(f"{name!r} is not a bundled scenario (bundled: {', '.join(names)})")
+    return (resources.files("navfdi") / "scenarios" / f"{name}.toml").read_text(encoding="utf-8")
+
+
 def bundled_scenarios() -> list[str]:
     """Names of the scenarios shipped with navfdi."""
     root = resources.files("navfdi") / "scenarios"

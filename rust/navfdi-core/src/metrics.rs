@@ -1,12 +1,14 @@
-//! The one event-matching engine: alarm intervals and the fault each belongs to. `navfdi run`
+//! The one event-matching engine: alarm intervals and the fault each detects. `navfdi run`
 //! (events and per-fault tables), `navfdi montecarlo` (per-run metrics, [`crate::montecarlo`])
 //! and `navfdi demo` all use it.
 //!
-//! Rule: an alarm interval `[start, end)` (end = first epoch without alarm, or never) belongs
-//! to the first fault, in start order, whose window `[f_start, f_end]` it overlaps
-//! (`start ≤ f_end` and `end > f_start`) and that began at or after the previous fault's window
-//! ended (`start ≥ previous f_end`): an alarm still raised from an earlier fault is not a new
-//! detection. Delay = `max(start − f_start, 0)`.
+//! Rule: a fault with window `[f_start, f_end)` is **detected** by an alarm interval whose
+//! **onset** (its first epoch) lies in `[f_start, f_end + GRACE]` ([`GRACE`] seconds after the
+//! fault's end still count: a detector's latency). When several faults' windows hold the
+//! onset, it belongs to the one that started last (the most recent change). An alarm raised
+//! before the fault began and still running at its start is *not* a detection: it is
+//! reported separately ("in alarm at onset"), and the fraction of the fault's epochs spent
+//! in alarm is reported beside the detection. Delay = onset − `f_start` (never negative).
 
 /// One alarm interval: epoch indices `[start, end)`; `end = None` if still in alarm at the
 /// last epoch.
@@ -32,18 +34,42 @@ pub fn intervals(alarm: &[bool]) -> Vec<Interval> {
     out
 }
 
-/// The fault (index into `windows`, which must be sorted by start) that the interval from time
-/// `start` to time `end` (`None`: never ended) detects, by the module's rule.
+/// Seconds after a fault's end within which an alarm onset still detects it: one epoch at
+/// 1 Hz, the latency of a detector that tests the fault's last measurement. Later onsets are
+/// the clearing transient, not detections (and fall in the [`crate::montecarlo::SETTLE`]
+/// seconds left out of the false-alarm count).
+pub const GRACE: f64 = 1.0;
+
+/// The fault (index into `windows`, `(start, end)` in s) that an alarm interval with onset at
+/// time `start` detects, by the module's rule: the latest-starting window with
+/// `w_start ≤ start ≤ w_end + GRACE`. `end` (the interval's end, None: never) is not used by
+/// the rule; it is kept for callers that pass whole intervals.
 pub fn match_interval(start: f64, end: Option<f64>, windows: &[(f64, f64)]) -> Option<usize> {
-    let end = end.unwrap_or(f64::INFINITY);
-    let mut prev_end = f64::NEG_INFINITY;
-    for (i, &(fs, fe)) in windows.iter().enumerate() {
-        if start <= fe && end > fs && start >= prev_end {
-            return Some(i);
+    let _ = end;
+    windows
+        .iter()
+        .enumerate()
+        .filter(|(_, &(ws, we))| ws <= start && start <= we + GRACE)
+        .max_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(b.0.cmp(&a.0)))
+        .map(|(i, _)| i)
+}
+
+/// Per fault window and alarm sequence: whether the detector was already in alarm at the
+/// fault's first epoch (an alarm raised before the fault began), and the fraction of the
+/// window's epochs in alarm (NaN when no epoch lies in the window).
+pub fn window_alarm(t: &[f64], alarm: &[bool], window: (f64, f64)) -> (bool, f64) {
+    let (ws, we) = window;
+    let first = t.iter().position(|&tk| tk >= ws && tk < we);
+    // In alarm at its first epoch with the alarm raised at an earlier epoch (before the fault).
+    let at_onset = first.is_some_and(|k| alarm[k] && k > 0 && alarm[k - 1]);
+    let (mut n, mut a) = (0u32, 0u32);
+    for (k, &tk) in t.iter().enumerate() {
+        if tk >= ws && tk < we {
+            n += 1;
+            a += u32::from(alarm[k]);
         }
-        prev_end = fe;
     }
-    None
+    (at_onset, if n > 0 { a as f64 / n as f64 } else { f64::NAN })
 }
 
 /// Every alarm interval of `alarm` (times `t`) with the fault it detects.
@@ -211,13 +237,35 @@ mod tests {
     #[test]
     fn matching_rule() {
         let w = [(300.0, 500.0), (800.0, 850.0)];
-        assert_eq!(match_interval(310.0, Some(520.0), &w), Some(0));
-        assert_eq!(match_interval(290.0, Some(301.0), &w), Some(0)); // false alarm running into it
-        assert_eq!(match_interval(290.0, Some(300.0), &w), None); // ended as the fault began
-        assert_eq!(match_interval(310.0, None, &w), Some(0)); // never cleared: only the first
-        assert_eq!(match_interval(600.0, Some(810.0), &w), Some(1));
-        assert_eq!(match_interval(499.0, Some(900.0), &w), Some(0)); // not a new detection of 1
-        assert_eq!(match_interval(503.0, Some(505.0), &w), None); // after the fault
+        assert_eq!(match_interval(310.0, Some(520.0), &w), Some(0)); // onset inside
+        assert_eq!(match_interval(300.0, None, &w), Some(0)); // onset at the first epoch
+                                                              // An alarm raised before the fault and still running detects nothing.
+        assert_eq!(match_interval(290.0, Some(301.0), &w), None);
+        assert_eq!(match_interval(290.0, None, &w), None);
+        assert_eq!(match_interval(600.0, Some(810.0), &w), None); // raised between faults
+        assert_eq!(match_interval(805.0, Some(810.0), &w), Some(1));
+        assert_eq!(match_interval(501.0, Some(520.0), &w), Some(0)); // within the 1 s grace
+        assert_eq!(match_interval(502.0, Some(520.0), &w), None); // after the grace
         assert_eq!(match_interval(100.0, Some(120.0), &w), None);
+        // Overlapping windows: the latest-starting fault that holds the onset.
+        let w = [(100.0, 200.0), (150.0, 160.0)];
+        assert_eq!(match_interval(155.0, None, &w), Some(1));
+        assert_eq!(match_interval(160.5, None, &w), Some(1)); // in 1's grace, 0's window
+        assert_eq!(match_interval(175.0, None, &w), Some(0));
+    }
+
+    #[test]
+    fn alarm_at_onset_and_fraction() {
+        let t: Vec<f64> = (0..10).map(|k| k as f64).collect();
+        let a = [
+            false, false, true, true, true, false, false, true, false, false,
+        ];
+        // Window [3, 7): in alarm at 3 since 2 (before the fault); 2 of 4 epochs in alarm.
+        assert_eq!(window_alarm(&t, &a, (3.0, 7.0)), (true, 0.5));
+        // Window [2, 4): the alarm begins with it: a detection, not "at onset".
+        assert_eq!(window_alarm(&t, &a, (2.0, 4.0)), (false, 1.0));
+        assert_eq!(window_alarm(&t, &a, (5.0, 7.0)), (false, 0.0));
+        let (at, f) = window_alarm(&t, &a, (20.0, 30.0));
+        assert!(!at && f.is_nan());
     }
 }

@@ -8,10 +8,11 @@
 //! Metrics per run and *cell* (sub-filter × detector × fault, plus one cell per sub-filter ×
 //! detector for the epochs outside every fault, fault id `none`):
 //!
-//! * fault cells: `detected` (an alarm interval overlapping the window, begun after the previous
-//!   fault on the same sensor ended), `delay` = its start − fault start (0 if a false alarm was
-//!   already raised at the start), `clear_delay` = end of the last such interval − fault end
-//!   (NaN if never cleared);
+//! * fault cells: `detected` (an alarm onset inside the window or up to
+//!   [`crate::metrics::GRACE`] s after it, [`crate::metrics`]'s rule), `delay` = onset − fault
+//!   start, `clear_delay` = end of the last such interval − fault end (NaN if never cleared),
+//!   `at_onset` (already in alarm when the fault began: reported, not a detection) and
+//!   `alarm_fraction` (share of the fault's epochs in alarm);
 //! * `none` cells: `false_alarm_epochs` and `outside_epochs`: epochs with an alarm, and all
 //!   epochs, outside every fault window of the sub-filter's sensor and outside the
 //!   [`SETTLE`] seconds after each fault ends (the clearing transient);
@@ -23,7 +24,7 @@
 use crate::arch::run_architecture;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::metrics::{intervals, match_interval, Interval};
+use crate::metrics::{intervals, match_interval, window_alarm, Interval};
 use crate::record::RunRecord;
 use crate::sim::noise::simulate;
 use crate::sim::prepare::Prepared;
@@ -59,6 +60,11 @@ pub struct CellMetrics {
     pub outside_epochs: u32,
     /// Isolation intervals overlapping no fault (`none` cell of the isolating detector).
     pub wrong_isolations: u32,
+    /// Fault cells: the detector was already in alarm at the fault's first epoch (raised
+    /// before the fault began; not a detection).
+    pub at_onset: bool,
+    /// Fault cells: fraction of the fault's epochs in alarm (NaN for `none` cells).
+    pub alarm_fraction: f64,
     /// Satellite-FDE counts (tight architecture; all zero otherwise): for a fault cell the
     /// fault's, for the `none` cell the outside epochs' ([`crate::metrics::SatFaultMetrics`]).
     pub sat: crate::metrics::SatFaultMetrics,
@@ -143,6 +149,8 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             false_alarm_epochs: 0,
             outside_epochs: 0,
             wrong_isolations: 0,
+            at_onset: false,
+            alarm_fraction: f64::NAN,
             sat: Default::default(),
         };
         if let Some(sr) = &rec.sats {
@@ -166,6 +174,7 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
                     m.delay = (t[first.0] - f.start).max(0.0);
                     m.clear_delay = last.1.map_or(f64::NAN, |e| t[e] - f.end);
                 }
+                (m.at_onset, m.alarm_fraction) = window_alarm(t, &det.alarm, (f.start, f.end));
             }
             None => {
                 for (k, &tk) in t.iter().enumerate() {

@@ -110,6 +110,20 @@ impl PyPreparedScenario {
         )?;
         d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
         d.set_item(
+            "at_onset",
+            to_numpy(
+                py,
+                rows.iter()
+                    .flat_map(|r| r.cells.iter().map(|m| m.at_onset))
+                    .collect::<Vec<bool>>(),
+                &[n, c],
+            )?,
+        )?;
+        d.set_item(
+            "alarm_fraction",
+            to_numpy(py, grid(&|m| m.alarm_fraction), &[n, c])?,
+        )?;
+        d.set_item(
             "clear_delay",
             to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?,
         )?;

@@ -260,3 +260,21 @@ pub fn match_alarms<'py>(
         to_numpy(py, faults, &[n])?,
     ))
 }
+
+/// Whether `alarm` (over times `t`) was already raised when the window `[start, end)` began
+/// (an alarm from before the fault: not a detection), and the fraction of the window's epochs
+/// in alarm (NaN when none lies in it); the rule of `navfdi_core::metrics::window_alarm`.
+#[pyfunction]
+pub fn window_alarm(
+    t: &Bound<'_, PyAny>,
+    alarm: Vec<bool>,
+    start: f64,
+    end: f64,
+) -> PyResult<(bool, f64)> {
+    let t = crate::convert::vector("t", t, Some(alarm.len()))?;
+    Ok(navfdi_core::metrics::window_alarm(
+        t.as_slice(),
+        &alarm,
+        (start, end),
+    ))
+}
