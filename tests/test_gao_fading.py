@@ -143,7 +143,7 @@ def test_outputs_carry_the_variant(tmp_path):
 
     r = navfdi.run_scenario("gao_fading", seed=1)
     paths = r.write(tmp_path, figures=False)
-    assert {p.name for p in paths} == {"events.csv", "timeseries.parquet", "errors.csv", "summary.json"}
+    assert {p.name for p in paths} == {"events.csv", "timeseries.parquet", "errors.csv", "summary.json", "report.html"}
     ev = pd.read_csv(tmp_path / "events.csv")
     assert ev.columns[0] == "variant" and set(ev.variant) == {"chi2", "sprt", "fading"}
     ts = pd.read_parquet(tmp_path / "timeseries.parquet")
@@ -151,9 +151,11 @@ def test_outputs_carry_the_variant(tmp_path):
     assert {"gnss.mdb.pos_n", "gnss.sprt.alarm", "error.pos_n"} <= set(ts.columns)
     err = pd.read_csv(tmp_path / "errors.csv")
     assert list(err.variant) == ["chi2", "sprt", "fading"]
+    units = {"pos": "m", "lat": "m", "vel": "m_s", "att": "rad"}
     for c in ["pos_e", "pos_n", "pos_u", "lat_m", "vel_e", "vel_n", "vel_u", "att_e", "att_n", "att_u"]:
-        assert f"{c}_rms" in err.columns and f"{c}_max" in err.columns
-    np.testing.assert_allclose(err.lat_m_rms, err.pos_n_rms)
+        u = units[c[:3]]
+        assert f"{c}_rms_{u}" in err.columns and f"{c}_max_{u}" in err.columns
+    np.testing.assert_allclose(err.lat_m_rms_m, err.pos_n_rms_m)
 
 
 def test_montecarlo_reports_per_variant(tmp_path):

@@ -171,7 +171,7 @@ def test_run_writes_the_paper_figures(tmp_path):
     import pandas as pd
 
     err = pd.read_csv(tmp_path / "errors.csv").set_index("variant")
-    assert err.loc["isolation", "fused_alt_rms"] < err.loc["no_isolation", "fused_alt_rms"]
+    assert err.loc["isolation", "fused_alt_rms_m"] < err.loc["no_isolation", "fused_alt_rms_m"]
 
 
 def test_montecarlo_reports_fused_altitude():

@@ -36,10 +36,10 @@ CORE_LAYERS = [
 ]
 
 PY_LAYERS = [
-    {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text"},
+    {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
     {"_terrain"},
     {"scenario"},
-    {"record", "demo", "gnss"},
+    {"record", "demo", "gnss", "report"},
     {"plots"},
     {"runs", "montecarlo"},
     {"federated", "cli", "__init__", "__main__"},

@@ -132,3 +132,72 @@ def test_scenarios_show_and_export(tmp_path):
 def test_a_closed_pipe_ends_quietly():
     p = subprocess.run(f"{sys.executable} -m navfdi scenarios --show shao2018 | head -1", shell=True, capture_output=True, text=True)
     assert p.returncode == 0 and "Broken pipe" not in p.stderr and p.stdout.startswith("#")
+
+
+# ---- objects that explain themselves -------------------------------------------------------
+
+
+def test_a_missing_variant_names_the_variants():
+    r = navfdi.run_scenario("yang2013", seed=0)
+    with pytest.raises(KeyError, match=r"no variant 'isolated'; the variants are: 'isolation', 'no_isolation'"):
+        r.runs["isolated"]
+    with pytest.raises(KeyError, match="the variants are"):
+        r["isolated"]
+
+
+@pytest.mark.parametrize("make", [lambda: navfdi.JointChi2Sprt(pf="1e-3", pm=1e-3), lambda: navfdi.ImprovedSprt(1e-3, "x"), lambda: navfdi.ResidualChi2(pf=None), lambda: navfdi.Aime("0.01", 5), lambda: navfdi.StateChi2(pf=True, n=2, reset_every=2)])
+def test_a_wrong_argument_type_is_named(make):
+    with pytest.raises(TypeError, match=r"^(pf|pm): expected a number"):
+        make()
+
+
+def test_help_describes_the_kalman_filter():
+    doc = navfdi.KalmanFilter.__doc__ or ""
+    assert "predict(" in doc and "update(" in doc and "Joseph" in doc and "see `navfdi._core.pyi`" not in doc
+
+
+def test_printing_a_scenario_is_one_line():
+    text = repr(navfdi.load_scenario("shao2018"))
+    assert "\n" not in text and len(text) < 300 and "tight" in text and "ls_precheck" in text
+
+
+def test_an_interrupted_campaign_keeps_its_variants_comparable(monkeypatch):
+    """Chunks run point by point in turn: stopping after three chunks leaves both variants of
+    yang2013 with runs (before, the first variant took every chunk until it was done)."""
+    mc = sys.modules["navfdi.montecarlo"]
+
+    calls = {"n": 0}
+    real = mc._chunk
+
+    def stop_after_three(*a, **k):
+        calls["n"] += 1
+        if calls["n"] > 3:
+            raise KeyboardInterrupt
+        return real(*a, **k)
+
+    monkeypatch.setattr(mc, "_chunk", stop_after_three)
+    c = navfdi.montecarlo("yang2013", runs=64, seed=0, chunk_size=16, workers=2, progress=False)
+    assert c.partial and all(n > 0 for n in c.runs_per_point()), c.runs_per_point()
+
+
+def test_figures_name_the_variant_they_show(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    seen = []
+    real = plt.Figure.savefig
+
+    def grab(self, path, *a, **k):
+        if str(path).endswith("master_attitude_error.png"):
+            seen.append((Path(path).name, [t.get_text() for ax in self.axes for t in (ax.get_legend().get_texts() if ax.get_legend() else [])], [ax.get_title() for ax in self.axes]))
+        return real(self, path, *a, **k)
+
+    with pytest.MonkeyPatch.context() as m:
+        m.setattr(plt.Figure, "savefig", grab)
+        navfdi.run_scenario("yang2013", seed=0).write(tmp_path)
+    labels = {name: (texts, titles) for name, texts, titles in seen}
+    texts, titles = labels["no_isolation_master_attitude_error.png"]
+    assert "variant no_isolation" in texts and "with isolation" not in texts and "fault window" in texts
+    assert "(no_isolation)" in titles[0]

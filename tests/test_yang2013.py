@@ -126,17 +126,17 @@ def test_cli_run_writes_outputs(tmp_path):
     assert "fault cns-ramp on cns" in proc.stdout and "fault cns-step on cns" in proc.stdout
     assert "master attitude error RMS over 300–999 s (first fault to end of run), arcsec: isolation" in proc.stdout
     ev = pd.read_csv(out / "events.csv")
-    assert list(ev.columns) == ["variant", "subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
+    assert list(ev.columns) == ["variant", "subfilter", "detector", "alarm_start_s", "alarm_end_s", "fault_id", "fault_start_s", "fault_end_s", "delay_s"]
     assert set(ev.variant) == {"isolation", "no_isolation"}
     step = ev[(ev.variant == "isolation") & (ev.detector == "joint") & (ev.fault_id == "cns-step")]
-    assert len(step) >= 1 and step.delay.min() <= 1
+    assert len(step) >= 1 and step.delay_s.min() <= 1
     ts = pd.read_parquet(out / "timeseries.parquet")
     assert len(ts) == 2 * 1000
     for col in ["variant", "t", "cns.joint.statistic", "cns.joint.threshold", "cns.joint.alarm", "cns.isolated", "error.att_e", "sigma.att_e"]:
         assert col in ts.columns, col
     assert not ts[ts.variant == "no_isolation"]["cns.isolated"].any() and ts[ts.variant == "isolation"]["cns.isolated"].any()
     err = pd.read_csv(out / "errors.csv")
-    assert list(err.variant) == ["isolation", "no_isolation"] and (err.att_e_rms.iloc[0] < err.att_e_rms.iloc[1])
+    assert list(err.variant) == ["isolation", "no_isolation"] and (err.att_e_rms_rad.iloc[0] < err.att_e_rms_rad.iloc[1])
     summary = json.loads((out / "summary.json").read_text())
     assert summary["seed"] == 3 and summary["scenario"]["name"] == "yang2013" and "navfdi" in summary["versions"]
     assert set(summary["variants"]) == {"isolation", "no_isolation"}

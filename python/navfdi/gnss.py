@@ -380,9 +380,35 @@ class GnssSolution:
         sats["satellite"] = sats["satellite"].astype(str)
         sats.to_parquet(paths[1], index=False)
         paths[2].write_text(_json.dumps({"summary": self.summary(), "config": self.config}, default=_json_default) + "\n")
-        if figures:
-            paths += _plot(self, d)
+        figs: list[Path] = _plot(self, d) if figures else []
+        paths += figs
+        paths.append(self._report(d, figs))
         return paths
+
+    def _report(self, d: Path, figures: list[Path]) -> Path:
+        """``report.html``: the summary's numbers, per-fault results, the solution (first 200
+        epochs as a table; the whole error series interactive), the figures and the settings."""
+        from navfdi.report import write_report
+
+        s = self.summary()
+        headline = {k: v for k, v in s.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+        tables = [("faults", pd.DataFrame(s["faults"]))] if s["faults"] else []
+        tables.append(("solution.csv (first 200 epochs)", self.solution.head(200)))
+        t = self.solution["gps_seconds"].to_numpy()
+        tau = t - t[0] if len(t) else t
+        series = None
+        if "east" in self.solution:
+            series = (tau, {f"{c} [m]": self.solution[c].to_numpy() for c in ("east", "north", "up")}, [(f.start, f.end) for f in self.faults], "time since first epoch [s]")
+        return write_report(
+            d / "report.html",
+            f"navfdi gnss {Path(self.config['obs']).name}",
+            f"{', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {self.config['alpha']:g}",
+            headline,
+            tables,
+            figures,
+            scenario_text=_json.dumps(self.config, default=_json_default),
+            series=series,
+        )
 
 
 def _json_default(o: Any) -> Any:
@@ -572,18 +598,20 @@ def _plot(s: GnssSolution, d: Path) -> list[Path]:
     sol, sats = s.solution, s.satellites
     t = sol["gps_seconds"].to_numpy()
     tau = t - t[0] if len(t) else t
+    cfg = s.config
+    what = f"{Path(cfg['obs']).name}: {','.join(cfg['systems'])}, mask {cfg['mask_deg']:g}°, α {cfg['alpha']:g}, {'FDE' if cfg['exclude'] else 'no exclusion'}"
     paths = []
     if s.truth is not None:
         fig, ax = plt.subplots(figsize=(9, 4))
         for c in ("east", "north", "up"):
             ax.plot(tau, sol[c], label=c, lw=1)
         ax.grid(alpha=0.3)
-        paths.append(_finish(plt, fig, ax, s.faults, d / "errors.png", {}, ylabel="error (m)", title="Position error against the truth"))
+        paths.append(_finish(plt, fig, ax, s.faults, d / "errors.png", {}, what, ylabel="error (m)", title="Position error against the truth"))
     fig, ax = plt.subplots(figsize=(9, 4))
     ax.semilogy(tau, sol["first_statistic"], lw=1, label="global test, all satellites")
     ax.semilogy(tau, sol["first_threshold"], "k--", lw=1, label="threshold")
     ax.grid(alpha=0.3)
-    paths.append(_finish(plt, fig, ax, s.faults, d / "statistic.png", {}, ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold"))
+    paths.append(_finish(plt, fig, ax, s.faults, d / "statistic.png", {}, what, ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold"))
     fig, ax = plt.subplots(figsize=(9, 4))
     names = sorted(str(n) for n in sats["satellite"].unique())
     pos = {n: i for i, n in enumerate(names)}
@@ -592,13 +620,19 @@ def _plot(s: GnssSolution, d: Path) -> list[Path]:
     ax.scatter(tau[used["epoch"]], [pos[str(n)] for n in used["satellite"]], s=2, c="0.75", label="used")
     ax.scatter(tau[ex["epoch"]], [pos[str(n)] for n in ex["satellite"]], s=8, c="C3", label="excluded")
     ax.set_yticks(range(len(names)), names, fontsize=7)
-    paths.append(_finish(plt, fig, ax, s.faults, d / "exclusions.png", {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0)}, title="Satellites used and excluded per epoch"))
+    paths.append(_finish(plt, fig, ax, s.faults, d / "exclusions.png", {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0)}, what, title="Satellites used and excluded per epoch"))
     return paths
 
 
-def _finish(plt: Any, fig: Any, ax: Any, faults: list[GnssFault], path: Path, legend: dict[str, Any], **labels: str) -> Path:
-    """Shade the fault windows, label the time axis, add the legend, save ``path`` and close."""
+def _finish(plt: Any, fig: Any, ax: Any, faults: list[GnssFault], path: Path, legend: dict[str, Any], what: str = "", **labels: str) -> Path:
+    """Shade the fault windows (one legend entry naming them), label the time axis, title the
+    figure with ``labels["title"]`` and what was run (``what``: file, systems, mask), add the
+    legend, save ``path`` and close."""
     _shade_faults(ax, faults)
+    if faults:
+        ax.axvspan(np.nan, np.nan, color="C1", alpha=0.12, label="injected: " + ", ".join(f"{f.satellite} {f.shape}" for f in faults))
+    if what and "title" in labels:
+        labels = {**labels, "title": f"{labels['title']}\n{what}"}
     ax.set(xlabel="time since first epoch (s)", **labels)
     ax.legend(**legend)
     fig.savefig(path, dpi=110, bbox_inches="tight")

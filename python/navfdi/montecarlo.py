@@ -413,11 +413,39 @@ class Campaign:
         runs.to_parquet(paths[0], index=False)
         self.summary().to_csv(paths[1], index=False)
         paths[2].write_text(_json.dumps(self.campaign_info(), default=str), encoding="utf-8")
+        figs: list[Path] = []
         if figures and len(self.runs):
             from navfdi.plots import plot_campaign
 
-            paths += plot_campaign(self, out)
+            figs = plot_campaign(self, out)
+        paths += figs
+        paths.append(self._report(out, figs))
         return paths
+
+    def _report(self, out: Path, figures: list[Path]) -> Path:
+        """``report.html``: headline figures per point, ``summary.csv`` as a table, the plots,
+        the scenario and the command (see :mod:`navfdi.report`)."""
+        from navfdi.report import write_report
+
+        s = self.summary()
+        headline: dict[str, Any] = {"runs per point": self.runs_requested, "partial": self.partial}
+        for _, r in s.iterrows():
+            key = " · ".join([*(str(r[c]) for c in self.sweep_columns), f"{r['subfilter']}/{r['detector']}", str(r["fault_id"])])
+            if r["fault_id"] != "none":
+                headline[f"{key}: P(det)"] = r["detection_probability"]
+                headline[f"{key}: in alarm [%]"] = 100 * r["alarm_fraction"] if r["alarm_fraction"] == r["alarm_fraction"] else math.nan
+            else:
+                headline[f"{key}: false alarms/epoch"] = r["false_alarm_rate"]
+        return write_report(
+            out / "report.html",
+            f"navfdi montecarlo {self.scenario.name}",
+            f"{self.runs_requested} runs per point, seed {self.seed}, {self.backend}" + (" — PARTIAL (interrupted)" if self.partial else ""),
+            headline,
+            [("summary.csv", s)],
+            figures,
+            scenario_text=self.scenario.text(),
+            notes="P(det): share of runs with an alarm raised inside the fault window (or 1 s after); in_alarm_at_onset: share already in alarm when the fault began; alarm_fraction: mean share of the fault's epochs in alarm.",
+        )
 
 
 def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[str, str, str, float]]], points: list[dict[str, Any]]):
@@ -564,7 +592,9 @@ def montecarlo(
         chunk_size = 16
     if chunk_size < 1:
         raise ValueError(f"chunk_size = {chunk_size}: must be at least 1")
-    tasks = [(p, s, min(chunk_size, runs - s)) for p in range(len(points)) for s in range(0, runs, chunk_size)]
+    # Chunk by chunk across the points (variants, sweep values), so that an interrupted
+    # campaign holds about as many runs of each point and still compares them.
+    tasks = [(p, s, min(chunk_size, runs - s)) for s in range(0, runs, chunk_size) for p in range(len(points))]
     jsons = [sc.to_json() for sc in scenarios]
     prepared = [_prepared(j) if client is None else _core.PreparedScenario(j) for j in jsons]
     cells = [pr.cells for pr in prepared]

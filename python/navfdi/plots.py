@@ -129,14 +129,19 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
         for f in faults:
             ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
         s = sigma[:, i] * arcsec
-        ax.fill_between(t, -s, s, color="tab:blue", alpha=0.15, lw=0, label="±1σ (filter, with isolation)")
+        main_label = "with isolation" if run.baseline is not None else f"variant {run.variant}"
+        ax.fill_between(t, -s, s, color="tab:blue", alpha=0.15, lw=0, label=f"±1σ (filter, {main_label})")
         if run.baseline is not None:
             ax.plot(t, run.error(False)[:, i] * arcsec, lw=0.8, color="tab:gray", label="without isolation")
-        ax.plot(t, run.error(True)[:, i] * arcsec, lw=0.8, color="tab:blue", label="with isolation")
+        ax.plot(t, run.error(True)[:, i] * arcsec, lw=0.8, color="tab:blue", label=main_label)
         ax.set_ylabel(f"φ_{name[0].upper()} [arcsec]")
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper left", fontsize=8, ncol=3)
-    axes[0].set_title(f"{run.scenario.name}: master attitude error and its ±1σ envelope (seed {run.seed}); faults shaded")
+    if faults:
+        axes[0].axvspan(np.nan, np.nan, color="tab:red", alpha=0.1, lw=0, label="fault window")
+        axes[0].legend(loc="upper left", fontsize=8, ncol=4)
+    what = "" if run.baseline is not None else f" ({run.variant})"
+    axes[0].set_title(f"{run.scenario.name}{what}: master attitude error and its ±1σ envelope (seed {run.seed})")
     axes[-1].set_xlabel("time [s]")
     p = out / f"{prefix}master_attitude_error.png"
     fig.savefig(p, dpi=110)
@@ -366,8 +371,9 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
         for gi, ((sub, det, fid), g) in enumerate(groups):
             xi = point_index(g) + off[gi]
             med, p95 = g["delay_median"].to_numpy(), g["delay_p95"].to_numpy()
-            ax.errorbar(xi, med, yerr=[np.zeros_like(med), np.maximum(p95 - med, 0)], marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} · {fid}")
-        ax.set_xticks(x, labels, rotation=20)
+            ax.errorbar(xi, med, yerr=[np.zeros_like(med), np.maximum(p95 - med, 0)], marker=MARKERS[gi % len(MARKERS)], ls="none", capsize=3, label=f"{sub}/{det} · {fid}")
+        ax.set_xticks(x, labels, rotation=20, ha="right")
+        ax.set_ylim(bottom=0)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("detection delay [s] (median, bar to p95)")
         ax.set_title(f"{campaign.scenario.name}: detection delay, median and 95th percentile ({_runs_label(campaign)})")
@@ -385,8 +391,9 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
         xi = point_index(g) + off[gi]
         pd_ = g["detection_probability"].to_numpy()
         err = np.clip([pd_ - g["detection_ci_low"].to_numpy(), g["detection_ci_high"].to_numpy() - pd_], 0, None)
-        a1.errorbar(xi, pd_, yerr=err, marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} · {fid}")
-    a1.set_ylim(-0.02, 1.02)
+        a1.errorbar(xi, pd_, yerr=err, marker=MARKERS[gi % len(MARKERS)], ls="none", capsize=3, label=f"{sub}/{det} · {fid}")
+    a1.set_ylim(-0.05, 1.12)
+    a1.axhline(1.0, color="k", lw=0.6, alpha=0.4)
     a1.set_ylabel("detection probability (95 % Wilson)")
     a1.set_title("detection probability per fault")
     none = s[s["fault_id"] == "none"]
@@ -397,18 +404,21 @@ def plot_campaign(campaign, out: Path) -> list[Path]:
         xi = point_index(g) + off[gi]
         fa = g["false_alarm_rate"].to_numpy()
         err = np.clip([fa - g["false_alarm_ci_low"].to_numpy(), g["false_alarm_ci_high"].to_numpy() - fa], 0, None)
-        line = a2.errorbar(xi, fa, yerr=err, marker=MARKERS[gi % len(MARKERS)], capsize=3, label=f"{sub}/{det} (pf {g['pf'].iloc[0]:g})")
+        line = a2.errorbar(xi, fa, yerr=err, marker=MARKERS[gi % len(MARKERS)], ls="none", capsize=3, label=f"{sub}/{det} (pf {g['pf'].iloc[0]:g})")
         colours.setdefault(float(g["pf"].iloc[0]), line[0].get_color())
     for pf, colour in colours.items():
         a2.axhline(pf, ls="--", lw=1.0, color=colour, alpha=0.8, label=f"nominal pf = {pf:g}")
+    # Rates are ≥ 0: a linear scale below 1e-4 and logarithmic above, never negative.
     a2.set_yscale("symlog", linthresh=1e-4)
+    top = max([float(np.nanmax(none["false_alarm_ci_high"])) if len(none) else 0.0, *colours]) if (len(none) or colours) else 1e-3
+    a2.set_ylim(0, top * 3 if top > 0 else 1e-3)
     a2.set_ylabel("false alarms per epoch outside faults")
     a2.set_title("false-alarm rate (dashed: nominal pf)")
     fig.suptitle(f"{campaign.scenario.name}: detection and false alarms ({_runs_label(campaign)})")
     if faults.empty:
         a1.text(0.5, 0.5, "no faults in this scenario", ha="center", va="center", transform=a1.transAxes)
     for a in (a1, a2):
-        a.set_xticks(x, labels, rotation=20)
+        a.set_xticks(x, labels, rotation=20, ha="right")
         a.set_xlabel(xlabel)
         a.grid(alpha=0.3)
         if a.get_legend_handles_labels()[0]:

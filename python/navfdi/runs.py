@@ -406,15 +406,46 @@ class ScenarioRun(RunRecord):
         figures to directory ``out`` (created if needed). Returns the paths written."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
-        paths = [out / "events.csv", out / "timeseries.parquet", out / "summary.json"]
-        self.events().to_csv(paths[0], index=False)
+        paths = [out / "events.csv", out / "timeseries.parquet", out / "errors.csv", out / "summary.json"]
+        events = self.events().rename(columns=EVENT_UNITS)
+        events.to_csv(paths[0], index=False)
         self.timeseries().to_parquet(paths[1], index=False)
-        paths[2].write_text(_json.dumps(self.summary(), default=float), encoding="utf-8")
+        import pandas as pd
+
+        errors = pd.DataFrame([{"variant": self.variant, **self.errors()}]).rename(columns=_error_unit)
+        errors.to_csv(paths[2], index=False)
+        paths[3].write_text(_json.dumps(self.summary(), default=float), encoding="utf-8")
+        figs: list[Path] = []
         if figures:
             from navfdi.plots import plot_run
 
-            paths += plot_run(self, out)
+            figs = plot_run(self, out)
+        paths += figs
+        t = self.t
+        series = {f"{c} [m]": self.record["error"][:, 6 + i] for i, c in enumerate(("east", "north", "up"))}
+        windows = [(f["start"], f["end"]) for f in self.scenario.faults()]
+        paths.append(_report(self.scenario, self.seed, out, [("errors.csv", errors), ("events.csv", events)], figs, (t, series, windows, "time [s]"), self._headline()))
         return paths
+
+    def _headline(self) -> dict[str, Any]:
+        """The numbers a reader of the report looks for first: navigation-error RMS and, per
+        fault and deciding detector, detection, delay, onset and share in alarm."""
+        e = self.errors()
+        out: dict[str, Any] = {"latitude error RMS [m]": e["lat_m_rms"], "east error RMS [m]": e["pos_e_rms"], "up error RMS [m]": e["pos_u_rms"], "attitude error RMS [arcsec]": float(np.degrees(np.sqrt((e["att_e_rms"] ** 2 + e["att_n_rms"] ** 2 + e["att_u_rms"] ** 2) / 3)) * 3600)}
+        if "fused_alt_rms" in e:
+            out["fused altitude error RMS [m]"] = e["fused_alt_rms"]
+        for m in self.fault_table():
+            key = f"{m.fault_id} · {m.subfilter}/{m.detector}"
+            out[f"{key}: delay [s]"] = float("nan") if m.delay is None else m.delay
+            out[f"{key}: in alarm [%]"] = 100 * m.alarm_fraction
+        return out
+
+
+class _Variants(dict):
+    """``{variant: ScenarioRun}`` whose missing key names the variants there are."""
+
+    def __missing__(self, key: object) -> ScenarioRun:
+        raise KeyError(f"no variant {key!r}; the variants are: {', '.join(map(repr, self))}")
 
 
 class VariantRuns:
@@ -432,11 +463,13 @@ class VariantRuns:
     """
 
     def __init__(self, scenario: Scenario, seed: int, runs: dict[str, ScenarioRun]):
+        runs = _Variants(runs)
         self.scenario = scenario
         self.seed = seed
         self.runs = runs
 
     def __getitem__(self, name: str) -> ScenarioRun:
+        """The run of variant ``name`` (``KeyError`` naming the variants otherwise)."""
         return self.runs[name]
 
     def events(self):
@@ -530,22 +563,52 @@ class VariantRuns:
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "events.csv", out / "timeseries.parquet", out / "errors.csv", out / "summary.json"]
-        self.events().to_csv(paths[0], index=False)
+        events = self.events().rename(columns=EVENT_UNITS)
+        events.to_csv(paths[0], index=False)
         self.timeseries().to_parquet(paths[1], index=False)
-        self.errors().to_csv(paths[2], index=False)
+        errors = self.errors().rename(columns=_error_unit)
+        errors.to_csv(paths[2], index=False)
         paths[3].write_text(_json.dumps(self.summary(), default=float), encoding="utf-8")
+        tables = [("errors.csv", errors), ("events.csv", events)]
         sats = self.satellite_table()
         if len(sats):
             paths.append(out / "satellites.csv")
             sats.to_csv(paths[-1], index=False)
+            tables.append(("satellites.csv", sats))
+        figs: list[Path] = []
         if figures:
             from navfdi.plots import plot_identified_satellites, plot_run, plot_variant_errors
 
             for name, r in self.runs.items():
-                paths += plot_run(r, out, prefix=f"{name}_")
-            paths += plot_variant_errors(self, out)
-            paths += plot_identified_satellites(self, out)
+                figs += plot_run(r, out, prefix=f"{name}_")
+            figs += plot_variant_errors(self, out)
+            figs += plot_identified_satellites(self, out)
+        paths += figs
+        first = next(iter(self.runs.values()))
+        series = {f"{name}: horizontal [m]": np.hypot(r.record["error"][:, 6], r.record["error"][:, 7]) for name, r in self.runs.items()}
+        windows = [(f["start"], f["end"]) for f in self.scenario.faults()]
+        headline: dict[str, Any] = {}
+        for name, r in self.runs.items():
+            headline.update({f"{name}: {k}": v for k, v in r._headline().items()})
+        paths.append(_report(self.scenario, self.seed, out, tables, figs, (first.t, series, windows, "time [s]"), headline))
         return paths
+
+
+def _report(sc: Scenario, seed: int, out: Path, tables: list[tuple[str, Any]], figures: list[Path], series: Any, headline: dict[str, Any]) -> Path:
+    """``report.html`` of a run (see :mod:`navfdi.report`)."""
+    from navfdi.report import write_report
+
+    return write_report(
+        out / "report.html",
+        f"navfdi run {sc.name}",
+        f"{sc.raw.get('description', '')} — seed {seed}, architecture {sc.core.get('architecture', 'federated')}",
+        headline,
+        tables,
+        figures,
+        scenario_text=sc.text(),
+        series=series,
+        notes=" ".join(FAULT_TABLE_LEGEND),
+    )
 
 
 def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolation: bool = True) -> ScenarioRun | VariantRuns:
@@ -579,6 +642,25 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
     _warn_never_applied(sc, recs[0])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
+
+
+def _error_unit(c: str) -> str:
+    """``errors.csv`` header of an error column: its SI unit appended (``att_e_rms_rad``)."""
+    if c == "variant":
+        return c
+    if c == "fused_alt_predict_only":
+        return "fused_alt_predict_only_fraction"
+    if c.startswith(("pos_", "lat_m", "fused_alt")):
+        return f"{c}_m"
+    if c.startswith("vel_"):
+        return f"{c}_m_s"
+    if c.startswith("att_"):
+        return f"{c}_rad"
+    return c
+
+
+#: ``events.csv`` headers: the times carry their unit (s).
+EVENT_UNITS = {c: f"{c}_s" for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay")}
 
 
 def _span(n: np.ndarray) -> str:

@@ -28,6 +28,7 @@ from typing import Any
 
 from navfdi import _core
 from navfdi._errors import NeverAppliedWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
+from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, parse, split
 
@@ -674,6 +675,37 @@ class Scenario:
     source: str = "<python>"
     _json: str = field(default="", repr=False, compare=False)
 
+    def text(self) -> str:
+        """The scenario as the user wrote it: the bundled or file TOML when it came from one
+        (and was not changed since: ``with_value`` sources say ``… (modified)``), else its
+        ``raw`` structure as JSON."""
+        text = None
+        if self.source in bundled_scenarios():
+            text = bundled_toml(self.source)
+        elif Path(self.source).suffix == ".toml" and Path(self.source).is_file():
+            text = Path(self.source).read_text(encoding="utf-8")
+        if text is not None:
+            try:
+                same = tomllib.loads(text) == self.raw
+            except tomllib.TOMLDecodeError:
+                same = False
+            if same:
+                return text
+        return "# changed from " + self.source + " (shown as JSON of the user's structure)\n" + json.dumps(self.raw, indent=2, default=str)
+
+    def __repr__(self) -> str:
+        """One line: name, architecture, duration, sensors, faults, variants and source (the
+        whole structure is in ``raw`` and ``core``; ``navfdi scenarios --show`` prints a
+        bundled one's TOML)."""
+        c = self.core
+        sensors = ", ".join(s["name"] for s in c.get("sensors", []))
+        faults = ", ".join(f["id"] for f in c.get("faults", [])) or "none"
+        variants = ", ".join(self.variant_names()) or "none"
+        return (
+            f"Scenario({self.name!r}, {c.get('architecture', 'federated')}, {c['duration']:g} s at dt {c['dt']:g} s; "
+            f"sensors: {sensors}; faults: {faults}; variants: {variants}; source: {self.source})"
+        )
+
     @property
     def name(self) -> str:
         """Scenario name."""
@@ -801,21 +833,6 @@ def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
     if core.get("terrain"):
         check_terrain(core, text)
     return Scenario(raw=copy.deepcopy(dict(raw)), core=core, source=source, _json=text)
-
-
-def bundled_toml(name: str) -> str:
-    """The TOML text of the bundled scenario ``name`` (to read, or to copy and edit). Raises
-    ``ValueError`` naming the bundled scenarios for an unknown name."""
-    names = bundled_scenarios()
-    if name not in names:
-        raise ValueError(f"{name!r} is not a bundled scenario (bundled: {', '.join(names)})")
-    return (resources.files("navfdi") / "scenarios" / f"{name}.toml").read_text(encoding="utf-8")
-
-
-def bundled_scenarios() -> list[str]:
-    """Names of the scenarios shipped with navfdi."""
-    root = resources.files("navfdi") / "scenarios"
-    return sorted(p.name[: -len(".toml")] for p in root.iterdir() if p.name.endswith(".toml"))
 
 
 def load_scenario(source: str | Path | Mapping[str, Any]) -> Scenario:

@@ -283,6 +283,28 @@ pub fn py_floats(v: &[f64]) -> String {
     )
 }
 
+/// A float argument, with an error that names it: `pf: expected a number (e.g. 0.001), got
+/// str '1e-3'` (the plain extraction error says only "must be real number, not str").
+pub fn float_arg(name: &str, v: &Bound<'_, PyAny>) -> PyResult<f64> {
+    if v.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name}: expected a number, got bool {}",
+            v.repr().map(|r| r.to_string()).unwrap_or_default()
+        )));
+    }
+    v.extract::<f64>().map_err(|_| {
+        let ty = v
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "object".into());
+        let r = v.repr().map(|r| r.to_string()).unwrap_or_default();
+        pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name}: expected a number (e.g. 0.001), got {ty} {r}"
+        ))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

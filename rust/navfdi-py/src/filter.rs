@@ -10,7 +10,9 @@ use numpy::{IxDyn, PyArray};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-/// Result of one measurement update (see `navfdi._core.pyi` for the Python documentation).
+/// Result of one measurement update: ``residual`` (m,) ``z − Hx⁻`` (NaN for unused
+/// components), ``covariance`` (m, m) ``A = HP⁻Hᵀ + R``, ``statistic`` ``rᵀA⁻¹r``, ``used``
+/// (m,) bool, ``dof`` (components used).
 #[pyclass(name = "Innovation", module = "navfdi._core", frozen)]
 pub struct PyInnovation {
     pub inner: Innovation,
@@ -58,7 +60,14 @@ impl PyInnovation {
     }
 }
 
-/// Linear Kalman filter (see `navfdi._core.pyi`).
+/// Linear Kalman filter with state ``x`` (n,) and covariance ``P`` (n, n).
+///
+/// ``KalmanFilter(x0, P0)``: initial state and covariance (symmetric positive definite).
+/// ``predict(Phi, Q, fading=1.0)``: ``x = Φx``, ``P = S·ΦPΦᵀ + Q``. ``update(z, H, R)``: the
+/// Cholesky/Joseph-form update; NaN components of ``z`` are left out (reduced-dimension
+/// update); returns an :class:`Innovation` (residual, covariance ``A = HPHᵀ + R``, statistic
+/// ``rᵀA⁻¹r``, components used). A rejected call leaves the filter as it was. Properties
+/// ``x``, ``P``, ``n``; picklable. Shapes and units in ``navfdi._core.pyi`` / ``help()``.
 #[pyclass(name = "KalmanFilter", module = "navfdi._core")]
 pub struct PyKalmanFilter {
     inner: KalmanFilter,

@@ -34,7 +34,8 @@ impl PyAime {
 impl PyAime {
     #[new]
     #[pyo3(signature = (pf, window))]
-    fn new(pf: f64, window: i64) -> PyResult<Self> {
+    fn new(pf: &Bound<'_, PyAny>, window: i64) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
         if window < 1 {
             return Err(PyValueError::new_err(format!(
                 "window = {window}: the AIME window must be at least 1 epoch"
@@ -140,7 +141,7 @@ impl PyTwoStageAime {
     #[new]
     #[pyo3(signature = (pf, window1, window2, q = 10.0, b = 0.99, every = 1, r0 = 1.0))]
     fn new(
-        pf: f64,
+        pf: &Bound<'_, PyAny>,
         window1: i64,
         window2: i64,
         q: f64,
@@ -148,6 +149,7 @@ impl PyTwoStageAime {
         every: i64,
         r0: f64,
     ) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
         for (name, w) in [("window1", window1), ("window2", window2), ("every", every)] {
             if w < 1 {
                 return Err(PyValueError::new_err(format!(

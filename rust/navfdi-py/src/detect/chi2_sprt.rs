@@ -65,7 +65,8 @@ impl PyResidualChi2 {
 impl PyResidualChi2 {
     #[new]
     #[pyo3(signature = (pf))]
-    fn new(pf: f64) -> PyResult<Self> {
+    fn new(pf: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
         Ok(PyResidualChi2 {
             inner: ResidualChi2::new(pf).py()?,
         })
@@ -142,7 +143,14 @@ impl PyImprovedSprt {
 impl PyImprovedSprt {
     #[new]
     #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
-    fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
+    fn new(
+        pf: &Bound<'_, PyAny>,
+        pm: &Bound<'_, PyAny>,
+        variance: &str,
+        min_samples: Option<i64>,
+    ) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
+        let pm = crate::convert::float_arg("pm", pm)?;
         let d = ImprovedSprt::new(pf, pm, parse_variance(variance)?).py()?;
         Ok(PyImprovedSprt {
             inner: with_min_samples(d, min_samples, ImprovedSprt::with_min_samples)?,
@@ -241,7 +249,14 @@ impl PyJointChi2Sprt {
 impl PyJointChi2Sprt {
     #[new]
     #[pyo3(signature = (pf, pm, variance = "known", min_samples = None))]
-    fn new(pf: f64, pm: f64, variance: &str, min_samples: Option<i64>) -> PyResult<Self> {
+    fn new(
+        pf: &Bound<'_, PyAny>,
+        pm: &Bound<'_, PyAny>,
+        variance: &str,
+        min_samples: Option<i64>,
+    ) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
+        let pm = crate::convert::float_arg("pm", pm)?;
         let d = JointChi2Sprt::new(pf, pm, parse_variance(variance)?).py()?;
         Ok(PyJointChi2Sprt {
             inner: with_min_samples(d, min_samples, JointChi2Sprt::with_min_samples)?,

@@ -90,12 +90,13 @@ impl PyStateChi2 {
     #[new]
     #[pyo3(signature = (pf, n, reset_every, min_age = None, states = None))]
     fn new(
-        pf: f64,
+        pf: &Bound<'_, PyAny>,
         n: i64,
         reset_every: i64,
         min_age: Option<i64>,
         states: Option<Vec<i64>>,
     ) -> PyResult<Self> {
+        let pf = crate::convert::float_arg("pf", pf)?;
         // Counts of at least 1, the same requirement (and message) whatever the sign.
         let n = positive_count("n", n)? as usize;
         let reset_every = positive_count("reset_every", reset_every)?;

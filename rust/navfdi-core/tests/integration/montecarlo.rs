@@ -6,7 +6,8 @@ use navfdi_core::sim::prepare::Prepared;
 use navfdi_core::spec::ScenarioSpec;
 
 fn prep() -> Prepared {
-    let mut spec = ScenarioSpec::from_json(include_str!("../../../benches/yang2013.json")).unwrap();
+    let mut spec =
+        ScenarioSpec::from_json(include_str!("../../../../benches/yang2013.json")).unwrap();
     spec.duration = 200.0; // shorter runs for the test; faults moved inside
     spec.faults[0].start = 50.0;
     spec.faults[0].end = 100.0;

@@ -1,0 +1,7 @@
+//! The core's integration tests, one binary (each file a module): the federated filter against
+//! a centralised one, Monte-Carlo determinism, and property tests of the filter and detectors.
+//! One binary instead of three saves about 80 MB of target/ and two links per build.
+
+mod federated;
+mod montecarlo;
+mod properties;
