@@ -27,7 +27,7 @@ MAX_LINES = 900
 CORE_LAYERS = [
     {"error", "validate", "linalg", "memory", "cancel"},
     {"kalman", "stats", "run"},
-    {"detect", "ins", "gnss", "fusion"},
+    {"detect", "ins", "gnss", "fusion", "integrity"},
     {"spec"},
     {"stream", "record", "metrics"},
     {"arch", "sim"},

@@ -24,6 +24,7 @@
 //!   * [`gnss`]: geodesy, constellations, RINEX, broadcast ephemerides, single-point
 //!     positioning, snapshot and innovation FDE, prefilters, the `gnss_ranges` stream type.
 //!   * [`fusion`]: federated master fusion, weighted fusion with a fault matrix.
+//!   * [`integrity`]: protection levels (ARAIM).
 //! * Configuration
 //!   * [`spec`]: the scenario schema (one file per part and per architecture) and its
 //!     validation.
@@ -53,6 +54,7 @@ pub mod error;
 pub mod fusion;
 pub mod gnss;
 pub mod ins;
+pub mod integrity;
 pub mod kalman;
 pub mod linalg;
 pub mod memory;

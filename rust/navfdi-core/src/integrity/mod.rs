@@ -1,0 +1,6 @@
+//! Integrity: how large an undetected position error can be (protection levels).
+//!
+//! * [`araim`]: advanced RAIM by multiple-hypothesis solution separation (ARAIM ADD v3.0),
+//!   one epoch from the geometry and the integrity support message.
+
+pub mod araim;
