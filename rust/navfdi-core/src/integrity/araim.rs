@@ -129,9 +129,10 @@ fn q(x: f64) -> f64 {
     n.sf(x)
 }
 
-/// Inverse of [`q`].
+/// Inverse of [`q`], as `−Φ⁻¹(p)`: evaluating `Φ⁻¹(1 − p)` loses the tail's precision for
+/// p ~ 1e-9 (the horizontal false-alert allocation per mode).
 fn q_inv(p: f64) -> f64 {
-    Normal::standard().inverse_cdf(1.0 - p)
+    -Normal::standard().inverse_cdf(p)
 }
 
 /// `(GᵀWG)⁻¹` and `S = (GᵀWG)⁻¹GᵀW` on the satellites `keep` (columns of constellations with no
