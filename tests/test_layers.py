@@ -39,7 +39,7 @@ PY_LAYERS = [
     {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
     {"_terrain"},
     {"scenario"},
-    {"record", "demo", "gnss", "report"},
+    {"record", "demo", "gnss", "report", "integrity"},
     {"plots"},
     {"runs", "montecarlo"},
     {"federated", "cli", "__init__", "__main__"},

@@ -76,6 +76,7 @@ from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import NeverAppliedWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
+from navfdi.integrity import Allocation, AraimResult, Ism, araim, lpv200
 
 __all__ = [
     "Aime",
@@ -89,7 +90,12 @@ __all__ = [
     "FederatedStep",
     "FusedValue",
     "FilterRun",
+    "Allocation",
+    "AraimResult",
     "GnssFault",
+    "Ism",
+    "araim",
+    "lpv200",
     "NeverAppliedWarning",
     "GnssSolution",
     "ImprovedSprt",

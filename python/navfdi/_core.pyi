@@ -48,6 +48,7 @@ __all__ = [
     "ncx2_cdf",
     "mdb",
     "validate_scenario",
+    "araim_epoch",
     "window_alarm",
     "scenario_trajectory",
     "run_scenario",
@@ -988,3 +989,19 @@ class Prefilter:
         """Process noise Q (3, 3) of one step."""
     def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
         """Pickle support."""
+
+def araim_epoch(
+    rows: list[list[float]] | list[tuple[float, float, float]],
+    constellation: list[int],
+    c_int: list[float],
+    c_acc: list[float],
+    b_nom: list[float],
+    p_sat: list[float],
+    p_const: list[float],
+    allocation: tuple[float, float, float, float, float, float],
+) -> dict[str, Any]:
+    """ARAIM (ADD v3.0) on one epoch; use :func:`navfdi.integrity.araim`. ``rows`` (n, 3) ENU
+    geometry rows (minus the lines of sight), ``constellation`` (n) indices, variances (m²),
+    ``b_nom`` (m), priors, ``allocation`` (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR,
+    P_THRES, P_EMT). Returns ``vpl, hpl, emt, sigma_acc, sigma0, bias0, k_fa, p_unmonitored,
+    n_max, available, modes``."""

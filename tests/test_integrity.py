@@ -1,0 +1,80 @@
+"""ARAIM (issue 24, in progress): the ADD v3.0 Appendix D example through the Python API, the
+ADD's elevation models, a 30-satellite two-constellation geometry, and bad input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import navfdi
+from navfdi.integrity import elevation_variances
+
+DATA = json.loads((Path(__file__).parent / "data" / "araim" / "add_v3_appendix_d.json").read_text())
+ROWS = np.array([r[1] for r in DATA["rows"]])
+SYSTEMS = [r[0][0] for r in DATA["rows"]]
+C_INT = np.array([r[2] for r in DATA["rows"]])
+C_ACC = np.array([r[3] for r in DATA["rows"]])
+EXP = DATA["expected"]
+
+
+def test_add_appendix_d_example():
+    r = navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC, allocation=navfdi.lpv200())
+    assert len(r.modes) == EXP["n_fault_modes_excl_fault_free"]
+    assert r.k_fa_v == pytest.approx(EXP["K_fa_vert"], abs=5e-4)
+    for key, c in (("const_out_GPS", 0), ("const_out_GAL", 1)):
+        m = next(m for m in r.modes if m["constellations"] == [c])
+        assert m["sigma"][2] == pytest.approx(EXP[key]["sigma_v_m"], abs=5e-4)
+        assert m["sigma_ss"][2] == pytest.approx(EXP[key]["sigma_ss_v_m"], abs=5e-4)
+        assert m["bias"][2] == pytest.approx(EXP[key]["b_v_m"], abs=5e-4)
+    assert r.vpl == pytest.approx(EXP["VPL_m"], abs=0.05)
+    assert r.emt == pytest.approx(EXP["EMT_m"], abs=0.05)
+    assert r.sigma_acc_v == pytest.approx(EXP["sigma_acc_v_m"], abs=0.05)
+    assert r.available and r.p_unmonitored < 8e-8
+
+
+@pytest.mark.xfail(strict=True, reason="open: HPL 14.416 m against the ADD's 14.5 m (sidereon 14.456 m); the vertical agrees, the horizontal gap's cause is not found (issue 24)")
+def test_add_appendix_d_hpl():
+    r = navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC)
+    assert r.hpl == pytest.approx(EXP["HPL_m"], abs=0.05)
+
+
+def test_the_adds_elevation_models_give_the_published_variances():
+    """σ_URA² + σ_tropo² + σ_user² from the rows' elevations equals the example's C_int to the
+    rows' 4-digit rounding, and the protection levels follow."""
+    tropo, user = elevation_variances(np.arcsin(-ROWS[:, 2]))
+    np.testing.assert_allclose(0.75**2 + tropo + user, C_INT, atol=2e-4)
+    np.testing.assert_allclose(0.5**2 + tropo + user, C_ACC, atol=2e-4)
+    r = navfdi.araim(-ROWS, SYSTEMS)
+    assert r.vpl == pytest.approx(EXP["VPL_m"], abs=0.05)
+
+
+def test_thirty_satellites_in_two_constellations_are_available():
+    i = np.arange(30)
+    az = i * 2.399963
+    el = np.radians(10 + 75 * ((i * 7) % 30) / 29)
+    los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+    r = navfdi.araim(los, ["G" if k % 2 == 0 else "E" for k in i])
+    assert r.available and r.p_unmonitored < 8e-8
+    # Pairs of events are monitored: a constellation with a satellite of the other among them.
+    assert any(len(m["constellations"]) == 1 and len(m["satellites"]) == 16 for m in r.modes)
+    assert r.vpl < 35.0 and r.hpl < 40.0
+
+
+@pytest.mark.parametrize(
+    "kwargs,match",
+    [
+        ({"los_enu": np.zeros((3, 2))}, r"los_enu: expected shape \(n, 3\)"),
+        ({"los_enu": -ROWS * 2}, r"los_enu\[\d\]: norm .* unit vectors"),
+        ({"systems": SYSTEMS[:-1]}, "systems: 9 letters for 10 satellites"),
+        ({"systems": ["G"] * 5 + ["C"] * 5}, r"no constellation prior for system\(s\) C"),
+        ({"c_int": -C_INT}, r"c_int\[0\] = -3.8865: a variance must be positive"),
+        ({"c_acc": C_ACC[:3]}, r"c_acc: expected a scalar or \(10,\) values"),
+    ],
+)
+def test_bad_input_is_named(kwargs, match):
+    args = {"los_enu": -ROWS, "systems": SYSTEMS, **kwargs}
+    with pytest.raises(ValueError, match=match):
+        navfdi.araim(args.pop("los_enu"), args.pop("systems"), **args)
