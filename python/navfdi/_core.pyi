@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "__version__",
+    "DETECTION_GRACE",
     "Prefilter",
     "PrefilterStep",
     "dll_variance",
@@ -530,6 +531,10 @@ def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, flo
     lies in ``[start, end + 1 s]`` (the latest-starting such fault); an alarm raised before a
     fault began detects nothing. Returns ``(start_index, end_index, fault_index)``, each (K,),
     with -1 for "never ended" and "no fault"."""
+
+#: Seconds after a fault's end within which an alarm onset still detects it
+#: (``navfdi_core::metrics::GRACE``).
+DETECTION_GRACE: float
 
 def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float) -> tuple[bool, float]:
     """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,):

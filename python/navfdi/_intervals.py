@@ -8,6 +8,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
+from navfdi import _core
+
 
 class AlarmInterval(NamedTuple):
     """One interval during which a detector was in alarm.
@@ -63,8 +65,6 @@ def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, 
     onset lies inside the fault's window or up to :data:`GRACE` s after it (the latest-starting
     such fault); an alarm raised before a fault began and still running detects nothing (see
     :func:`window_alarm`)."""
-    from navfdi import _core
-
     a = np.asarray(alarm, dtype=bool)
     times = np.asarray(t, dtype=float)
     starts, ends, faults = _core.match_alarms(times, a.tolist(), [(float(s), float(e)) for s, e in windows])
@@ -75,9 +75,9 @@ def match_events(alarm: ArrayLike, t: ArrayLike, windows: Sequence[tuple[float, 
 
 
 
-#: Seconds after a fault's end within which an alarm onset still detects it (Rust
-#: ``navfdi_core::metrics::GRACE``).
-GRACE = 1.0
+#: Seconds after a fault's end within which an alarm onset still detects it (the Rust
+#: engine's ``navfdi_core::metrics::GRACE``, read from it).
+GRACE: float = _core.DETECTION_GRACE
 
 
 def window_alarm(alarm: ArrayLike, t: ArrayLike, start: float, end: float) -> tuple[bool, float]:
@@ -85,7 +85,5 @@ def window_alarm(alarm: ArrayLike, t: ArrayLike, start: float, end: float) -> tu
     the alarm was already raised before the fault began and still on at its first epoch (not a
     detection), and the share of the window's epochs in alarm (NaN when no epoch lies in it).
     Computed in Rust (``navfdi._core.window_alarm``)."""
-    from navfdi import _core
-
     a = np.asarray(alarm, dtype=bool)
     return _core.window_alarm(np.asarray(t, dtype=float), a.tolist(), float(start), float(end))

@@ -141,7 +141,7 @@ def araim(
     missing = [s for s in letters if s not in ism.p_const]
     if missing:
         raise ValueError(f"ism.p_const: no constellation prior for system(s) {', '.join(missing)}")
-    per_sat = lambda v, name: np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy() if np.ndim(v) == 0 or np.size(v) == n else _bad(name, n)  # noqa: E731
+    per_sat = lambda v, name: _per_satellite(v, name, n)  # noqa: E731
     elevation = np.arcsin(np.clip(los[:, 2], -1.0, 1.0))
     tropo, user = elevation_variances(elevation)
     ci = per_sat(ism.sigma_ura, "ism.sigma_ura") ** 2 + tropo + user if c_int is None else per_sat(c_int, "c_int")
@@ -169,5 +169,8 @@ def araim(
     )
 
 
-def _bad(name: str, n: int) -> np.ndarray:
-    raise ValueError(f"{name}: expected a scalar or ({n},) values")
+def _per_satellite(v: Any, name: str, n: int) -> np.ndarray:
+    """``v`` (a scalar or (n,) values) as (n,) floats; ``ValueError`` naming ``name`` otherwise."""
+    if np.ndim(v) != 0 and np.size(v) != n:
+        raise ValueError(f"{name}: expected a scalar or ({n},) values")
+    return np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()

@@ -41,11 +41,10 @@ pub fn intervals(alarm: &[bool]) -> Vec<Interval> {
 pub const GRACE: f64 = 1.0;
 
 /// The fault (index into `windows`, `(start, end)` in s) that an alarm interval with onset at
-/// time `start` detects, by the module's rule: the latest-starting window with
-/// `w_start ≤ start ≤ w_end + GRACE`. `end` (the interval's end, None: never) is not used by
-/// the rule; it is kept for callers that pass whole intervals.
-pub fn match_interval(start: f64, end: Option<f64>, windows: &[(f64, f64)]) -> Option<usize> {
-    let _ = end;
+/// time `onset` detects, by the module's rule: the latest-starting window with
+/// `w_start ≤ onset ≤ w_end + GRACE` (the interval's end plays no part).
+pub fn match_interval(onset: f64, windows: &[(f64, f64)]) -> Option<usize> {
+    let start = onset;
     windows
         .iter()
         .enumerate()
@@ -77,7 +76,7 @@ pub fn events(t: &[f64], alarm: &[bool], windows: &[(f64, f64)]) -> Vec<(Interva
     intervals(alarm)
         .into_iter()
         .map(|iv| {
-            let m = match_interval(t[iv.0], iv.1.map(|e| t[e]), windows);
+            let m = match_interval(t[iv.0], windows);
             (iv, m)
         })
         .collect()
@@ -237,21 +236,21 @@ mod tests {
     #[test]
     fn matching_rule() {
         let w = [(300.0, 500.0), (800.0, 850.0)];
-        assert_eq!(match_interval(310.0, Some(520.0), &w), Some(0)); // onset inside
-        assert_eq!(match_interval(300.0, None, &w), Some(0)); // onset at the first epoch
-                                                              // An alarm raised before the fault and still running detects nothing.
-        assert_eq!(match_interval(290.0, Some(301.0), &w), None);
-        assert_eq!(match_interval(290.0, None, &w), None);
-        assert_eq!(match_interval(600.0, Some(810.0), &w), None); // raised between faults
-        assert_eq!(match_interval(805.0, Some(810.0), &w), Some(1));
-        assert_eq!(match_interval(501.0, Some(520.0), &w), Some(0)); // within the 1 s grace
-        assert_eq!(match_interval(502.0, Some(520.0), &w), None); // after the grace
-        assert_eq!(match_interval(100.0, Some(120.0), &w), None);
+        assert_eq!(match_interval(310.0, &w), Some(0)); // onset inside
+        assert_eq!(match_interval(300.0, &w), Some(0)); // onset at the first epoch
+                                                        // An alarm raised before the fault and still running detects nothing.
+        assert_eq!(match_interval(290.0, &w), None);
+        assert_eq!(match_interval(290.0, &w), None);
+        assert_eq!(match_interval(600.0, &w), None); // raised between faults
+        assert_eq!(match_interval(805.0, &w), Some(1));
+        assert_eq!(match_interval(501.0, &w), Some(0)); // within the 1 s grace
+        assert_eq!(match_interval(502.0, &w), None); // after the grace
+        assert_eq!(match_interval(100.0, &w), None);
         // Overlapping windows: the latest-starting fault that holds the onset.
         let w = [(100.0, 200.0), (150.0, 160.0)];
-        assert_eq!(match_interval(155.0, None, &w), Some(1));
-        assert_eq!(match_interval(160.5, None, &w), Some(1)); // in 1's grace, 0's window
-        assert_eq!(match_interval(175.0, None, &w), Some(0));
+        assert_eq!(match_interval(155.0, &w), Some(1));
+        assert_eq!(match_interval(160.5, &w), Some(1)); // in 1's grace, 0's window
+        assert_eq!(match_interval(175.0, &w), Some(0));
     }
 
     #[test]

@@ -165,9 +165,7 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
                 let me = faults.iter().position(|g| std::ptr::eq(*g, f));
                 let matched: Vec<&Interval> = ivs
                     .iter()
-                    .filter(|(s, e)| {
-                        me.is_some() && match_interval(t[*s], e.map(|e| t[e]), &windows) == me
-                    })
+                    .filter(|(s, _)| me.is_some() && match_interval(t[*s], &windows) == me)
                     .collect();
                 if let (Some(first), Some(last)) = (matched.first(), matched.last()) {
                     m.detected = true;

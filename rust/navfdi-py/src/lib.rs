@@ -155,6 +155,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scenario::run_variants, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::match_alarms, m)?)?;
     m.add_function(wrap_pyfunction!(scenario::window_alarm, m)?)?;
+    m.add("DETECTION_GRACE", navfdi_core::metrics::GRACE)?;
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
     m.add_class::<montecarlo::PyPreparedScenario>()?;
