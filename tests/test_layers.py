@@ -30,17 +30,17 @@ CORE_LAYERS = [
     {"detect", "ins", "gnss", "fusion", "integrity"},
     {"spec"},
     {"stream", "record", "metrics"},
-    {"arch", "sim"},
+    {"arch", "sim", "logs"},
     {"montecarlo"},
     {"lib"},
 ]
 
 PY_LAYERS = [
     {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
-    {"_terrain"},
+    {"_terrain", "_fields", "_lc_schema"},
     {"scenario"},
-    {"record", "demo", "gnss", "report", "integrity"},
-    {"plots"},
+    {"record", "demo", "gnss", "report", "integrity", "logs"},
+    {"plots", "plots_logged"},
     {"runs", "montecarlo"},
     {"federated", "cli", "__init__", "__main__"},
 ]

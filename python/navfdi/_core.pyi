@@ -33,6 +33,7 @@ __all__ = [
     "read_rinex_obs",
     "read_rinex_nav",
     "GnssRun",
+    "LoggedSource",
     "KalmanFilter",
     "Innovation",
     "run_filter",
@@ -869,6 +870,37 @@ def read_rinex_nav(path: str) -> dict[str, Any]:
     ``idot``, ``omega_dot`` rad/s; ``tgd`` s; ``health``; ``accuracy`` m; ``iod`` (float64
     arrays); ``unhealthy``, ``fnav`` (list[bool]); ``klobuchar`` (8 floats or None);
     ``records`` (records per system letter); ``version``."""
+
+@final
+class LoggedSource:
+    """Recorded logs prepared for a scenario (architecture ``loosely_coupled``). Internal:
+    use :func:`navfdi.run_scenario` on a scenario with a ``[source]`` table.
+
+    ``imu``: (N, 7) float array — time (s from the run's time 0), angular rate x, y, z (rad/s),
+    specific force x, y, z (m/s²), IMU axes. ``gnss``, ``reference``: (M, 13) — time (s),
+    latitude, longitude (rad), height (m), velocity east, north, up (m/s), σ of position
+    east, north, up (m) and of velocity (m/s). Raises ValueError naming the array and row."""
+
+    def __new__(cls, spec_json: str, imu: ArrayLike, gnss: ArrayLike, reference: ArrayLike | None = None) -> LoggedSource: ...
+    @property
+    def epochs(self) -> int:
+        """Number of record epochs (the GNSS log's)."""
+    @property
+    def faults_applied(self) -> list[bool]:
+        """Per fault (as given, before any draw): whether its sensor measures inside its window."""
+    @property
+    def cells(self) -> list[tuple[str, str, str, float]]:
+        """The metric cells: ``(channel, detector, fault_id or "none", pf)``."""
+    def run_chunk(self, seed: int, start: int, count: int, threads: int = 0, keep: list[int] | None = None) -> dict[str, Any]:
+        """Monte-Carlo runs ``start .. start + count``: run ``i`` draws its faults' ``draw``
+        ranges from ``(seed, i)``; the dict of arrays of :meth:`PreparedScenario.run_chunk`
+        plus ``hor_rms``, ``hor_max``, ``fault_hor_max`` (count,) in m and the drawn
+        ``fault_start``, ``fault_magnitude`` (count, faults), ``fault_kind``,
+        ``fault_components`` (lists). GIL released; Ctrl-C stops it."""
+    def run(self, spec_jsons: list[str], isolation: bool = True) -> list[dict[str, Any]]:
+        """Run each scenario (the prepared one and its variants) on the recorded measurements
+        with the prepared scenario's faults injected; one record dict per scenario, with
+        ``nav`` (T, 21) and ``nav_columns``. GIL released; Ctrl-C stops it."""
 
 @final
 class GnssRun:

@@ -227,7 +227,13 @@ class Campaign:
         ``error_rms`` (master attitude error RMS over all runs and epochs, rad),
         ``position_error_rms`` (m), ``latitude_error_rms`` (north position, m), ``fused_alt_rms`` (fused-altitude error RMS over
         the runs, m; NaN without altitude fusion), ``runs_requested`` and ``partial`` (True where the point
-        has fewer finished runs than requested: an interrupted campaign). Fault rows carry NaN
+        has fewer finished runs than requested: an interrupted campaign). Campaigns on
+        recorded logs add ``horizontal_error_rms`` (m, against the reference's non-input
+        epochs, over the runs) and ``fault_horizontal_error_max_mean``, ``_p95`` (m, each
+        run's largest horizontal error inside its fault window; mean and 95th percentile over
+        the runs); their ``runs`` table also has each run's drawn ``fault_start`` (s),
+        ``fault_magnitude`` (SI), ``fault_kind`` and ``fault_components`` on its fault rows.
+        Fault rows carry NaN
         false-alarm rates; ``none`` rows NaN detection figures. Every point × cell has a row,
         with ``runs = 0`` and NaN figures where an interrupted campaign ran none.
         """
@@ -296,6 +302,11 @@ class Campaign:
             rec["latitude_error_rms"] = float(np.sqrt(np.mean(g["lat_rms"].to_numpy() ** 2)))
             fa = g["fused_alt_rms"].to_numpy()
             rec["fused_alt_rms"] = float(np.sqrt(np.mean(fa[np.isfinite(fa)] ** 2))) if np.isfinite(fa).any() else float("nan")
+            if "hor_rms" in g:
+                hr, fm = g["hor_rms"].to_numpy(float), g["fault_hor_max"].to_numpy(float)
+                rec["horizontal_error_rms"] = float(np.sqrt(np.nanmean(hr**2))) if np.isfinite(hr).any() else math.nan
+                rec["fault_horizontal_error_max_mean"] = float(np.nanmean(fm)) if np.isfinite(fm).any() else math.nan
+                rec["fault_horizontal_error_max_p95"] = float(np.nanpercentile(fm, 95)) if np.isfinite(fm).any() else math.nan
             rows.append(rec)
             seen.add((rec["point"], rec["subfilter"], rec["detector"], rec["fault_id"]))
         for point, cells in enumerate(self.cells):
@@ -303,7 +314,8 @@ class Campaign:
                 if (point, sub, det, fid) not in seen:
                     rec = {"point": point, **{c: self.points[point][c] for c in self.sweep_columns}, "subfilter": sub, "detector": det, "fault_id": fid, "pf": float(pf), "runs": 0}
                     rows.append(rec)
-        cols = [*keys, "runs", *SUMMARY_FIGURES]
+        extra = ["horizontal_error_rms", "fault_horizontal_error_max_mean", "fault_horizontal_error_max_p95"] if "hor_rms" in df else []
+        cols = [*keys, "runs", *SUMMARY_FIGURES, *extra]
         out = pd.DataFrame(rows, columns=cols) if rows else pd.DataFrame(columns=cols)
         if rows:
             order = {(p, c[0], c[1], c[2]): i for p, cells in enumerate(self.cells) for i, c in enumerate(cells)}
@@ -343,6 +355,11 @@ class Campaign:
                 lines.append("· " + ", ".join(f"{k} = {v}" for k, v in zip(keys, key)))
             r0 = g.iloc[0]
             err = f"  error RMS: attitude {r0['error_rms'] * arcsec:.2f} arcsec, position {r0['position_error_rms']:.3f} m, latitude {r0['latitude_error_rms']:.3f} m"
+            if "horizontal_error_rms" in g:
+                err = f"  horizontal error RMS {r0['horizontal_error_rms']:.3f} m"
+                fm = g["fault_horizontal_error_max_mean"].to_numpy(float)
+                if np.isfinite(fm).any():
+                    err += f"; largest in the fault: mean {np.nanmax(fm):.2f} m, p95 {np.nanmax(g['fault_horizontal_error_max_p95'].to_numpy(float)):.2f} m"
             if r0["fused_alt_rms"] == r0["fused_alt_rms"]:
                 err += f", fused altitude {r0['fused_alt_rms']:.3f} m"
             lines.append(err)
@@ -448,7 +465,7 @@ class Campaign:
         )
 
 
-def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[str, str, str, float]]], points: list[dict[str, Any]]):
+def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[str, str, str, float]]], points: list[dict[str, Any]], fault_ids: Sequence[str] = ()):
     import pandas as pd
 
     frames = []
@@ -468,6 +485,15 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             cols[k] = ch[k].reshape(-1)
         for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max", "fused_alt_rms", "fused_alt_max"):
             cols[k] = np.repeat(ch[k], c)
+        if "fault_start" in ch:
+            # Campaigns on recorded logs: each run's drawn fault on its fault rows (NaN / "" on
+            # the "none" rows) and the horizontal errors against the reference.
+            col = {f: j for j, f in enumerate(fault_ids)}
+            for k, fill in (("fault_start", np.nan), ("fault_magnitude", np.nan), ("fault_kind", ""), ("fault_components", "")):
+                v = np.asarray(ch[k], dtype=object if fill == "" else float).reshape(n, -1)
+                cols[k] = [v[r, col[f]] if f in col and col[f] < v.shape[1] else fill for r in range(n) for f in fid]
+            for k in ("hor_rms", "hor_max", "fault_hor_max"):
+                cols[k] = np.repeat(ch[k], c)
         for path, value in points[point].items():
             cols[path] = [value] * (n * c)
         frames.append(pd.DataFrame(cols))
@@ -596,7 +622,15 @@ def montecarlo(
     # campaign holds about as many runs of each point and still compares them.
     tasks = [(p, s, min(chunk_size, runs - s)) for s in range(0, runs, chunk_size) for p in range(len(points))]
     jsons = [sc.to_json() for sc in scenarios]
-    prepared = [_prepared(j) if client is None else _core.PreparedScenario(j) for j in jsons]
+    logged = "source" in base.raw
+    if logged and client is not None:
+        raise ValueError("client: a campaign on recorded logs runs in this process (its logs are not shipped to Dask workers); leave client unset")
+    if logged:
+        from navfdi import logs
+
+        prepared: list[Any] = [logs.logged_source(sc) for sc in scenarios]
+    else:
+        prepared = [_prepared(j) if client is None else _core.PreparedScenario(j) for j in jsons]
     cells = [pr.cells for pr in prepared]
     never = [{f["id"] for f, ok in zip(sc.faults(), pr.faults_applied) if not ok} for sc, pr in zip(scenarios, prepared)]
     for pi, ids in enumerate(never):
@@ -615,7 +649,8 @@ def montecarlo(
     try:
         if client is None:
             for p, s, c in tasks:
-                ch = _chunk(jsons[p], int(seed), s, c, threads, tuple(k for k in keep if s <= k < s + c))
+                kept = tuple(k for k in keep if s <= k < s + c)
+                ch = prepared[p].run_chunk(int(seed), s, c, threads, list(kept)) if logged else _chunk(jsons[p], int(seed), s, c, threads, kept)
                 done.append((p, ch))
                 if bar is not None:
                     bar.update(c)
@@ -641,5 +676,5 @@ def montecarlo(
         if bar is not None:
             bar.close()
     series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
-    runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points)
+    runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points, [f["id"] for f in base.faults()])
     return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names, never)

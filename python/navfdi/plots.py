@@ -28,7 +28,9 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     * ``channel_statistics.png`` (ultra-tight): every channel's statistic against the
       threshold, faulty channels highlighted, exclusions marked (paper 004's Fig. 11–15);
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
-      isolation.
+      isolation (simulated runs);
+    * runs on recorded logs: every GNSS channel's detectors, and ``track.png``,
+      ``errors.png``, ``biases.png`` (:func:`navfdi.plots_logged.plot_logged`).
 
     Returns the paths written.
     """
@@ -43,7 +45,7 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     for s in run.record["subfilters"]:
         sub = s["sensor"]
         mine = [f for f in faults if fault_on(f, sub)]
-        if not mine:
+        if not mine and ("nav" not in run.record or sub in ("zupt", "nhc")):
             continue
         for d in s["detectors"]:
             fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
@@ -122,6 +124,11 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
         paths += _plot_altitude(run, out, prefix, plt)
     if run.scenario.core.get("architecture") == "ultra_tight":
         paths.append(_plot_channels(run, out, prefix, plt))
+    if "nav" in run.record:
+        # Recorded logs: no attitude reference; the track, errors and biases instead.
+        from navfdi.plots_logged import plot_logged
+
+        return paths + plot_logged(run, out, prefix)
     fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
     arcsec = np.degrees(1.0) * 3600
     sigma = run.record["sigma"]
@@ -265,6 +272,11 @@ def _isolating_detector(run: RunRecord, sub: str) -> str | None:
     if core.get("architecture") == "ultra_tight":
         u = core["ultra_tight"]
         return str(u["method"]) if u["exclude"] else None
+    if core.get("architecture") == "loosely_coupled":
+        for cs in core["loosely_coupled"]["sensors"]:
+            if cs["sensor"] == sub:
+                return cs.get("decision")
+        return None
     if core.get("architecture", "federated") == "centralized":
         for cs in core["centralized"]["sensors"]:
             if cs["sensor"] == sub:
@@ -288,6 +300,29 @@ def plot_variant_errors(runs, out: Path) -> list[Path]:
 
     fig, axes = plt.subplots(3, 1, figsize=(9, 7.5), sharex=True, constrained_layout=True)
     first = next(iter(runs.runs.values()))
+    if "nav" in first.record:
+        # Recorded logs: horizontal and vertical error at the scored epochs.
+        plt.close(fig)
+        fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
+        for gi, (name, r) in enumerate(runs.runs.items()):
+            e = r.record["error"]
+            ok = np.isfinite(e[:, 6])
+            rms = r.errors()["hor_rms"]
+            axes[0].plot(r.t[ok], np.hypot(e[ok, 6], e[ok, 7]), lw=0.8, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, int(ok.sum()) // 25), ms=3, label=f"{name} (RMS {rms:.3f} m)")
+            axes[1].plot(r.t[ok], e[ok, 8], lw=0.8, marker=MARKERS[gi % len(MARKERS)], markevery=max(1, int(ok.sum()) // 25), ms=3, label=name)
+        for ax, label in zip(axes, ["horizontal error [m]", "up error [m]"]):
+            for f in first.scenario.faults():
+                ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+            ax.set_ylabel(label)
+            ax.grid(alpha=0.3)
+        axes[0].set_yscale("symlog", linthresh=0.1)
+        axes[0].legend(fontsize=8)
+        axes[0].set_title(f"{first.scenario.name}: error per variant against the reference's non-input epochs; faults shaded", fontsize=10)
+        axes[-1].set_xlabel("time [s]")
+        p = out / "variant_errors.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        return [p]
     for ax, (col, label) in zip(axes, [(7, "latitude (north) error [m]"), (6, "east error [m]"), (8, "up error [m]")]):
         for f in first.scenario.faults():
             ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)

@@ -280,7 +280,12 @@ class ScenarioRun(RunRecord):
         sat_lines = self._satellite_lines()
         if sat_lines:
             lines += sat_lines + [""]
-        if self.baseline is not None:
+        if "nav" in self.record:
+            e = self.errors()
+            lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
+            for name, _, _ in self.windows():
+                lines.append(f"  {name}: horizontal RMS {e[name + '.hor_rms']:.3f} m, max {e[name + '.hor_max']:.3f} m")
+        elif self.baseline is not None:
             lines.append(self._error_summary())
         return fit("\n".join(lines).rstrip() + "\n")
 
@@ -357,6 +362,14 @@ class ScenarioRun(RunRecord):
                     cols[f"sat.{nm}.in_view"] = sat["in_view"][:, j]
                     cols[f"sat.{nm}.excluded"] = sat["excluded"][:, j]
                     cols[f"sat.{nm}.w"] = sat["w"][:, j]
+        nav = self.record.get("nav")
+        if nav is not None:
+            cols["time"] = self.t
+            for j, c in enumerate(self.record["nav_columns"]):
+                v = nav[:, j]
+                if c in ("lat", "lon", "roll", "pitch", "yaw"):
+                    c, v = f"{c}_deg", np.degrees(v)
+                cols[c] = v
         for i, c in enumerate(ERROR_COLUMNS):
             cols[f"error.{c}"] = self.record["error"][:, i]
             cols[f"sigma.{c}"] = self.record["sigma"][:, i]
@@ -372,6 +385,8 @@ class ScenarioRun(RunRecord):
         also ``fused_alt_rms``, ``fused_alt_max`` (m, error of the fused altitude measurement
         over the epochs it existed) and ``fused_alt_predict_only`` (fraction of epochs in which
         no sensor contributed)."""
+        if "nav" in self.record:
+            return self._logged_errors()
         e = self.record["error"]
         cols = dict(zip(ERROR_COLUMNS, e.T))
         cols["lat_m"] = cols["pos_n"]
@@ -386,6 +401,47 @@ class ScenarioRun(RunRecord):
             out["fused_alt_rms"] = float(np.sqrt(np.mean(f[ok] ** 2))) if ok.any() else float("nan")
             out["fused_alt_max"] = float(np.max(np.abs(f[ok]))) if ok.any() else float("nan")
             out["fused_alt_predict_only"] = float(1.0 - ok.mean())
+        return out
+
+    def windows(self) -> list[tuple[str, float, float]]:
+        """Scoring windows of a logged run: ``(name, start, end)`` (s) per sensor outage
+        (``outage[start-end]``) and fault (``fault id``)."""
+        out: list[tuple[str, float, float]] = []
+        for sen in self.scenario.core["sensors"]:
+            for a, b in sen.get("outages", []):
+                name = f"outage[{a:g}-{b:g}]"
+                if all(n != name for n, _, _ in out):
+                    out.append((name, a, b))
+        out += [(f["id"], f["start"], f["end"]) for f in self.scenario.faults()]
+        return out
+
+    def _logged_errors(self) -> dict[str, float]:
+        """Errors of a run on recorded logs against its reference, over the epochs the
+        reference scores (not used as input): ``hor_rms``, ``hor_max`` (m, horizontal),
+        ``ver_rms``, ``ver_max`` (m), ``vel_rms``, ``vel_max`` (m/s, 3-D), ``scored`` (epochs),
+        and the same horizontal/vertical numbers per outage and fault window
+        (``{window}.hor_rms`` ...)."""
+        e = self.record["error"]
+        hor = np.hypot(e[:, 6], e[:, 7])
+        ver = np.abs(e[:, 8])
+        vel = np.linalg.norm(e[:, 3:6], axis=1)
+        ok = np.isfinite(hor)
+
+        def stats(sel: np.ndarray, prefix: str) -> dict[str, float]:
+            m = sel & ok
+            if not m.any():
+                return {f"{prefix}hor_rms": float("nan"), f"{prefix}hor_max": float("nan"), f"{prefix}ver_rms": float("nan"), f"{prefix}ver_max": float("nan")}
+            return {
+                f"{prefix}hor_rms": float(np.sqrt(np.mean(hor[m] ** 2))), f"{prefix}hor_max": float(hor[m].max()),
+                f"{prefix}ver_rms": float(np.sqrt(np.mean(ver[m] ** 2))), f"{prefix}ver_max": float(ver[m].max()),
+            }
+
+        out = stats(np.ones_like(ok), "")
+        out["vel_rms"] = float(np.sqrt(np.mean(vel[ok] ** 2))) if ok.any() else float("nan")
+        out["vel_max"] = float(vel[ok].max()) if ok.any() else float("nan")
+        out["scored"] = float(ok.sum())
+        for name, a, b in self.windows():
+            out.update(stats((self.t >= a) & (self.t < b), f"{name}."))
         return out
 
     def summary(self) -> dict[str, Any]:
@@ -431,6 +487,12 @@ class ScenarioRun(RunRecord):
         """The numbers a reader of the report looks for first: navigation-error RMS and, per
         fault and deciding detector, detection, delay, onset and share in alarm."""
         e = self.errors()
+        if "nav" in self.record:
+            head: dict[str, Any] = {"horizontal error RMS [m]": e["hor_rms"], "horizontal error max [m]": e["hor_max"], "vertical error RMS [m]": e["ver_rms"]}
+            for m in self.fault_table():
+                key = f"{m.fault_id} · {m.subfilter}/{m.detector}"
+                head[f"{key}: delay [s]"] = float("nan") if m.delay is None else m.delay
+            return head
         out: dict[str, Any] = {"latitude error RMS [m]": e["lat_m_rms"], "east error RMS [m]": e["pos_e_rms"], "up error RMS [m]": e["pos_u_rms"], "attitude error RMS [arcsec]": float(np.degrees(np.sqrt((e["att_e_rms"] ** 2 + e["att_n_rms"] ** 2 + e["att_u_rms"] ** 2) / 3)) * 3600)}
         if "fused_alt_rms" in e:
             out["fused altitude error RMS [m]"] = e["fused_alt_rms"]
@@ -518,6 +580,15 @@ class VariantRuns:
         if any(r.fault_table() for r in self.runs.values()):
             parts.append("\n".join(FAULT_TABLE_LEGEND) + "\n")
         err = self.errors()
+        if "hor_rms" in err.columns:
+            lines = ["navigation error per variant against the reference epochs not used as input: RMS / max"]
+            lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
+            first = next(iter(self.runs.values()))
+            for _, row in err.iterrows():
+                for name in ["", *[w[0] + "." for w in first.windows()]]:
+                    lines.append(f"  {row['variant']:<14} {(name[:-1] or 'whole run'):<22} {row[name + 'hor_rms']:>8.3f} / {row[name + 'hor_max']:<7.3f} {row[name + 'ver_rms']:>8.3f} / {row[name + 'ver_max']:<7.3f}")
+            parts.append("\n".join(lines) + "\n")
+            return fit("\n".join(parts))
         lines = ["navigation error per variant (whole run): RMS / max"]
         lines.append(f"  {'variant':<14} {'lat [m]':>16} {'east [m]':>16} {'up [m]':>16} {'vel N [m/s]':>16}")
         for _, row in err.iterrows():
@@ -634,6 +705,8 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or not 0 <= seed < 2**64:
         raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
+    if "source" in sc.raw:
+        return _run_logged(sc, int(seed), compare_isolation)
     if sc.variant_names():
         variants = sc.variants()
         recs = _core.run_variants([v.to_json() for _, v in variants], int(seed))
@@ -642,6 +715,23 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     recs = _core.run_scenario(sc.to_json(), int(seed), 0, [True, False] if compare_isolation else [True])
     _warn_never_applied(sc, recs[0])
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
+
+
+def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun | VariantRuns:
+    """A scenario on recorded logs: its faults injected into the recorded measurements, every
+    variant on the same ones (see :mod:`navfdi.logs`)."""
+    from . import logs
+
+    src = logs.logged_source(sc)
+    if sc.variant_names():
+        variants = sc.variants()
+        recs = src.run([v.to_json() for _, v in variants])
+        _warn_never_applied(sc, recs[0])
+        return VariantRuns(sc, seed, {name: ScenarioRun(v, seed, rec, None, name) for (name, v), rec in zip(variants, recs)})
+    recs = src.run([sc.to_json()])
+    base = src.run([sc.to_json()], isolation=False)[0] if compare_isolation else None
+    _warn_never_applied(sc, recs[0])
+    return ScenarioRun(sc, seed, recs[0], base)
 
 
 def _error_unit(c: str) -> str:

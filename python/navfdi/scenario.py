@@ -30,7 +30,9 @@ from navfdi import _core
 from navfdi._errors import NeverAppliedWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
 from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._terrain import check_terrain
-from navfdi.units import UNITS, UnitError, parse, split
+from navfdi.units import UNITS, UnitError, split
+from navfdi._fields import _bool, _check_keys, _count, _detectors, _list, _name, _need, _number, _str, _unit
+from navfdi._lc_schema import _loosely_coupled
 
 
 #: Component names and dimensions per sensor kind (order = measurement order).
@@ -247,95 +249,8 @@ _INS = {
 }
 
 
-def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
-    if not isinstance(d, Mapping):
-        raise ScenarioError(f"{path}: expected a table, got {type(d).__name__}")
-    if key not in d:
-        raise ScenarioError(f"{path + '.' if path else ''}{key}: missing")
-    return d[key]
-
-
-def _check_keys(d: Mapping[str, Any], allowed: set[str], path: str) -> None:
-    if not isinstance(d, Mapping):
-        raise ScenarioError(f"{path or 'scenario'} = {d!r}: expected a table")
-    extra = sorted(str(k) for k in set(d) - allowed)
-    if extra:
-        where = path or "scenario"
-        raise ScenarioError(f"{where}: unknown field(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
-
-
-def _list(v: Any, path: str) -> list[Any]:
-    if not isinstance(v, list):
-        raise ScenarioError(f"{path}: expected a list, got {type(v).__name__}")
-    return v
-
-
-def _str(v: Any, path: str) -> str:
-    if not isinstance(v, str):
-        raise ScenarioError(f"{path} = {v!r}: expected a string")
-    return v
-
-
-def _name(v: Any, path: str) -> str:
-    """A non-empty name without surrounding white space."""
-    s = _str(v, path)
-    if not s.strip():
-        raise ScenarioError(f"{path} = {v!r}: must not be empty")
-    if s != s.strip():
-        raise ScenarioError(f"{path} = {v!r}: must not start or end with white space")
-    return s
-
-
-def _number(v: Any, path: str) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-        raise ScenarioError(f"{path} = {v!r}: expected a finite number")
-    return float(v)
-
-
-def _count(v: Any, path: str) -> int:
-    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
-        raise ScenarioError(f"{path} = {v!r}: expected an integer >= 1")
-    return v
-
-
-def _bool(v: Any, path: str) -> bool:
-    """A TOML boolean; anything else names the field."""
-    if not isinstance(v, bool):
-        raise ScenarioError(f"{path} = {v!r}: expected true or false")
-    return v
-
-
-def _unit(v: Any, dim: str, path: str) -> float:
-    try:
-        return parse(v, dim, path)
-    except UnitError as e:
-        raise ScenarioError(str(e)) from None
-
-
-def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
-    """The ``detectors`` list of a sub-filter or centralized sensor at path ``p``."""
-    dets = []
-    for j, d in enumerate(_list(value, f"{p}.detectors")):
-        dp = f"{p}.detectors[{j}]"
-        _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
-        kind = _str(_need(d, "kind", dp), f"{dp}.kind")
-        if kind not in ("chi2", "sprt", "joint", "state_chi2"):
-            raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt, joint or state_chi2")
-        dets.append(
-            {
-                "name": _name(d.get("name", kind), f"{dp}.name"),
-                "kind": kind,
-                "pf": _number(_need(d, "pf", dp), f"{dp}.pf"),
-                "pm": None if "pm" not in d else _number(d["pm"], f"{dp}.pm"),
-                "variance": None if "variance" not in d else _str(d["variance"], f"{dp}.variance"),
-                "min_samples": None if "min_samples" not in d else _count(d["min_samples"], f"{dp}.min_samples"),
-            }
-        )
-    return dets
-
-
 #: Top-level fields a variant may override: the filter, never what is simulated.
-VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "ultra_tight", "state_chi2")
+VARIANT_FIELDS = ("architecture", "federated", "centralized", "tight", "ultra_tight", "loosely_coupled", "state_chi2")
 
 #: Names of the filter states, in order (15 INS error states; 17 with a receiver clock).
 STATE_NAMES = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "lat", "lon", "h", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "clock_bias", "clock_drift"]
@@ -441,14 +356,188 @@ def _altitude_fusion(a: Any) -> dict[str, Any]:
     }
 
 
+def _magnitude(mag_raw: Any, kind: str, comps: list[tuple[str, str]], idx: list[int], noise: list[float], sensor: str, p: str) -> float:
+    """A fault magnitude in SI: the faulted components' unit (per s for ramps, per s² for
+    quadratics) or a multiple of the sensor's noise σ (``p``: the field path)."""
+    per = {"step": "", "ramp": "/s", "quadratic": "/s2"}
+    try:
+        number, unit = split(mag_raw, f"{p}.magnitude")
+    except UnitError as e:
+        raise ScenarioError(str(e)) from None
+    suffix = per[kind]
+    dims_early = {d for _, d in (comps[j] for j in idx)}
+    if dims_early == {"velocity"} and kind != "step":
+        # A velocity ramp (quadratic) is a velocity per second (squared): m/s² (m/s³).
+        alias = {"ramp": {"m/s2": "m/s/s", "m/s^2": "m/s/s", "m/s²": "m/s/s"}, "quadratic": {"m/s3": "m/s/s2", "m/s^3": "m/s/s2", "m/s³": "m/s/s2"}}[kind]
+        unit = alias.get(unit, unit)
+    if not unit.endswith(suffix) or (suffix == "/s" and unit.endswith("/s2")):
+        raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: a {kind} needs a unit ending in {suffix!r}" if suffix else f"{p}.magnitude = {mag_raw!r}: a step takes a plain unit (no /s)")
+    base = unit[: len(unit) - len(suffix)] if suffix else unit
+    dims = {d for _, d in (comps[j] for j in idx)}
+    if base == "sigma":
+        sig = [noise[j] for j in idx]
+        if max(sig) - min(sig) > 1e-12 * max(sig):
+            raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: components with different noise cannot share a sigma magnitude; split the fault")
+        return number * sig[0]
+    else:
+        if len(dims) != 1:
+            raise ScenarioError(f"{p}.components: mixes {', '.join(sorted(dims))}; split the fault or use a sigma magnitude")
+        dim = dims.pop()
+        if base not in UNITS[dim]:
+            if kind == "step":
+                want = ", ".join(UNITS[dim])
+            elif dim == "velocity":
+                want = "m/s2" if kind == "ramp" else "m/s3"
+            else:
+                want = ", ".join(f"{u}{suffix}" for u in UNITS[dim])
+            what = {"step": dim, "ramp": f"{dim} per second", "quadratic": f"{dim} per second squared"}[kind]
+            raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {what}: a {kind} on {sensor}'s {dim} component(s) takes {want} (or sigma{suffix})")
+        return number * UNITS[dim][base]
+
+
+def _component_set(v: Any, names: list[str], p: str) -> list[int]:
+    idx: list[int] = []
+    for j, c in enumerate(_list(v, p)):
+        if c not in names:
+            raise ScenarioError(f"{p}[{j}] = {c!r}: not a component ({', '.join(names)})")
+        if names.index(c) in idx:
+            raise ScenarioError(f"{p}[{j}] = {c!r}: listed twice")
+        idx.append(names.index(c))
+    if not idx:
+        raise ScenarioError(f"{p}: at least one component is required")
+    return idx
+
+
+def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise: list[float], sensor: str) -> dict[str, Any]:
+    """``faults[i].draw``: what a Monte-Carlo campaign on recorded logs draws per run —
+    ``start = [lo, hi]`` (the window's length kept), ``components = [[...], ...]`` (sets to
+    choose from) and ``shapes = [{kind, magnitude = [lo, hi]}, ...]``."""
+    q = f"{p}.draw"
+    _check_keys(d, {"start", "components", "shapes"}, q)
+    out: dict[str, Any] = {"start": None, "components": [], "shapes": []}
+    if "start" in d:
+        r = _list(d["start"], f"{q}.start")
+        if len(r) != 2:
+            raise ScenarioError(f"{q}.start: expected [low, high], got {r!r}")
+        out["start"] = [_unit(r[0], "time", f"{q}.start[0]"), _unit(r[1], "time", f"{q}.start[1]")]
+    for j, cs in enumerate(_list(d.get("components", []), f"{q}.components")):
+        out["components"].append(_component_set(cs, names, f"{q}.components[{j}]"))
+    sets = out["components"] or [list(range(len(comps)))]
+    for j, sh in enumerate(_list(d.get("shapes", []), f"{q}.shapes")):
+        sp = f"{q}.shapes[{j}]"
+        _check_keys(sh, {"kind", "magnitude"}, sp)
+        kind = _str(_need(sh, "kind", sp), f"{sp}.kind")
+        if kind not in ("step", "ramp", "quadratic"):
+            raise ScenarioError(f"{sp}.kind = {kind!r}: use step, ramp or quadratic")
+        r = _list(_need(sh, "magnitude", sp), f"{sp}.magnitude")
+        if len(r) != 2:
+            raise ScenarioError(f"{sp}.magnitude: expected [low, high], got {r!r}")
+        lo, hi = (_magnitude(v, kind, comps, sets[0], noise, sensor, sp) for v in r)
+        out["shapes"].append([kind, [lo, hi]])
+    return out
+
+
+def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
+    """Convert ``[[sensors]]`` and ``[[faults]]`` into ``core``."""
+    sensors = []
+    noise_si: dict[str, list[float]] = {}
+    kinds: dict[str, str] = {}
+    for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
+        p = f"sensors[{i}]"
+        _check_keys(s, {"name", "kind", "noise", "bias", "proportional_noise", "rate", "outages", "ranges"}, p)
+        name = _name(_need(s, "name", p), f"{p}.name")
+        kind = _str(_need(s, "kind", p), f"{p}.kind")
+        if kind not in SENSOR_COMPONENTS:
+            raise ScenarioError(f"{p}.kind = {kind!r}: unknown sensor (use one of: {', '.join(SENSOR_COMPONENTS)})")
+        comps = SENSOR_COMPONENTS[kind]
+        noise = _need(s, "noise", p)
+        ns = _per_component(noise, comps, kind, f"{p}.noise", positive=True)
+        bias = [] if "bias" not in s else _per_component(s["bias"], comps, kind, f"{p}.bias", positive=False)
+        outages = []
+        for j, w in enumerate(_list(s.get("outages", []), f"{p}.outages")):
+            w = _list(w, f"{p}.outages[{j}]")
+            if len(w) != 2:
+                raise ScenarioError(f"{p}.outages[{j}]: expected [start, end], got {w!r}")
+            outages.append([_unit(w[0], "time", f"{p}.outages[{j}][0]"), _unit(w[1], "time", f"{p}.outages[{j}][1]")])
+        entry: dict[str, Any] = {"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages}
+        if bias:
+            entry["bias"] = bias
+        if "proportional_noise" in s:
+            if kind != "radio_altimeter":
+                raise ScenarioError(f"{p}.proportional_noise: only a radio_altimeter's noise scales with the height above the terrain (this one is {kind})")
+            frac = _unit(s["proportional_noise"], "fraction", f"{p}.proportional_noise")
+            if not 0 < frac < 1:
+                raise ScenarioError(f"{p}.proportional_noise = {s['proportional_noise']!r}: must be between 0 % and 100 % (exclusive)")
+            entry["proportional_noise"] = frac
+        if kind == "gnss_ranges":
+            entry["ranges"] = _ranges(_need(s, "ranges", p), f"{p}.ranges")
+        elif "ranges" in s:
+            raise ScenarioError(f"{p}.ranges: only a gnss_ranges sensor has satellites (this one is {kind})")
+        sensors.append(entry)
+        noise_si[name] = ns
+        kinds[name] = kind
+    core["sensors"] = sensors
+
+    faults = []
+    for i, f in enumerate(_list(raw.get("faults", []), "faults")):
+        p = f"faults[{i}]"
+        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end", "satellite", "draw"}, p)
+        sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
+        if sensor not in kinds:
+            raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(repr(k) for k in kinds)})")
+        comps = SENSOR_COMPONENTS[kinds[sensor]]
+        names = [c for c, _ in comps]
+        want = _need(f, "components", p)
+        if want == "all":
+            idx = list(range(len(comps)))
+        else:
+            idx = []
+            for j, c in enumerate(_list(want, f"{p}.components")):
+                if c not in names:
+                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: not a component of {sensor} ({', '.join(names)})")
+                if names.index(c) in idx:
+                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: listed twice (the fault would be added twice)")
+                idx.append(names.index(c))
+            if not idx:
+                raise ScenarioError(f"{p}.components: at least one component is required (or \"all\")")
+        kind = _str(_need(f, "kind", p), f"{p}.kind")
+        per = {"step": "", "ramp": "/s", "quadratic": "/s2"}
+        if kind not in per:
+            raise ScenarioError(f"{p}.kind = {kind!r}: use step, ramp or quadratic")
+        magnitude = _magnitude(_need(f, "magnitude", p), kind, comps, idx, noise_si[sensor], sensor, p)
+        fault: dict[str, Any] = {
+                "id": _name(_need(f, "id", p), f"{p}.id"),
+                "sensor": sensor,
+                "components": idx,
+                "kind": kind,
+                "magnitude": magnitude,
+                "start": _unit(_need(f, "start", p), "time", f"{p}.start"),
+                "end": _unit(_need(f, "end", p), "time", f"{p}.end"),
+        }
+        if "satellite" in f:
+            fault["satellite"] = _name(f["satellite"], f"{p}.satellite")
+        if "draw" in f:
+            fault["draw"] = _draw(f["draw"], p, comps, names, noise_si[sensor], sensor)
+        faults.append(fault)
+    core["faults"] = faults
+
+
+
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "terrain", "state_chi2", "modes", "variants"}, "")
+    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "loosely_coupled", "source", "terrain", "state_chi2", "modes", "variants"}, "")
+    logged = raw.get("architecture") == "loosely_coupled"
+    if logged and "source" not in raw:
+        raise ScenarioError("source: required by architecture = \"loosely_coupled\" (the IMU and GNSS logs the strapdown INS runs on)")
+    if "source" in raw and not logged:
+        raise ScenarioError("source: recorded logs run only with architecture = \"loosely_coupled\" so far")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
         "dt": _unit(_need(raw, "dt", ""), "time", "dt"),
     }
+    if logged:
+        return _convert_logged(raw, core)
     tr = _need(raw, "trajectory", "")
     if isinstance(tr, Mapping) and "waypoints" in tr:
         tr = _waypoints(tr, core["duration"])
@@ -493,122 +582,10 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     _check_keys(ins, set(_INS), "ins")
     core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}
 
-    sensors = []
-    noise_si: dict[str, list[float]] = {}
-    kinds: dict[str, str] = {}
-    for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
-        p = f"sensors[{i}]"
-        _check_keys(s, {"name", "kind", "noise", "bias", "proportional_noise", "rate", "outages", "ranges"}, p)
-        name = _name(_need(s, "name", p), f"{p}.name")
-        kind = _str(_need(s, "kind", p), f"{p}.kind")
-        if kind not in SENSOR_COMPONENTS:
-            raise ScenarioError(f"{p}.kind = {kind!r}: unknown sensor (use one of: {', '.join(SENSOR_COMPONENTS)})")
-        comps = SENSOR_COMPONENTS[kind]
-        noise = _need(s, "noise", p)
-        ns = _per_component(noise, comps, kind, f"{p}.noise", positive=True)
-        bias = [] if "bias" not in s else _per_component(s["bias"], comps, kind, f"{p}.bias", positive=False)
-        outages = []
-        for j, w in enumerate(_list(s.get("outages", []), f"{p}.outages")):
-            w = _list(w, f"{p}.outages[{j}]")
-            if len(w) != 2:
-                raise ScenarioError(f"{p}.outages[{j}]: expected [start, end], got {w!r}")
-            outages.append([_unit(w[0], "time", f"{p}.outages[{j}][0]"), _unit(w[1], "time", f"{p}.outages[{j}][1]")])
-        entry: dict[str, Any] = {"name": name, "kind": kind, "noise": ns, "rate": _unit(_need(s, "rate", p), "frequency", f"{p}.rate"), "outages": outages}
-        if bias:
-            entry["bias"] = bias
-        if "proportional_noise" in s:
-            if kind != "radio_altimeter":
-                raise ScenarioError(f"{p}.proportional_noise: only a radio_altimeter's noise scales with the height above the terrain (this one is {kind})")
-            frac = _unit(s["proportional_noise"], "fraction", f"{p}.proportional_noise")
-            if not 0 < frac < 1:
-                raise ScenarioError(f"{p}.proportional_noise = {s['proportional_noise']!r}: must be between 0 % and 100 % (exclusive)")
-            entry["proportional_noise"] = frac
-        if kind == "gnss_ranges":
-            entry["ranges"] = _ranges(_need(s, "ranges", p), f"{p}.ranges")
-        elif "ranges" in s:
-            raise ScenarioError(f"{p}.ranges: only a gnss_ranges sensor has satellites (this one is {kind})")
-        sensors.append(entry)
-        noise_si[name] = ns
-        kinds[name] = kind
-    core["sensors"] = sensors
-
-    faults = []
-    for i, f in enumerate(_list(raw.get("faults", []), "faults")):
-        p = f"faults[{i}]"
-        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end", "satellite"}, p)
-        sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
-        if sensor not in kinds:
-            raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(repr(k) for k in kinds)})")
-        comps = SENSOR_COMPONENTS[kinds[sensor]]
-        names = [c for c, _ in comps]
-        want = _need(f, "components", p)
-        if want == "all":
-            idx = list(range(len(comps)))
-        else:
-            idx = []
-            for j, c in enumerate(_list(want, f"{p}.components")):
-                if c not in names:
-                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: not a component of {sensor} ({', '.join(names)})")
-                if names.index(c) in idx:
-                    raise ScenarioError(f"{p}.components[{j}] = {c!r}: listed twice (the fault would be added twice)")
-                idx.append(names.index(c))
-            if not idx:
-                raise ScenarioError(f"{p}.components: at least one component is required (or \"all\")")
-        kind = _str(_need(f, "kind", p), f"{p}.kind")
-        per = {"step": "", "ramp": "/s", "quadratic": "/s2"}
-        if kind not in per:
-            raise ScenarioError(f"{p}.kind = {kind!r}: use step, ramp or quadratic")
-        mag_raw = _need(f, "magnitude", p)
-        try:
-            number, unit = split(mag_raw, f"{p}.magnitude")
-        except UnitError as e:
-            raise ScenarioError(str(e)) from None
-        suffix = per[kind]
-        dims_early = {d for _, d in (comps[j] for j in idx)}
-        if dims_early == {"velocity"} and kind != "step":
-            # A velocity ramp (quadratic) is a velocity per second (squared): m/s² (m/s³).
-            alias = {"ramp": {"m/s2": "m/s/s", "m/s^2": "m/s/s", "m/s²": "m/s/s"}, "quadratic": {"m/s3": "m/s/s2", "m/s^3": "m/s/s2", "m/s³": "m/s/s2"}}[kind]
-            unit = alias.get(unit, unit)
-        if not unit.endswith(suffix) or (suffix == "/s" and unit.endswith("/s2")):
-            raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: a {kind} needs a unit ending in {suffix!r}" if suffix else f"{p}.magnitude = {mag_raw!r}: a step takes a plain unit (no /s)")
-        base = unit[: len(unit) - len(suffix)] if suffix else unit
-        dims = {d for _, d in (comps[j] for j in idx)}
-        if base == "sigma":
-            sig = [noise_si[sensor][j] for j in idx]
-            if max(sig) - min(sig) > 1e-12 * max(sig):
-                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: components with different noise cannot share a sigma magnitude; split the fault")
-            magnitude = number * sig[0]
-        else:
-            if len(dims) != 1:
-                raise ScenarioError(f"{p}.components: mixes {', '.join(sorted(dims))}; split the fault or use a sigma magnitude")
-            dim = dims.pop()
-            if base not in UNITS[dim]:
-                if kind == "step":
-                    want = ", ".join(UNITS[dim])
-                elif dim == "velocity":
-                    want = "m/s2" if kind == "ramp" else "m/s3"
-                else:
-                    want = ", ".join(f"{u}{suffix}" for u in UNITS[dim])
-                what = {"step": dim, "ramp": f"{dim} per second", "quadratic": f"{dim} per second squared"}[kind]
-                raise ScenarioError(f"{p}.magnitude = {mag_raw!r}: unknown unit {base!r} for {what}: a {kind} on {sensor}'s {dim} component(s) takes {want} (or sigma{suffix})")
-            magnitude = number * UNITS[dim][base]
-        fault: dict[str, Any] = {
-                "id": _name(_need(f, "id", p), f"{p}.id"),
-                "sensor": sensor,
-                "components": idx,
-                "kind": kind,
-                "magnitude": magnitude,
-                "start": _unit(_need(f, "start", p), "time", f"{p}.start"),
-                "end": _unit(_need(f, "end", p), "time", f"{p}.end"),
-        }
-        if "satellite" in f:
-            fault["satellite"] = _name(f["satellite"], f"{p}.satellite")
-        faults.append(fault)
-    core["faults"] = faults
-
+    _sensors_and_faults(raw, core)
     arch = _str(raw.get("architecture", "federated"), "architecture")
     if arch not in ("federated", "centralized", "tight", "ultra_tight"):
-        raise ScenarioError(f"architecture = {arch!r}: use federated, centralized, tight or ultra_tight")
+        raise ScenarioError(f"architecture = {arch!r}: use federated, centralized, tight, ultra_tight or loosely_coupled")
     core["architecture"] = arch
     _variants(raw)
     for other in ("federated", "centralized", "tight", "ultra_tight"):
@@ -816,6 +793,24 @@ def _parse_path(path: str) -> list[str | int]:
     for name, idx in re.findall(r"([A-Za-z_]\w*)|\[(\d+)\]", path):
         out.append(name if name else int(idx))
     return out
+
+
+def _convert_logged(raw: Mapping[str, Any], core: dict[str, Any]) -> dict[str, Any]:
+    """A recorded-data scenario: no trajectory or INS error model (the motion and the IMU come
+    from the logs); ``[source]`` stays in the Python layer (see :mod:`navfdi.logs`)."""
+    for k in ("trajectory", "ins", "terrain", "modes", "state_chi2"):
+        if k in raw:
+            raise ScenarioError(f"{k}: not used by a loosely_coupled scenario on recorded logs (remove it)")
+    src = _need(raw, "source", "")
+    _check_keys(src, {"gnss", "reference", "reference_quality", "imu"}, "source")
+    _sensors_and_faults(raw, core)
+    core["architecture"] = "loosely_coupled"
+    _variants(raw)
+    for other in ("federated", "centralized", "tight", "ultra_tight"):
+        if other in raw:
+            raise ScenarioError(f"{other}: given, but architecture is 'loosely_coupled' (remove it)")
+    core["loosely_coupled"] = _loosely_coupled(_need(raw, "loosely_coupled", ""))
+    return core
 
 
 def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:

@@ -25,6 +25,8 @@ UNITS: dict[str, dict[str, float]] = {
     "carrier_to_noise": {"dB-Hz": 1.0},
     "chips2_per_time": {"chips^2/s": 1.0, "chip^2/s": 1.0},
     "frequency2_per_time3": {"Hz^2/s^3": 1.0},
+    "angular_rate_density": {"rad/s/sqrt(Hz)": 1.0, "deg/s/sqrt(Hz)": math.pi / 180, "deg/h/sqrt(Hz)": math.pi / 180 / 3600, "deg/sqrt(h)": math.pi / 180 / 60},
+    "acceleration_density": {"m/s2/sqrt(Hz)": 1.0, "m/s^2/sqrt(Hz)": 1.0, "g/sqrt(Hz)": _G0, "mg/sqrt(Hz)": _G0 * 1e-3, "ug/sqrt(Hz)": _G0 * 1e-6},
 }
 
 

@@ -57,6 +57,7 @@ pub mod ins;
 pub mod integrity;
 pub mod kalman;
 pub mod linalg;
+pub mod logs;
 pub mod memory;
 pub mod metrics;
 pub mod montecarlo;

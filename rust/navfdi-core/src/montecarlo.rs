@@ -94,6 +94,15 @@ pub struct RunMetrics {
     pub fused_alt_rms: f64,
     /// Fused-altitude error maximum |error| (m; NaN likewise).
     pub fused_alt_max: f64,
+    /// Runs on recorded logs: horizontal error RMS and maximum (m) over the scored epochs,
+    /// and the maximum inside the fault windows (NaN without faults); NaN for simulated runs.
+    pub hor_rms: f64,
+    /// See [`RunMetrics::hor_rms`].
+    pub hor_max: f64,
+    /// See [`RunMetrics::hor_rms`].
+    pub fault_hor_max: f64,
+    /// The run's faults as drawn (campaigns on recorded logs; empty otherwise).
+    pub drawn: Vec<crate::spec::FaultSpec>,
     /// Optional full record of the run (kept for chosen runs).
     pub record: Option<RunRecord>,
 }
@@ -130,7 +139,14 @@ pub fn spec_cells(spec: &ScenarioSpec) -> Vec<Cell> {
 
 /// Reduce one run's record to metrics.
 pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> RunMetrics {
-    let spec = &prep.spec;
+    metrics_of(&prep.spec, run, rec, cells)
+}
+
+/// Reduce one run's record of scenario `spec` to metrics (any source). On recorded logs
+/// (a record with a navigation solution) the `none` cells count only the epochs the detector
+/// tested, and the errors are taken over the epochs the reference scores.
+pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]) -> RunMetrics {
+    let logged = !rec.nav.is_empty();
     let t = &rec.t;
     let mut out = Vec::with_capacity(cells.len());
     for c in cells {
@@ -177,7 +193,8 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             None => {
                 for (k, &tk) in t.iter().enumerate() {
                     let inside = faults.iter().any(|f| tk >= f.start && tk < f.end + SETTLE);
-                    if !inside {
+                    let untested = logged && det.statistic[k].is_nan();
+                    if !inside && !untested {
                         m.outside_epochs += 1;
                         if det.alarm[k] {
                             m.false_alarm_epochs += 1;
@@ -197,6 +214,9 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
             }
         }
         out.push(m);
+    }
+    if logged {
+        return logged_errors(spec, run, rec, out);
     }
     let epochs = t.len().max(1) as f64;
     let (mut a2, mut amax, mut p2, mut pmax) = (0.0, 0.0f64, 0.0, 0.0f64);
@@ -235,8 +255,122 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
         pos_max: pmax,
         lat_rms: (l2 / epochs).sqrt(),
         lat_max: lmax,
+        hor_rms: f64::NAN,
+        hor_max: f64::NAN,
+        fault_hor_max: f64::NAN,
+        drawn: Vec::new(),
         record: None,
     }
+}
+
+/// Errors of a run on recorded logs, over the epochs its reference scores (finite errors).
+fn logged_errors(
+    spec: &ScenarioSpec,
+    run: u64,
+    rec: &RunRecord,
+    cells: Vec<CellMetrics>,
+) -> RunMetrics {
+    let (mut n, mut p2, mut pmax, mut l2, mut lmax, mut h2, mut hmax) =
+        (0usize, 0.0, 0.0f64, 0.0, 0.0f64, 0.0, 0.0f64);
+    let mut fmax = f64::NAN;
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        if !(row[6].is_finite() && row[7].is_finite() && row[8].is_finite()) {
+            continue;
+        }
+        n += 1;
+        l2 += row[7] * row[7];
+        lmax = lmax.max(row[7].abs());
+        for v in &row[6..9] {
+            p2 += v * v;
+            pmax = pmax.max(v.abs());
+        }
+        let h = row[6].hypot(row[7]);
+        h2 += h * h;
+        hmax = hmax.max(h);
+        let tk = rec.t[k];
+        if spec.faults.iter().any(|f| tk >= f.start && tk < f.end) {
+            fmax = fmax.max(h);
+        }
+    }
+    let nn = n.max(1) as f64;
+    let none = |v: f64| if n == 0 { f64::NAN } else { v };
+    RunMetrics {
+        run,
+        cells,
+        att_rms: f64::NAN,
+        att_max: f64::NAN,
+        pos_rms: none((p2 / (3.0 * nn)).sqrt()),
+        pos_max: none(pmax),
+        lat_rms: none((l2 / nn).sqrt()),
+        lat_max: none(lmax),
+        fused_alt_rms: f64::NAN,
+        fused_alt_max: f64::NAN,
+        hor_rms: none((h2 / nn).sqrt()),
+        hor_max: none(hmax),
+        fault_hor_max: fmax,
+        drawn: spec.faults.clone(),
+        record: None,
+    }
+}
+
+/// Runs `start..start + count` of a campaign on recorded logs: run `i` draws its faults from
+/// `(seed, i)` ([`ScenarioSpec::drawn`]), injects them into the recorded measurements and runs
+/// the architecture; on `threads` threads (0: rayon's default), in run order. The cells are
+/// `spec`'s (drawn faults keep their ids).
+#[allow(clippy::too_many_arguments)]
+pub fn run_logged_chunk(
+    src: &crate::logs::LoggedSource,
+    spec: &ScenarioSpec,
+    seed: u64,
+    start: u64,
+    count: u64,
+    threads: usize,
+    keep: &[u64],
+    cancel: &Cancel,
+) -> Result<Vec<RunMetrics>> {
+    if start.checked_add(count).is_none() {
+        return Err(Error::Invalid(format!(
+            "runs {start} + {count}: the run index would overflow"
+        )));
+    }
+    let cells = spec_cells(spec);
+    let one = |i: u64| -> Result<RunMetrics> {
+        cancel.check()?;
+        let run_spec = spec.drawn(seed, i);
+        let meas = src.measurements(&run_spec);
+        let streams = crate::stream::Streams {
+            models: &src.models,
+            meas: &meas,
+            reference: Some(&src.reference),
+            seed,
+            stream: i,
+        };
+        let rec = run_architecture(&run_spec, &streams, true, keep.contains(&i), cancel).map_err(
+            |e| match e {
+                Error::Cancelled => Error::Cancelled,
+                e => Error::Invalid(format!("run {i}: {e}")),
+            },
+        )?;
+        let mut m = metrics_of(&run_spec, i, &rec, &cells);
+        if keep.contains(&i) {
+            m.record = Some(rec);
+        }
+        Ok(m)
+    };
+    let work =
+        || -> Result<Vec<RunMetrics>> { (start..start + count).into_par_iter().map(one).collect() };
+    if threads == 0 {
+        return work();
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| {
+            Error::Invalid(format!(
+                "workers = {threads}: cannot start a thread pool: {e}"
+            ))
+        })?
+        .install(work)
 }
 
 /// One run: simulate, filter with isolation, reduce.

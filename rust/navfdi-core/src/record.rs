@@ -149,7 +149,38 @@ pub struct RunRecord {
     /// Per fault of the scenario: whether it ever reached a measurement
     /// ([`crate::stream::faults_applied`]).
     pub faults_applied: Vec<bool>,
+    /// The navigation solution of a strapdown INS (architecture `loosely_coupled`), T ×
+    /// [`NAV_COLUMNS`] row-major; empty otherwise.
+    pub nav: Vec<f64>,
 }
+
+/// Columns of [`RunRecord::nav`]: the GNSS antenna's latitude, longitude (rad) and height
+/// (m); velocity east, north, up (m/s); roll, pitch, yaw (rad, body forward-right-down to
+/// north-east-down); estimated gyro biases (rad/s) and accelerometer biases (m/s²) in body
+/// axes; and their 1σ (rad/s, m/s²). NaN before the INS is aligned.
+pub const NAV_COLUMNS: [&str; 21] = [
+    "lat",
+    "lon",
+    "height",
+    "vel_e",
+    "vel_n",
+    "vel_u",
+    "roll",
+    "pitch",
+    "yaw",
+    "gyro_bias_x",
+    "gyro_bias_y",
+    "gyro_bias_z",
+    "accel_bias_x",
+    "accel_bias_y",
+    "accel_bias_z",
+    "gyro_bias_x_sigma",
+    "gyro_bias_y_sigma",
+    "gyro_bias_z_sigma",
+    "accel_bias_x_sigma",
+    "accel_bias_y_sigma",
+    "accel_bias_z_sigma",
+];
 
 /// Per-epoch inputs of the altitude fusion (see [`RunRecord::fusion`]).
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -232,6 +263,7 @@ impl RunRecord {
             fused_alt: Vec::new(),
             fusion: None,
             faults_applied: crate::stream::faults_applied(spec, models),
+            nav: Vec::new(),
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

@@ -55,6 +55,61 @@ pub struct Models {
     pub ranges: Option<RangeStream>,
     /// Navigation mode per epoch (1, 2, 3 for q1, q2, q3; empty without modes).
     pub mode: Vec<u8>,
+    /// Recorded IMU samples and per-epoch measurement σ of a recorded-data source (None for
+    /// the simulator's error-state streams).
+    pub logged: Option<Logged>,
+}
+
+/// Recorded IMU samples: time (s from the run's time 0, as logged: the configured time offset
+/// is applied by the architecture), angular rate (rad/s) and specific force (m/s²) in the
+/// IMU's own axes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImuSamples {
+    /// Sample times (s), strictly increasing.
+    pub t: Vec<f64>,
+    /// Angular rate per sample (rad/s, IMU axes).
+    pub gyro: Vec<Vector3<f64>>,
+    /// Specific force per sample (m/s², IMU axes).
+    pub accel: Vec<Vector3<f64>>,
+}
+
+/// What a recorded-data source adds to [`Models`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Logged {
+    /// The IMU log.
+    pub imu: ImuSamples,
+    /// Origin of the local east-north-up coordinates the position measurements are given in
+    /// (`e = Δlon (R_N + h₀) cos lat₀`, `n = Δlat (R_M + h₀)`, `u = Δh` at the origin's radii:
+    /// an exactly invertible map, so a fault of d metres moves the fix by d metres to 1e-4).
+    pub origin: Nominal,
+    /// Per sensor and epoch: the σ of each measurement component as recorded (NaN-free where
+    /// the sensor is available; empty vectors elsewhere).
+    pub sigma: Vec<Vec<DVector<f64>>>,
+}
+
+impl Nominal {
+    /// Local east, north, up (m) of the point `p` from this origin (see [`Logged::origin`]).
+    pub fn to_enu(&self, p: &Nominal) -> Vector3<f64> {
+        let rm = crate::ins::earth::r_meridian(self.lat) + self.h;
+        let rn = crate::ins::earth::r_normal(self.lat) + self.h;
+        Vector3::new(
+            (p.lon - self.lon) * rn * self.lat.cos(),
+            (p.lat - self.lat) * rm,
+            p.h - self.h,
+        )
+    }
+
+    /// The point at local east, north, up `enu` (m) from this origin (inverse of
+    /// [`Nominal::to_enu`]).
+    pub fn from_enu(&self, enu: &Vector3<f64>) -> Nominal {
+        let rm = crate::ins::earth::r_meridian(self.lat) + self.h;
+        let rn = crate::ins::earth::r_normal(self.lat) + self.h;
+        Nominal {
+            lat: self.lat + enu.y / rm,
+            lon: self.lon + enu.x / (rn * self.lat.cos()),
+            h: self.h + enu.z,
+        }
+    }
 }
 
 impl Models {
@@ -82,8 +137,12 @@ pub struct Measurements {
 /// The reference a run is scored against (never an input of the filters).
 #[derive(Debug, Clone, Default)]
 pub struct Reference {
-    /// True error state `x_INS − x_true` per epoch (n).
+    /// True error state `x_INS − x_true` per epoch (n); empty for a recorded-data source.
     pub x_true: Vec<DVector<f64>>,
+    /// A recorded reference per epoch: the antenna's east, north, up (m, from
+    /// [`Logged::origin`]) and velocity east, north, up (m/s); NaN where the reference has no
+    /// epoch or the epoch was an input of the filter (scored only on the others).
+    pub enu: Vec<[f64; 6]>,
 }
 
 /// One run's streams: its models, measurements and optional reference.

@@ -11,6 +11,7 @@ mod filter;
 mod gnss;
 mod integrity;
 mod interrupt;
+mod logged;
 mod montecarlo;
 mod pickling;
 mod prefilter;
@@ -167,6 +168,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(rinex::read_rinex_nav, m)?)?;
     m.add_class::<rinex::PyGnssRun>()?;
     m.add_function(wrap_pyfunction!(montecarlo::check_campaign_memory, m)?)?;
+    m.add_class::<logged::PyLoggedSource>()?;
     m.add_class::<prefilter::PyPrefilter>()?;
     m.add_class::<prefilter::PyPrefilterStep>()?;
     m.add_function(wrap_pyfunction!(prefilter::py_dll_variance, m)?)?;

@@ -85,98 +85,7 @@ impl PyPreparedScenario {
         let rows = crate::interrupt::run(py, move |cancel| {
             run_chunk(&prep, seed, start, count, threads, &keep, cancel)
         })?;
-        let n = rows.len();
-        let c = self.cells.len();
-        let d = PyDict::new(py);
-        d.set_item(
-            "run",
-            to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?,
-        )?;
-        let grid = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
-            rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
-        };
-        let grid_i = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> i64| -> Vec<i64> {
-            rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
-        };
-        d.set_item(
-            "detected",
-            to_numpy(
-                py,
-                rows.iter()
-                    .flat_map(|r| r.cells.iter().map(|m| m.detected))
-                    .collect::<Vec<bool>>(),
-                &[n, c],
-            )?,
-        )?;
-        d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
-        d.set_item(
-            "at_onset",
-            to_numpy(
-                py,
-                rows.iter()
-                    .flat_map(|r| r.cells.iter().map(|m| m.at_onset))
-                    .collect::<Vec<bool>>(),
-                &[n, c],
-            )?,
-        )?;
-        d.set_item(
-            "alarm_fraction",
-            to_numpy(py, grid(&|m| m.alarm_fraction), &[n, c])?,
-        )?;
-        d.set_item(
-            "clear_delay",
-            to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?,
-        )?;
-        d.set_item(
-            "false_alarm_epochs",
-            to_numpy(py, grid_i(&|m| m.false_alarm_epochs as i64), &[n, c])?,
-        )?;
-        d.set_item(
-            "outside_epochs",
-            to_numpy(py, grid_i(&|m| m.outside_epochs as i64), &[n, c])?,
-        )?;
-        d.set_item(
-            "wrong_isolations",
-            to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?,
-        )?;
-        for (key, f) in [
-            (
-                "fde_faulty_epochs",
-                (|m| m.sat.faulty_epochs) as fn(&navfdi_core::montecarlo::CellMetrics) -> u32,
-            ),
-            ("fde_detected_epochs", |m| m.sat.detected_epochs),
-            ("fde_exclusion_epochs", |m| m.sat.exclusion_epochs),
-            ("fde_exact_epochs", |m| m.sat.exact_epochs),
-            ("fde_after_epochs", |m| m.sat.after_epochs),
-            ("fde_after_alarm_epochs", |m| m.sat.after_alarm_epochs),
-            ("fde_outside_epochs", |m| m.sat.outside_epochs),
-            ("fde_false_exclusions", |m| m.sat.false_exclusions),
-        ] {
-            d.set_item(key, to_numpy(py, grid_i(&|m| f(m) as i64), &[n, c])?)?;
-        }
-        for (key, f) in [
-            (
-                "att_rms",
-                (|r| r.att_rms) as fn(&navfdi_core::montecarlo::RunMetrics) -> f64,
-            ),
-            ("att_max", |r| r.att_max),
-            ("pos_rms", |r| r.pos_rms),
-            ("pos_max", |r| r.pos_max),
-            ("lat_rms", |r| r.lat_rms),
-            ("lat_max", |r| r.lat_max),
-            ("fused_alt_rms", |r| r.fused_alt_rms),
-            ("fused_alt_max", |r| r.fused_alt_max),
-        ] {
-            d.set_item(key, to_numpy(py, rows.iter().map(f).collect(), &[n])?)?;
-        }
-        let recs = PyDict::new(py);
-        for r in rows {
-            if let Some(rec) = r.record {
-                recs.set_item(r.run, crate::scenario::record_to_py(py, rec)?)?;
-            }
-        }
-        d.set_item("records", recs)?;
-        Ok(d)
+        rows_to_py(py, rows, self.cells.len())
     }
 }
 
@@ -193,4 +102,146 @@ pub fn check_campaign_memory(
 ) -> PyResult<()> {
     let spec = ScenarioSpec::from_json(spec_json).py()?;
     navfdi_core::montecarlo::check_campaign_memory(&spec, runs, points, kept, row_bytes).py()
+}
+
+/// Per-run metric rows as the dict of arrays ``run_chunk`` returns (``c`` cells per run).
+pub fn rows_to_py<'py>(
+    py: Python<'py>,
+    rows: Vec<navfdi_core::montecarlo::RunMetrics>,
+    c: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let n = rows.len();
+    let d = PyDict::new(py);
+    d.set_item(
+        "run",
+        to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?,
+    )?;
+    let grid = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
+        rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
+    };
+    let grid_i = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> i64| -> Vec<i64> {
+        rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
+    };
+    d.set_item(
+        "detected",
+        to_numpy(
+            py,
+            rows.iter()
+                .flat_map(|r| r.cells.iter().map(|m| m.detected))
+                .collect::<Vec<bool>>(),
+            &[n, c],
+        )?,
+    )?;
+    d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
+    d.set_item(
+        "at_onset",
+        to_numpy(
+            py,
+            rows.iter()
+                .flat_map(|r| r.cells.iter().map(|m| m.at_onset))
+                .collect::<Vec<bool>>(),
+            &[n, c],
+        )?,
+    )?;
+    d.set_item(
+        "alarm_fraction",
+        to_numpy(py, grid(&|m| m.alarm_fraction), &[n, c])?,
+    )?;
+    d.set_item(
+        "clear_delay",
+        to_numpy(py, grid(&|m| m.clear_delay), &[n, c])?,
+    )?;
+    d.set_item(
+        "false_alarm_epochs",
+        to_numpy(py, grid_i(&|m| m.false_alarm_epochs as i64), &[n, c])?,
+    )?;
+    d.set_item(
+        "outside_epochs",
+        to_numpy(py, grid_i(&|m| m.outside_epochs as i64), &[n, c])?,
+    )?;
+    d.set_item(
+        "wrong_isolations",
+        to_numpy(py, grid_i(&|m| m.wrong_isolations as i64), &[n, c])?,
+    )?;
+    for (key, f) in [
+        (
+            "fde_faulty_epochs",
+            (|m| m.sat.faulty_epochs) as fn(&navfdi_core::montecarlo::CellMetrics) -> u32,
+        ),
+        ("fde_detected_epochs", |m| m.sat.detected_epochs),
+        ("fde_exclusion_epochs", |m| m.sat.exclusion_epochs),
+        ("fde_exact_epochs", |m| m.sat.exact_epochs),
+        ("fde_after_epochs", |m| m.sat.after_epochs),
+        ("fde_after_alarm_epochs", |m| m.sat.after_alarm_epochs),
+        ("fde_outside_epochs", |m| m.sat.outside_epochs),
+        ("fde_false_exclusions", |m| m.sat.false_exclusions),
+    ] {
+        d.set_item(key, to_numpy(py, grid_i(&|m| f(m) as i64), &[n, c])?)?;
+    }
+    for (key, f) in [
+        (
+            "att_rms",
+            (|r| r.att_rms) as fn(&navfdi_core::montecarlo::RunMetrics) -> f64,
+        ),
+        ("att_max", |r| r.att_max),
+        ("pos_rms", |r| r.pos_rms),
+        ("pos_max", |r| r.pos_max),
+        ("lat_rms", |r| r.lat_rms),
+        ("lat_max", |r| r.lat_max),
+        ("fused_alt_rms", |r| r.fused_alt_rms),
+        ("fused_alt_max", |r| r.fused_alt_max),
+        ("hor_rms", |r| r.hor_rms),
+        ("hor_max", |r| r.hor_max),
+        ("fault_hor_max", |r| r.fault_hor_max),
+    ] {
+        d.set_item(key, to_numpy(py, rows.iter().map(f).collect(), &[n])?)?;
+    }
+    // The faults each run drew (campaigns on recorded logs): start (s), magnitude (SI), kind
+    // and components (comma-separated indices), (runs, faults).
+    let nf = rows.first().map_or(0, |r| r.drawn.len());
+    if nf > 0 && rows.iter().all(|r| r.drawn.len() == nf) {
+        let f = |g: &dyn Fn(&navfdi_core::spec::FaultSpec) -> f64| -> Vec<f64> {
+            rows.iter().flat_map(|r| r.drawn.iter().map(g)).collect()
+        };
+        d.set_item("fault_start", to_numpy(py, f(&|x| x.start), &[n, nf])?)?;
+        d.set_item(
+            "fault_magnitude",
+            to_numpy(py, f(&|x| x.magnitude), &[n, nf])?,
+        )?;
+        let kinds: Vec<String> = rows
+            .iter()
+            .flat_map(|r| {
+                r.drawn.iter().map(|x| {
+                    match x.kind {
+                        navfdi_core::spec::FaultKind::Step => "step",
+                        navfdi_core::spec::FaultKind::Ramp => "ramp",
+                        navfdi_core::spec::FaultKind::Quadratic => "quadratic",
+                    }
+                    .to_string()
+                })
+            })
+            .collect();
+        let comps: Vec<String> = rows
+            .iter()
+            .flat_map(|r| {
+                r.drawn.iter().map(|x| {
+                    x.components
+                        .iter()
+                        .map(|c| c.to_string())
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+            })
+            .collect();
+        d.set_item("fault_kind", kinds)?;
+        d.set_item("fault_components", comps)?;
+    }
+    let recs = PyDict::new(py);
+    for r in rows {
+        if let Some(rec) = r.record {
+            recs.set_item(r.run, crate::scenario::record_to_py(py, rec)?)?;
+        }
+    }
+    d.set_item("records", recs)?;
+    Ok(d)
 }

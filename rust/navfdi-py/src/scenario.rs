@@ -23,7 +23,8 @@ pub fn validate_scenario(spec_json: &str) -> PyResult<()> {
 #[pyfunction]
 pub fn scenario_trajectory<'py>(py: Python<'py>, spec_json: &str) -> PyResult<Bound<'py, PyDict>> {
     let spec = ScenarioSpec::from_json(spec_json).py()?;
-    let tr = py.detach(|| generate(&spec.trajectory, spec.dt, spec.epochs()));
+    let traj = spec.trajectory().py()?.clone();
+    let tr = py.detach(|| generate(&traj, spec.dt, spec.epochs()));
     let t = tr.len();
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, tr.iter().map(|e| e.t).collect(), &[t])?)?;
@@ -90,6 +91,11 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         subs.append(sd)?;
     }
     d.set_item("subfilters", subs)?;
+    if !rec.nav.is_empty() {
+        let c = navfdi_core::record::NAV_COLUMNS.len();
+        d.set_item("nav", to_numpy(py, rec.nav, &[t, c])?)?;
+        d.set_item("nav_columns", navfdi_core::record::NAV_COLUMNS.to_vec())?;
+    }
     if !rec.fused_alt.is_empty() {
         d.set_item("fused_alt", to_numpy(py, rec.fused_alt, &[t])?)?;
     }

@@ -10,6 +10,7 @@
 pub mod centralized;
 pub mod common;
 pub mod federated;
+pub mod loosely_coupled;
 pub mod tight;
 pub mod ultra_tight;
 
@@ -41,6 +42,10 @@ pub fn run_architecture(
         Architecture::Tight => tight::run_tight(spec, src, isolation, full, cancel),
         Architecture::UltraTight => {
             ultra_tight::run_ultra_tight(spec, src, isolation, full, cancel)
+        }
+        Architecture::LooselyCoupled => {
+            let isolate = spec.loosely_coupled.as_ref().is_none_or(|l| l.isolate);
+            loosely_coupled::run_loosely_coupled(spec, src, isolation && isolate, cancel)
         }
     }
 }

@@ -3,8 +3,12 @@
 //! * [`earth`]: WGS-84 constants and radii of curvature.
 //! * [`error_model`]: the 15-state psi-angle error model in the ENU navigation frame, its
 //!   continuous-time `F` along a truth trajectory, and the discretised `Φ` and `ΓQΓᵀ`.
+//! * [`strapdown`]: mechanisation of recorded IMU samples (attitude, velocity, position).
+//! * [`error_filter`]: the closed-loop 15-state error-state filter of that mechanisation.
 
 pub mod earth;
+pub mod error_filter;
 pub mod error_model;
+pub mod strapdown;
 
 pub use error_model::{ErrorModel, InsErrorParams, ACC, ATT, GYRO, N_STATES, POS, VEL};

@@ -148,7 +148,10 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
             raw,
             ins_position: ins,
         },
-        reference: Reference { x_true },
+        reference: Reference {
+            x_true,
+            enu: Vec::new(),
+        },
         seed,
         stream,
     }

@@ -136,9 +136,11 @@ impl Prepared {
         spec.validate()?;
         let epochs = spec.epochs();
         let dt = spec.dt;
-        let truth = generate(&spec.trajectory, dt, epochs);
+        let truth = generate(spec.trajectory()?, dt, epochs);
         check_truth(&truth)?;
-        let model = ErrorModel { params: spec.ins };
+        let model = ErrorModel {
+            params: *spec.ins()?,
+        };
         let n = spec.n_states();
         let clock = spec
             .sensors
@@ -319,6 +321,7 @@ impl Prepared {
                 available,
                 ranges,
                 mode,
+                logged: None,
             },
             q_factor,
             p0_factor,

@@ -38,6 +38,117 @@ pub struct FaultSpec {
     /// Satellite name (faults on a `gnss_ranges` sensor only), e.g. `G03`.
     #[serde(default)]
     pub satellite: Option<String>,
+    /// What a Monte-Carlo campaign on recorded logs draws per run (None: the fault as given).
+    #[serde(default)]
+    pub draw: Option<FaultDraw>,
+}
+
+/// A fault's parameters drawn per Monte-Carlo run from the run's seed (uniformly): its start
+/// (the window's length kept), its shape and size, and the components it affects.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FaultDraw {
+    /// Range of the start (s), `[lo, hi]`; None: the fault's own start.
+    #[serde(default)]
+    pub start: Option<[f64; 2]>,
+    /// Shapes to choose from, each with its range of magnitude (SI, as `magnitude`); empty:
+    /// the fault's own kind and magnitude.
+    #[serde(default)]
+    pub shapes: Vec<(FaultKind, [f64; 2])>,
+    /// Component sets to choose from (indices, as `components`); empty: the fault's own.
+    #[serde(default)]
+    pub components: Vec<Vec<usize>>,
+}
+
+/// Stream of the fault draws: separate from the simulator's noise streams of the same run.
+pub const DRAW_STREAM: u64 = 0x00d2_a3f1_7c5b_9e41;
+
+impl FaultSpec {
+    /// This fault with its [`FaultSpec::draw`] drawn from `rng` (itself when there is none).
+    pub fn drawn(&self, rng: &mut rand_chacha::ChaCha8Rng) -> FaultSpec {
+        use rand::RngExt;
+        let mut f = self.clone();
+        let Some(d) = &self.draw else {
+            return f;
+        };
+        if let Some([lo, hi]) = d.start {
+            let len = self.end - self.start;
+            f.start = lo + (hi - lo) * rng.random::<f64>();
+            f.end = f.start + len;
+        }
+        if !d.shapes.is_empty() {
+            let (kind, [lo, hi]) = d.shapes[rng.random_range(0..d.shapes.len())];
+            f.kind = kind;
+            f.magnitude = lo + (hi - lo) * rng.random::<f64>();
+        }
+        if !d.components.is_empty() {
+            f.components = d.components[rng.random_range(0..d.components.len())].clone();
+        }
+        f.draw = None;
+        f
+    }
+}
+
+impl ScenarioSpec {
+    fn validate_draw(&self, p: &str, f: &FaultSpec, d: &FaultDraw, dim: usize) -> Result<()> {
+        if self.architecture != Architecture::LooselyCoupled {
+            return Err(bad(
+                format!("{p}.draw"),
+                "drawn faults run on recorded logs (architecture loosely_coupled); a simulated campaign varies a fault with --sweep",
+            ));
+        }
+        let range = |q: String, r: [f64; 2]| -> Result<()> {
+            if !(r[0].is_finite() && r[1].is_finite() && r[0] <= r[1]) {
+                return Err(bad(
+                    q,
+                    format!(
+                        "[{}, {}]: expected finite [low, high] with low <= high",
+                        r[0], r[1]
+                    ),
+                ));
+            }
+            Ok(())
+        };
+        if let Some(r) = d.start {
+            range(format!("{p}.draw.start"), r)?;
+            let len = f.end - f.start;
+            if r[0] < 0.0 || r[1] + len > self.duration {
+                return Err(bad(
+                    format!("{p}.draw.start"),
+                    format!(
+                        "[{}, {}] s with the fault's {len} s window leaves the run's 0–{} s",
+                        r[0], r[1], self.duration
+                    ),
+                ));
+            }
+        }
+        for (j, (_, r)) in d.shapes.iter().enumerate() {
+            range(format!("{p}.draw.shapes[{j}].magnitude"), *r)?;
+        }
+        for (j, set) in d.components.iter().enumerate() {
+            let q = format!("{p}.draw.components[{j}]");
+            if set.is_empty() {
+                return Err(bad(q, "an empty component set"));
+            }
+            for (k, &c) in set.iter().enumerate() {
+                if c >= dim || set[..k].contains(&c) {
+                    return Err(bad(q, format!("component index {c} is out of range or repeated (sensor {:?} has {dim} components)", f.sensor)));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The scenario of Monte-Carlo run `run` of a campaign seeded `seed`: every fault with a
+    /// `draw` drawn from ChaCha8 `(seed, run ^ DRAW_STREAM)`.
+    pub fn drawn(&self, seed: u64, run: u64) -> ScenarioSpec {
+        use rand::SeedableRng;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(run ^ DRAW_STREAM);
+        let mut out = self.clone();
+        out.faults = self.faults.iter().map(|f| f.drawn(&mut rng)).collect();
+        out
+    }
 }
 
 impl FaultSpec {
@@ -111,6 +222,9 @@ impl ScenarioSpec {
             if !f.magnitude.is_finite() {
                 return Err(bad(format!("{p}.magnitude"), "must be finite"));
             }
+            if let Some(d) = &f.draw {
+                self.validate_draw(&p, f, d, dim)?;
+            }
             match (&self.sensors[si].ranges, &f.satellite) {
                 (Some(r), Some(sat)) => {
                     let orbits = r.orbits();
@@ -172,6 +286,7 @@ impl ScenarioSpec {
                             Architecture::Centralized => "centralized.sensors entry",
                             Architecture::Tight => "tight filter (tight.sensor)",
                             Architecture::UltraTight => "ultra-tight filter (ultra_tight.sensor)",
+                            Architecture::LooselyCoupled => "loosely_coupled.sensors entry",
                         },
                         f.sensor
                     ),
@@ -204,6 +319,18 @@ impl ScenarioSpec {
                     c.sensors.iter().enumerate().map(|(i, s)| {
                         (
                             format!("centralized.sensors[{i}].sensor"),
+                            s.sensor.as_str(),
+                        )
+                    })
+                })
+                .collect(),
+            Architecture::LooselyCoupled => self
+                .loosely_coupled
+                .iter()
+                .flat_map(|l| {
+                    l.sensors.iter().enumerate().map(|(i, s)| {
+                        (
+                            format!("loosely_coupled.sensors[{i}].sensor"),
                             s.sensor.as_str(),
                         )
                     })

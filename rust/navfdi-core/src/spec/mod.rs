@@ -14,6 +14,7 @@ mod check;
 mod detectors;
 mod faults;
 mod federated;
+mod loosely_coupled;
 mod sensors;
 mod tight;
 mod trajectory;
@@ -25,6 +26,7 @@ pub use centralized::{AltitudeFusionSpec, CentralSensorSpec, CentralizedSpec, Po
 pub use detectors::{DetectorKind, DetectorSpec, StateChi2Spec};
 pub use faults::{FaultKind, FaultSpec};
 pub use federated::{FederatedSpec, SubfilterSpec};
+pub use loosely_coupled::{AlignmentSpec, ConstraintSpec, LooselyCoupledSpec};
 pub use sensors::{ModesSpec, RangesSpec, SensorKind, SensorSpec};
 pub use tight::{FdePlacement, TightSpec, TIGHT_DETECTOR};
 pub use trajectory::{SegmentSpec, TerrainSpec, TerrainWave, TrajectorySpec};
@@ -46,10 +48,13 @@ pub struct ScenarioSpec {
     pub duration: f64,
     /// Filter period (s).
     pub dt: f64,
-    /// Truth trajectory.
-    pub trajectory: TrajectorySpec,
-    /// IMU error model and initial errors.
-    pub ins: InsErrorParams,
+    /// Truth trajectory (simulated scenarios; a `loosely_coupled` scenario's motion comes from
+    /// its recorded logs).
+    #[serde(default)]
+    pub trajectory: Option<TrajectorySpec>,
+    /// IMU error model and initial errors (simulated scenarios).
+    #[serde(default)]
+    pub ins: Option<InsErrorParams>,
     /// Auxiliary sensors.
     pub sensors: Vec<SensorSpec>,
     /// Injected faults.
@@ -70,6 +75,9 @@ pub struct ScenarioSpec {
     /// Ultra-tight (vector-tracking) configuration (architecture `ultra_tight`).
     #[serde(default)]
     pub ultra_tight: Option<UltraTightSpec>,
+    /// Loosely coupled strapdown INS configuration (architecture `loosely_coupled`).
+    #[serde(default)]
+    pub loosely_coupled: Option<LooselyCoupledSpec>,
     /// Terrain under the trajectory (radio altimeters); flat when absent.
     #[serde(default)]
     pub terrain: Option<TerrainSpec>,
@@ -97,6 +105,10 @@ pub enum Architecture {
     /// The 17-state filter at the navigation rate on pseudorange and rate residuals averaged
     /// from per-channel prefilters at 50 Hz, with vector tracking and AIME (paper 004).
     UltraTight,
+    /// A strapdown INS mechanised from recorded IMU samples in a closed-loop 15-state
+    /// error-state filter, aided by GNSS positions and velocities and by vehicle constraints
+    /// (zero velocity, non-holonomic), each with its detectors.
+    LooselyCoupled,
 }
 
 /// A detection channel: a sensor tested by detectors, whatever the architecture (a federated
@@ -232,6 +244,10 @@ impl ScenarioSpec {
                     })
                     .collect()
             }),
+            Architecture::LooselyCoupled => self
+                .loosely_coupled
+                .as_ref()
+                .map_or_else(Vec::new, |l| l.channels()),
         }
     }
 
@@ -345,32 +361,7 @@ impl ScenarioSpec {
         // One run with isolation and its no-isolation baseline, as `navfdi run` holds them.
         self.check_memory(2.0)?;
         self.validate_trajectory()?;
-        let ins = &self.ins;
-        for (p, v) in [
-            ("ins.gyro_bias", ins.gyro_bias),
-            ("ins.gyro_white", ins.gyro_white),
-            ("ins.gyro_markov", ins.gyro_markov),
-            ("ins.accel_markov", ins.accel_markov),
-            ("ins.init_level", ins.init_level),
-            ("ins.init_heading", ins.init_heading),
-            ("ins.init_velocity", ins.init_velocity),
-            ("ins.init_position", ins.init_position),
-        ] {
-            non_negative(p, v)?;
-        }
-        positive("ins.gyro_tau", ins.gyro_tau)?;
-        positive("ins.accel_tau", ins.accel_tau)?;
-        for p in [
-            ins.init_level,
-            ins.init_heading,
-            ins.init_velocity,
-            ins.init_position,
-        ] {
-            if p == 0.0 {
-                return Err(bad("ins", "initial-error standard deviations must be positive (P0 must be positive definite)"));
-            }
-        }
-
+        self.validate_ins()?;
         self.validate_sensors()?;
         self.validate_faults()?;
         let others: Vec<(&str, bool)> = vec![
@@ -378,12 +369,14 @@ impl ScenarioSpec {
             ("centralized", self.centralized.is_some()),
             ("tight", self.tight.is_some()),
             ("ultra_tight", self.ultra_tight.is_some()),
+            ("loosely_coupled", self.loosely_coupled.is_some()),
         ];
         let arch = match self.architecture {
             Architecture::Federated => "federated",
             Architecture::Centralized => "centralized",
             Architecture::Tight => "tight",
             Architecture::UltraTight => "ultra_tight",
+            Architecture::LooselyCoupled => "loosely_coupled",
         };
         for (name, given) in others {
             if given && name != arch {
@@ -413,7 +406,81 @@ impl ScenarioSpec {
             Architecture::UltraTight => self.validate_ultra_tight(),
             Architecture::Federated => self.validate_federated(),
             Architecture::Centralized => self.validate_centralized(),
+            Architecture::LooselyCoupled => self.validate_loosely_coupled(),
         }
+    }
+
+    fn validate_ins(&self) -> Result<()> {
+        let logged = self.architecture == Architecture::LooselyCoupled;
+        let Some(ins) = self.ins.as_ref() else {
+            if logged {
+                return Ok(());
+            }
+            return Err(bad(
+                "ins",
+                "required: the IMU error model of a simulated scenario",
+            ));
+        };
+        if logged {
+            return Err(bad("ins", "given, but a loosely_coupled scenario runs a strapdown INS on recorded IMU samples: its noise figures are loosely_coupled.imu"));
+        }
+
+        for (p, v) in [
+            ("ins.gyro_bias", ins.gyro_bias),
+            ("ins.gyro_white", ins.gyro_white),
+            ("ins.gyro_markov", ins.gyro_markov),
+            ("ins.accel_markov", ins.accel_markov),
+            ("ins.init_level", ins.init_level),
+            ("ins.init_heading", ins.init_heading),
+            ("ins.init_velocity", ins.init_velocity),
+            ("ins.init_position", ins.init_position),
+        ] {
+            non_negative(p, v)?;
+        }
+        positive("ins.gyro_tau", ins.gyro_tau)?;
+        positive("ins.accel_tau", ins.accel_tau)?;
+        for p in [
+            ins.init_level,
+            ins.init_heading,
+            ins.init_velocity,
+            ins.init_position,
+        ] {
+            if p == 0.0 {
+                return Err(bad("ins", "initial-error standard deviations must be positive (P0 must be positive definite)"));
+            }
+        }
+
+        Ok(())
+    }
+
+    /// The truth trajectory of a simulated scenario.
+    pub fn trajectory(&self) -> Result<&TrajectorySpec> {
+        self.trajectory.as_ref().ok_or_else(|| {
+            bad(
+                "trajectory",
+                "required: the truth trajectory of a simulated scenario",
+            )
+        })
+    }
+
+    /// The IMU error model of a simulated scenario.
+    pub fn ins(&self) -> Result<&InsErrorParams> {
+        self.ins.as_ref().ok_or_else(|| {
+            bad(
+                "ins",
+                "required: the IMU error model of a simulated scenario",
+            )
+        })
+    }
+
+    /// The loosely coupled configuration (validated to exist for that architecture).
+    pub fn loosely_coupled(&self) -> Result<&LooselyCoupledSpec> {
+        self.loosely_coupled.as_ref().ok_or_else(|| {
+            bad(
+                "loosely_coupled",
+                "required by architecture \"loosely_coupled\"",
+            )
+        })
     }
 
     fn sensor_names(&self) -> String {

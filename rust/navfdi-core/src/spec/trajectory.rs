@@ -133,7 +133,9 @@ impl ScenarioSpec {
     /// the end): height, speed and acceleration, checked segment by segment in closed form so
     /// that a descent below the surface or a runaway speed is named before anything runs.
     pub(super) fn check_kinematics(&self) -> Result<()> {
-        let tr = &self.trajectory;
+        let Some(tr) = self.trajectory.as_ref() else {
+            return Ok(());
+        };
         let end = self.duration;
         let (mut t0, mut h, mut speed) = (0.0f64, tr.height, tr.speed);
         let n = tr.segments.len();
@@ -210,7 +212,13 @@ impl ScenarioSpec {
 
     /// Start point, segments and terrain.
     pub(super) fn validate_trajectory(&self) -> Result<()> {
-        let tr = &self.trajectory;
+        let logged = self.architecture == super::Architecture::LooselyCoupled;
+        let tr = match (self.trajectory.as_ref(), logged) {
+            (None, true) => return Ok(()),
+            (Some(_), true) => return Err(bad("trajectory", "given, but a loosely_coupled scenario takes its motion from its recorded logs (remove [trajectory])")),
+            (None, false) => return Err(bad("trajectory", "required: the truth trajectory of a simulated scenario")),
+            (Some(tr), false) => tr,
+        };
         if !(tr.latitude.abs() < 89.0f64.to_radians()) {
             return Err(bad(
                 "trajectory.latitude",

@@ -1,0 +1,319 @@
+"""Recorded logs as a scenario source: IMU CSV logs and RTKLIB ``.pos`` solutions.
+
+A scenario's ``[source]`` table names the files (relative paths resolve against the TOML
+file's folder); :func:`read_imu` and :func:`read_pos` read them with pandas and check them,
+naming the file, line and column of bad input; :func:`load_source` turns them into the arrays
+:class:`navfdi._core.LoggedSource` takes. Time 0 of a logged run is the first epoch of the
+GNSS file. All times are GPS time (GPST); heights are whatever the GNSS file holds.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import gzip
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import pandas as pd
+
+from ._errors import ScenarioError
+
+__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH"]
+
+#: Start of GPS time, 1980-01-06 00:00:00 GPST.
+GPS_EPOCH = _dt.datetime(1980, 1, 6)
+_WEEK = 604800.0
+_G = 9.80665
+_GYRO_UNITS = {"rad/s": 1.0, "deg/s": np.pi / 180.0}
+_ACCEL_UNITS = {"m/s^2": 1.0, "m/s2": 1.0, "g": _G}
+
+
+@dataclass(frozen=True)
+class ImuLog:
+    """An IMU log: ``t`` (N,) GPS seconds since the GPS epoch, ``gyro`` (N, 3) rad/s and
+    ``accel`` (N, 3) m/s² in the IMU's axes (rates, whatever the file held)."""
+
+    t: np.ndarray
+    gyro: np.ndarray
+    accel: np.ndarray
+    path: str
+
+
+@dataclass(frozen=True)
+class PosLog:
+    """A GNSS solution: ``t`` (M,) GPS seconds since the GPS epoch, ``lat``, ``lon`` (M,) in
+    degrees, ``height`` (M,) m, ``q`` (M,) solution quality (1 fix, 2 float, 5 single, …),
+    ``vel`` (M, 3) east, north, up m/s (NaN without velocity columns), ``sd_pos`` (M, 3) and
+    ``sd_vel`` (M, 3) σ east, north, up (m, m/s)."""
+
+    t: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+    height: np.ndarray
+    q: np.ndarray
+    vel: np.ndarray
+    sd_pos: np.ndarray
+    sd_vel: np.ndarray
+    path: str
+
+    def rows(self, t0: float) -> np.ndarray:
+        """(M, 13) rows for :class:`navfdi._core.LoggedSource`: time from ``t0`` (s), latitude,
+        longitude (rad), height (m), velocity east, north, up, σ position, σ velocity."""
+        return np.column_stack([
+            self.t - t0, np.radians(self.lat), np.radians(self.lon), self.height,
+            self.vel, self.sd_pos, self.sd_vel,
+        ]).astype(np.float64)
+
+    def select(self, mask: np.ndarray) -> PosLog:
+        """The epochs where ``mask`` (M,) is true."""
+        return PosLog(self.t[mask], self.lat[mask], self.lon[mask], self.height[mask], self.q[mask],
+                      self.vel[mask], self.sd_pos[mask], self.sd_vel[mask], self.path)
+
+
+def _open_text(path: Path) -> list[str]:
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise ScenarioError(f"{path}: cannot read the file ({e.strerror or e})") from None
+    if raw[:2] == b"\x1f\x8b":
+        try:
+            raw = gzip.decompress(raw)
+        except (OSError, EOFError) as e:
+            raise ScenarioError(f"{path}: not a readable gzip file ({e})") from None
+    try:
+        return raw.decode("utf-8").splitlines()
+    except UnicodeDecodeError as e:
+        raise ScenarioError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
+
+
+def _numeric(df: pd.DataFrame, path: Path, first_line: int) -> pd.DataFrame:
+    out = df.apply(pd.to_numeric, errors="coerce")
+    bad = out.isna() & df.notna() | out.isin([np.inf, -np.inf])
+    missing = df.isna()
+    for mask, what in ((bad, "is not a finite number"), (missing, "is missing")):
+        if mask.to_numpy().any():
+            r, c = np.argwhere(mask.to_numpy())[0]
+            col = df.columns[c]
+            val = df.iat[r, c]
+            raise ScenarioError(f"{path}, line {first_line + r}, column {col!r}: {val!r} {what}")
+    return out
+
+
+def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float = 0.1) -> ImuLog:
+    """Read an IMU CSV log (``.gz`` accepted) with a header line.
+
+    ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
+    seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
+    ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
+    ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
+    increments, in rad and m/s or deg and g·s, divided by the sample interval).
+    ``max_gap``: the largest interval between samples (s) accepted. Raises
+    :class:`~navfdi.ScenarioError` naming the file, line and column of bad input.
+    """
+    path = Path(path)
+    lines = _open_text(path)
+    if not lines:
+        raise ScenarioError(f"{path}: empty file")
+    header = [h.strip() for h in lines[0].split(",")]
+    need = list(columns.get("gyro", [])) + list(columns.get("accel", []))
+    if len(columns.get("gyro", [])) != 3 or len(columns.get("accel", [])) != 3:
+        raise ScenarioError(f"{path}: source.imu.gyro and source.imu.accel must name three columns each (x, y, z)")
+    timecols = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
+    for c in timecols + need:
+        if c not in header:
+            raise ScenarioError(f"{path}, line 1: no column {c!r} (the header has {', '.join(header)})")
+    gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
+    if gu not in _GYRO_UNITS:
+        raise ScenarioError(f"source.imu.gyro_unit: {gu!r} is not one of {', '.join(_GYRO_UNITS)}")
+    if au not in _ACCEL_UNITS:
+        raise ScenarioError(f"source.imu.accel_unit: {au!r} is not one of {', '.join(_ACCEL_UNITS)}")
+    kind = columns.get("kind", "rates")
+    if kind not in ("rates", "increments"):
+        raise ScenarioError(f"source.imu.kind: {kind!r} is not 'rates' or 'increments'")
+    rows = [ln.split(",") for ln in lines[1:] if ln.strip()]
+    widths = {len(r) for r in rows}
+    if len(widths) > 1:
+        i = next(i for i, r in enumerate(rows) if len(r) != len(header))
+        raise ScenarioError(f"{path}, line {i + 2}: {len(rows[i])} fields, the header has {len(header)}")
+    df = pd.DataFrame(rows, columns=header)[timecols + need].apply(lambda s: s.str.strip())
+    df = _numeric(df, path, 2)
+    if "time" in columns:
+        t = df[columns["time"]].to_numpy(float)
+    else:
+        t = df[timecols[0]].to_numpy(float) * _WEEK + df[timecols[1]].to_numpy(float)
+    gyro = df[list(columns["gyro"])].to_numpy(float) * _GYRO_UNITS[gu]
+    accel = df[list(columns["accel"])].to_numpy(float) * _ACCEL_UNITS[au]
+    dt = np.diff(t)
+    if (dt <= 0).any():
+        i = int(np.argmax(dt <= 0))
+        raise ScenarioError(f"{path}, line {i + 3}, column {timecols[-1]!r}: time does not increase ({t[i + 1]:.6f} s after {t[i]:.6f} s)")
+    if (dt > max_gap).any():
+        i = int(np.argmax(dt > max_gap))
+        raise ScenarioError(
+            f"{path}, line {i + 3}, column {timecols[-1]!r}: a gap of {dt[i]:.3f} s in the IMU log exceeds source.imu.max_gap = {max_gap} s")
+    if kind == "increments":
+        step = np.r_[dt[:1], dt]
+        gyro = gyro / step[:, None]
+        accel = accel / step[:, None]
+    mags = np.linalg.norm(accel, axis=1)
+    if np.median(mags) > 50 or np.median(mags) < 2:
+        raise ScenarioError(
+            f"{path}: median specific force {np.median(mags):.3g} m/s² after converting from {au!r}; at rest it is about 9.8: check source.imu.accel_unit")
+    return ImuLog(t, gyro, accel, str(path))
+
+
+def _pos_time(tok0: str, tok1: str) -> float:
+    if "/" in tok0:
+        d = _dt.datetime.strptime(f"{tok0} {tok1[:15]}", "%Y/%m/%d %H:%M:%S.%f" if "." in tok1 else "%Y/%m/%d %H:%M:%S")
+        return (d - GPS_EPOCH).total_seconds()
+    return float(tok0) * _WEEK + float(tok1)
+
+
+def read_pos(path: str | Path) -> PosLog:
+    """Read an RTKLIB solution file (``.pos``, ``.gz`` accepted) in latitude/longitude/height
+    form, GPST time as ``yyyy/mm/dd hh:mm:ss.sss`` or GPS week and seconds, with or without
+    the velocity columns. Raises :class:`~navfdi.ScenarioError` naming the file, line and
+    column of bad input."""
+    path = Path(path)
+    lines = _open_text(path)
+    head = [ln for ln in lines if ln.startswith("%")]
+    names = None
+    for ln in head:
+        if "latitude" in ln and "longitude" in ln:
+            names = ln[1:].split()
+    if names is None:
+        if any("x-ecef" in ln or "e-baseline" in ln for ln in head):
+            raise ScenarioError(f"{path}: positions in ECEF or ENU form; write the solution as latitude/longitude/height (RTKLIB out-solformat = llh)")
+        raise ScenarioError(f"{path}: no '% ... latitude(deg) longitude(deg) height(m)' header line: not an RTKLIB llh solution file")
+    if "GPST" not in names[0]:
+        raise ScenarioError(f"{path}: time column {names[0]!r}; GPST is required (RTKLIB out-timesys = gpst)")
+    if "latitude(d'\")" in names or any("'" in n for n in names[1:3]):
+        raise ScenarioError(f"{path}: latitude and longitude in degrees-minutes-seconds; write them in decimal degrees (out-degform = deg)")
+    fields = names[1:]
+    data = []
+    first = None
+    for i, ln in enumerate(lines):
+        if ln.startswith("%") or not ln.strip():
+            continue
+        tok = ln.split()
+        if first is None:
+            first = i + 1
+        if len(tok) < 2 + len(fields):
+            raise ScenarioError(f"{path}, line {i + 1}: {len(tok)} fields, the header names {2 + len(fields)}")
+        try:
+            t = _pos_time(tok[0], tok[1])
+        except ValueError:
+            raise ScenarioError(f"{path}, line {i + 1}, column 'GPST': {tok[0]} {tok[1]!r} is not a GPST time") from None
+        try:
+            vals = [float(x) for x in tok[2:2 + len(fields)]]
+        except ValueError:
+            j = next(j for j, x in enumerate(tok[2:2 + len(fields)]) if not _isfloat(x))
+            raise ScenarioError(f"{path}, line {i + 1}, column {fields[j]!r}: {tok[2 + j]!r} is not a number") from None
+        data.append([t, *vals])
+    if not data:
+        raise ScenarioError(f"{path}: no solution epochs")
+    a = np.asarray(data)
+    col = {n: a[:, j + 1] for j, n in enumerate(fields)}
+
+    def get(name: str, default: float = np.nan) -> np.ndarray:
+        for k, v in col.items():
+            if k.startswith(name):
+                return v
+        return np.full(len(a), default)
+
+    times = a[:, 0]
+    steps = np.diff(times)
+    if (steps <= 0).any():
+        i = int(np.argmax(steps <= 0))
+        raise ScenarioError(f"{path}: epoch {i + 2} ({times[i + 1]:.3f} s) does not come after the one before it")
+    vel = np.column_stack([get("ve"), get("vn"), get("vu")])
+    sd_vel = np.column_stack([get("sdve"), get("sdvn"), get("sdvu")])
+    return PosLog(times, get("latitude"), get("longitude"), get("height"), get("Q", 0), vel,
+                  np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path))
+
+
+def _isfloat(x: str) -> bool:
+    try:
+        float(x)
+        return True
+    except ValueError:
+        return False
+
+
+def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
+    """Read a scenario's ``[source]`` table (paths relative to ``base``): returns ``imu``
+    (N, 7), ``gnss`` (M, 13), ``reference`` (K, 13) or None arrays for
+    :class:`navfdi._core.LoggedSource`, ``t0`` (GPS seconds of time 0), and the logs."""
+    def file(key: str) -> Path:
+        v = source.get(key)
+        if not isinstance(v, str):
+            raise ScenarioError(f"source.{key}: a file path is required")
+        p = Path(v)
+        return p if p.is_absolute() else base / p
+    imu_cfg = source.get("imu")
+    if not isinstance(imu_cfg, Mapping):
+        raise ScenarioError("source.imu: a table with file and columns is required")
+    imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg, float(imu_cfg.get("max_gap", 0.1)))
+    pos = read_pos(file("gnss"))
+    ref = None
+    if "reference" in source:
+        ref = read_pos(file("reference"))
+        quality = source.get("reference_quality", [1])
+        ref = ref.select(np.isin(ref.q, quality))
+    t0 = float(pos.t[0])
+    if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
+        raise ScenarioError(
+            f"{pos.path} ({_gpst(pos.t[0])}–{_gpst(pos.t[-1])} GPST) and {imu.path} ({_gpst(imu.t[0])}–{_gpst(imu.t[-1])} GPST) do not overlap in time")
+    imu_rows = np.column_stack([imu.t - t0, imu.gyro, imu.accel])
+    return {
+        "imu": imu_rows, "gnss": pos.rows(t0), "reference": None if ref is None else ref.rows(t0),
+        "t0": t0, "imu_log": imu, "gnss_log": pos, "reference_log": ref,
+    }
+
+
+def file_in(cfg: Mapping[str, Any], base: Path, name: str) -> Path:
+    """The path ``cfg["file"]`` resolved against ``base``; ``name`` is its field path."""
+    v = cfg.get("file")
+    if not isinstance(v, str):
+        raise ScenarioError(f"{name}: a file path is required")
+    p = Path(v)
+    return p if p.is_absolute() else base / p
+
+
+def _gpst(t: float) -> str:
+    return (GPS_EPOCH + _dt.timedelta(seconds=float(t))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
+
+
+def scenario_folder(sc: Any) -> Path:
+    """The folder a scenario's relative ``[source]`` paths resolve against: its TOML file's
+    (the package's ``scenarios`` folder for a bundled scenario, the working directory for one
+    built in Python)."""
+    from importlib import resources
+
+    from ._bundled import bundled_scenarios
+
+    if sc.source in bundled_scenarios():
+        return Path(str(resources.files("navfdi") / "scenarios"))
+    p = Path(sc.source)
+    return p.parent if p.suffix == ".toml" else Path.cwd()
+
+
+def logged_source(sc: Any) -> Any:
+    """Read scenario ``sc``'s logs and prepare them (:class:`navfdi._core.LoggedSource`).
+    Checks that the scenario's ``duration`` and ``dt`` match the GNSS log."""
+    from . import _core
+
+    data = load_source(sc.raw["source"], scenario_folder(sc))
+    g = data["gnss"]
+    span = float(g[-1, 0])
+    dt = float(np.median(np.diff(g[:, 0]))) if len(g) > 1 else float("nan")
+    if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
+        raise ScenarioError(
+            f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: the GNSS log {data['gnss_log'].path} spans {span:g} s "
+            f"at {dt:g} s epochs; set duration = \"{span:g} s\" and dt = \"{dt:g} s\"")
+    try:
+        return _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"])
+    except ValueError as e:
+        raise ScenarioError(str(e)) from None

@@ -1,0 +1,801 @@
+//! Loosely coupled INS/GNSS on recorded IMU samples: a strapdown INS
+//! ([`crate::ins::strapdown`]) in a closed-loop 15-state error-state filter
+//! ([`crate::ins::error_filter`]), aided at the record epochs by GNSS positions and
+//! velocities (lever arm applied) and by the optional vehicle constraints: zero velocity when
+//! the IMU shows rest, and the non-holonomic constraint (no lateral or vertical body
+//! velocity). Every aiding measurement is a detection channel: its innovation `λ` is tested by
+//! the channel's detectors, and an alarm of its deciding detector drops the measurement for
+//! the epoch (with isolation; a constraint's deciding detector always gates it, with or
+//! without isolation: a constraint that fails its test does not hold at that epoch). Reads only the streams: the IMU samples and measurement σ in
+//! [`crate::stream::Logged`], the measurements (faults already injected) and the reference.
+//!
+//! Alignment: levelling and gyro biases from the mean IMU output over the last static stretch
+//! (GNSS speed below `alignment.static_speed`) before the first GNSS velocity above
+//! `alignment.speed`; heading from that velocity's course (or given); position and velocity
+//! from that epoch's fix. Epochs before it are recorded as NaN.
+
+use super::common::make_detector;
+use crate::cancel::Cancel;
+use crate::detect::Detector;
+use crate::error::{Error, Result};
+use crate::ins::earth;
+use crate::ins::error_filter::{ErrorFilter, BA, BG, N, PHI, R, V};
+use crate::ins::strapdown::{level, mechanise, mounting, skew, Increment, NavState};
+use crate::record::{RunRecord, NAV_COLUMNS};
+use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
+use crate::stream::{Nominal, Streams};
+use nalgebra::{DMatrix, DVector, Matrix3, UnitQuaternion, Vector3};
+
+/// One aiding channel's configuration resolved against the scenario.
+struct Aid {
+    /// Sensor index in the scenario (None for a constraint).
+    sensor: Option<usize>,
+    /// Offset of the position east/north/up components in the sensor's vector.
+    pos: Option<usize>,
+    /// Offset of the velocity components.
+    vel: Option<usize>,
+    detectors: Vec<Detector>,
+    decision: Option<usize>,
+    /// False-alarm probability of the deciding detector (component isolation's tests).
+    decision_pf: f64,
+    /// Fallback σ per component (the sensor's `noise`), a floor under the recorded σ.
+    floor: Vec<f64>,
+}
+
+/// A position channel's previous measurement: time, fix, the INS antenna position then, the
+/// fix's variances (east, north, up), whether it was excluded and, while excluded, how the fix
+/// had moved against the INS.
+struct Track {
+    t: f64,
+    fix: Nominal,
+    ins: NavState,
+    var: DVector<f64>,
+    excluded: bool,
+    /// While excluded: how the fix moved against the INS since the measurement before.
+    drift: Option<Vector3<f64>>,
+    /// Size of the position innovation (m).
+    innovation: f64,
+}
+
+/// North, east, down (m) of `p` from `q` (at `q`'s radii).
+fn ned(p: &impl Point, q: &impl Point) -> Vector3<f64> {
+    let (la, lo, h) = q.llh();
+    let (pa, po, ph) = p.llh();
+    let rm = earth::r_meridian(la) + h;
+    let rn = earth::r_normal(la) + h;
+    Vector3::new((pa - la) * rm, (po - lo) * rn * la.cos(), -(ph - h))
+}
+
+/// A point with latitude, longitude (rad) and height (m).
+trait Point {
+    fn llh(&self) -> (f64, f64, f64);
+}
+
+impl Point for Nominal {
+    fn llh(&self) -> (f64, f64, f64) {
+        (self.lat, self.lon, self.h)
+    }
+}
+
+impl Point for NavState {
+    fn llh(&self) -> (f64, f64, f64) {
+        (self.lat, self.lon, self.h)
+    }
+}
+
+/// A measurement ready for the filter, components in the channel's order.
+struct Meas {
+    /// `ẑ − z`: INS prediction minus measurement.
+    res: DVector<f64>,
+    h: DMatrix<f64>,
+    r: DMatrix<f64>,
+}
+
+/// Per-epoch outcome of one channel.
+#[derive(Clone)]
+struct Outcome {
+    lambda: f64,
+    dof: u32,
+    excluded: bool,
+    fused: bool,
+    /// Per detector: statistic, threshold, alarm.
+    tests: Vec<(f64, f64, bool)>,
+    /// Some components excluded (the rest used).
+    partial: bool,
+    /// Innovation and its covariance (tested measurements).
+    inn: Option<(DVector<f64>, DMatrix<f64>)>,
+}
+
+const NOT_MEASURED: Outcome = Outcome {
+    lambda: f64::NAN,
+    dof: 0,
+    excluded: false,
+    fused: false,
+    tests: Vec::new(),
+    partial: false,
+    inn: None,
+};
+
+/// Run the loosely coupled filter over one run's streams (`isolation = false`: detectors
+/// report but every measurement updates the filter).
+pub fn run_loosely_coupled(
+    spec: &ScenarioSpec,
+    src: &Streams,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    let l = spec.loosely_coupled()?;
+    let models = src.models;
+    let logged = models.logged.as_ref().ok_or_else(|| {
+        Error::Invalid(
+            "architecture loosely_coupled runs a strapdown INS on recorded IMU samples: run the scenario from its [source] logs"
+                .into(),
+        )
+    })?;
+    let epochs = models.epochs();
+    let mut rec = RunRecord::empty(spec, models);
+    rec.nav = Vec::with_capacity(epochs * NAV_COLUMNS.len());
+
+    // IMU in body axes on the corrected time line.
+    let m = mounting(l.mounting[0], l.mounting[1], l.mounting[2]);
+    let imu = &logged.imu;
+    let t_imu: Vec<f64> = imu.t.iter().map(|t| t + l.imu_time_offset).collect();
+    let gyro: Vec<Vector3<f64>> = imu.gyro.iter().map(|w| m * w).collect();
+    let acc: Vec<Vector3<f64>> = imu.accel.iter().map(|f| m * f).collect();
+    if t_imu.len() < 2 {
+        return Err(Error::Invalid(
+            "the IMU log has fewer than two samples".into(),
+        ));
+    }
+    let lever = Vector3::from(l.lever_arm);
+
+    let mut aids = build_aids(spec)?;
+    let pos_aid = aids.iter().position(|a| a.pos.is_some());
+    let vel_aid = aids.iter().position(|a| a.vel.is_some());
+    let (Some(pos_aid), Some(vel_aid)) = (pos_aid, vel_aid) else {
+        return Err(Error::Invalid(
+            "loosely_coupled.sensors: the alignment needs GNSS positions and velocities (a gnss sensor, or a gnss_position and a gnss_velocity sensor)".into(),
+        ));
+    };
+    let n_gnss = l.sensors.len();
+    let zupt_ch = l.zupt.as_ref().map(|_| n_gnss);
+    let nhc_ch = l
+        .nhc
+        .as_ref()
+        .map(|_| n_gnss + usize::from(l.zupt.is_some()));
+
+    // Alignment.
+    let measure = |aid: &Aid, k: usize, off: Option<usize>| -> Option<Vector3<f64>> {
+        let si = aid.sensor?;
+        let o = off?;
+        if !models.available[si][k] {
+            return None;
+        }
+        let z = &src.meas.z[si][k];
+        let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
+        v.iter().all(|x| x.is_finite()).then_some(v)
+    };
+    let speed_at = |k: usize| measure(&aids[vel_aid], k, aids[vel_aid].vel).map(|v| v.xy().norm());
+    let ka = (0..epochs)
+        .find(|&k| {
+            speed_at(k).is_some_and(|s| s >= l.alignment.speed)
+                && measure(&aids[pos_aid], k, aids[pos_aid].pos).is_some()
+                && models.t[k] > t_imu[0]
+        })
+        .ok_or_else(|| {
+            Error::Invalid(format!(
+                "alignment: no epoch with a GNSS fix and a GNSS speed of at least loosely_coupled.alignment.speed = {} m/s inside the IMU log",
+                l.alignment.speed
+            ))
+        })?;
+    // The last static stretch before ka.
+    let mut end = None;
+    let mut start = None;
+    for k in (0..ka).rev() {
+        match speed_at(k) {
+            Some(s) if s < l.alignment.static_speed => {
+                end.get_or_insert(k);
+                start = Some(k);
+            }
+            Some(_) if end.is_some() => break,
+            _ => {}
+        }
+    }
+    let (Some(k0), Some(k1)) = (start, end) else {
+        return Err(Error::Invalid(format!(
+            "alignment: no static start (GNSS speed below loosely_coupled.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s: levelling needs the vehicle at rest",
+            l.alignment.static_speed, l.alignment.speed
+        )));
+    };
+    let (t0, t1) = (models.t[k0], models.t[k1]);
+    let idx: Vec<usize> = (0..t_imu.len())
+        .filter(|&i| t_imu[i] >= t0 && t_imu[i] <= t1)
+        .collect();
+    if idx.len() < 50 {
+        return Err(Error::Invalid(format!(
+            "alignment: the static start {t0:.2}–{t1:.2} s holds {} IMU samples; levelling needs at least 50",
+            idx.len()
+        )));
+    }
+    let mean =
+        |v: &[Vector3<f64>]| idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len() as f64;
+    let f_mean = mean(&acc);
+    let bg0 = if l.alignment.gyro_bias {
+        mean(&gyro)
+    } else {
+        Vector3::zeros()
+    };
+    let (roll, pitch) = level(&f_mean);
+    let v_enu = measure(&aids[vel_aid], ka, aids[vel_aid].vel).unwrap_or_default();
+    let speed = v_enu.xy().norm();
+    let yaw = l
+        .alignment
+        .heading
+        .unwrap_or_else(|| v_enu.x.atan2(v_enu.y));
+    let sig_v = logged
+        .sigma
+        .get(aids[vel_aid].sensor.unwrap_or(0))
+        .and_then(|s| s.get(ka))
+        .and_then(|s| s.get(aids[vel_aid].vel.unwrap_or(0)).copied())
+        .unwrap_or(0.1);
+    let sig_heading = if l.alignment.heading.is_some() {
+        l.alignment.sigma_heading
+    } else {
+        l.alignment.sigma_heading.max(sig_v / speed.max(1e-3))
+    };
+    let q = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+    let fix = logged
+        .origin
+        .from_enu(&measure(&aids[pos_aid], ka, aids[pos_aid].pos).unwrap_or_default());
+    let mut s = NavState {
+        lat: fix.lat,
+        lon: fix.lon,
+        h: fix.h,
+        v: Vector3::new(v_enu.y, v_enu.x, -v_enu.z),
+        q,
+    };
+    // The INS point is the IMU's: move from the antenna by −C l.
+    shift(&mut s, &-(q * lever));
+    let mut kf = ErrorFilter::new(
+        l.alignment.sigma_position,
+        l.alignment.sigma_velocity,
+        Vector3::new(
+            l.alignment.sigma_level,
+            l.alignment.sigma_level,
+            sig_heading,
+        ),
+        bg0,
+        l.noise(),
+    )
+    .with_mounting(&m);
+
+    let mut outcomes = vec![NOT_MEASURED.clone(); aids.len()];
+    for _ in 0..ka {
+        push_empty(&mut rec, &mut outcomes);
+    }
+    let mut i = t_imu.partition_point(|&t| t <= models.t[ka]);
+    let mut t_cur = models.t[ka];
+    let mut prev = Increment::zero(0.0);
+    let mut w_last = gyro[i.min(gyro.len() - 1)] - kf.bg;
+    let mut excluded_before = vec![false; aids.len()];
+    let mut track: Vec<Option<Track>> = (0..aids.len()).map(|_| None).collect();
+    for k in ka..epochs {
+        if k % 256 == 0 {
+            cancel.check()?;
+        }
+        let tk = models.t[k];
+        if tk > t_imu[t_imu.len() - 1] {
+            // The IMU log has ended: no navigation.
+            push_empty(&mut rec, &mut outcomes);
+            continue;
+        }
+        // Mechanise to tk.
+        while t_cur < tk {
+            let ip = i.min(t_imu.len() - 1);
+            let im = ip.saturating_sub(1);
+            let w = 0.5 * (gyro[im] + gyro[ip]) - kf.bg;
+            let f = 0.5 * (acc[im] + acc[ip]) - kf.ba;
+            let t_next = t_imu[ip].min(tk);
+            let dt = t_next - t_cur;
+            if dt > 0.0 {
+                let inc = Increment {
+                    dtheta: w * dt,
+                    dvel: f * dt,
+                    dt,
+                };
+                mechanise(&mut s, &prev, &inc);
+                kf.propagate(&s, &f, dt);
+                prev = inc;
+                w_last = w;
+            }
+            t_cur = t_next;
+            if t_imu[ip] <= tk {
+                i = ip + 1;
+                if i >= t_imu.len() {
+                    break;
+                }
+            }
+        }
+        outcomes.iter_mut().for_each(|o| *o = NOT_MEASURED.clone());
+        // Constraints first, then GNSS in configuration order.
+        let mut at_rest = false;
+        if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
+            if still(&t_imu, &acc, &gyro, &kf.bg, i, tk, c) {
+                at_rest = true;
+                let mut h = DMatrix::zeros(3, N);
+                for j in 0..3 {
+                    h[(j, V + j)] = 1.0;
+                }
+                let meas = Meas {
+                    res: DVector::from_column_slice(s.v.as_slice()),
+                    h,
+                    r: diag(&c.noise),
+                };
+                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true)?;
+            }
+        }
+        if let (Some(ch), Some(c)) = (nhc_ch, l.nhc.as_ref()) {
+            if !at_rest && s.v.norm() >= c.threshold && w_last.z.abs() <= c.rate_threshold {
+                let cbn = s.q.to_rotation_matrix().into_inner();
+                let ct = cbn.transpose();
+                let vb = ct * s.v;
+                let hv = ct;
+                let hphi = -ct * skew(&s.v);
+                let mut h = DMatrix::zeros(2, N);
+                for (row, b) in [1usize, 2].iter().enumerate() {
+                    for j in 0..3 {
+                        h[(row, V + j)] = hv[(*b, j)];
+                        h[(row, PHI + j)] = hphi[(*b, j)];
+                    }
+                }
+                let meas = Meas {
+                    res: DVector::from_vec(vec![vb.y, vb.z]),
+                    h,
+                    r: diag(&c.noise),
+                };
+                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true)?;
+            }
+        }
+        // GNSS: every channel tested on the pre-update state; with `witness`, a channel's
+        // alarm excludes it only if another GNSS channel of the epoch passes (when all alarm,
+        // the INS is as likely at fault as the GNSS: none is excluded).
+        let mut tested: Vec<(usize, Meas, Outcome)> = Vec::new();
+        for (a, aid) in aids.iter_mut().enumerate().take(n_gnss) {
+            let Some(si) = aid.sensor else { continue };
+            if !models.available[si][k] {
+                continue;
+            }
+            let z = &src.meas.z[si][k];
+            if z.iter().any(|x| !x.is_finite()) {
+                continue;
+            }
+            let sig = logged.sigma.get(si).and_then(|v| v.get(k));
+            let meas = gnss_measurement(&s, aid, z, sig, &logged.origin, &lever, &w_last);
+            let o = test(&kf, aid, &meas, isolation)?;
+            tested.push((a, meas, o));
+        }
+        let witnessed = !l.witness || tested.iter().any(|(_, _, o)| !o.excluded);
+        let mut ant = s;
+        shift(&mut ant, &(s.q * lever));
+        let sig_v = (kf.p[(V, V)] + kf.p[(V + 1, V + 1)] + kf.p[(V + 2, V + 2)]).max(0.0) / 3.0;
+        for (a, meas, mut o) in tested {
+            o.excluded &= witnessed;
+            let si = aids[a].sensor.unwrap_or(0);
+            let z = &src.meas.z[si][k];
+            // A position channel excluded at its previous measurement and alarming now is
+            // re-admitted when its fix jumped relative to the INS since then (the fault
+            // ended, or changed): what stays excluded is a fault that persists, not the
+            // INS's own error after a fault pulled it.
+            let mut readmit = false;
+            let mut drift = None;
+            if let (Some(off), Some(prev)) = (aids[a].pos, track[a].as_ref()) {
+                let g = logged
+                    .origin
+                    .from_enu(&Vector3::new(z[off], z[off + 1], z[off + 2]));
+                if o.excluded && prev.excluded {
+                    // How the fix moved against the INS since the previous measurement: a
+                    // persisting fault repeats it (0 for a step, the rate for a ramp); its end
+                    // (or a change) breaks it.
+                    let dt = models.t[k] - prev.t;
+                    let d = ned(&g, &prev.fix) - ned(&ant, &prev.ins);
+                    if let Some(dp) = prev.drift {
+                        let var = meas.r.diagonal().rows(off, 3).into_owned() + &prev.var;
+                        let lam: f64 = (0..3)
+                            .map(|j| (d[j] - dp[j]).powi(2) / (2.0 * (var[j] + sig_v * dt * dt)))
+                            .sum();
+                        let thr = aids[a]
+                            .decision
+                            .and_then(|j| o.tests.get(j))
+                            .map_or(f64::INFINITY, |t| t.1);
+                        // A fault's end removes (most of) the offset the fix had: a jump of
+                        // at least half the previous innovation, beyond the noise.
+                        let jump = (d - dp).norm();
+                        readmit = lam > thr && jump > 0.5 * prev.innovation;
+                    }
+                    drift = Some(d);
+                }
+            }
+            if readmit {
+                o.excluded = false;
+                // Let the filter move to the re-admitted fix: position σ grown by the
+                // innovation (east, north, up components into north, east, down).
+                if let Some(off) = aids[a].pos {
+                    for (j, row) in [(0usize, R + 1), (1, R), (2, R + 2)] {
+                        kf.p[(row, row)] += meas.res[off + j].powi(2);
+                    }
+                }
+            }
+            // Component isolation: of an alarming measurement keep what passes.
+            let mut keep: Vec<usize> = (0..meas.res.len()).collect();
+            if o.excluded && l.isolate_components && aids[a].decision_pf.is_finite() {
+                if let Some((r, sv)) = o.inn.as_ref() {
+                    keep = isolate(r, sv, aids[a].decision_pf)?;
+                }
+                if !keep.is_empty() {
+                    o.excluded = false;
+                    o.partial = true;
+                }
+            }
+            o.fused = !o.excluded;
+            if let Some(off) = aids[a].pos {
+                track[a] = Some(Track {
+                    t: models.t[k],
+                    fix: logged
+                        .origin
+                        .from_enu(&Vector3::new(z[off], z[off + 1], z[off + 2])),
+                    ins: ant,
+                    var: meas.r.diagonal().rows(off, 3).into_owned(),
+                    excluded: o.excluded || o.partial,
+                    drift: if o.excluded || o.partial { drift } else { None },
+                    innovation: meas.res.rows(off, 3).norm(),
+                });
+            }
+            if o.fused {
+                // Re-linearised after the updates before it in this epoch.
+                let sig = logged.sigma.get(si).and_then(|v| v.get(k));
+                let fresh = gnss_measurement(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
+                update(&mut kf, &mut s, &rows(&fresh, &keep))?;
+            }
+            outcomes[a] = o;
+        }
+        // Record.
+        let mut fused = 0;
+        for (c, o) in outcomes.iter().enumerate() {
+            fused += u32::from(o.fused);
+            let sub = &mut rec.subs[c];
+            sub.statistic.push(o.lambda);
+            sub.dof.push(o.dof);
+            sub.isolated.push(o.excluded || o.partial);
+            sub.reinstated
+                .push(excluded_before[c] && o.fused && !o.excluded);
+            sub.fused.push(o.fused);
+            for (j, d) in sub.detectors.iter_mut().enumerate() {
+                let (st, th, al) = o
+                    .tests
+                    .get(j)
+                    .copied()
+                    .unwrap_or((f64::NAN, f64::NAN, false));
+                d.statistic.push(st);
+                d.threshold.push(th);
+                d.alarm.push(al);
+            }
+            if o.fused || o.excluded {
+                excluded_before[c] = o.excluded;
+            }
+        }
+        rec.sources.push(fused);
+        record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
+    }
+    Ok(rec)
+}
+
+fn diag(sig: &[f64]) -> DMatrix<f64> {
+    DMatrix::from_diagonal(&DVector::from_iterator(
+        sig.len(),
+        sig.iter().map(|s| s * s),
+    ))
+}
+
+/// Move the state's position by `d` metres north, east, down.
+fn shift(s: &mut NavState, d: &Vector3<f64>) {
+    let rm = earth::r_meridian(s.lat) + s.h;
+    let rn = earth::r_normal(s.lat) + s.h;
+    s.lat += d.x / rm;
+    s.lon += d.y / (rn * s.lat.cos());
+    s.h -= d.z;
+}
+
+/// Rest over the window before `tk`: σ of the specific-force magnitude and mean
+/// bias-corrected rate magnitude under their thresholds.
+fn still(
+    t: &[f64],
+    acc: &[Vector3<f64>],
+    gyro: &[Vector3<f64>],
+    bg: &Vector3<f64>,
+    i: usize,
+    tk: f64,
+    c: &ConstraintSpec,
+) -> bool {
+    let hi = i.min(t.len());
+    let lo = t[..hi].partition_point(|&x| x < tk - c.window);
+    let n = hi - lo;
+    if n < 5 {
+        return false;
+    }
+    let mags: Vec<f64> = acc[lo..hi].iter().map(|f| f.norm()).collect();
+    let mean = mags.iter().sum::<f64>() / n as f64;
+    let var = mags.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let rate = gyro[lo..hi].iter().map(|w| (w - bg).norm()).sum::<f64>() / n as f64;
+    var.sqrt() < c.threshold && rate < c.rate_threshold
+}
+
+#[allow(clippy::too_many_arguments)]
+fn gnss_measurement(
+    s: &NavState,
+    aid: &Aid,
+    z: &DVector<f64>,
+    sig: Option<&DVector<f64>>,
+    origin: &Nominal,
+    lever: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> Meas {
+    let dim = z.len();
+    let c = s.q.to_rotation_matrix().into_inner();
+    let cl = c * lever;
+    let mut res = DVector::zeros(dim);
+    let mut h = DMatrix::zeros(dim, N);
+    // NED rows into the sensor's east, north, up order.
+    let mut put = |off: usize,
+                   d_ned: &Vector3<f64>,
+                   rows: &nalgebra::Matrix3x6<f64>,
+                   col0: usize,
+                   blk: &Matrix3<f64>| {
+        let order = [(1usize, 1.0), (0, 1.0), (2, -1.0)];
+        for (j, (src_row, sign)) in order.iter().enumerate() {
+            res[off + j] = sign * d_ned[*src_row];
+            for q in 0..3 {
+                h[(off + j, col0 + q)] = sign * rows[(*src_row, q)];
+                h[(off + j, PHI + q)] = sign * blk[(*src_row, q)];
+            }
+        }
+    };
+    let ident = nalgebra::Matrix3x6::<f64>::from_fn(|r, c| if r == c { 1.0 } else { 0.0 });
+    if let Some(o) = aid.pos {
+        let g = origin.from_enu(&Vector3::new(z[o], z[o + 1], z[o + 2]));
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = earth::r_normal(s.lat) + s.h;
+        let d = Vector3::new(
+            (s.lat - g.lat) * rm,
+            (s.lon - g.lon) * rn * s.lat.cos(),
+            -(s.h - g.h),
+        ) + cl;
+        put(o, &d, &ident, R, &skew(&cl));
+    }
+    if let Some(o) = aid.vel {
+        let vl = c * w.cross(lever);
+        let v_g = Vector3::new(z[o + 1], z[o], -z[o + 2]);
+        let d = s.v + vl - v_g;
+        put(o, &d, &ident, V, &skew(&vl));
+    }
+    let sd: Vec<f64> = (0..dim)
+        .map(|j| {
+            let rec = sig
+                .and_then(|v| v.get(j).copied())
+                .filter(|x| x.is_finite() && *x > 0.0);
+            rec.unwrap_or(0.0).max(aid.floor[j])
+        })
+        .collect();
+    Meas {
+        res,
+        h,
+        r: diag(&sd),
+    }
+}
+
+/// Test one measurement with the channel's detectors: the outcome says whether its deciding
+/// detector alarms (excluded, with isolation); nothing is updated.
+fn test(kf: &ErrorFilter, aid: &mut Aid, meas: &Meas, isolation: bool) -> Result<Outcome> {
+    let zero = DVector::zeros(meas.res.len());
+    let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
+    let dof = meas.res.len();
+    let mut alarm = false;
+    let mut stats = Vec::with_capacity(aid.detectors.len());
+    for (j, d) in aid.detectors.iter_mut().enumerate() {
+        let dec = d.test_innovation(&inn.r, &inn.s, inn.lambda, dof)?;
+        if Some(j) == aid.decision && dec.alarm {
+            alarm = true;
+        }
+        stats.push((dec.statistic, dec.threshold, dec.alarm));
+    }
+    let excluded = alarm && isolation;
+    Ok(Outcome {
+        lambda: inn.lambda,
+        dof: dof as u32,
+        excluded,
+        fused: !excluded,
+        tests: stats,
+        partial: false,
+        inn: Some((inn.r, inn.s)),
+    })
+}
+
+/// Components to keep of an alarming innovation `r` with covariance `s`: the component with
+/// the largest Baarda w (`(S⁻¹r)_i / √(S⁻¹)_ii`) is left out, again, until the χ² test of the
+/// rest at `pf` passes (all left out when it never does).
+fn isolate(r: &DVector<f64>, s: &DMatrix<f64>, pf: f64) -> Result<Vec<usize>> {
+    let mut keep: Vec<usize> = (0..r.len()).collect();
+    while !keep.is_empty() {
+        let rk = DVector::from_iterator(keep.len(), keep.iter().map(|&i| r[i]));
+        let sk = s.select_rows(&keep).select_columns(&keep);
+        let Some(inv) = sk.clone().try_inverse() else {
+            return Ok(Vec::new());
+        };
+        let u = &inv * &rk;
+        if rk.dot(&u) <= crate::stats::chi2_threshold(pf, keep.len())? {
+            break;
+        }
+        let worst = (0..keep.len())
+            .max_by(|&a, &b| {
+                let wa = u[a].abs() / inv[(a, a)].max(1e-300).sqrt();
+                let wb = u[b].abs() / inv[(b, b)].max(1e-300).sqrt();
+                wa.total_cmp(&wb)
+            })
+            .unwrap_or(0);
+        keep.remove(worst);
+    }
+    Ok(keep)
+}
+
+/// The rows `keep` of a measurement.
+fn rows(m: &Meas, keep: &[usize]) -> Meas {
+    Meas {
+        res: DVector::from_iterator(keep.len(), keep.iter().map(|&i| m.res[i])),
+        h: m.h.select_rows(keep),
+        r: m.r.select_rows(keep).select_columns(keep),
+    }
+}
+
+/// Update the filter with a measurement and feed the correction back into the state.
+fn update(kf: &mut ErrorFilter, s: &mut NavState, meas: &Meas) -> Result<()> {
+    let zero = DVector::zeros(meas.res.len());
+    let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
+    let dx = kf.update(&inn, &meas.h, &meas.r)?;
+    kf.feedback(s, &dx);
+    Ok(())
+}
+
+/// Test a constraint and update with it unless excluded.
+fn apply(
+    kf: &mut ErrorFilter,
+    s: &mut NavState,
+    aid: &mut Aid,
+    meas: &Meas,
+    isolation: bool,
+) -> Result<Outcome> {
+    let o = test(kf, aid, meas, isolation)?;
+    if !o.excluded {
+        update(kf, s, meas)?;
+    }
+    Ok(o)
+}
+
+fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome]) {
+    for (c, o) in outcomes.iter_mut().enumerate() {
+        *o = NOT_MEASURED.clone();
+        let sub = &mut rec.subs[c];
+        sub.statistic.push(f64::NAN);
+        sub.dof.push(0);
+        sub.isolated.push(false);
+        sub.reinstated.push(false);
+        sub.fused.push(false);
+        for d in &mut sub.detectors {
+            d.statistic.push(f64::NAN);
+            d.threshold.push(f64::NAN);
+            d.alarm.push(false);
+        }
+    }
+    rec.sources.push(0);
+    rec.error.extend([f64::NAN; 9]);
+    rec.sigma.extend([f64::NAN; 9]);
+    rec.nav.extend([f64::NAN; NAV_COLUMNS.len()]);
+}
+
+fn record_nav(
+    rec: &mut RunRecord,
+    s: &NavState,
+    kf: &ErrorFilter,
+    lever: &Vector3<f64>,
+    origin: &Nominal,
+    src: &Streams,
+    k: usize,
+) {
+    let mut ant = *s;
+    shift(&mut ant, &(s.q * lever));
+    let (roll, pitch, yaw) = s.q.euler_angles();
+    let v_enu = Vector3::new(s.v.y, s.v.x, -s.v.z);
+    rec.nav.extend([
+        ant.lat, ant.lon, ant.h, v_enu.x, v_enu.y, v_enu.z, roll, pitch, yaw,
+    ]);
+    rec.nav.extend(kf.bg.iter().chain(kf.ba.iter()).copied());
+    let sig = kf.sigma();
+    rec.nav.extend((BG..BA + 3).map(|j| sig[j]));
+    let p = origin.to_enu(&Nominal {
+        lat: ant.lat,
+        lon: ant.lon,
+        h: ant.h,
+    });
+    match src.reference.and_then(|r| r.enu.get(k)) {
+        Some(r) => {
+            rec.error.extend([f64::NAN; 3]);
+            rec.error
+                .extend([v_enu.x - r[3], v_enu.y - r[4], v_enu.z - r[5]]);
+            rec.error.extend([p.x - r[0], p.y - r[1], p.z - r[2]]);
+        }
+        None => rec.error.extend([f64::NAN; 9]),
+    }
+    rec.sigma.extend([
+        sig[PHI + 1],
+        sig[PHI],
+        sig[PHI + 2],
+        sig[V + 1],
+        sig[V],
+        sig[V + 2],
+        sig[R + 1],
+        sig[R],
+        sig[R + 2],
+    ]);
+}
+
+fn build_aids(spec: &ScenarioSpec) -> Result<Vec<Aid>> {
+    let l = spec.loosely_coupled()?;
+    let mut out = Vec::new();
+    let dets = |specs: &[crate::spec::DetectorSpec]| -> Result<Vec<Detector>> {
+        specs
+            .iter()
+            .map(|d| make_detector(d.kind, d.pf, d.pm, d.variance.as_deref(), d.min_samples))
+            .collect()
+    };
+    for a in &l.sensors {
+        let si = spec.sensor_index(&a.sensor).ok_or_else(|| {
+            Error::Invalid(format!("loosely_coupled: unknown sensor {:?}", a.sensor))
+        })?;
+        let kind = spec.sensors[si].kind;
+        let (pos, vel) = match kind {
+            SensorKind::Gnss => (Some(0), Some(3)),
+            SensorKind::GnssPosition => (Some(0), None),
+            SensorKind::GnssVelocity => (None, Some(0)),
+            _ => (None, None),
+        };
+        out.push(Aid {
+            sensor: Some(si),
+            pos,
+            vel,
+            decision: a
+                .decision
+                .as_ref()
+                .and_then(|n| a.detectors.iter().position(|d| &d.name == n)),
+            decision_pf: a
+                .decision
+                .as_ref()
+                .and_then(|n| a.detectors.iter().find(|d| &d.name == n))
+                .map_or(f64::NAN, |d| d.pf),
+            detectors: dets(&a.detectors)?,
+            floor: spec.sensors[si].noise.clone(),
+        });
+    }
+    for c in [&l.zupt, &l.nhc].into_iter().flatten() {
+        out.push(Aid {
+            sensor: None,
+            pos: None,
+            vel: None,
+            decision: c
+                .decision
+                .as_ref()
+                .and_then(|n| c.detectors.iter().position(|d| &d.name == n)),
+            decision_pf: f64::NAN,
+            detectors: dets(&c.detectors)?,
+            floor: c.noise.clone(),
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,308 @@
+//! Closed-loop 15-state error-state Kalman filter of a strapdown INS ([`super::strapdown`]):
+//! position error (m, north-east-down), velocity error (m/s), attitude error φ (rad), gyro
+//! bias (rad/s) and accelerometer bias (m/s²), biases as first-order Gauss-Markov processes.
+//! `F`, `Φ ≈ I + F Δt` and `Q` are built from the mechanised state and the IMU's noise
+//! figures at every sample (never from a truth); corrections are fed back into the
+//! mechanisation after every update and the error state reset to zero.
+//!
+//! Conventions (KF-GINS's): `δr = r̂ − r`, `δv = v̂ − v`, `Ĉ_b^n = (I − [φ×]) C_b^n`; the
+//! bias states are the estimated biases themselves, removed from the IMU increments.
+
+use super::earth;
+use super::strapdown::{frame_rates, skew, NavState};
+use crate::error::{Error, Result};
+use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
+
+/// Number of error states.
+pub const N: usize = 15;
+/// Index of the position error (north, east, down; m).
+pub const R: usize = 0;
+/// Index of the velocity error (north, east, down; m/s).
+pub const V: usize = 3;
+/// Index of the attitude error φ (rad, navigation axes).
+pub const PHI: usize = 6;
+/// Index of the gyro bias (rad/s, body axes).
+pub const BG: usize = 9;
+/// Index of the accelerometer bias (m/s², body axes).
+pub const BA: usize = 12;
+
+/// 15 × 15 matrix.
+pub type Mat15 = SMatrix<f64, N, N>;
+/// 15-vector.
+pub type Vec15 = SVector<f64, N>;
+
+/// The IMU's noise figures, in SI units.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ImuNoise {
+    /// Angle random walk: gyro white-noise density per IMU axis x, y, z (rad/s/√Hz).
+    pub gyro_noise: [f64; 3],
+    /// Velocity random walk: accelerometer white-noise density per IMU axis (m/s²/√Hz).
+    pub accel_noise: [f64; 3],
+    /// Gyro bias instability: σ of the Gauss-Markov bias (rad/s).
+    pub gyro_bias: f64,
+    /// Accelerometer bias instability: σ of the Gauss-Markov bias (m/s²).
+    pub accel_bias: f64,
+    /// Correlation time of both biases (s).
+    pub bias_tau: f64,
+}
+
+/// The error-state filter: the estimated biases and the error covariance.
+#[derive(Debug, Clone)]
+pub struct ErrorFilter {
+    /// Error covariance (15 × 15).
+    pub p: Mat15,
+    /// Estimated gyro bias (rad/s, body).
+    pub bg: Vector3<f64>,
+    /// Estimated accelerometer bias (m/s², body).
+    pub ba: Vector3<f64>,
+    noise: ImuNoise,
+    /// White-noise spectral densities in body axes (`M diag(n²) Mᵀ`).
+    q_gyro: Matrix3<f64>,
+    q_acc: Matrix3<f64>,
+}
+
+/// Outcome of one measurement's innovation, before (and whether) it updated the filter.
+#[derive(Debug, Clone)]
+pub struct Innovation {
+    /// Innovation `z − ẑ` (m components as given).
+    pub r: DVector<f64>,
+    /// Its covariance `H P Hᵀ + R`.
+    pub s: DMatrix<f64>,
+    /// `λ = rᵀ S⁻¹ r`.
+    pub lambda: f64,
+}
+
+impl ErrorFilter {
+    /// A filter with initial σ per state group: position (m), velocity (m/s), attitude
+    /// (rad; roll, pitch, yaw — applied to north, east, down), gyro bias (rad/s), accelerometer
+    /// bias (m/s²), and the IMU noise figures.
+    pub fn new(
+        sig_pos: f64,
+        sig_vel: f64,
+        sig_att: Vector3<f64>,
+        bg0: Vector3<f64>,
+        noise: ImuNoise,
+    ) -> Self {
+        let mut p = Mat15::zeros();
+        for i in 0..3 {
+            p[(R + i, R + i)] = sig_pos * sig_pos;
+            p[(V + i, V + i)] = sig_vel * sig_vel;
+            p[(PHI + i, PHI + i)] = sig_att[i] * sig_att[i];
+            p[(BG + i, BG + i)] = noise.gyro_bias * noise.gyro_bias;
+            p[(BA + i, BA + i)] = noise.accel_bias * noise.accel_bias;
+        }
+        let sq = |n: [f64; 3]| {
+            Matrix3::from_diagonal(&Vector3::new(n[0] * n[0], n[1] * n[1], n[2] * n[2]))
+        };
+        ErrorFilter {
+            p,
+            bg: bg0,
+            ba: Vector3::zeros(),
+            noise,
+            q_gyro: sq(noise.gyro_noise),
+            q_acc: sq(noise.accel_noise),
+        }
+    }
+
+    /// Rotate the per-axis noise densities from the IMU's axes into the body's with the
+    /// mounting `m` (`C_imu^b`).
+    pub fn with_mounting(mut self, m: &Matrix3<f64>) -> Self {
+        self.q_gyro = m * self.q_gyro * m.transpose();
+        self.q_acc = m * self.q_acc * m.transpose();
+        self
+    }
+
+    /// Propagate `P` over `dt` s with `F` from state `s` and the bias-corrected specific
+    /// force `f_b` (m/s²) and angular rate `w_b` (rad/s) of the interval.
+    pub fn propagate(&mut self, s: &NavState, f_b: &Vector3<f64>, dt: f64) {
+        if dt <= 0.0 {
+            return;
+        }
+        let c = s.q.to_rotation_matrix().into_inner();
+        let (w_ie, w_en) = frame_rates(s);
+        let w_in = w_ie + w_en;
+        let f_n = c * f_b;
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = earth::r_normal(s.lat) + s.h;
+        let mut f = Mat15::zeros();
+        // Position: δr' = −[ω_en×] δr + δv (the dominant terms).
+        let v = &s.v;
+        f.fixed_view_mut::<3, 3>(R, R).copy_from(&Matrix3::new(
+            -v.z / rm,
+            0.0,
+            v.x / rm,
+            v.y * s.lat.tan() / rn,
+            -(v.z + v.x * s.lat.tan()) / rn,
+            v.y / rn,
+            0.0,
+            0.0,
+            0.0,
+        ));
+        f.fixed_view_mut::<3, 3>(R, V)
+            .copy_from(&Matrix3::identity());
+        // Velocity: δv' = −[(2ω_ie + ω_en)×] δv + [f_n×] φ + C δba, plus gravity's height term.
+        f.fixed_view_mut::<3, 3>(V, V)
+            .copy_from(&(-skew(&(2.0 * w_ie + w_en))));
+        f[(V + 2, R + 2)] = -2.0 * earth::gravity(s.lat, s.h) / (earth::A);
+        f.fixed_view_mut::<3, 3>(V, PHI).copy_from(&skew(&f_n));
+        f.fixed_view_mut::<3, 3>(V, BA).copy_from(&c);
+        // Attitude: φ' = −[ω_in×] φ − C δbg.
+        f.fixed_view_mut::<3, 3>(PHI, PHI)
+            .copy_from(&(-skew(&w_in)));
+        f.fixed_view_mut::<3, 3>(PHI, BG).copy_from(&(-c));
+        let tau = self.noise.bias_tau;
+        for i in 0..6 {
+            f[(BG + i, BG + i)] = -1.0 / tau;
+        }
+        let phi = Mat15::identity() + f * dt;
+        // Discrete process noise: white noise through C, Gauss-Markov drivers on the biases.
+        let qv = c * self.q_acc * c.transpose() * dt;
+        let qa = c * self.q_gyro * c.transpose() * dt;
+        let qbg = 2.0 * self.noise.gyro_bias.powi(2) / tau * dt;
+        let qba = 2.0 * self.noise.accel_bias.powi(2) / tau * dt;
+        let mut p = phi * self.p * phi.transpose();
+        {
+            let mut b = p.fixed_view_mut::<3, 3>(V, V);
+            b += qv;
+        }
+        {
+            let mut b = p.fixed_view_mut::<3, 3>(PHI, PHI);
+            b += qa;
+        }
+        for i in 0..3 {
+            p[(BG + i, BG + i)] += qbg;
+            p[(BA + i, BA + i)] += qba;
+        }
+        self.p = 0.5 * (p + p.transpose());
+    }
+
+    /// The innovation of a measurement `z` with prediction `z_hat`, matrix `h` (m × 15) and
+    /// noise covariance `r` (m × m).
+    pub fn innovation(
+        &self,
+        z: &DVector<f64>,
+        z_hat: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<Innovation> {
+        let p = DMatrix::from_column_slice(N, N, self.p.as_slice());
+        let s = h * &p * h.transpose() + r;
+        let res = z - z_hat;
+        let chol = Cholesky::new(s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance".into(),
+            detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
+        })?;
+        let lambda = res.dot(&chol.solve(&res));
+        Ok(Innovation { r: res, s, lambda })
+    }
+
+    /// Update with an innovation `inn` of matrix `h` (Joseph form) and return the error-state
+    /// estimate to feed back ([`ErrorFilter::feedback`]).
+    pub fn update(
+        &mut self,
+        inn: &Innovation,
+        h: &DMatrix<f64>,
+        r: &DMatrix<f64>,
+    ) -> Result<Vec15> {
+        let p = DMatrix::from_column_slice(N, N, self.p.as_slice());
+        let chol = Cholesky::new(inn.s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+            name: "innovation covariance".into(),
+            detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
+        })?;
+        // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ.
+        let k = chol.solve(&(h * &p)).transpose();
+        let dx = &k * &inn.r;
+        let ikh = DMatrix::<f64>::identity(N, N) - &k * h;
+        let pn = &ikh * &p * ikh.transpose() + &k * r * k.transpose();
+        for j in 0..N {
+            for i in 0..N {
+                self.p[(i, j)] = 0.5 * (pn[(i, j)] + pn[(j, i)]);
+            }
+        }
+        Ok(Vec15::from_iterator(dx.iter().copied()))
+    }
+
+    /// Feed an error-state estimate `dx` back into the mechanised state `s` and the biases.
+    pub fn feedback(&mut self, s: &mut NavState, dx: &Vec15) {
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = earth::r_normal(s.lat) + s.h;
+        s.lat -= dx[R] / rm;
+        s.lon -= dx[R + 1] / (rn * s.lat.cos());
+        s.h += dx[R + 2];
+        s.v -= Vector3::new(dx[V], dx[V + 1], dx[V + 2]);
+        let phi = Vector3::new(dx[PHI], dx[PHI + 1], dx[PHI + 2]);
+        s.q = UnitQuaternion::from_scaled_axis(phi) * s.q;
+        self.bg += Vector3::new(dx[BG], dx[BG + 1], dx[BG + 2]);
+        self.ba += Vector3::new(dx[BA], dx[BA + 1], dx[BA + 2]);
+    }
+
+    /// σ of every error state (square roots of `P`'s diagonal).
+    pub fn sigma(&self) -> Vec15 {
+        Vec15::from_iterator((0..N).map(|i| self.p[(i, i)].max(0.0).sqrt()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn noise() -> ImuNoise {
+        ImuNoise {
+            gyro_noise: [1e-3; 3],
+            accel_noise: [1e-3; 3],
+            gyro_bias: 1e-4,
+            accel_bias: 1e-3,
+            bias_tau: 3600.0,
+        }
+    }
+
+    #[test]
+    fn position_update_pulls_state_to_fix() {
+        let mut s = NavState {
+            lat: 0.7,
+            lon: 0.2,
+            h: 10.0,
+            v: Vector3::zeros(),
+            q: UnitQuaternion::identity(),
+        };
+        let mut kf = ErrorFilter::new(10.0, 1.0, Vector3::repeat(0.01), Vector3::zeros(), noise());
+        // INS 3 m north of a fix with σ 0.1 m: the update moves it almost all the way.
+        let z = DVector::zeros(3);
+        let zh = DVector::from_vec(vec![3.0, 0.0, 0.0]);
+        let mut h = DMatrix::zeros(3, N);
+        for i in 0..3 {
+            h[(i, R + i)] = 1.0;
+        }
+        let r = DMatrix::identity(3, 3) * 0.01;
+        let inn = kf.innovation(&zh, &z, &h, &r).unwrap();
+        assert!((inn.lambda - 9.0 / (100.0 + 0.01)).abs() < 1e-9);
+        let dx = kf.update(&inn, &h, &r).unwrap();
+        let lat0 = s.lat;
+        kf.feedback(&mut s, &dx);
+        let moved = (lat0 - s.lat) * (earth::r_meridian(0.7) + 10.0);
+        assert!((moved - 3.0 * 100.0 / 100.01).abs() < 1e-4, "{moved}");
+        assert!(kf.p[(0, 0)] < 0.0101);
+    }
+
+    #[test]
+    fn covariance_grows_without_aiding() {
+        let s = NavState {
+            lat: 0.7,
+            lon: 0.2,
+            h: 10.0,
+            v: Vector3::zeros(),
+            q: UnitQuaternion::identity(),
+        };
+        let mut kf = ErrorFilter::new(0.1, 0.01, Vector3::repeat(0.001), Vector3::zeros(), noise());
+        let f = Vector3::new(0.0, 0.0, -9.8);
+        let p0 = kf.p[(0, 0)];
+        for _ in 0..1000 {
+            kf.propagate(&s, &f, 0.01);
+        }
+        assert!(kf.p[(0, 0)] > p0 && kf.p[(3, 3)] > 1e-4);
+        // Symmetric and positive definite after 1000 steps.
+        assert!((kf.p - kf.p.transpose()).norm() < 1e-12);
+        assert!(kf.p.cholesky().is_some());
+    }
+}

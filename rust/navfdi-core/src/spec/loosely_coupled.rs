@@ -1,0 +1,269 @@
+//! Loosely coupled strapdown INS configuration: the IMU's noise figures and mounting, the
+//! antenna lever arm, initial alignment, the GNSS sensors that aid it (each with detectors and
+//! a deciding detector) and the optional vehicle constraints (zero velocity, non-holonomic),
+//! each a detection channel like any sensor.
+
+use super::check::{bad, non_negative, positive};
+use super::detectors::DetectorSpec;
+use super::{default_true, Channel, ScenarioSpec, SensorKind};
+use crate::error::Result;
+use crate::ins::error_filter::ImuNoise;
+use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
+
+/// Name of the zero-velocity channel in records.
+pub const ZUPT: &str = "zupt";
+/// Name of the non-holonomic-constraint channel in records.
+pub const NHC: &str = "nhc";
+
+/// Initial alignment of the strapdown INS.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AlignmentSpec {
+    /// GNSS ground speed (m/s) above which the heading is taken from the GNSS velocity's
+    /// course and navigation starts.
+    pub speed: f64,
+    /// Heading at the start of navigation (rad from north), instead of the GNSS course.
+    #[serde(default)]
+    pub heading: Option<f64>,
+    /// GNSS ground speed (m/s) below which the vehicle counts as at rest for the static
+    /// levelling and gyro-bias estimate before it starts moving.
+    #[serde(default = "default_static_speed")]
+    pub static_speed: f64,
+    /// Estimate the gyro biases as the mean rate over the static start (else start at 0).
+    #[serde(default = "default_true")]
+    pub gyro_bias: bool,
+    /// Initial σ: level (roll, pitch) attitude (rad).
+    pub sigma_level: f64,
+    /// Initial σ: heading (rad); with the heading from the GNSS course, at least the course's
+    /// own σ (velocity σ over speed) is used.
+    pub sigma_heading: f64,
+    /// Initial σ: position (m) and velocity (m/s) per axis.
+    pub sigma_position: f64,
+    /// See [`AlignmentSpec::sigma_position`].
+    pub sigma_velocity: f64,
+}
+
+fn default_static_speed() -> f64 {
+    0.05
+}
+
+/// A vehicle constraint used as a measurement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintSpec {
+    /// Noise σ per component (m/s): zero velocity north, east, down (3); non-holonomic body
+    /// right and down velocity (2).
+    pub noise: Vec<f64>,
+    /// Detectors run on the constraint's innovation.
+    #[serde(default)]
+    pub detectors: Vec<DetectorSpec>,
+    /// Detector whose alarm drops the constraint for the epoch (None: never).
+    #[serde(default)]
+    pub decision: Option<String>,
+    /// Zero velocity: IMU window (s) over which rest is detected. Non-holonomic: unused.
+    #[serde(default = "default_window")]
+    pub window: f64,
+    /// Zero velocity: largest σ of the specific-force magnitude over the window (m/s²).
+    /// Non-holonomic: least INS speed (m/s) for the constraint to apply.
+    pub threshold: f64,
+    /// Zero velocity: largest mean magnitude of the bias-corrected angular rate over the
+    /// window (rad/s). Non-holonomic: largest yaw rate (rad/s) for it to apply (sliding in
+    /// tight turns).
+    pub rate_threshold: f64,
+}
+
+fn default_window() -> f64 {
+    0.5
+}
+
+/// A GNSS sensor aiding the INS.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AidingSpec {
+    /// Sensor name (kind `gnss`, `gnss_position` or `gnss_velocity`).
+    pub sensor: String,
+    /// Detectors run on this sensor's innovation.
+    #[serde(default)]
+    pub detectors: Vec<DetectorSpec>,
+    /// Name of the detector whose alarm excludes the sensor's measurement for the epoch
+    /// (None: never acted on).
+    #[serde(default)]
+    pub decision: Option<String>,
+}
+
+/// Loosely coupled configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LooselyCoupledSpec {
+    /// The IMU's noise figures.
+    pub imu: ImuNoise,
+    /// IMU-to-body mounting roll, pitch, yaw (rad; body forward-right-down).
+    pub mounting: [f64; 3],
+    /// GNSS antenna position from the IMU in body axes, forward-right-down (m).
+    pub lever_arm: [f64; 3],
+    /// Seconds added to the IMU time stamps (logging delay).
+    #[serde(default)]
+    pub imu_time_offset: f64,
+    /// Initial alignment.
+    pub alignment: AlignmentSpec,
+    /// GNSS sensors aiding the INS, updated in this order.
+    pub sensors: Vec<AidingSpec>,
+    /// Zero-velocity updates at rest detected from the IMU.
+    #[serde(default)]
+    pub zupt: Option<ConstraintSpec>,
+    /// Non-holonomic constraint (no lateral or vertical body velocity) for wheeled vehicles.
+    #[serde(default)]
+    pub nhc: Option<ConstraintSpec>,
+    /// A GNSS channel's alarm excludes it only when another GNSS channel of the same epoch
+    /// passes its test (default): when position and velocity both alarm, the INS is as likely
+    /// at fault (after an outage, or a manoeuvre beyond its noise model) and excluding both
+    /// would lock good GNSS out. `false`: every alarm excludes.
+    #[serde(default = "default_true")]
+    pub witness: bool,
+    /// An alarming GNSS measurement keeps the components that pass: the one with the largest
+    /// w-test statistic is left out until the χ² test of the rest passes at the deciding
+    /// detector's pf (default). `false`: the whole measurement is excluded.
+    #[serde(default = "default_true")]
+    pub isolate_components: bool,
+    /// Deciding detectors act (default). `false`: they report but every measurement is used.
+    #[serde(default = "default_true")]
+    pub isolate: bool,
+}
+
+impl LooselyCoupledSpec {
+    /// Detection channels: the aiding sensors, then `zupt` and `nhc` when configured.
+    pub fn channels(&self) -> Vec<Channel<'_>> {
+        let mut out: Vec<Channel> = self
+            .sensors
+            .iter()
+            .map(|a| Channel {
+                sensor: &a.sensor,
+                detectors: Cow::Borrowed(&a.detectors),
+                decision: a.decision.as_deref(),
+                satellite: None,
+            })
+            .collect();
+        for (name, c) in [(ZUPT, &self.zupt), (NHC, &self.nhc)] {
+            if let Some(c) = c {
+                out.push(Channel {
+                    sensor: name,
+                    detectors: Cow::Borrowed(&c.detectors),
+                    decision: c.decision.as_deref(),
+                    satellite: None,
+                });
+            }
+        }
+        out
+    }
+
+    /// The IMU's noise figures as the error filter takes them.
+    pub fn noise(&self) -> ImuNoise {
+        self.imu
+    }
+}
+
+impl ScenarioSpec {
+    pub(super) fn validate_loosely_coupled(&self) -> Result<()> {
+        let l = self.loosely_coupled()?;
+        let p = "loosely_coupled";
+        for (n, v) in l
+            .imu
+            .gyro_noise
+            .iter()
+            .map(|v| ("imu.gyro_noise", *v))
+            .chain(l.imu.accel_noise.iter().map(|v| ("imu.accel_noise", *v)))
+            .chain([
+                ("imu.gyro_bias", l.imu.gyro_bias),
+                ("imu.accel_bias", l.imu.accel_bias),
+                ("imu.bias_tau", l.imu.bias_tau),
+                ("alignment.speed", l.alignment.speed),
+                ("alignment.static_speed", l.alignment.static_speed),
+                ("alignment.sigma_level", l.alignment.sigma_level),
+                ("alignment.sigma_heading", l.alignment.sigma_heading),
+                ("alignment.sigma_position", l.alignment.sigma_position),
+                ("alignment.sigma_velocity", l.alignment.sigma_velocity),
+            ])
+        {
+            positive(&format!("{p}.{n}"), v)?;
+        }
+        for (i, v) in l.mounting.iter().chain(l.lever_arm.iter()).enumerate() {
+            if !v.is_finite() {
+                let f = if i < 3 { "mounting" } else { "lever_arm" };
+                return Err(bad(format!("{p}.{f}"), "must be finite numbers"));
+            }
+        }
+        if l.lever_arm.iter().any(|v| v.abs() > 100.0) {
+            return Err(bad(
+                format!("{p}.lever_arm"),
+                "a component exceeds 100 m: give it in metres",
+            ));
+        }
+        if !(l.imu_time_offset.abs() <= 10.0) {
+            return Err(bad(format!("{p}.imu_time_offset"), "must be within ±10 s"));
+        }
+        if let Some(h) = l.alignment.heading {
+            if !h.is_finite() {
+                return Err(bad(format!("{p}.alignment.heading"), "must be finite"));
+            }
+        }
+        if l.sensors.is_empty() {
+            return Err(bad(
+                format!("{p}.sensors"),
+                "at least one GNSS sensor is required",
+            ));
+        }
+        for (i, a) in l.sensors.iter().enumerate() {
+            let q = format!("{p}.sensors[{i}]");
+            let dup = l.sensors[..i].iter().any(|o| o.sensor == a.sensor);
+            self.check_sensor_ref(&q, &a.sensor, dup, "is listed twice")?;
+            let si = self.sensor_index(&a.sensor).unwrap_or(0);
+            let kind = self.sensors[si].kind;
+            if !matches!(
+                kind,
+                SensorKind::Gnss | SensorKind::GnssPosition | SensorKind::GnssVelocity
+            ) {
+                return Err(bad(
+                    format!("{q}.sensor"),
+                    format!("{:?} is {kind:?}: a loosely coupled INS is aided by gnss, gnss_position or gnss_velocity sensors", a.sensor),
+                ));
+            }
+            self.validate_detectors(&q, &a.detectors, false)?;
+            check_decision(&q, &a.decision, &a.detectors)?;
+        }
+        for (name, c, dim) in [(ZUPT, &l.zupt, 3), (NHC, &l.nhc, 2)] {
+            let Some(c) = c else { continue };
+            let q = format!("{p}.{name}");
+            if c.noise.len() != dim || c.noise.iter().any(|v| !(*v > 0.0 && v.is_finite())) {
+                return Err(bad(
+                    format!("{q}.noise"),
+                    format!("{dim} positive finite σ (m/s) are required"),
+                ));
+            }
+            positive(&format!("{q}.window"), c.window)?;
+            non_negative(&format!("{q}.threshold"), c.threshold)?;
+            non_negative(&format!("{q}.rate_threshold"), c.rate_threshold)?;
+            self.validate_detectors(&q, &c.detectors, false)?;
+            check_decision(&q, &c.decision, &c.detectors)?;
+        }
+        if self.state_chi2.is_some() {
+            return Err(bad("state_chi2", "the state chi-square test needs the error model's Φ and Q of a simulated scenario; it is not available with loosely_coupled"));
+        }
+        if self.sensors.iter().any(|s| s.name == ZUPT || s.name == NHC) {
+            return Err(bad("sensors", "the names \"zupt\" and \"nhc\" are the constraint channels' of a loosely coupled INS; rename the sensor"));
+        }
+        Ok(())
+    }
+}
+
+fn check_decision(q: &str, decision: &Option<String>, dets: &[DetectorSpec]) -> Result<()> {
+    if let Some(dn) = decision {
+        if !dets.iter().any(|d| &d.name == dn) {
+            return Err(bad(
+                format!("{q}.decision"),
+                format!("{dn:?} is not one of its detectors"),
+            ));
+        }
+    }
+    Ok(())
+}

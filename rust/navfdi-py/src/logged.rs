@@ -1,0 +1,196 @@
+//! Recorded-data runs: the IMU and GNSS logs (read and checked by `navfdi.logs`) as arrays,
+//! turned into measurement streams by `navfdi_core::logs` and run by the scenario's
+//! architecture with the GIL released.
+
+use crate::convert::{matrix, read};
+use crate::errors::IntoPyResult;
+use crate::scenario::record_to_py;
+use nalgebra::{DMatrix, Vector3};
+use navfdi_core::arch::run_architecture;
+use navfdi_core::logs::{GnssLog, LoggedSource};
+use navfdi_core::record::RunRecord;
+use navfdi_core::spec::ScenarioSpec;
+use navfdi_core::stream::{ImuSamples, Nominal, Streams};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyList;
+
+fn gnss_log(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<GnssLog> {
+    let m = columns(name, obj, 13)?;
+    let rows = m.nrows();
+    let v3 = |r: usize, c: usize| Vector3::new(m[(r, c)], m[(r, c + 1)], m[(r, c + 2)]);
+    Ok(GnssLog {
+        t: (0..rows).map(|r| m[(r, 0)]).collect(),
+        pos: (0..rows)
+            .map(|r| Nominal {
+                lat: m[(r, 1)],
+                lon: m[(r, 2)],
+                h: m[(r, 3)],
+            })
+            .collect(),
+        vel: (0..rows).map(|r| v3(r, 4)).collect(),
+        sd_pos: (0..rows).map(|r| v3(r, 7)).collect(),
+        sd_vel: (0..rows).map(|r| v3(r, 10)).collect(),
+    })
+}
+
+fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: usize) -> PyResult<DMatrix<f64>> {
+    let a = read(name, obj)?;
+    if a.shape.len() != 2 || a.shape[1] != cols {
+        return Err(PyValueError::new_err(format!(
+            "{name}: expected shape (n, {cols}), got {:?}",
+            a.shape
+        )));
+    }
+    matrix(name, obj)
+}
+
+/// Recorded logs prepared for a scenario: ``LoggedSource(spec_json, imu, gnss, reference=None)``.
+///
+/// ``imu``: (N, 7) float array, columns time (s from the run's time 0), angular rate x, y, z
+/// (rad/s) and specific force x, y, z (m/s²) in the IMU's axes. ``gnss`` and ``reference``:
+/// (M, 13) arrays, columns time (s), latitude, longitude (rad), height (m), velocity east,
+/// north, up (m/s), σ of position east, north, up (m) and of velocity east, north, up (m/s).
+/// The record epochs are ``gnss``'s; the reference is scored where no GNSS measurement was an
+/// input. Raises ValueError naming the array and row of bad input.
+#[pyclass(name = "LoggedSource", module = "navfdi._core", frozen)]
+pub struct PyLoggedSource {
+    src: LoggedSource,
+    spec: ScenarioSpec,
+}
+
+#[pymethods]
+impl PyLoggedSource {
+    #[new]
+    #[pyo3(signature = (spec_json, imu, gnss, reference=None))]
+    fn new(
+        py: Python<'_>,
+        spec_json: &str,
+        imu: &Bound<'_, PyAny>,
+        gnss: &Bound<'_, PyAny>,
+        reference: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let spec = ScenarioSpec::from_json(spec_json).py()?;
+        let m = columns("imu", imu, 7)?;
+        let n = m.nrows();
+        let imu = ImuSamples {
+            t: (0..n).map(|r| m[(r, 0)]).collect(),
+            gyro: (0..n)
+                .map(|r| Vector3::new(m[(r, 1)], m[(r, 2)], m[(r, 3)]))
+                .collect(),
+            accel: (0..n)
+                .map(|r| Vector3::new(m[(r, 4)], m[(r, 5)], m[(r, 6)]))
+                .collect(),
+        };
+        let gnss = gnss_log("gnss", gnss)?;
+        let reference = reference.map(|r| gnss_log("reference", r)).transpose()?;
+        let sp = spec.clone();
+        let src = py
+            .detach(move || LoggedSource::new(&sp, imu, &gnss, reference.as_ref()))
+            .py()?;
+        Ok(PyLoggedSource { src, spec })
+    }
+
+    /// Number of record epochs.
+    #[getter]
+    fn epochs(&self) -> usize {
+        self.src.models.epochs()
+    }
+
+    /// Per fault of the scenario (as given, before any draw): whether it reaches a
+    /// measurement (its sensor measures inside the window).
+    #[getter]
+    fn faults_applied(&self) -> Vec<bool> {
+        navfdi_core::stream::faults_applied(&self.spec, &self.src.models)
+    }
+
+    /// The metric cells: list of ``(channel, detector, fault_id or "none", pf)``.
+    #[getter]
+    fn cells(&self) -> Vec<(String, String, String, f64)> {
+        let spec = &self.spec;
+        let channels = spec.channels();
+        navfdi_core::montecarlo::spec_cells(spec)
+            .iter()
+            .map(|c| {
+                let ch = &channels[c.subfilter];
+                let d = &ch.detectors[c.detector];
+                let f = c
+                    .fault
+                    .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
+                (ch.name().to_string(), d.name.clone(), f, d.pf)
+            })
+            .collect()
+    }
+
+    /// Monte-Carlo runs ``start .. start + count`` on the recorded data: run ``i`` draws its
+    /// faults' ``draw`` ranges from ``(seed, i)``; on ``threads`` threads (0: all cores), GIL
+    /// released. Returns the dict of arrays of ``PreparedScenario.run_chunk`` (plus
+    /// ``hor_rms``, ``hor_max``, ``fault_hor_max`` in m).
+    #[pyo3(signature = (seed, start, count, threads = 0, keep = None))]
+    fn run_chunk<'py>(
+        &self,
+        py: Python<'py>,
+        seed: u64,
+        start: u64,
+        count: u64,
+        threads: usize,
+        keep: Option<Vec<u64>>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        if count == 0 {
+            return Err(PyValueError::new_err("count: must be at least 1"));
+        }
+        let keep = keep.unwrap_or_default();
+        let (src, spec) = (&self.src, &self.spec);
+        let rows = crate::interrupt::run(py, move |cancel| {
+            navfdi_core::montecarlo::run_logged_chunk(
+                src, spec, seed, start, count, threads, &keep, cancel,
+            )
+        })?;
+        let c = navfdi_core::montecarlo::spec_cells(&self.spec).len();
+        crate::montecarlo::rows_to_py(py, rows, c)
+    }
+
+    /// Run each scenario of ``spec_jsons`` (the prepared one and its variants: only the
+    /// filter may differ) on the recorded measurements with the prepared scenario's faults
+    /// injected; ``isolation`` False makes every detector report only. Returns one record dict
+    /// per scenario (as ``run_scenario``'s, plus ``nav`` (T, 21) and ``nav_columns``); the GIL
+    /// is released and Ctrl-C stops the run.
+    #[pyo3(signature = (spec_jsons, isolation=true))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        spec_jsons: Vec<String>,
+        isolation: bool,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let specs = spec_jsons
+            .iter()
+            .map(|j| ScenarioSpec::from_json(j))
+            .collect::<navfdi_core::Result<Vec<_>>>()
+            .py()?;
+        let base = &self.spec;
+        let src = &self.src;
+        let records =
+            crate::interrupt::run(py, move |cancel| -> navfdi_core::Result<Vec<RunRecord>> {
+                let meas = src.measurements(base);
+                let streams = Streams {
+                    models: &src.models,
+                    meas: &meas,
+                    reference: Some(&src.reference),
+                    seed: 0,
+                    stream: 0,
+                };
+                specs
+                    .iter()
+                    .map(|s| {
+                        base.check_variant(s)?;
+                        run_architecture(s, &streams, isolation, true, cancel)
+                    })
+                    .collect()
+            })?;
+        let out = PyList::empty(py);
+        for r in records {
+            out.append(record_to_py(py, r)?)?;
+        }
+        Ok(out)
+    }
+}
