@@ -203,3 +203,17 @@ def test_campaign_draws_faults_per_run_reproducibly() -> None:
     assert (steps.fault_hor_max.to_numpy() < 5.0).all() and (big > 8.0).all()
     s = a.summary()
     assert {"horizontal_error_rms", "fault_horizontal_error_max_mean"} <= set(s.columns)
+
+
+def test_cli_set_overrides_a_field(capsys, tmp_path: Path) -> None:
+    from navfdi.cli import main
+
+    assert main(["run", "drive_lc", "--set", "faults[0].start=300 s", "--set", "faults[0].end=330 s", "--out", str(tmp_path), "--no-figures"]) == 0
+    out = capsys.readouterr().out
+    import json
+
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["scenario"]["faults"][0]["start"] == "300 s"
+    assert "gnss_fault" in out
+    assert main(["run", "drive_lc", "--set", "faults[0].magnitude=30 m,40 m"]) == 2
+    assert "one value expected" in capsys.readouterr().err

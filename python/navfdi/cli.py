@@ -98,6 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    run.add_argument("--set", action="append", default=[], metavar="PATH=VALUE", help='override a scenario field, e.g. --set "faults[0].magnitude=30 m" or --set "sensors[0].rate=2 Hz" (repeatable; the --sweep syntax with one value)')
     sc = sub.add_parser("scenarios", help="list the bundled scenarios, show or export one as TOML")
     show = sc.add_mutually_exclusive_group()
     show.add_argument("--show", metavar="NAME", default=None, help="print a bundled scenario's TOML")
@@ -193,9 +194,19 @@ def _dispatch(args: argparse.Namespace) -> int:
                 print(fit(f"{name:<{width}}  {desc}"))
             print("\nnavfdi scenarios --show NAME prints one; --export NAME PATH writes it to edit.")
     elif args.command == "run":
+        from navfdi._errors import ScenarioError
+        from navfdi.montecarlo import parse_sweep
         from navfdi.runs import run_scenario
+        from navfdi.scenario import load_scenario
 
-        result = run_scenario(args.scenario, seed=args.seed)
+        scenario = load_scenario(args.scenario)
+        sets = parse_sweep(args.set)
+        for path, vals in sets.items():
+            if len(vals) != 1:
+                raise ScenarioError(f"--set {path}: one value expected, got {len(vals)} ({', '.join(map(str, vals))}); use navfdi montecarlo --sweep for several")
+        if sets:
+            scenario = scenario.with_values({p: v[0] for p, v in sets.items()})
+        result = run_scenario(scenario, seed=args.seed)
         print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}\n")
         print(result.format_tables(), end="")
         if args.out:

@@ -196,6 +196,7 @@ impl LoggedSource {
             reference: Reference {
                 x_true: Vec::new(),
                 enu,
+                attitude: Vec::new(),
             },
         })
     }

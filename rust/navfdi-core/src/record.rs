@@ -157,8 +157,10 @@ pub struct RunRecord {
 /// Columns of [`RunRecord::nav`]: the GNSS antenna's latitude, longitude (rad) and height
 /// (m); velocity east, north, up (m/s); roll, pitch, yaw (rad, body forward-right-down to
 /// north-east-down); estimated gyro biases (rad/s) and accelerometer biases (m/s²) in body
-/// axes; and their 1σ (rad/s, m/s²). NaN before the INS is aligned.
-pub const NAV_COLUMNS: [&str; 21] = [
+/// axes; their 1σ (rad/s, m/s²); and the normalised estimation error squared of antenna
+/// position, velocity and attitude (9 dof) where the reference has the true attitude (NaN
+/// otherwise). NaN before the INS is aligned.
+pub const NAV_COLUMNS: [&str; 22] = [
     "lat",
     "lon",
     "height",
@@ -180,6 +182,7 @@ pub const NAV_COLUMNS: [&str; 21] = [
     "accel_bias_x_sigma",
     "accel_bias_y_sigma",
     "accel_bias_z_sigma",
+    "nees",
 ];
 
 /// Per-epoch inputs of the altitude fusion (see [`RunRecord::fusion`]).

@@ -143,6 +143,10 @@ pub struct Reference {
     /// [`Logged::origin`]) and velocity east, north, up (m/s); NaN where the reference has no
     /// epoch or the epoch was an input of the filter (scored only on the others).
     pub enu: Vec<[f64; 6]>,
+    /// The true body (forward-right-down) to north-east-down attitude per epoch, where the
+    /// source knows it (simulated logs; empty for recorded ones): with it a strapdown
+    /// architecture records its normalised estimation error squared.
+    pub attitude: Vec<nalgebra::UnitQuaternion<f64>>,
 }
 
 /// One run's streams: its models, measurements and optional reference.

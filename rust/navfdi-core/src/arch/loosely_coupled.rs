@@ -14,6 +14,8 @@
 //! `alignment.speed`; heading from that velocity's course (or given); position and velocity
 //! from that epoch's fix. Epochs before it are recorded as NaN.
 
+mod checks;
+
 use super::common::make_detector;
 use crate::cancel::Cancel;
 use crate::detect::Detector;
@@ -24,6 +26,7 @@ use crate::ins::strapdown::{level, mechanise, mounting, skew, Increment, NavStat
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
+use checks::{isolate, ned, nees, rows, shift, Meas, Track};
 use nalgebra::{DMatrix, DVector, Matrix3, UnitQuaternion, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
@@ -40,55 +43,6 @@ struct Aid {
     decision_pf: f64,
     /// Fallback σ per component (the sensor's `noise`), a floor under the recorded σ.
     floor: Vec<f64>,
-}
-
-/// A position channel's previous measurement: time, fix, the INS antenna position then, the
-/// fix's variances (east, north, up), whether it was excluded and, while excluded, how the fix
-/// had moved against the INS.
-struct Track {
-    t: f64,
-    fix: Nominal,
-    ins: NavState,
-    var: DVector<f64>,
-    excluded: bool,
-    /// While excluded: how the fix moved against the INS since the measurement before.
-    drift: Option<Vector3<f64>>,
-    /// Size of the position innovation (m).
-    innovation: f64,
-}
-
-/// North, east, down (m) of `p` from `q` (at `q`'s radii).
-fn ned(p: &impl Point, q: &impl Point) -> Vector3<f64> {
-    let (la, lo, h) = q.llh();
-    let (pa, po, ph) = p.llh();
-    let rm = earth::r_meridian(la) + h;
-    let rn = earth::r_normal(la) + h;
-    Vector3::new((pa - la) * rm, (po - lo) * rn * la.cos(), -(ph - h))
-}
-
-/// A point with latitude, longitude (rad) and height (m).
-trait Point {
-    fn llh(&self) -> (f64, f64, f64);
-}
-
-impl Point for Nominal {
-    fn llh(&self) -> (f64, f64, f64) {
-        (self.lat, self.lon, self.h)
-    }
-}
-
-impl Point for NavState {
-    fn llh(&self) -> (f64, f64, f64) {
-        (self.lat, self.lon, self.h)
-    }
-}
-
-/// A measurement ready for the filter, components in the channel's order.
-struct Meas {
-    /// `ẑ − z`: INS prediction minus measurement.
-    res: DVector<f64>,
-    h: DMatrix<f64>,
-    r: DMatrix<f64>,
 }
 
 /// Per-epoch outcome of one channel.
@@ -244,6 +198,19 @@ pub fn run_loosely_coupled(
         l.alignment.sigma_heading.max(sig_v / speed.max(1e-3))
     };
     let q = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+    // The static mean rate holds the Earth's rotation as well as the bias: remove it with the
+    // attitude at rest (level from the static start, heading from the first motion).
+    let bg0 = if l.alignment.gyro_bias {
+        let lat = logged.origin.lat;
+        let w_ie = Vector3::new(
+            earth::OMEGA_IE * lat.cos(),
+            0.0,
+            -earth::OMEGA_IE * lat.sin(),
+        );
+        bg0 - q.inverse() * w_ie
+    } else {
+        bg0
+    };
     let fix = logged
         .origin
         .from_enu(&measure(&aids[pos_aid], ka, aids[pos_aid].pos).unwrap_or_default());
@@ -496,15 +463,6 @@ fn diag(sig: &[f64]) -> DMatrix<f64> {
     ))
 }
 
-/// Move the state's position by `d` metres north, east, down.
-fn shift(s: &mut NavState, d: &Vector3<f64>) {
-    let rm = earth::r_meridian(s.lat) + s.h;
-    let rn = earth::r_normal(s.lat) + s.h;
-    s.lat += d.x / rm;
-    s.lon += d.y / (rn * s.lat.cos());
-    s.h -= d.z;
-}
-
 /// Rest over the window before `tk`: σ of the specific-force magnitude and mean
 /// bias-corrected rate magnitude under their thresholds.
 fn still(
@@ -619,42 +577,6 @@ fn test(kf: &ErrorFilter, aid: &mut Aid, meas: &Meas, isolation: bool) -> Result
     })
 }
 
-/// Components to keep of an alarming innovation `r` with covariance `s`: the component with
-/// the largest Baarda w (`(S⁻¹r)_i / √(S⁻¹)_ii`) is left out, again, until the χ² test of the
-/// rest at `pf` passes (all left out when it never does).
-fn isolate(r: &DVector<f64>, s: &DMatrix<f64>, pf: f64) -> Result<Vec<usize>> {
-    let mut keep: Vec<usize> = (0..r.len()).collect();
-    while !keep.is_empty() {
-        let rk = DVector::from_iterator(keep.len(), keep.iter().map(|&i| r[i]));
-        let sk = s.select_rows(&keep).select_columns(&keep);
-        let Some(inv) = sk.clone().try_inverse() else {
-            return Ok(Vec::new());
-        };
-        let u = &inv * &rk;
-        if rk.dot(&u) <= crate::stats::chi2_threshold(pf, keep.len())? {
-            break;
-        }
-        let worst = (0..keep.len())
-            .max_by(|&a, &b| {
-                let wa = u[a].abs() / inv[(a, a)].max(1e-300).sqrt();
-                let wb = u[b].abs() / inv[(b, b)].max(1e-300).sqrt();
-                wa.total_cmp(&wb)
-            })
-            .unwrap_or(0);
-        keep.remove(worst);
-    }
-    Ok(keep)
-}
-
-/// The rows `keep` of a measurement.
-fn rows(m: &Meas, keep: &[usize]) -> Meas {
-    Meas {
-        res: DVector::from_iterator(keep.len(), keep.iter().map(|&i| m.res[i])),
-        h: m.h.select_rows(keep),
-        r: m.r.select_rows(keep).select_columns(keep),
-    }
-}
-
 /// Update the filter with a measurement and feed the correction back into the state.
 fn update(kf: &mut ErrorFilter, s: &mut NavState, meas: &Meas) -> Result<()> {
     let zero = DVector::zeros(meas.res.len());
@@ -719,6 +641,7 @@ fn record_nav(
     rec.nav.extend(kf.bg.iter().chain(kf.ba.iter()).copied());
     let sig = kf.sigma();
     rec.nav.extend((BG..BA + 3).map(|j| sig[j]));
+    rec.nav.push(nees(s, kf, lever, origin, src, k));
     let p = origin.to_enu(&Nominal {
         lat: ant.lat,
         lon: ant.lon,

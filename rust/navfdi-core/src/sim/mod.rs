@@ -6,8 +6,10 @@
 //! their noise from a generator seeded by `(seed, run index)` ([`noise::simulate`]), giving
 //! each run's measurements and its reference (the true error state). The architectures
 //! ([`crate::arch`]) consume the result through [`noise::Simulated::streams`] and never import
-//! this module.
+//! this module. [`logs`] simulates recorded-style logs (IMU samples, a GNSS solution) along a
+//! trajectory for the strapdown architecture's consistency check.
 
+pub mod logs;
 pub mod noise;
 pub mod prepare;
 pub mod ranges;

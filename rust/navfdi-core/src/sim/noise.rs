@@ -151,6 +151,7 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         reference: Reference {
             x_true,
             enu: Vec::new(),
+            attitude: Vec::new(),
         },
         seed,
         stream,
