@@ -51,6 +51,7 @@ __all__ = [
     "mdb",
     "validate_scenario",
     "araim_epoch",
+    "snapshot_pl",
     "window_alarm",
     "scenario_trajectory",
     "run_scenario",
@@ -1026,6 +1027,17 @@ class Prefilter:
         """Process noise Q (3, 3) of one step."""
     def __reduce__(self) -> tuple[Callable[[str, str], Any], tuple[str, str]]:
         """Pickle support."""
+
+def snapshot_pl(
+    los_enu: list[list[float]] | list[tuple[float, float, float]],
+    clock: list[int],
+    sigma2: list[float],
+    threshold: float,
+    k_md: float,
+) -> dict[str, Any]:
+    """Slope-based protection levels of the snapshot least-squares global test; use
+    :func:`navfdi.integrity.snapshot_pl`. Returns ``hpl``, ``vpl``, ``sigma_h``, ``sigma_v`` (m),
+    ``hslope``, ``vslope``, ``critical``."""
 
 def araim_epoch(
     rows: list[list[float]] | list[tuple[float, float, float]],

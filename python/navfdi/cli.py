@@ -124,6 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
     gn.add_argument("--weighting", choices=["elevation", "rtklib"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2)")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
+    gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200")
     gn.add_argument("--fault", action="append", default=[], metavar="SAT:SHAPE:SIZE:START:END", help="inject a fault, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s (times from the first epoch; repeatable)")
     truth = gn.add_mutually_exclusive_group()
     truth.add_argument("--truth", default=None, metavar="LAT,LON,H", help="reference position (deg, deg, m) for the error statistics")
@@ -255,6 +256,7 @@ def _gnss(args: argparse.Namespace) -> int:
         noise_factors=factors,
         truth=truth,
         progress=sys.stderr.isatty(),
+        integrity=args.integrity,
     )
     print(sol.format_summary(), end="")
     if args.out:

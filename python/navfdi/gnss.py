@@ -283,6 +283,10 @@ class GnssSolution:
             out["vertical_rms"] = float(np.sqrt(np.mean(u**2)))
             out["horizontal_max"] = float(np.max(np.hypot(e, n)))
             out["vertical_max"] = float(np.max(np.abs(u)))
+        if "integrity" in self.config:
+            from navfdi.gnss_integrity import integrity_summary
+
+            out["integrity"] = integrity_summary(self)
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
@@ -352,6 +356,14 @@ class GnssSolution:
         lines = [f"epochs {s['epochs']}, solved {s['solved']} ({', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
         if "horizontal_rms" in s:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
+        ig = s.get("integrity")
+        if ig:
+            line = f"integrity ({ig['allocation']}): available {ig['availability']:.1%} of solved epochs, {ig['alarm_epochs']} alarm epochs"
+            if "araim_vertical_hazardously_misleading" in ig:
+                hmi = sum(ig[f"{k}_{d}_hazardously_misleading"] for k in ("araim", "raim") for d in ("horizontal", "vertical"))
+                mi = {k: ig[f"{k}_horizontal_misleading"] + ig[f"{k}_vertical_misleading"] for k in ("araim", "raim")}
+                line += f"; error > PL while available: ARAIM {mi['araim']}, snapshot RAIM {mi['raim']} epochs; hazardously misleading {hmi}"
+            lines.append(line)
         skipped = ", ".join(f"{k} {v}" for k, v in sorted(s["skipped"].items())) or "none"
         lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
@@ -381,6 +393,10 @@ class GnssSolution:
         sats.to_parquet(paths[1], index=False)
         paths[2].write_text(_json.dumps({"summary": self.summary(), "config": self.config}, default=_json_default) + "\n")
         figs: list[Path] = _plot(self, d) if figures else []
+        if figures and "integrity" in self.config and self.truth is not None:
+            from navfdi.gnss_integrity import plot_stanford
+
+            figs += plot_stanford(self, d)
         paths += figs
         paths.append(self._report(d, figs))
         return paths
@@ -392,6 +408,7 @@ class GnssSolution:
 
         s = self.summary()
         headline = {k: v for k, v in s.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+        headline.update({f"integrity {k}": v for k, v in s.get("integrity", {}).items() if isinstance(v, (int, float)) and not isinstance(v, bool)})
         tables = [("faults", pd.DataFrame(s["faults"]))] if s["faults"] else []
         tables.append(("solution.csv (first 200 epochs)", self.solution.head(200)))
         t = self.solution["gps_seconds"].to_numpy()
@@ -439,6 +456,7 @@ def gnss_solve(
     truth: np.ndarray | Sequence[float] | str | None = None,
     progress: bool = False,
     chunk: int = 500,
+    integrity: str | None = None,
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
@@ -482,6 +500,11 @@ def gnss_solve(
         Show a tqdm progress bar.
     chunk : int
         Epochs solved per call into Rust (progress granularity).
+    integrity : str, optional
+        An allocation (``"lpv200"``): add ARAIM and snapshot-RAIM protection levels and the
+        integrity state per epoch (:mod:`navfdi.gnss_integrity`); the summary then has an
+        ``integrity`` block (availability, misleading and hazardously misleading epochs
+        against the truth) and ``write`` adds the Stanford diagrams.
     """
     if isinstance(systems, str):
         systems = [s for s in re.split(r"[,\s]+", systems.strip()) if s]
@@ -582,6 +605,10 @@ def gnss_solve(
         "receiver": run.receiver,
     }
     out = GnssSolution(sol, sats, t_ecef, config, parsed)
+    if integrity is not None:
+        from navfdi.gnss_integrity import add_integrity
+
+        add_integrity(out, integrity)
     for f in parsed:
         note = out.fault_note(f)
         if note:

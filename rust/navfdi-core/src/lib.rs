@@ -24,7 +24,7 @@
 //!   * [`gnss`]: geodesy, constellations, RINEX, broadcast ephemerides, single-point
 //!     positioning, snapshot and innovation FDE, prefilters, the `gnss_ranges` stream type.
 //!   * [`fusion`]: federated master fusion, weighted fusion with a fault matrix.
-//!   * [`integrity`]: protection levels (ARAIM).
+//!   * [`integrity`]: protection levels (ARAIM, snapshot RAIM).
 //! * Configuration
 //!   * [`spec`]: the scenario schema (one file per part and per architecture) and its
 //!     validation.

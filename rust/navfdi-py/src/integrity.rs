@@ -78,3 +78,44 @@ pub fn araim_epoch<'py>(
     d.set_item("modes", modes)?;
     Ok(d)
 }
+
+/// Slope-based protection levels of the snapshot least-squares global test (one epoch).
+/// `los_enu` (n, 3): unit lines of sight receiver → satellite (east, north, up); `clock` (n):
+/// 0-based clock group per satellite; `sigma2` (n, m²); `threshold`: the χ² quantile the test
+/// compares `rᵀWr` with; `k_md`: the missed-detection quantile. Returns a dict: `hpl`, `vpl`,
+/// `sigma_h`, `sigma_v` (m), `hslope`, `vslope`, `critical` (index of the satellite with the
+/// largest vertical slope). ValueError for too few satellites or a singular geometry.
+#[pyfunction]
+pub fn snapshot_pl<'py>(
+    py: Python<'py>,
+    los_enu: Vec<[f64; 3]>,
+    clock: Vec<usize>,
+    sigma2: Vec<f64>,
+    threshold: f64,
+    k_md: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    if let Some((i, r)) = los_enu
+        .iter()
+        .enumerate()
+        .find(|(_, r)| !r.iter().all(|v| v.is_finite()))
+    {
+        return Err(PyValueError::new_err(format!(
+            "los_enu[{i}]: {r:?} is not finite"
+        )));
+    }
+    let los: Vec<nalgebra::Vector3<f64>> = los_enu
+        .iter()
+        .map(|r| nalgebra::Vector3::from(*r))
+        .collect();
+    let pl = navfdi_core::integrity::snapshot::snapshot_pl(&los, &clock, &sigma2, threshold, k_md)
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("hpl", pl.hpl)?;
+    d.set_item("vpl", pl.vpl)?;
+    d.set_item("sigma_h", pl.sigma_h)?;
+    d.set_item("sigma_v", pl.sigma_v)?;
+    d.set_item("hslope", pl.hslope)?;
+    d.set_item("vslope", pl.vslope)?;
+    d.set_item("critical", pl.critical)?;
+    Ok(d)
+}

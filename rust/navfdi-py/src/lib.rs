@@ -164,6 +164,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gnss::snapshot_fde, m)?)?;
     m.add_function(wrap_pyfunction!(gnss::py_ls_test, m)?)?;
     m.add_function(wrap_pyfunction!(integrity::araim_epoch, m)?)?;
+    m.add_function(wrap_pyfunction!(integrity::snapshot_pl, m)?)?;
     m.add_function(wrap_pyfunction!(rinex::read_rinex_obs, m)?)?;
     m.add_function(wrap_pyfunction!(rinex::read_rinex_nav, m)?)?;
     m.add_class::<rinex::PyGnssRun>()?;

@@ -2,5 +2,7 @@
 //!
 //! * [`araim`]: advanced RAIM by multiple-hypothesis solution separation (ARAIM ADD v3.0),
 //!   one epoch from the geometry and the integrity support message.
+//! * [`snapshot`]: slope-based protection levels of the snapshot least-squares global test.
 
 pub mod araim;
+pub mod snapshot;

@@ -1,0 +1,172 @@
+"""Integrity on real GNSS files: protection levels for every epoch of a :class:`GnssSolution`.
+
+Per solved epoch, over the satellites the solution used (after exclusion):
+
+* ARAIM (:func:`navfdi.araim`, ADD v3.0 multiple-hypothesis solution separation) with the
+  allocation (``lpv200``: HAL 40 m, VAL 35 m, EMT 15 m) and the default integrity support
+  message; the nominal error model is the solution's own (its weights σ², the code noise and
+  elevation model the least squares used, on single-frequency data with broadcast ionosphere)
+  plus σ_URA² (σ_URE² for accuracy): the ADD's dual-frequency airborne models would understate
+  the errors of a single-frequency receiver;
+* snapshot RAIM (:func:`navfdi.integrity.snapshot_pl`): slope-based levels of the same global
+  test (its threshold and weights) at the missed-detection probability ``p_md``.
+
+Columns added to ``solution``: ``hpl``, ``vpl``, ``emt`` (ARAIM, m), ``hpl_raim``,
+``vpl_raim`` (snapshot, m) and ``integrity``: ``available`` (ARAIM available and HPL ≤ HAL,
+VPL ≤ VAL, EMT ≤ the EMT limit), ``unavailable``, ``alarm`` (the global test still fails after
+exclusion) or ``no_solution``. With a truth, :func:`integrity_summary` counts the epochs where
+the error exceeds the protection level: misleading (MI) when the epoch was available,
+hazardously misleading (HMI) when the error also exceeds the alert limit.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from statistics import NormalDist
+from typing import Any
+
+import numpy as np
+
+from navfdi import _core
+from navfdi.integrity import Allocation, Ism, araim, lpv200
+
+#: Alert limits (m) and EMT limit of the named allocations.
+LIMITS = {"lpv200": {"hal": 40.0, "val": 35.0, "emt": 15.0}}
+
+
+def allocation_by_name(name: str) -> tuple[Allocation, dict[str, float]]:
+    """The allocation and limits of a name (``lpv200``)."""
+    if name not in LIMITS:
+        raise ValueError(f"integrity {name!r}: unknown allocation (known: {', '.join(LIMITS)})")
+    return lpv200(), LIMITS[name]
+
+
+def snapshot_pl(los_enu: Any, systems: list[str], sigma2: Any, threshold: float, p_md: float = 1e-3) -> dict[str, Any]:
+    """Slope-based snapshot RAIM protection levels (see :mod:`navfdi_core::integrity::snapshot`):
+    ``los_enu`` (n, 3) unit lines of sight, ``systems`` (n) letters (one clock each),
+    ``sigma2`` (n) m², ``threshold`` the global test's χ² quantile, ``p_md`` the missed-detection
+    probability (two-sided normal quantile). Returns ``hpl``, ``vpl``, ``sigma_h``, ``sigma_v``
+    (m), ``hslope``, ``vslope``, ``critical``."""
+    if not 0 < p_md < 1:
+        raise ValueError(f"p_md = {p_md!r}: must be in (0, 1)")
+    letters = sorted(set(systems), key=systems.index)
+    k_md = NormalDist().inv_cdf(1 - p_md / 2)
+    los = np.asarray(los_enu, dtype=float)
+    return _core.snapshot_pl(los.tolist(), [letters.index(s) for s in systems], [float(v) for v in np.asarray(sigma2, dtype=float)], float(threshold), k_md)
+
+
+def add_integrity(solution: Any, name: str = "lpv200", p_md: float = 1e-3, ism: Ism | None = None) -> None:
+    """Add the integrity columns to ``solution.solution`` (see the module docs) and record the
+    settings in ``solution.config["integrity"]``."""
+    alloc, limits = allocation_by_name(name)
+    ism = ism or Ism()
+    for f in ("sigma_ura", "sigma_ure", "b_nom", "p_sat"):
+        if np.ndim(getattr(ism, f)) != 0:
+            raise ValueError(f"ism.{f}: a file's epochs see different satellites; give one value for all")
+    sol, sats = solution.solution, solution.satellites
+    used = sats[sats["status"] == "used"]
+    by_epoch = {int(e): g for e, g in used.groupby("epoch", observed=True)}
+    n = len(sol)
+    cols = {k: np.full(n, np.nan) for k in ("hpl", "vpl", "emt", "hpl_raim", "vpl_raim")}
+    state = np.full(n, "no_solution", dtype=object)
+    for i in range(n):
+        if sol["status"].iat[i] == "no_solution" or i not in by_epoch:
+            continue
+        g = by_epoch[i]
+        el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
+        los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+        systems = [str(s)[0] for s in g["satellite"]]
+        s2 = g["sigma"].to_numpy(float) ** 2
+        ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
+        ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
+        try:
+            r = araim(los, systems, c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc)
+            cols["hpl"][i], cols["vpl"][i], cols["emt"][i] = r.hpl, r.vpl, r.emt
+            ok = r.available and r.hpl <= limits["hal"] and r.vpl <= limits["val"] and r.emt <= limits["emt"]
+        except ValueError:
+            ok = False
+        thr = float(sol["threshold"].iat[i])
+        if math.isfinite(thr) and thr > 0:
+            try:
+                p = snapshot_pl(los, systems, s2, thr, p_md)
+                cols["hpl_raim"][i], cols["vpl_raim"][i] = p["hpl"], p["vpl"]
+            except ValueError:
+                pass
+        failed = sol["status"].iat[i] == "unidentified" or (sol["statistic"].iat[i] >= thr if math.isfinite(thr) else False)
+        state[i] = "alarm" if failed else ("available" if ok else "unavailable")
+    for k, v in cols.items():
+        sol[k] = v
+    sol["integrity"] = state
+    solution.config["integrity"] = {"allocation": name, **limits, "p_md_raim": p_md, "sigma_ura": np.asarray(ism.sigma_ura, dtype=float).tolist(), "sigma_ure": np.asarray(ism.sigma_ure, dtype=float).tolist()}
+
+
+def integrity_summary(solution: Any) -> dict[str, Any]:
+    """Availability and, with a truth, the counts of the Stanford diagram per direction:
+    epochs where the error exceeds the protection level (``mi``: misleading, available epochs
+    only; ``hmi``: the error also exceeds the alert limit), for ARAIM and snapshot RAIM."""
+    sol = solution.solution
+    cfg = solution.config["integrity"]
+    st = sol["integrity"]
+    solved = st != "no_solution"
+    out: dict[str, Any] = {
+        "allocation": cfg["allocation"],
+        "availability": float((st == "available").sum() / solved.sum()) if solved.any() else math.nan,
+        "alarm_epochs": int((st == "alarm").sum()),
+    }
+    if solution.truth is None:
+        return out
+    avail = (st == "available").to_numpy()
+    he = np.hypot(sol["east"].to_numpy(float), sol["north"].to_numpy(float))
+    ve = np.abs(sol["up"].to_numpy(float))
+    for kind, h, v in (("araim", "hpl", "vpl"), ("raim", "hpl_raim", "vpl_raim")):
+        for d, err, pl, al in (("horizontal", he, sol[h].to_numpy(float), cfg["hal"]), ("vertical", ve, sol[v].to_numpy(float), cfg["val"])):
+            ok = np.isfinite(pl) & np.isfinite(err)
+            mi = ok & (err > pl)
+            out[f"{kind}_{d}_misleading"] = int((mi & avail).sum())
+            out[f"{kind}_{d}_hazardously_misleading"] = int((mi & (err > al)).sum())
+            out[f"{kind}_{d}_pl_median"] = float(np.median(pl[ok])) if ok.any() else math.nan
+            out[f"{kind}_{d}_error_over_pl_max"] = float(np.max(err[ok] / pl[ok])) if ok.any() else math.nan
+    return out
+
+
+def plot_stanford(solution: Any, out: Path) -> list[Path]:
+    """Stanford diagrams (``stanford_horizontal.png``, ``stanford_vertical.png``): error
+    against the ARAIM protection level per epoch as a 2-D histogram, the alert limit and the
+    diagonal, and the four regions' counts (normal operation, MI, unavailable, HMI)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    sol = solution.solution
+    cfg = solution.config["integrity"]
+    paths = []
+    for d, err, pl, al in (
+        ("horizontal", np.hypot(sol["east"].to_numpy(float), sol["north"].to_numpy(float)), sol["hpl"].to_numpy(float), cfg["hal"]),
+        ("vertical", np.abs(sol["up"].to_numpy(float)), sol["vpl"].to_numpy(float), cfg["val"]),
+    ):
+        ok = np.isfinite(err) & np.isfinite(pl)
+        top = max(al * 1.5, float(np.nanmax(pl[ok], initial=0)) * 1.1, float(np.nanmax(err[ok], initial=0)) * 1.1)
+        fig, ax = plt.subplots(figsize=(6.5, 5.5), constrained_layout=True)
+        if ok.any():
+            h = ax.hist2d(err[ok], pl[ok], bins=60, range=[[0, top], [0, top]], cmin=1, cmap="viridis")
+            fig.colorbar(h[3], ax=ax, label="epochs")
+        ax.plot([0, top], [0, top], "k-", lw=0.8)
+        ax.axhline(al, color="tab:red", lw=0.8)
+        ax.axvline(al, color="tab:red", lw=0.8, ls="--")
+        normal = int((ok & (err <= pl) & (pl <= al)).sum())
+        mi = int((ok & (err > pl) & (err <= al)).sum())
+        unavailable = int((ok & (pl > al) & (err <= pl)).sum())
+        hmi = int((ok & (err > pl) & (err > al)).sum())
+        ax.text(0.02, 0.97, f"normal operation {normal}\nunavailable {unavailable}\nmisleading (MI) {mi}\nhazardously misleading {hmi}", transform=ax.transAxes, va="top", fontsize=8, bbox={"fc": "white", "alpha": 0.8})
+        ax.set_xlim(0, top)
+        ax.set_ylim(0, top)
+        ax.set_xlabel(f"{d} position error [m]")
+        ax.set_ylabel(f"{'HPL' if d == 'horizontal' else 'VPL'} (ARAIM) [m]")
+        ax.set_title(f"{Path(solution.config['obs']).name}: Stanford diagram, {d} ({cfg['allocation']}, alert limit {al:g} m)", fontsize=9)
+        p = out / f"stanford_{d}.png"
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
+    return paths
