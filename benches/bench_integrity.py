@@ -1,0 +1,56 @@
+"""Speed of the protection levels (issue 24), in one process.
+
+    python benches/bench_integrity.py
+
+Per epoch: ARAIM (``navfdi.araim``: Python call with its checks, and ``_core.araim_epoch``
+alone) with 10 satellites in two constellations and 40 satellites in two constellations
+(fault modes up to P_THRES), and the snapshot-RAIM slope levels (``_core.snapshot_pl``) with
+10 satellites. The peer (sidereon's ``araim``) is not wired in yet.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+import navfdi
+from navfdi import _core
+
+
+def geometry(n: int) -> tuple[np.ndarray, list[str]]:
+    i = np.arange(n)
+    az = i * 2.399963
+    el = np.radians(10 + 75 * ((i * 7) % n) / max(n - 1, 1))
+    los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+    return los, ["G" if k % 2 == 0 else "E" for k in i]
+
+
+def best(f, reps: int) -> float:
+    out = []
+    for _ in range(5):
+        t = time.perf_counter()
+        for _ in range(reps):
+            f()
+        out.append((time.perf_counter() - t) / reps)
+    return min(out)
+
+
+def main() -> None:
+    for n, reps in ((10, 2000), (40, 100)):
+        los, sys_ = geometry(n)
+        t = best(lambda: navfdi.araim(los, sys_), reps)
+        r = navfdi.araim(los, sys_)
+        letters = sorted(set(sys_), key=sys_.index)
+        tropo, user = navfdi.integrity.elevation_variances(np.arcsin(los[:, 2]))
+        args = ((-los).tolist(), [letters.index(s) for s in sys_], (0.5625 + tropo + user).tolist(), (0.25 + tropo + user).tolist(), [0.5] * n, [1e-5] * n, [1e-4, 1e-4], (9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5))
+        tc = best(lambda: _core.araim_epoch(*args), reps)
+        print(f"ARAIM {n} satellites (2 constellations, {len(r.modes)} modes): navfdi.araim {t * 1e6:.1f} µs, _core.araim_epoch {tc * 1e6:.1f} µs")
+    los, sys_ = geometry(10)
+    clock = [0 if s == "G" else 1 for s in sys_]
+    ts = best(lambda: _core.snapshot_pl(los.tolist(), clock, [1.0] * 10, 20.0, 3.29), 20000)
+    print(f"snapshot RAIM PL, 10 satellites: {ts * 1e6:.2f} µs")
+
+
+if __name__ == "__main__":
+    main()
