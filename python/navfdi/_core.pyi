@@ -929,6 +929,9 @@ class GnssRun:
         cusum: tuple[float, float, float, int, float],
     ) -> GnssRun: ...
     @property
+    def codes(self) -> dict[str, str]:
+        """Pseudorange code used per system letter (chosen by priority, or given)."""
+    @property
     def n_epochs(self) -> int:
         """Number of epochs in the observation file."""
     @property

@@ -124,6 +124,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
     gn.add_argument("--weighting", choices=["elevation", "rtklib"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2)")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
+    gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
     gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200")
     gn.add_argument("--fault", action="append", default=[], metavar="SAT:SHAPE:SIZE:START:END", help="inject a fault, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s (times from the first epoch; repeatable)")
     truth = gn.add_mutually_exclusive_group()
@@ -243,6 +244,12 @@ def _gnss(args: argparse.Namespace) -> int:
             factors[sys_.strip().upper()] = float(val)
         except ValueError:
             raise ValueError(f"--noise-factor {item!r}: expected SYS=FACTOR, e.g. C=3") from None
+    codes = {}
+    for item in args.code:
+        sys_, sep, val = item.partition("=")
+        if not sep or not sys_.strip() or not val.strip():
+            raise ValueError(f"--code {item!r}: expected SYS=CODE, e.g. E=C1X")
+        codes[sys_.strip().upper()] = val.strip()
     sol = gnss_solve(
         args.obs,
         args.nav,
@@ -254,6 +261,7 @@ def _gnss(args: argparse.Namespace) -> int:
         weighting=args.weighting,
         faults=faults,
         noise_factors=factors,
+        codes=codes,
         truth=truth,
         progress=sys.stderr.isatty(),
         integrity=args.integrity,

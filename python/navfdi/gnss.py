@@ -276,7 +276,7 @@ class GnssSolution:
         was excluded, and its SPRT, AIME and rate CUSUM alarmed (alarm onsets)."""
         sol, sats = self.solution, self.satellites
         solved = sol["status"] != "no_solution"
-        out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"]}
+        out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"], "codes": self.config.get("codes", {})}
         if self.truth is not None and solved.any():
             e, n, u = (sol.loc[solved, c].to_numpy() for c in ("east", "north", "up"))
             out["horizontal_rms"] = float(np.sqrt(np.mean(e**2 + n**2)))
@@ -353,7 +353,8 @@ class GnssSolution:
     def format_summary(self) -> str:
         """The summary as printed by ``navfdi gnss``."""
         s = self.summary()
-        lines = [f"epochs {s['epochs']}, solved {s['solved']} ({', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
+        codes = ", ".join(f"{k} {v}" for k, v in self.config.get("codes", {}).items())
+        lines = [f"epochs {s['epochs']}, solved {s['solved']} ({codes or ', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
         if "horizontal_rms" in s:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
         ig = s.get("integrity")
@@ -482,7 +483,11 @@ def gnss_solve(
     faults : GnssFault or str
         Faults to inject (``"G13:step:20m:100s:200s"``; times from the first epoch).
     codes : dict
-        Pseudorange code per system letter (defaults ``C1C``; BeiDou ``C2I``).
+        Pseudorange code per system letter, to force one (``{"E": "C1X"}``). By default each
+        system's first code with pseudoranges in the file, in the order GPS C1C > C1W > C1X >
+        C1L > C1S > C1P > C1Y, Galileo C1C > C1X > C1B > C1A > C1Z, BeiDou C2I > C2X > C2Q,
+        QZSS C1C > C1X > C1L > C1S > C1Z (first band: the broadcast group delays refer to it).
+        A system with none of them is an error naming the codes the file holds.
     noise_factors : dict
         Factor on σ per system letter (default 1), e.g. ``{"C": 3.0}`` where a system's
         broadcast biases exceed the code noise.
@@ -595,7 +600,8 @@ def gnss_solve(
         "weighting": weighting,
         "ionosphere": bool(ionosphere),
         "troposphere": bool(troposphere),
-        "codes": dict(codes or {}),
+        "codes": dict(run.codes),
+        "codes_given": dict(codes or {}),
         "noise_factors": dict(noise_factors or {}),
         "sprt": list(sprt),
         "aime": list(aime),

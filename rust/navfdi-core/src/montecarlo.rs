@@ -328,11 +328,7 @@ pub fn run_logged_chunk(
     keep: &[u64],
     cancel: &Cancel,
 ) -> Result<Vec<RunMetrics>> {
-    if start.checked_add(count).is_none() {
-        return Err(Error::Invalid(format!(
-            "runs {start} + {count}: the run index would overflow"
-        )));
-    }
+    check_range(start, count)?;
     let cells = spec_cells(spec);
     let one = |i: u64| -> Result<RunMetrics> {
         cancel.check()?;
@@ -357,20 +353,7 @@ pub fn run_logged_chunk(
         }
         Ok(m)
     };
-    let work =
-        || -> Result<Vec<RunMetrics>> { (start..start + count).into_par_iter().map(one).collect() };
-    if threads == 0 {
-        return work();
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| {
-            Error::Invalid(format!(
-                "workers = {threads}: cannot start a thread pool: {e}"
-            ))
-        })?
-        .install(work)
+    in_pool(threads, start, count, one)
 }
 
 /// One run: simulate, filter with isolation, reduce.
@@ -435,11 +418,7 @@ pub fn run_chunk(
     keep: &[u64],
     cancel: &Cancel,
 ) -> Result<Vec<RunMetrics>> {
-    if start.checked_add(count).is_none() {
-        return Err(Error::Invalid(format!(
-            "runs {start} + {count}: the run index would overflow"
-        )));
-    }
+    check_range(start, count)?;
     let workers = if threads == 0 {
         rayon::current_num_threads()
     } else {
@@ -461,22 +440,40 @@ pub fn run_chunk(
         "keep fewer series, use fewer workers, or shorten the scenario",
     )?;
     let cells = cells(prep);
+    in_pool(threads, start, count, |i| {
+        one_run(prep, seed, i, &cells, keep.contains(&i), cancel)
+    })
+}
+
+/// Refuse a chunk whose run indices would overflow.
+fn check_range(start: u64, count: u64) -> Result<()> {
+    if start.checked_add(count).is_none() {
+        return Err(Error::Invalid(format!(
+            "runs {start} + {count}: the run index would overflow"
+        )));
+    }
+    Ok(())
+}
+
+/// Run `one` over `start..start + count` on `threads` threads (0: rayon's default pool), in
+/// run order.
+fn in_pool<F>(threads: usize, start: u64, count: u64, one: F) -> Result<Vec<RunMetrics>>
+where
+    F: Fn(u64) -> Result<RunMetrics> + Sync + Send,
+{
     let work = || -> Result<Vec<RunMetrics>> {
-        (start..start + count)
-            .into_par_iter()
-            .map(|i| one_run(prep, seed, i, &cells, keep.contains(&i), cancel))
-            .collect()
+        (start..start + count).into_par_iter().map(&one).collect()
     };
     if threads == 0 {
         return work();
     }
-    let pool = rayon::ThreadPoolBuilder::new()
+    rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| {
             Error::Invalid(format!(
                 "workers = {threads}: cannot start a thread pool: {e}"
             ))
-        })?;
-    pool.install(work)
+        })?
+        .install(work)
 }

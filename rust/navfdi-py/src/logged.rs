@@ -107,19 +107,7 @@ impl PyLoggedSource {
     /// The metric cells: list of ``(channel, detector, fault_id or "none", pf)``.
     #[getter]
     fn cells(&self) -> Vec<(String, String, String, f64)> {
-        let spec = &self.spec;
-        let channels = spec.channels();
-        navfdi_core::montecarlo::spec_cells(spec)
-            .iter()
-            .map(|c| {
-                let ch = &channels[c.subfilter];
-                let d = &ch.detectors[c.detector];
-                let f = c
-                    .fault
-                    .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
-                (ch.name().to_string(), d.name.clone(), f, d.pf)
-            })
-            .collect()
+        crate::montecarlo::cell_names(&self.spec, &navfdi_core::montecarlo::spec_cells(&self.spec))
     }
 
     /// Monte-Carlo runs ``start .. start + count`` on the recorded data: run ``i`` draws its

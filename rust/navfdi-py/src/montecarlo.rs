@@ -47,19 +47,7 @@ impl PyPreparedScenario {
     /// The metric cells: list of ``(subfilter, detector, fault_id or "none", pf)``.
     #[getter]
     fn cells(&self) -> Vec<(String, String, String, f64)> {
-        let spec = &self.prep.spec;
-        let channels = spec.channels();
-        self.cells
-            .iter()
-            .map(|c| {
-                let ch = &channels[c.subfilter];
-                let d = &ch.detectors[c.detector];
-                let f = c
-                    .fault
-                    .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
-                (ch.name().to_string(), d.name.clone(), f, d.pf)
-            })
-            .collect()
+        cell_names(&self.prep.spec, &self.cells)
     }
 
     /// Runs ``start .. start + count`` (noise from ``(seed, run index)``) on ``threads`` threads
@@ -244,4 +232,23 @@ pub fn rows_to_py<'py>(
     }
     d.set_item("records", recs)?;
     Ok(d)
+}
+
+/// The metric cells of `spec` as ``(channel, detector, fault_id or "none", pf)``.
+pub fn cell_names(
+    spec: &navfdi_core::spec::ScenarioSpec,
+    cells: &[Cell],
+) -> Vec<(String, String, String, f64)> {
+    let channels = spec.channels();
+    cells
+        .iter()
+        .map(|c| {
+            let ch = &channels[c.subfilter];
+            let d = &ch.detectors[c.detector];
+            let f = c
+                .fault
+                .map_or_else(|| "none".to_string(), |i| spec.faults[i].id.clone());
+            (ch.name().to_string(), d.name.clone(), f, d.pf)
+        })
+        .collect()
 }

@@ -286,6 +286,13 @@ impl PyGnssRun {
             let obs = rinex::read_obs(&obs_path)?;
             Ok((obs, nav))
         })?;
+        // Codes: the user's where given, else the first of the priority list the file holds.
+        let forced: Vec<(Sys, String)> = codes
+            .iter()
+            .map(|(l, c)| parse_sys(l).map(|s| (s, c.clone())))
+            .collect::<PyResult<_>>()?;
+        cfg.codes = navfdi_core::gnss::signals::select_codes(&obs, &cfg.systems, &forced).py()?;
+        cfg.validate().py()?;
         for s in &cfg.systems {
             if !nav.ephemerides.keys().any(|k| k.sys == *s) {
                 return Err(navfdi_core::Error::Format(format!(
@@ -305,6 +312,17 @@ impl PyGnssRun {
             out: SppRun::default(),
             next: 0,
         })
+    }
+
+    /// The pseudorange code used per system letter (chosen by priority or given).
+    #[getter]
+    fn codes(&self) -> BTreeMap<String, String> {
+        self.cfg
+            .codes
+            .iter()
+            .filter(|(s, _)| self.cfg.systems.contains(s))
+            .map(|(s, c)| (s.letter().to_string(), c.clone()))
+            .collect()
     }
 
     /// Number of epochs in the observation file.

@@ -33,6 +33,7 @@ pub mod ranges;
 pub mod rinex;
 pub mod rinex_text;
 pub mod sequential;
+pub mod signals;
 pub mod snapshot;
 pub mod spp;
 

@@ -5,7 +5,7 @@
 
 use super::check::{bad, non_negative, positive};
 use super::detectors::DetectorSpec;
-use super::{default_true, Channel, ScenarioSpec, SensorKind};
+use super::{default_true, CentralSensorSpec, Channel, ScenarioSpec, SensorKind};
 use crate::error::Result;
 use crate::ins::error_filter::ImuNoise;
 use serde::{Deserialize, Serialize};
@@ -77,21 +77,6 @@ fn default_window() -> f64 {
     0.5
 }
 
-/// A GNSS sensor aiding the INS.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AidingSpec {
-    /// Sensor name (kind `gnss`, `gnss_position` or `gnss_velocity`).
-    pub sensor: String,
-    /// Detectors run on this sensor's innovation.
-    #[serde(default)]
-    pub detectors: Vec<DetectorSpec>,
-    /// Name of the detector whose alarm excludes the sensor's measurement for the epoch
-    /// (None: never acted on).
-    #[serde(default)]
-    pub decision: Option<String>,
-}
-
 /// Loosely coupled configuration.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -107,8 +92,9 @@ pub struct LooselyCoupledSpec {
     pub imu_time_offset: f64,
     /// Initial alignment.
     pub alignment: AlignmentSpec,
-    /// GNSS sensors aiding the INS, updated in this order.
-    pub sensors: Vec<AidingSpec>,
+    /// GNSS sensors aiding the INS, updated in this order, each with its detectors and the
+    /// detector whose alarm excludes its measurement (a centralized sensor's fields).
+    pub sensors: Vec<CentralSensorSpec>,
     /// Zero-velocity updates at rest detected from the IMU.
     #[serde(default)]
     pub zupt: Option<ConstraintSpec>,

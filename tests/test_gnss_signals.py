@@ -1,0 +1,46 @@
+"""Signal selection per system (issue 23, item 1): the first code of a documented priority
+that the file holds, a forced code that must be there, and errors naming what the file has."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import navfdi
+from navfdi.cli import main
+
+D = Path(__file__).parent / "data"
+WALK = (str(D / "walk_0827" / "gnss_1730.obs.gz"), str(D / "walk_0827" / "gnss_1730.nav"))
+STATIC = (str(D / "rinex" / "rover.obs.gz"), str(D / "rinex" / "base.nav"))
+
+
+def test_galileo_c1x_is_chosen_and_every_epoch_solved() -> None:
+    s = navfdi.gnss_solve(*WALK, systems="G,E")
+    assert s.config["codes"] == {"G": "C1C", "E": "C1X"}
+    assert s.summary()["codes"] == {"G": "C1C", "E": "C1X"}
+    assert len(s.solution) == 536 and (s.solution["status"] != "no_solution").all()
+    used = s.satellites[s.satellites["status"] == "used"]
+    assert used["satellite"].astype(str).str.startswith("E").any()
+    # Galileo alone: 7 satellites with ephemerides; the epochs with 4 above the mask cannot be
+    # tested and say so.
+    e_only = navfdi.gnss_solve(*WALK, systems="E")
+    sol = e_only.solution
+    unsolved = sol[sol["status"] == "no_solution"]
+    assert len(unsolved) < 0.2 * len(sol)
+    assert unsolved["reason"].str.contains("observation\\(s\\) left").all()
+
+
+def test_a_forced_code_must_be_in_the_file(capsys) -> None:
+    with pytest.raises(ValueError, match=r"E=C1C has no pseudoranges in the observation file; it holds for Galileo: C1X \(3199\), C5X"):
+        navfdi.gnss_solve(*WALK, systems="G,E", codes={"E": "C1C"})
+    assert navfdi.gnss_solve(*STATIC, systems="G", codes={"G": "C1C"}).config["codes"] == {"G": "C1C"}
+    assert main(["gnss", *WALK, "--systems", "G,E", "--code", "E=C1C"]) == 2
+    assert "it holds for Galileo: C1X" in capsys.readouterr().err
+    assert main(["gnss", *WALK, "--code", "E"]) == 2
+    assert "expected SYS=CODE" in capsys.readouterr().err
+
+
+def test_a_system_without_usable_code_names_what_the_file_holds() -> None:
+    with pytest.raises(ValueError, match=r"QZSS was asked for .* it holds: no pseudoranges at all"):
+        navfdi.gnss_solve(*WALK, systems="G,J")
