@@ -44,3 +44,21 @@ def test_a_forced_code_must_be_in_the_file(capsys) -> None:
 def test_a_system_without_usable_code_names_what_the_file_holds() -> None:
     with pytest.raises(ValueError, match=r"QZSS was asked for .* it holds: no pseudoranges at all"):
         navfdi.gnss_solve(*WALK, systems="G,J")
+
+
+def test_doppler_velocity_on_the_static_file() -> None:
+    """Issue 23, item 5: receiver velocity from D1C/D1X with the rate test; the receiver is
+    static, so the truth is zero."""
+    from navfdi.gnss import read_truth_file
+
+    truth = read_truth_file(D / "rinex" / "rover_position.txt")
+    for systems in ("G", "G,E"):
+        s = navfdi.gnss_solve(*STATIC, systems=systems, truth=truth)
+        sol = s.solution
+        assert {"vx", "vy", "vz", "clock_drift", "vel_e", "vel_n", "vel_u", "vel_statistic", "vel_threshold"} <= set(sol.columns)
+        summ = s.summary()
+        assert summ["velocity_epochs"] == len(sol)
+        assert summ["velocity_rms"] <= 0.1, summ["velocity_rms"]
+        assert (sol["vel_statistic"] < sol["vel_threshold"]).all()
+    with pytest.raises(ValueError, match="doppler noise"):
+        navfdi.gnss_solve(*STATIC, doppler_noise=(0.0, 0.0))

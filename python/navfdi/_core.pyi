@@ -940,6 +940,10 @@ class GnssRun:
     def advance(self, n: int) -> int:
         """Solve up to ``n`` more epochs (GIL released; Ctrl-C stops within one epoch and
         keeps the epochs before this call); returns how many were solved."""
+    def velocity(self, noise: tuple[float, float] = ...) -> dict[str, Any]:
+        """Receiver velocity from Doppler for the epochs solved so far (``noise`` default
+        (0.05, 0.05) m/s): ``vx, vy, vz``,
+        ``clock_drift`` (m/s), ``statistic``, ``threshold``, ``dof``, ``used``, ``excluded``."""
     def epoch_table(self) -> dict[str, Any]:
         """Per-epoch columns (n_epochs_solved,): ``time`` GPS s; ``x, y, z`` ECEF m (NaN without
         a solution); ``clock_G/E/C/J`` m; ``dof``, ``statistic``, ``threshold``,

@@ -237,7 +237,9 @@ class GnssSolution:
     ``satellites``: per epoch and satellite (``epoch``, ``time``, ``satellite``, ``elevation``,
     ``azimuth`` deg, ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault`` m, ``w``,
     ``sat_x, sat_y, sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s),
-    ``status``). ``truth``: ECEF (3,) m or None. ``config``: the settings.
+    ``status``). ``truth``: ECEF (3,) m or None. ``config``: the settings. Velocity from Doppler:
+    ``vx, vy, vz`` (ECEF) and ``vel_e, vel_n, vel_u`` (m/s), ``clock_drift`` (m/s),
+    ``vel_statistic``, ``vel_threshold`` of the rate test, ``vel_used``, ``vel_excluded``.
     """
 
     solution: pd.DataFrame
@@ -283,6 +285,13 @@ class GnssSolution:
             out["vertical_rms"] = float(np.sqrt(np.mean(u**2)))
             out["horizontal_max"] = float(np.max(np.hypot(e, n)))
             out["vertical_max"] = float(np.max(np.abs(u)))
+            vok = solved & sol["vel_e"].notna()
+            if vok.any():
+                # The truth is a fixed position: the true velocity is zero.
+                ve = sol.loc[vok, ["vel_e", "vel_n", "vel_u"]].to_numpy()
+                out["velocity_epochs"] = int(vok.sum())
+                out["velocity_rms"] = float(np.sqrt(np.mean(np.sum(ve**2, axis=1))))
+                out["velocity_horizontal_rms"] = float(np.sqrt(np.mean(ve[:, 0] ** 2 + ve[:, 1] ** 2)))
         if "integrity" in self.config:
             from navfdi.gnss_integrity import integrity_summary
 
@@ -458,6 +467,7 @@ def gnss_solve(
     progress: bool = False,
     chunk: int = 500,
     integrity: str | None = None,
+    doppler_noise: tuple[float, float] = (0.05, 0.05),
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
@@ -505,6 +515,8 @@ def gnss_solve(
         Show a tqdm progress bar.
     chunk : int
         Epochs solved per call into Rust (progress granularity).
+    doppler_noise : (a, b)
+        Pseudorange-rate noise (m/s) of the Doppler velocity, ``σ² = a² + b²/sin² el``.
     integrity : str, optional
         An allocation (``"lpv200"``): add ARAIM and snapshot-RAIM protection levels and the
         integrity state per epoch (:mod:`navfdi.gnss_integrity`); the summary then has an
@@ -583,6 +595,17 @@ def gnss_solve(
         enu = (xyz - t_ecef) @ enu_rotation(t_lla[0], t_lla[1]).T
         sol["east"], sol["north"], sol["up"] = enu[:, 0], enu[:, 1], enu[:, 2]
     sol["reason"] = ep["reason"]
+    # Receiver velocity from Doppler (ECEF and east/north/up at each epoch's position).
+    vel = run.velocity((float(doppler_noise[0]), float(doppler_noise[1])))
+    v = np.column_stack([vel["vx"], vel["vy"], vel["vz"]])
+    sol["vx"], sol["vy"], sol["vz"], sol["clock_drift"] = v[:, 0], v[:, 1], v[:, 2], vel["clock_drift"]
+    venu = np.full_like(v, np.nan)
+    for i in np.flatnonzero(np.isfinite(v[:, 0]) & np.isfinite(lla[:, 0])):
+        venu[i] = enu_rotation(lla[i, 0], lla[i, 1]) @ v[i]
+    sol["vel_e"], sol["vel_n"], sol["vel_u"] = venu[:, 0], venu[:, 1], venu[:, 2]
+    sol["vel_statistic"], sol["vel_threshold"] = vel["statistic"], vel["threshold"]
+    sol["vel_used"] = vel["used"]
+    sol["vel_excluded"] = vel["excluded"]
     st = run.satellite_table()
     sats = pd.DataFrame(st)
     sats["epoch"] = sats["epoch"].astype("int64")
@@ -607,6 +630,7 @@ def gnss_solve(
         "aime": list(aime),
         "cusum": list(cusum),
         "faults": [f.__dict__ for f in parsed],
+        "doppler_noise": list(doppler_noise),
         "dropped_observation_types": run.dropped,
         "receiver": run.receiver,
     }

@@ -372,6 +372,72 @@ impl PyGnssRun {
         Ok(end - start)
     }
 
+    /// Receiver velocity from Doppler for the epochs solved so far (`navfdi_core::gnss::doppler`),
+    /// rate noise `(a, b)` m/s in `σ² = a² + b²/sin² el`: dict of arrays `vx, vy, vz,
+    /// clock_drift` (m/s, ECEF; NaN without a solution), `statistic, threshold` of the rate
+    /// test, `dof`, `used` (satellites), `excluded` (names, space separated). GIL released.
+    #[pyo3(signature = (noise = (0.05, 0.05)))]
+    fn velocity<'py>(&self, py: Python<'py>, noise: (f64, f64)) -> PyResult<Bound<'py, PyDict>> {
+        if !(noise.0 >= 0.0
+            && noise.1 >= 0.0
+            && noise.0 + noise.1 > 0.0
+            && (noise.0 + noise.1).is_finite())
+        {
+            return Err(PyValueError::new_err(format!(
+                "doppler noise {noise:?}: give non-negative finite (a, b) m/s, not both 0"
+            )));
+        }
+        let (obs, nav, cfg, out) = (&self.obs, &self.nav, &self.cfg, &self.out);
+        let rows = crate::interrupt::run(py, move |_| {
+            navfdi_core::gnss::doppler::doppler_velocity(obs, nav, cfg, out, noise, &cfg.fde)
+        })?;
+        let n = rows.len();
+        let d = PyDict::new(py);
+        let f = |g: &dyn Fn(&navfdi_core::gnss::doppler::EpochVelocity) -> f64| -> Vec<f64> {
+            rows.iter().map(g).collect()
+        };
+        for (c, name) in ["vx", "vy", "vz"].iter().enumerate() {
+            d.set_item(
+                *name,
+                to_numpy(py, f(&|r| r.velocity.map_or(f64::NAN, |v| v.0[c])), &[n])?,
+            )?;
+        }
+        d.set_item(
+            "clock_drift",
+            to_numpy(py, f(&|r| r.velocity.map_or(f64::NAN, |v| v.1)), &[n])?,
+        )?;
+        d.set_item("statistic", to_numpy(py, f(&|r| r.fde.statistic), &[n])?)?;
+        d.set_item("threshold", to_numpy(py, f(&|r| r.fde.threshold), &[n])?)?;
+        d.set_item(
+            "dof",
+            to_numpy(py, rows.iter().map(|r| r.fde.dof as i64).collect(), &[n])?,
+        )?;
+        d.set_item(
+            "used",
+            to_numpy(
+                py,
+                rows.iter()
+                    .map(|r| (r.sats.len() - r.fde.excluded.len()) as i64)
+                    .collect(),
+                &[n],
+            )?,
+        )?;
+        d.set_item(
+            "excluded",
+            rows.iter()
+                .map(|r| {
+                    r.fde
+                        .excluded
+                        .iter()
+                        .map(|&i| r.sats[i].name())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
     /// Per-epoch columns of the epochs solved so far: ``time`` (GPS s), ``x, y, z`` (ECEF m,
     /// NaN without a solution), ``status`` (str), ``dof``, ``statistic``, ``threshold``,
     /// ``first_statistic``, ``first_threshold``, ``first_dof``, ``excluded`` (space-separated

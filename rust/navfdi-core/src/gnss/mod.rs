@@ -24,6 +24,7 @@ pub mod atmosphere;
 pub mod broadcast;
 pub mod clock;
 pub mod constellation;
+pub mod doppler;
 pub mod geodesy;
 pub mod innovation;
 pub mod lsq;

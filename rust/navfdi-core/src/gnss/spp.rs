@@ -47,7 +47,7 @@ const OMEGA_E: f64 = 7.292_115_146_7e-5;
 const F_L1: f64 = 1_575.42e6;
 
 /// Carrier frequency (Hz) of a first-band code of `sys` (`C1C` → L1/E1, `C2I` → B1I).
-fn frequency(sys: Sys, code: &str) -> Option<f64> {
+pub fn frequency(sys: Sys, code: &str) -> Option<f64> {
     let band = code.chars().nth(1)?;
     match (sys, band) {
         (Sys::Gps | Sys::Qzss | Sys::Galileo, '1') => Some(F_L1),
