@@ -62,3 +62,15 @@ def test_doppler_velocity_on_the_static_file() -> None:
         assert (sol["vel_statistic"] < sol["vel_threshold"]).all()
     with pytest.raises(ValueError, match="doppler noise"):
         navfdi.gnss_solve(*STATIC, doppler_noise=(0.0, 0.0))
+
+
+def test_small_defects(tmp_path: Path) -> None:
+    """Issue 23, smaller defects: solution.csv keeps the fractional GPS seconds at 4 Hz (a
+    fault on a satellite never observed is warned and kept out: tests/test_hardening_round2)."""
+    s = navfdi.gnss_solve(*WALK, systems="G,E")
+    s.write(tmp_path, figures=False)
+    import pandas as pd
+
+    back = pd.read_csv(tmp_path / "solution.csv")
+    steps = back["gps_seconds"].diff().dropna().to_numpy()
+    assert abs(steps - 0.25).max() < 1e-6

@@ -397,7 +397,8 @@ class GnssSolution:
         d = Path(out)
         d.mkdir(parents=True, exist_ok=True)
         paths = [d / "solution.csv", d / "satellites.parquet", d / "summary.json"]
-        self.solution.to_csv(paths[0], index=False, float_format="%.10g")
+        # 15 significant digits: GPS seconds (~1.4e9) keep their milliseconds at 4 Hz and more.
+        self.solution.to_csv(paths[0], index=False, float_format="%.15g")
         sats = self.satellites.copy()
         sats["satellite"] = sats["satellite"].astype(str)
         sats.to_parquet(paths[1], index=False)
