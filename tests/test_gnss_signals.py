@@ -74,3 +74,25 @@ def test_small_defects(tmp_path: Path) -> None:
     back = pd.read_csv(tmp_path / "solution.csv")
     steps = back["gps_seconds"].diff().dropna().to_numpy()
     assert abs(steps - 0.25).max() < 1e-6
+
+
+def test_noise_auto_fits_a_receiver_the_default_model_does_not(capsys) -> None:
+    """Issue 23, item 2, on the walk log (handheld u-blox): the default code-noise model
+    excludes a satellite at a third of the fault-free epochs; --noise auto estimates the σ
+    factor from the file, brings the fault-free exclusions to ≤ 5 % and still excludes a 20 m
+    step on the highest satellite exactly in ≥ 90 % of its epochs."""
+    plain = navfdi.gnss_solve(*WALK, systems="G,E")
+    assert plain.summary()["false_exclusion_rate"] > 0.25
+    assert "--noise auto" in plain.format_summary()
+    auto = navfdi.gnss_solve(*WALK, systems="G,E", noise_scale="auto")
+    s = auto.summary()
+    assert auto.config["noise_scale_estimated"] and 1.5 < s["noise_scale"] < 4
+    assert s["false_exclusion_rate"] <= 0.05
+    sats = auto.satellites[auto.satellites["status"] == "used"]
+    high = sats.groupby(sats["satellite"].astype(str))["elevation"].mean().idxmax()
+    f = navfdi.gnss_solve(*WALK, systems="G,E", noise_scale="auto", faults=[f"{high}:step:20m:30s:90s"]).summary()["faults"][0]
+    assert f["excluded_rate"] >= 0.9 and f["excluded_exactly"] >= 0.9 * f["epochs"]
+    with pytest.raises(ValueError, match="noise_scale"):
+        navfdi.gnss_solve(*STATIC, noise_scale="loud")
+    assert main(["gnss", *STATIC, "--noise", "x"]) == 2
+    assert "--noise 'x'" in capsys.readouterr().err

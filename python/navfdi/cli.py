@@ -123,6 +123,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
     gn.add_argument("--weighting", choices=["elevation", "rtklib"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2)")
+    gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' estimates the factor from the file (a first pass without exclusion), or give a number")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
     gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
     gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200")
@@ -150,6 +151,18 @@ def main(argv: list[str] | None = None) -> int:
         else:
             print(f"navfdi: error: {_describe(e)}", file=sys.stderr)
         return 2
+
+
+def _noise_scale(v: str | None) -> float | str:
+    """``--noise``: ``auto`` or a positive factor (1 without the option)."""
+    if v is None:
+        return 1.0
+    if v.strip().lower() == "auto":
+        return "auto"
+    try:
+        return float(v)
+    except ValueError:
+        raise ValueError(f"--noise {v!r}: 'auto' or a positive number") from None
 
 
 def _describe(e: BaseException) -> str:
@@ -262,6 +275,7 @@ def _gnss(args: argparse.Namespace) -> int:
         faults=faults,
         noise_factors=factors,
         codes=codes,
+        noise_scale=_noise_scale(args.noise),
         truth=truth,
         progress=sys.stderr.isatty(),
         integrity=args.integrity,

@@ -296,6 +296,7 @@ class GnssSolution:
             from navfdi.gnss_integrity import integrity_summary
 
             out["integrity"] = integrity_summary(self)
+        out["noise_scale"] = self.config.get("noise_scale", 1.0)
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
@@ -380,6 +381,10 @@ class GnssSolution:
         lines.append(f"exclusions per satellite: {ex}")
         lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
+        if self.config.get("noise_scale_estimated"):
+            lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto)")
+        elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
+            lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto') estimates a sigma factor from the file")
         for f in s["faults"]:
             if not f["applied"]:
                 lines.append(f"fault {f['fault']}: never applied ({f['note']}); left out of the statistics")
@@ -445,6 +450,18 @@ def _json_default(o: Any) -> Any:
     return str(o)
 
 
+def estimate_noise_scale(solution: pd.DataFrame) -> float:
+    """The σ factor that makes the global test fit a file (see :func:`gnss_solve`'s
+    ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
+    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs."""
+    ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
+    if ok.sum() < 20:
+        raise ValueError(f"noise_scale='auto': {int(ok.sum())} epochs could be tested; at least 20 are needed to estimate the noise")
+    t = solution.loc[ok, "first_statistic"].to_numpy(float)
+    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "first_dof"]])
+    return float(np.sqrt(np.quantile(t / q, 0.9)))
+
+
 def gnss_solve(
     obs: str | os.PathLike[str],
     nav: str | os.PathLike[str],
@@ -469,6 +486,7 @@ def gnss_solve(
     chunk: int = 500,
     integrity: str | None = None,
     doppler_noise: tuple[float, float] = (0.05, 0.05),
+    noise_scale: float | str = 1.0,
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
@@ -516,6 +534,12 @@ def gnss_solve(
         Show a tqdm progress bar.
     chunk : int
         Epochs solved per call into Rust (progress granularity).
+    noise_scale : float or "auto"
+        Factor on every system's σ (on top of ``noise_factors``). ``"auto"`` estimates it from
+        the file: a first pass without exclusion and without the injected faults, then the
+        90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global statistic against its
+        90 % quantile; 1 when the model fits, robust to up to 10 % faulty epochs) gives the
+        factor's square; the run is then solved with it (``config["noise_scale"]``).
     doppler_noise : (a, b)
         Pseudorange-rate noise (m/s) of the Doppler velocity, ``σ² = a² + b²/sin² el``.
     integrity : str, optional
@@ -531,6 +555,20 @@ def gnss_solve(
         raise ValueError("systems: give at least one of G, E, C, J")
     for p, name in ((obs, "obs"), (nav, "nav")):
         check_input_file(p, name)
+    if isinstance(noise_scale, str):
+        if noise_scale != "auto":
+            raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
+        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise)
+        first = gnss_solve(obs, nav, exclude=False, **common)
+        scale = estimate_noise_scale(first.solution)
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=scale, **common)
+        out.config["noise_scale_estimated"] = True
+        return out
+    if isinstance(noise_scale, bool) or not (isinstance(noise_scale, (int, float)) and 0 < noise_scale < 1e6):
+        raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
+    if noise_scale != 1.0:
+        given = {str(kk).upper(): float(v) for kk, v in (noise_factors or {}).items()}
+        noise_factors = {s_: given.get(s_, 1.0) * float(noise_scale) for s_ in ("G", "E", "C", "J")}
     parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f, f"faults[{i}]") for i, f in enumerate(faults)]
     if not (isinstance(mask_deg, (int, float)) and math.isfinite(mask_deg) and 0 <= mask_deg < 90):
         raise ValueError(f"mask: {mask_deg} deg; the elevation mask must be in [0, 90) deg")
@@ -632,6 +670,7 @@ def gnss_solve(
         "cusum": list(cusum),
         "faults": [f.__dict__ for f in parsed],
         "doppler_noise": list(doppler_noise),
+        "noise_scale": float(noise_scale),
         "dropped_observation_types": run.dropped,
         "receiver": run.receiver,
     }
