@@ -29,7 +29,7 @@ def _constraint(c: Any, p: str, dim: int) -> dict[str, Any]:
 
 def _loosely_coupled(lc: Any) -> dict[str, Any]:
     p = "loosely_coupled"
-    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "isolate"}, p)
+    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate"}, p)
     imu = _need(lc, "imu", p)
     _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau"}, f"{p}.imu")
 
@@ -65,6 +65,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
         "sensors": [],
         "witness": _bool(lc.get("witness", True), f"{p}.witness"),
         "isolate_components": _bool(lc.get("isolate_components", True), f"{p}.isolate_components"),
+        "accommodate": _bool(lc.get("accommodate", True), f"{p}.accommodate"),
         "isolate": _bool(lc.get("isolate", True), f"{p}.isolate"),
     }
     for i, a in enumerate(_list(_need(lc, "sensors", p), f"{p}.sensors")):

@@ -246,6 +246,11 @@ pub fn run_loosely_coupled(
     let mut w_last = gyro[i.min(gyro.len() - 1)] - kf.bg;
     let mut excluded_before = vec![false; aids.len()];
     let mut track: Vec<Option<Track>> = (0..aids.len()).map(|_| None).collect();
+    // Accommodation of an isolated position component: its offset from the INS when it was
+    // isolated (and that offset's variance); while the offset explains it, the component is
+    // used as a relative fix. `stepless`: its fault was not a step (the offset did not hold).
+    let mut accom: Vec<[Option<(f64, f64)>; 3]> = vec![[None; 3]; aids.len()];
+    let mut stepless: Vec<[bool; 3]> = vec![[false; 3]; aids.len()];
     for k in ka..epochs {
         if k % 256 == 0 {
             cancel.check()?;
@@ -337,7 +342,24 @@ pub fn run_loosely_coupled(
                 continue;
             }
             let sig = logged.sigma.get(si).and_then(|v| v.get(k));
-            let meas = gnss_measurement(&s, aid, z, sig, &logged.origin, &lever, &w_last);
+            let mut meas = gnss_measurement(&s, aid, z, sig, &logged.origin, &lever, &w_last);
+            if let Some(off) = aid.pos {
+                // An accommodated component whose raw fix agrees with the INS again is used
+                // as it is; the others are corrected by their offsets.
+                let thr = crate::stats::chi2_threshold(aid.decision_pf, 1).unwrap_or(f64::INFINITY);
+                for (j, acc) in accom[a].iter_mut().enumerate() {
+                    let Some((b, v)) = *acc else { continue };
+                    let row = meas.h.row(off + j);
+                    let p = DMatrix::from_column_slice(N, N, kf.p.as_slice());
+                    let sjj = (row * &p * row.transpose())[(0, 0)] + meas.r[(off + j, off + j)];
+                    if meas.res[off + j].powi(2) / sjj <= thr {
+                        *acc = None;
+                        continue;
+                    }
+                    meas.res[off + j] -= b;
+                    meas.r[(off + j, off + j)] += v;
+                }
+            }
             let o = test(&kf, aid, &meas, isolation)?;
             tested.push((a, meas, o));
         }
@@ -404,6 +426,39 @@ pub fn run_loosely_coupled(
                 }
             }
             o.fused = !o.excluded;
+            let active = accom[a];
+            if let (Some(off), true) = (aids[a].pos, l.accommodate && isolation) {
+                for j in 0..3 {
+                    let out = o.excluded || !keep.contains(&(off + j));
+                    match (active[j], out) {
+                        // The offset no longer explains the fix: not a step; excluded until it
+                        // agrees with the INS again.
+                        (Some(_), true) => {
+                            accom[a][j] = None;
+                            stepless[a][j] = true;
+                        }
+                        // A gross jump (|w| over 4× the deciding test's 1-dof critical value),
+                        // not an alarm at the edge of the noise: accommodated from the next fix.
+                        (None, true) if !stepless[a][j] => {
+                            let var = o
+                                .inn
+                                .as_ref()
+                                .map_or(f64::NAN, |(_, sv)| sv[(off + j, off + j)]);
+                            let crit = crate::stats::chi2_threshold(aids[a].decision_pf, 1)
+                                .unwrap_or(f64::INFINITY);
+                            if var.is_finite() && meas.res[off + j].powi(2) / var > 16.0 * crit {
+                                accom[a][j] = Some((meas.res[off + j], var));
+                            } else {
+                                // Isolated without a jump (a ramp growing into the test): not
+                                // a step, whatever it grows to.
+                                stepless[a][j] = true;
+                            }
+                        }
+                        (None, false) => stepless[a][j] = false,
+                        _ => {}
+                    }
+                }
+            }
             if let Some(off) = aids[a].pos {
                 track[a] = Some(Track {
                     t: models.t[k],
@@ -420,7 +475,16 @@ pub fn run_loosely_coupled(
             if o.fused {
                 // Re-linearised after the updates before it in this epoch.
                 let sig = logged.sigma.get(si).and_then(|v| v.get(k));
-                let fresh = gnss_measurement(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
+                let mut fresh =
+                    gnss_measurement(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
+                if let Some(off) = aids[a].pos {
+                    for (j, acc) in active.iter().enumerate() {
+                        if let (Some((b, v)), true) = (acc, accom[a][j].is_some()) {
+                            fresh.res[off + j] -= b;
+                            fresh.r[(off + j, off + j)] += v;
+                        }
+                    }
+                }
                 update(&mut kf, &mut s, &rows(&fresh, &keep))?;
             }
             outcomes[a] = o;

@@ -112,6 +112,12 @@ pub struct LooselyCoupledSpec {
     /// detector's pf (default). `false`: the whole measurement is excluded.
     #[serde(default = "default_true")]
     pub isolate_components: bool,
+    /// An isolated position component is accommodated (default): its offset from the INS when
+    /// isolated is removed from its later fixes, which are used as relative fixes while that
+    /// offset explains them (a step fault); when it does not (a ramp, the fault's end) the
+    /// component is excluded, and used as it is again once it agrees with the INS.
+    #[serde(default = "default_true")]
+    pub accommodate: bool,
     /// Deciding detectors act (default). `false`: they report but every measurement is used.
     #[serde(default = "default_true")]
     pub isolate: bool,
