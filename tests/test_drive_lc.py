@@ -223,3 +223,14 @@ def test_cli_set_overrides_a_field(capsys, tmp_path: Path) -> None:
     assert "gnss_fault" in out
     assert main(["run", "drive_lc", "--set", "faults[0].magnitude=30 m,40 m"]) == 2
     assert "one value expected" in capsys.readouterr().err
+
+
+def test_optional_scale_factor_states() -> None:
+    """Scale-factor states (21 error states) switched on by the IMU's scale-factor
+    instability; on the drive they keep the fault-free accuracy (their consistency is checked
+    on simulated logs with 1000 ppm errors: rust/navfdi-core/tests/integration/strapdown.rs)."""
+    sc = _free().with_values({"loosely_coupled.imu.gyro_scale": "1000 ppm", "loosely_coupled.imu.accel_scale": "1000 ppm"}, create=True)
+    r = run_scenario(sc)["fde"]
+    assert r.errors()["hor_rms"] <= 0.067
+    with pytest.raises(ScenarioError, match=r"loosely_coupled\.imu\.gyro_scale.*small fraction"):
+        _free().with_value("loosely_coupled.imu.gyro_scale", "20 %", create=True)

@@ -31,7 +31,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
     p = "loosely_coupled"
     _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate"}, p)
     imu = _need(lc, "imu", p)
-    _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau"}, f"{p}.imu")
+    _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau", "gyro_scale", "accel_scale"}, f"{p}.imu")
 
     def axes(v: Any, dim: str, q: str) -> list[float]:
         vals = [v] * 3 if isinstance(v, str) else _list(v, q)
@@ -48,6 +48,8 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
             "gyro_bias": _unit(_need(imu, "gyro_bias", f"{p}.imu"), "angular_rate", f"{p}.imu.gyro_bias"),
             "accel_bias": _unit(_need(imu, "accel_bias", f"{p}.imu"), "acceleration", f"{p}.imu.accel_bias"),
             "bias_tau": _unit(_need(imu, "bias_tau", f"{p}.imu"), "time", f"{p}.imu.bias_tau"),
+            "gyro_scale": _unit(imu.get("gyro_scale", "0 ppm"), "fraction", f"{p}.imu.gyro_scale"),
+            "accel_scale": _unit(imu.get("accel_scale", "0 ppm"), "fraction", f"{p}.imu.accel_scale"),
         },
         "mounting": axes(_need(lc, "mounting", p), "angle", f"{p}.mounting"),
         "lever_arm": axes(_need(lc, "lever_arm", p), "length", f"{p}.lever_arm"),

@@ -19,7 +19,7 @@ UNITS: dict[str, dict[str, float]] = {
     "velocity": {"m/s": 1.0, "km/h": 1 / 3.6, "kn": 1852 / 3600},
     "time": {"s": 1.0, "ms": 1e-3, "min": 60.0, "h": 3600.0},
     "frequency": {"Hz": 1.0},
-    "fraction": {"%": 0.01},
+    "fraction": {"%": 0.01, "ppm": 1e-6},
     "length2_per_time": {"m^2/s": 1.0, "m2/s": 1.0},
     "length2_per_time3": {"m^2/s^3": 1.0, "m2/s3": 1.0},
     "carrier_to_noise": {"dB-Hz": 1.0},

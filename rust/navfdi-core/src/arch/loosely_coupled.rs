@@ -21,7 +21,7 @@ use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
 use crate::ins::earth;
-use crate::ins::error_filter::{ErrorFilter, BA, BG, N, PHI, R, V};
+use crate::ins::error_filter::{ErrorFilter, BA, BG, N, N_SCALE, PHI, R, V};
 use crate::ins::strapdown::{level, mechanise, mounting, skew, Increment, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
@@ -73,6 +73,20 @@ const NOT_MEASURED: Outcome = Outcome {
 /// Run the loosely coupled filter over one run's streams (`isolation = false`: detectors
 /// report but every measurement updates the filter).
 pub fn run_loosely_coupled(
+    spec: &ScenarioSpec,
+    src: &Streams,
+    isolation: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    if spec.loosely_coupled()?.imu.scale_factors() {
+        run::<N_SCALE>(spec, src, isolation, cancel)
+    } else {
+        run::<N>(spec, src, isolation, cancel)
+    }
+}
+
+/// [`run_loosely_coupled`] with `NS` error states (15, or 21 with scale factors).
+fn run<const NS: usize>(
     spec: &ScenarioSpec,
     src: &Streams,
     isolation: bool,
@@ -223,7 +237,7 @@ pub fn run_loosely_coupled(
     };
     // The INS point is the IMU's: move from the antenna by −C l.
     shift(&mut s, &-(q * lever));
-    let mut kf = ErrorFilter::new(
+    let mut kf = ErrorFilter::<NS>::new(
         l.alignment.sigma_position,
         l.alignment.sigma_velocity,
         Vector3::new(
@@ -265,8 +279,8 @@ pub fn run_loosely_coupled(
         while t_cur < tk {
             let ip = i.min(t_imu.len() - 1);
             let im = ip.saturating_sub(1);
-            let w = 0.5 * (gyro[im] + gyro[ip]) - kf.bg;
-            let f = 0.5 * (acc[im] + acc[ip]) - kf.ba;
+            let (w, f) =
+                kf.compensate(&(0.5 * (gyro[im] + gyro[ip])), &(0.5 * (acc[im] + acc[ip])));
             let t_next = t_imu[ip].min(tk);
             let dt = t_next - t_cur;
             if dt > 0.0 {
@@ -276,7 +290,7 @@ pub fn run_loosely_coupled(
                     dt,
                 };
                 mechanise(&mut s, &prev, &inc);
-                kf.propagate(&s, &f, dt);
+                kf.propagate(&s, &f, &w, dt);
                 prev = inc;
                 w_last = w;
             }
@@ -294,7 +308,7 @@ pub fn run_loosely_coupled(
         if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
             if still(&t_imu, &acc, &gyro, &kf.bg, i, tk, c) {
                 at_rest = true;
-                let mut h = DMatrix::zeros(3, N);
+                let mut h = DMatrix::zeros(3, NS);
                 for j in 0..3 {
                     h[(j, V + j)] = 1.0;
                 }
@@ -313,7 +327,7 @@ pub fn run_loosely_coupled(
                 let vb = ct * s.v;
                 let hv = ct;
                 let hphi = -ct * skew(&s.v);
-                let mut h = DMatrix::zeros(2, N);
+                let mut h = DMatrix::zeros(2, NS);
                 for (row, b) in [1usize, 2].iter().enumerate() {
                     for j in 0..3 {
                         h[(row, V + j)] = hv[(*b, j)];
@@ -342,7 +356,7 @@ pub fn run_loosely_coupled(
                 continue;
             }
             let sig = logged.sigma.get(si).and_then(|v| v.get(k));
-            let mut meas = gnss_measurement(&s, aid, z, sig, &logged.origin, &lever, &w_last);
+            let mut meas = gnss_measurement::<NS>(&s, aid, z, sig, &logged.origin, &lever, &w_last);
             if let Some(off) = aid.pos {
                 // An accommodated component whose raw fix agrees with the INS again is used
                 // as it is; the others are corrected by their offsets.
@@ -350,7 +364,7 @@ pub fn run_loosely_coupled(
                 for (j, acc) in accom[a].iter_mut().enumerate() {
                     let Some((b, v)) = *acc else { continue };
                     let row = meas.h.row(off + j);
-                    let p = DMatrix::from_column_slice(N, N, kf.p.as_slice());
+                    let p = DMatrix::from_column_slice(NS, NS, kf.p.as_slice());
                     let sjj = (row * &p * row.transpose())[(0, 0)] + meas.r[(off + j, off + j)];
                     if meas.res[off + j].powi(2) / sjj <= thr {
                         *acc = None;
@@ -476,7 +490,7 @@ pub fn run_loosely_coupled(
                 // Re-linearised after the updates before it in this epoch.
                 let sig = logged.sigma.get(si).and_then(|v| v.get(k));
                 let mut fresh =
-                    gnss_measurement(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
+                    gnss_measurement::<NS>(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
                 if let Some(off) = aids[a].pos {
                     for (j, acc) in active.iter().enumerate() {
                         if let (Some((b, v)), true) = (acc, accom[a][j].is_some()) {
@@ -552,7 +566,7 @@ fn still(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn gnss_measurement(
+fn gnss_measurement<const NS: usize>(
     s: &NavState,
     aid: &Aid,
     z: &DVector<f64>,
@@ -565,7 +579,7 @@ fn gnss_measurement(
     let c = s.q.to_rotation_matrix().into_inner();
     let cl = c * lever;
     let mut res = DVector::zeros(dim);
-    let mut h = DMatrix::zeros(dim, N);
+    let mut h = DMatrix::zeros(dim, NS);
     // NED rows into the sensor's east, north, up order.
     let mut put = |off: usize,
                    d_ned: &Vector3<f64>,
@@ -616,7 +630,12 @@ fn gnss_measurement(
 
 /// Test one measurement with the channel's detectors: the outcome says whether its deciding
 /// detector alarms (excluded, with isolation); nothing is updated.
-fn test(kf: &ErrorFilter, aid: &mut Aid, meas: &Meas, isolation: bool) -> Result<Outcome> {
+fn test<const NS: usize>(
+    kf: &ErrorFilter<NS>,
+    aid: &mut Aid,
+    meas: &Meas,
+    isolation: bool,
+) -> Result<Outcome> {
     let zero = DVector::zeros(meas.res.len());
     let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
     let dof = meas.res.len();
@@ -642,7 +661,7 @@ fn test(kf: &ErrorFilter, aid: &mut Aid, meas: &Meas, isolation: bool) -> Result
 }
 
 /// Update the filter with a measurement and feed the correction back into the state.
-fn update(kf: &mut ErrorFilter, s: &mut NavState, meas: &Meas) -> Result<()> {
+fn update<const NS: usize>(kf: &mut ErrorFilter<NS>, s: &mut NavState, meas: &Meas) -> Result<()> {
     let zero = DVector::zeros(meas.res.len());
     let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
     let dx = kf.update(&inn, &meas.h, &meas.r)?;
@@ -651,8 +670,8 @@ fn update(kf: &mut ErrorFilter, s: &mut NavState, meas: &Meas) -> Result<()> {
 }
 
 /// Test a constraint and update with it unless excluded.
-fn apply(
-    kf: &mut ErrorFilter,
+fn apply<const NS: usize>(
+    kf: &mut ErrorFilter<NS>,
     s: &mut NavState,
     aid: &mut Aid,
     meas: &Meas,
@@ -686,10 +705,10 @@ fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome]) {
     rec.nav.extend([f64::NAN; NAV_COLUMNS.len()]);
 }
 
-fn record_nav(
+fn record_nav<const NS: usize>(
     rec: &mut RunRecord,
     s: &NavState,
-    kf: &ErrorFilter,
+    kf: &ErrorFilter<NS>,
     lever: &Vector3<f64>,
     origin: &Nominal,
     src: &Streams,

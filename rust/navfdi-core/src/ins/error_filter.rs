@@ -13,8 +13,14 @@ use super::strapdown::{frame_rates, skew, NavState};
 use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector, Matrix3, SMatrix, SVector, UnitQuaternion, Vector3};
 
-/// Number of error states.
+/// Number of error states without scale factors.
 pub const N: usize = 15;
+/// Number of error states with gyro and accelerometer scale factors.
+pub const N_SCALE: usize = 21;
+/// Index of the gyro scale-factor error (dimensionless, body axes; [`N_SCALE`] states).
+pub const SG: usize = 15;
+/// Index of the accelerometer scale-factor error.
+pub const SA: usize = 18;
 /// Index of the position error (north, east, down; m).
 pub const R: usize = 0;
 /// Index of the velocity error (north, east, down; m/s).
@@ -45,13 +51,32 @@ pub struct ImuNoise {
     pub accel_bias: f64,
     /// Correlation time of both biases (s).
     pub bias_tau: f64,
+    /// Scale-factor instability of the gyros (σ of a Gauss-Markov scale factor with the
+    /// biases' correlation time, dimensionless); 0: no scale-factor states.
+    #[serde(default)]
+    pub gyro_scale: f64,
+    /// Scale-factor instability of the accelerometers; 0: none.
+    #[serde(default)]
+    pub accel_scale: f64,
 }
 
-/// The error-state filter: the estimated biases and the error covariance.
+impl ImuNoise {
+    /// Whether the filter carries scale-factor states ([`N_SCALE`] states).
+    pub fn scale_factors(&self) -> bool {
+        self.gyro_scale > 0.0 || self.accel_scale > 0.0
+    }
+}
+
+/// The error-state filter: the estimated biases (and scale factors) and the error covariance,
+/// `N` = 15 states, or [`N_SCALE`] = 21 with scale factors.
 #[derive(Debug, Clone)]
-pub struct ErrorFilter {
-    /// Error covariance (15 × 15).
-    pub p: Mat15,
+pub struct ErrorFilter<const NS: usize = N> {
+    /// Error covariance (NS × NS).
+    pub p: SMatrix<f64, NS, NS>,
+    /// Estimated gyro and accelerometer scale factors (dimensionless; zero without them).
+    pub sg: Vector3<f64>,
+    /// See [`ErrorFilter::sg`].
+    pub sa: Vector3<f64>,
     /// Estimated gyro bias (rad/s, body).
     pub bg: Vector3<f64>,
     /// Estimated accelerometer bias (m/s², body).
@@ -73,7 +98,7 @@ pub struct Innovation {
     pub lambda: f64,
 }
 
-impl ErrorFilter {
+impl<const NS: usize> ErrorFilter<NS> {
     /// A filter with initial σ per state group: position (m), velocity (m/s), attitude
     /// (rad; roll, pitch, yaw — applied to north, east, down), gyro bias (rad/s), accelerometer
     /// bias (m/s²), and the IMU noise figures.
@@ -84,19 +109,25 @@ impl ErrorFilter {
         bg0: Vector3<f64>,
         noise: ImuNoise,
     ) -> Self {
-        let mut p = Mat15::zeros();
+        let mut p = SMatrix::<f64, NS, NS>::zeros();
         for i in 0..3 {
             p[(R + i, R + i)] = sig_pos * sig_pos;
             p[(V + i, V + i)] = sig_vel * sig_vel;
             p[(PHI + i, PHI + i)] = sig_att[i] * sig_att[i];
             p[(BG + i, BG + i)] = noise.gyro_bias * noise.gyro_bias;
             p[(BA + i, BA + i)] = noise.accel_bias * noise.accel_bias;
+            if NS == N_SCALE {
+                p[(SG + i, SG + i)] = noise.gyro_scale * noise.gyro_scale;
+                p[(SA + i, SA + i)] = noise.accel_scale * noise.accel_scale;
+            }
         }
         let sq = |n: [f64; 3]| {
             Matrix3::from_diagonal(&Vector3::new(n[0] * n[0], n[1] * n[1], n[2] * n[2]))
         };
         ErrorFilter {
             p,
+            sg: Vector3::zeros(),
+            sa: Vector3::zeros(),
             bg: bg0,
             ba: Vector3::zeros(),
             noise,
@@ -113,9 +144,18 @@ impl ErrorFilter {
         self
     }
 
-    /// Propagate `P` over `dt` s with `F` from state `s` and the bias-corrected specific
-    /// force `f_b` (m/s²) and angular rate `w_b` (rad/s) of the interval.
-    pub fn propagate(&mut self, s: &NavState, f_b: &Vector3<f64>, dt: f64) {
+    /// The IMU's angular rate `w` (rad/s) and specific force `f` (m/s²) corrected for the
+    /// estimated biases and scale factors.
+    pub fn compensate(&self, w: &Vector3<f64>, f: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+        (
+            (w - self.bg).component_div(&(Vector3::repeat(1.0) + self.sg)),
+            (f - self.ba).component_div(&(Vector3::repeat(1.0) + self.sa)),
+        )
+    }
+
+    /// Propagate `P` over `dt` s with `F` from state `s` and the corrected specific force
+    /// `f_b` (m/s²) and angular rate `w_b` (rad/s) of the interval.
+    pub fn propagate(&mut self, s: &NavState, f_b: &Vector3<f64>, w_b: &Vector3<f64>, dt: f64) {
         if dt <= 0.0 {
             return;
         }
@@ -125,7 +165,7 @@ impl ErrorFilter {
         let f_n = c * f_b;
         let rm = earth::r_meridian(s.lat) + s.h;
         let rn = earth::r_normal(s.lat) + s.h;
-        let mut f = Mat15::zeros();
+        let mut f = SMatrix::<f64, NS, NS>::zeros();
         // Position: δr' = −[ω_en×] δr + δv (the dominant terms).
         let v = &s.v;
         f.fixed_view_mut::<3, 3>(R, R).copy_from(&Matrix3::new(
@@ -152,10 +192,20 @@ impl ErrorFilter {
             .copy_from(&(-skew(&w_in)));
         f.fixed_view_mut::<3, 3>(PHI, BG).copy_from(&(-c));
         let tau = self.noise.bias_tau;
-        for i in 0..6 {
-            f[(BG + i, BG + i)] = -1.0 / tau;
+        for i in BG..NS {
+            f[(i, i)] = -1.0 / tau;
         }
-        let phi = Mat15::identity() + f * dt;
+        if NS == N_SCALE {
+            // Scale factors: δv' += C diag(f_b) δs_a, φ' −= C diag(ω_b) δs_g.
+            for j in 0..3 {
+                for i in 0..3 {
+                    f[(V + i, SA + j)] = c[(i, j)] * f_b[j];
+                    f[(PHI + i, SG + j)] = -c[(i, j)] * w_b[j];
+                }
+            }
+        }
+        let _ = w_b;
+        let phi = SMatrix::<f64, NS, NS>::identity() + f * dt;
         // Discrete process noise: white noise through C, Gauss-Markov drivers on the biases.
         let qv = c * self.q_acc * c.transpose() * dt;
         let qa = c * self.q_gyro * c.transpose() * dt;
@@ -173,6 +223,10 @@ impl ErrorFilter {
         for i in 0..3 {
             p[(BG + i, BG + i)] += qbg;
             p[(BA + i, BA + i)] += qba;
+            if NS == N_SCALE {
+                p[(SG + i, SG + i)] += 2.0 * self.noise.gyro_scale.powi(2) / tau * dt;
+                p[(SA + i, SA + i)] += 2.0 * self.noise.accel_scale.powi(2) / tau * dt;
+            }
         }
         self.p = 0.5 * (p + p.transpose());
     }
@@ -186,7 +240,7 @@ impl ErrorFilter {
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<Innovation> {
-        let p = DMatrix::from_column_slice(N, N, self.p.as_slice());
+        let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
         let s = h * &p * h.transpose() + r;
         let res = z - z_hat;
         let chol = Cholesky::new(s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
@@ -204,8 +258,8 @@ impl ErrorFilter {
         inn: &Innovation,
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
-    ) -> Result<Vec15> {
-        let p = DMatrix::from_column_slice(N, N, self.p.as_slice());
+    ) -> Result<SVector<f64, NS>> {
+        let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
         let chol = Cholesky::new(inn.s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
             name: "innovation covariance".into(),
             detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
@@ -213,18 +267,18 @@ impl ErrorFilter {
         // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ.
         let k = chol.solve(&(h * &p)).transpose();
         let dx = &k * &inn.r;
-        let ikh = DMatrix::<f64>::identity(N, N) - &k * h;
+        let ikh = DMatrix::<f64>::identity(NS, NS) - &k * h;
         let pn = &ikh * &p * ikh.transpose() + &k * r * k.transpose();
-        for j in 0..N {
-            for i in 0..N {
+        for j in 0..NS {
+            for i in 0..NS {
                 self.p[(i, j)] = 0.5 * (pn[(i, j)] + pn[(j, i)]);
             }
         }
-        Ok(Vec15::from_iterator(dx.iter().copied()))
+        Ok(SVector::<f64, NS>::from_iterator(dx.iter().copied()))
     }
 
     /// Feed an error-state estimate `dx` back into the mechanised state `s` and the biases.
-    pub fn feedback(&mut self, s: &mut NavState, dx: &Vec15) {
+    pub fn feedback(&mut self, s: &mut NavState, dx: &SVector<f64, NS>) {
         let rm = earth::r_meridian(s.lat) + s.h;
         let rn = earth::r_normal(s.lat) + s.h;
         s.lat -= dx[R] / rm;
@@ -235,11 +289,15 @@ impl ErrorFilter {
         s.q = UnitQuaternion::from_scaled_axis(phi) * s.q;
         self.bg += Vector3::new(dx[BG], dx[BG + 1], dx[BG + 2]);
         self.ba += Vector3::new(dx[BA], dx[BA + 1], dx[BA + 2]);
+        if NS == N_SCALE {
+            self.sg += Vector3::new(dx[SG], dx[SG + 1], dx[SG + 2]);
+            self.sa += Vector3::new(dx[SA], dx[SA + 1], dx[SA + 2]);
+        }
     }
 
     /// σ of every error state (square roots of `P`'s diagonal).
-    pub fn sigma(&self) -> Vec15 {
-        Vec15::from_iterator((0..N).map(|i| self.p[(i, i)].max(0.0).sqrt()))
+    pub fn sigma(&self) -> SVector<f64, NS> {
+        SVector::<f64, NS>::from_iterator((0..NS).map(|i| self.p[(i, i)].max(0.0).sqrt()))
     }
 }
 
@@ -254,6 +312,8 @@ mod tests {
             gyro_bias: 1e-4,
             accel_bias: 1e-3,
             bias_tau: 3600.0,
+            gyro_scale: 0.0,
+            accel_scale: 0.0,
         }
     }
 
@@ -266,7 +326,8 @@ mod tests {
             v: Vector3::zeros(),
             q: UnitQuaternion::identity(),
         };
-        let mut kf = ErrorFilter::new(10.0, 1.0, Vector3::repeat(0.01), Vector3::zeros(), noise());
+        let mut kf =
+            ErrorFilter::<N>::new(10.0, 1.0, Vector3::repeat(0.01), Vector3::zeros(), noise());
         // INS 3 m north of a fix with σ 0.1 m: the update moves it almost all the way.
         let z = DVector::zeros(3);
         let zh = DVector::from_vec(vec![3.0, 0.0, 0.0]);
@@ -294,11 +355,12 @@ mod tests {
             v: Vector3::zeros(),
             q: UnitQuaternion::identity(),
         };
-        let mut kf = ErrorFilter::new(0.1, 0.01, Vector3::repeat(0.001), Vector3::zeros(), noise());
+        let mut kf =
+            ErrorFilter::<N>::new(0.1, 0.01, Vector3::repeat(0.001), Vector3::zeros(), noise());
         let f = Vector3::new(0.0, 0.0, -9.8);
         let p0 = kf.p[(0, 0)];
         for _ in 0..1000 {
-            kf.propagate(&s, &f, 0.01);
+            kf.propagate(&s, &f, &Vector3::zeros(), 0.01);
         }
         assert!(kf.p[(0, 0)] > p0 && kf.p[(3, 3)] > 1e-4);
         // Symmetric and positive definite after 1000 steps.

@@ -35,6 +35,11 @@ pub struct LogNoise {
     pub gyro_bias: f64,
     /// σ of the constant accelerometer bias drawn per run and axis (m/s²).
     pub accel_bias: f64,
+    /// σ of the constant gyro and accelerometer scale-factor errors drawn per run and axis
+    /// (dimensionless): the IMU outputs `(1 + s) · truth + bias + noise`.
+    pub gyro_scale: f64,
+    /// See [`LogNoise::gyro_scale`].
+    pub accel_scale: f64,
     /// GNSS epoch interval (s).
     pub gnss_dt: f64,
     /// GNSS position σ per axis (m) and velocity σ per axis (m/s).
@@ -85,13 +90,17 @@ pub fn simulate_logs(
     rng.set_stream(run);
     let bg = normal3(&mut rng) * noise.gyro_bias;
     let ba = normal3(&mut rng) * noise.accel_bias;
-    let sg = noise.gyro_noise * noise.imu_rate.sqrt();
-    let sa = noise.accel_noise * noise.imu_rate.sqrt();
+    let sg = Vector3::repeat(1.0) + normal3(&mut rng) * noise.gyro_scale;
+    let sa = Vector3::repeat(1.0) + normal3(&mut rng) * noise.accel_scale;
+    let sgn = noise.gyro_noise * noise.imu_rate.sqrt();
+    let san = noise.accel_noise * noise.imu_rate.sqrt();
     let mut imu = ImuSamples::default();
     for e in &truth {
         imu.t.push(e.t);
-        imu.gyro.push(e.w_b + bg + normal3(&mut rng) * sg);
-        imu.accel.push(e.f_b + ba + normal3(&mut rng) * sa);
+        imu.gyro
+            .push(e.w_b.component_mul(&sg) + bg + normal3(&mut rng) * sgn);
+        imu.accel
+            .push(e.f_b.component_mul(&sa) + ba + normal3(&mut rng) * san);
     }
     // ENU (right-forward-up body) to NED (forward-right-down body).
     let enu_ned = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);

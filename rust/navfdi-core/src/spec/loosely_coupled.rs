@@ -179,6 +179,18 @@ impl ScenarioSpec {
         {
             positive(&format!("{p}.{n}"), v)?;
         }
+        for (n, v) in [
+            ("imu.gyro_scale", l.imu.gyro_scale),
+            ("imu.accel_scale", l.imu.accel_scale),
+        ] {
+            non_negative(&format!("{p}.{n}"), v)?;
+            if v >= 0.1 {
+                return Err(bad(
+                    format!("{p}.{n}"),
+                    format!("{v}: a scale-factor σ is a small fraction (e.g. 1e-3 for 1000 ppm)"),
+                ));
+            }
+        }
         for (i, v) in l.mounting.iter().chain(l.lever_arm.iter()).enumerate() {
             if !v.is_finite() {
                 let f = if i < 3 { "mounting" } else { "lever_arm" };

@@ -15,7 +15,13 @@ use navfdi_core::stream::Streams;
 const DURATION: f64 = 240.0;
 
 fn noise() -> LogNoise {
+    noise_with(0.0)
+}
+
+fn noise_with(scale: f64) -> LogNoise {
     LogNoise {
+        gyro_scale: scale,
+        accel_scale: scale,
         imu_rate: 100.0,
         gyro_noise: 0.01f64.to_radians(),
         accel_noise: 100e-6 * 9.80665,
@@ -28,7 +34,11 @@ fn noise() -> LogNoise {
 }
 
 fn spec() -> ScenarioSpec {
-    let n = noise();
+    spec_with(0.0)
+}
+
+fn spec_with(scale: f64) -> ScenarioSpec {
+    let n = noise_with(scale);
     let (gn, an) = ([n.gyro_noise; 3], [n.accel_noise; 3]);
     let json = serde_json::json!({
         "name": "sim_lc", "duration": DURATION, "dt": 0.25, "architecture": "loosely_coupled",
@@ -38,7 +48,8 @@ fn spec() -> ScenarioSpec {
         ],
         "loosely_coupled": {
             "imu": {"gyro_noise": gn, "accel_noise": an,
-                    "gyro_bias": n.gyro_bias, "accel_bias": n.accel_bias, "bias_tau": 3600.0},
+                    "gyro_bias": n.gyro_bias, "accel_bias": n.accel_bias, "bias_tau": 3600.0,
+                    "gyro_scale": scale, "accel_scale": scale},
             "mounting": MOUNTING, "lever_arm": [0.0, 0.0, 0.0],
             "alignment": {"speed": 2.0, "static_speed": 0.3, "sigma_level": 0.5f64.to_radians(),
                           "sigma_heading": 2.0f64.to_radians(), "sigma_position": 1.0, "sigma_velocity": 0.2},
@@ -70,8 +81,8 @@ fn trajectory() -> navfdi_core::spec::TrajectorySpec {
 /// pitch the body in one step (a coordinated-turn model), which no IMU sample sequence
 /// reproduces, so they are left out here.
 /// Per run, the NEES at every epoch where it exists (time, value).
-fn nees_run(spec: &ScenarioSpec, run: u64) -> Vec<(f64, f64)> {
-    let sim = simulate_logs(&trajectory(), DURATION, &noise(), 11, run).unwrap();
+fn nees_run(spec: &ScenarioSpec, run: u64, noise: &LogNoise) -> Vec<(f64, f64)> {
+    let sim = simulate_logs(&trajectory(), DURATION, noise, 11, run).unwrap();
     let mut src = LoggedSource::new(spec, sim.imu, &sim.gnss, Some(&sim.reference)).unwrap();
     src.reference.attitude = sim.attitude;
     let meas = src.measurements(spec);
@@ -102,9 +113,19 @@ fn mounting_of_the_simulated_imu_maps_right_forward_up_to_forward_right_down() {
 
 #[test]
 fn nees_stays_inside_its_chi2_interval() {
-    let spec = spec();
+    check_nees(&spec(), &noise());
+}
+
+/// With scale-factor errors of 1000 ppm in the IMU and scale-factor states in the filter
+/// (21 states) the NEES stays consistent too.
+#[test]
+fn nees_with_scale_factor_states() {
+    check_nees(&spec_with(1e-3), &noise_with(1e-3));
+}
+
+fn check_nees(spec: &ScenarioSpec, noise: &LogNoise) {
     let runs = 20u64;
-    let per_run: Vec<Vec<(f64, f64)>> = (0..runs).map(|r| nees_run(&spec, r)).collect();
+    let per_run: Vec<Vec<(f64, f64)>> = (0..runs).map(|r| nees_run(spec, r, noise)).collect();
     // Epochs (keyed in ms) with a NEES in every run, from 20 s after the last alignment.
     let key = |t: f64| (t * 1000.0).round() as i64;
     let start = per_run.iter().map(|r| r[0].0).fold(0.0, f64::max) + 20.0;

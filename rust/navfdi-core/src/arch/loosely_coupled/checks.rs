@@ -5,7 +5,7 @@
 
 use crate::error::Result;
 use crate::ins::earth;
-use crate::ins::error_filter::{ErrorFilter, N, PHI, R, V};
+use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
 use crate::stream::{Nominal, Streams};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -106,9 +106,9 @@ pub(super) fn rows(m: &Meas, keep: &[usize]) -> Meas {
 
 /// Normalised estimation error squared of antenna position, velocity and attitude at epoch
 /// `k` against a reference that has the true attitude (NaN otherwise).
-pub(super) fn nees(
+pub(super) fn nees<const NS: usize>(
     s: &NavState,
-    kf: &ErrorFilter,
+    kf: &ErrorFilter<NS>,
     lever: &Vector3<f64>,
     origin: &Nominal,
     src: &Streams,
@@ -134,7 +134,7 @@ pub(super) fn nees(
     err.fixed_rows_mut::<3>(3).copy_from(&dv);
     err.fixed_rows_mut::<3>(6).copy_from(&phi);
     // Antenna position error = δr + [(C l)×] φ.
-    let mut t = nalgebra::SMatrix::<f64, 9, N>::zeros();
+    let mut t = nalgebra::SMatrix::<f64, 9, NS>::zeros();
     for j in 0..3 {
         t[(j, R + j)] = 1.0;
         t[(3 + j, V + j)] = 1.0;
