@@ -234,3 +234,19 @@ def test_optional_scale_factor_states() -> None:
     assert r.errors()["hor_rms"] <= 0.067
     with pytest.raises(ScenarioError, match=r"loosely_coupled\.imu\.gyro_scale.*small fraction"):
         _free().with_value("loosely_coupled.imu.gyro_scale", "20 %", create=True)
+
+
+def test_timeseries_columns_of_a_logged_run(tmp_path: Path) -> None:
+    import pandas as pd
+
+    r = run_scenario(_free())
+    r.write(tmp_path, figures=False)
+    ts = pd.read_parquet(tmp_path / "timeseries.parquet")
+    need = {"time", "lat", "lon", "height", "vel_e", "vel_n", "vel_u", "roll_deg", "pitch_deg", "yaw_deg", "gyro_bias_x", "accel_bias_z_sigma", "gnss_pos.exclude.statistic"}
+    assert need <= set(ts.columns)
+    fde = ts[ts["variant"] == "fde"]
+    ok = fde["lat"].notna()
+    assert fde.loc[ok, "lat"].between(40.09, 40.11).all() and fde.loc[ok, "lon"].between(-105.16, -105.13).all()
+    errors = pd.read_csv(tmp_path / "errors.csv")
+    assert {"variant", "hor_rms_m", "hor_max_m", "ver_rms_m", "ver_max_m", "vel_rms_m_s", "scored_epochs"} <= set(errors.columns)
+    assert errors.loc[errors["variant"] == "fde", "hor_rms_m"].iloc[0] <= 0.067

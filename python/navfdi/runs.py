@@ -367,7 +367,9 @@ class ScenarioRun(RunRecord):
             cols["time"] = self.t
             for j, c in enumerate(self.record["nav_columns"]):
                 v = nav[:, j]
-                if c in ("lat", "lon", "roll", "pitch", "yaw"):
+                if c in ("lat", "lon"):
+                    v = np.degrees(v)
+                elif c in ("roll", "pitch", "yaw"):
                     c, v = f"{c}_deg", np.degrees(v)
                 cols[c] = v
         for i, c in enumerate(ERROR_COLUMNS):
@@ -740,8 +742,10 @@ def _error_unit(c: str) -> str:
         return c
     if c == "fused_alt_predict_only":
         return "fused_alt_predict_only_fraction"
-    if c.startswith(("pos_", "lat_m", "fused_alt")):
+    if c.startswith(("pos_", "lat_m", "fused_alt", "hor_", "ver_")) or ".hor_" in c or ".ver_" in c:
         return f"{c}_m"
+    if c == "scored":
+        return "scored_epochs"
     if c.startswith("vel_"):
         return f"{c}_m_s"
     if c.startswith("att_"):
