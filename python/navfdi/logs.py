@@ -246,20 +246,14 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     """Read a scenario's ``[source]`` table (paths relative to ``base``): returns ``imu``
     (N, 7), ``gnss`` (M, 13), ``reference`` (K, 13) or None arrays for
     :class:`navfdi._core.LoggedSource`, ``t0`` (GPS seconds of time 0), and the logs."""
-    def file(key: str) -> Path:
-        v = source.get(key)
-        if not isinstance(v, str):
-            raise ScenarioError(f"source.{key}: a file path is required")
-        p = Path(v)
-        return p if p.is_absolute() else base / p
     imu_cfg = source.get("imu")
     if not isinstance(imu_cfg, Mapping):
         raise ScenarioError("source.imu: a table with file and columns is required")
     imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg, float(imu_cfg.get("max_gap", 0.1)))
-    pos = read_pos(file("gnss"))
+    pos = read_pos(file_in(source, base, "source.gnss", "gnss"))
     ref = None
     if "reference" in source:
-        ref = read_pos(file("reference"))
+        ref = read_pos(file_in(source, base, "source.reference", "reference"))
         quality = source.get("reference_quality", [1])
         ref = ref.select(np.isin(ref.q, quality))
     t0 = float(pos.t[0])
@@ -273,9 +267,9 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     }
 
 
-def file_in(cfg: Mapping[str, Any], base: Path, name: str) -> Path:
-    """The path ``cfg["file"]`` resolved against ``base``; ``name`` is its field path."""
-    v = cfg.get("file")
+def file_in(cfg: Mapping[str, Any], base: Path, name: str, key: str = "file") -> Path:
+    """The path ``cfg[key]`` resolved against ``base``; ``name`` is its field path."""
+    v = cfg.get(key)
     if not isinstance(v, str):
         raise ScenarioError(f"{name}: a file path is required")
     p = Path(v)

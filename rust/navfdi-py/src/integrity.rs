@@ -24,15 +24,7 @@ pub fn araim_epoch<'py>(
     p_const: Vec<f64>,
     allocation: (f64, f64, f64, f64, f64, f64),
 ) -> PyResult<Bound<'py, PyDict>> {
-    if let Some((i, r)) = rows
-        .iter()
-        .enumerate()
-        .find(|(_, r)| !r.iter().all(|v| v.is_finite()))
-    {
-        return Err(PyValueError::new_err(format!(
-            "los_enu[{i}]: {r:?} is not finite"
-        )));
-    }
+    finite_rows(&rows)?;
     let (p_hmi_vert, p_hmi_hor, p_fa_vert, p_fa_hor, p_thres, p_emt) = allocation;
     let alloc = Allocation {
         p_hmi_vert,
@@ -94,15 +86,7 @@ pub fn snapshot_pl<'py>(
     threshold: f64,
     k_md: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if let Some((i, r)) = los_enu
-        .iter()
-        .enumerate()
-        .find(|(_, r)| !r.iter().all(|v| v.is_finite()))
-    {
-        return Err(PyValueError::new_err(format!(
-            "los_enu[{i}]: {r:?} is not finite"
-        )));
-    }
+    finite_rows(&los_enu)?;
     let los: Vec<nalgebra::Vector3<f64>> = los_enu
         .iter()
         .map(|r| nalgebra::Vector3::from(*r))
@@ -118,4 +102,18 @@ pub fn snapshot_pl<'py>(
     d.set_item("vslope", pl.vslope)?;
     d.set_item("critical", pl.critical)?;
     Ok(d)
+}
+
+/// Every line of sight finite, else a ValueError naming the first bad row of `los_enu`.
+fn finite_rows(rows: &[[f64; 3]]) -> PyResult<()> {
+    match rows
+        .iter()
+        .enumerate()
+        .find(|(_, r)| !r.iter().all(|v| v.is_finite()))
+    {
+        Some((i, r)) => Err(PyValueError::new_err(format!(
+            "los_enu[{i}]: {r:?} is not finite"
+        ))),
+        None => Ok(()),
+    }
 }

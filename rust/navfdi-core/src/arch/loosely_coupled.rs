@@ -26,7 +26,7 @@ use crate::ins::strapdown::{level, mechanise, mounting, skew, Increment, NavStat
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
-use checks::{isolate, ned, nees, rows, shift, Meas, Track};
+use checks::{antenna, isolate, ned, nees, rows, shift, Meas, Track};
 use nalgebra::{DMatrix, DVector, Matrix3, UnitQuaternion, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
@@ -246,7 +246,7 @@ fn run<const NS: usize>(
             sig_heading,
         ),
         bg0,
-        l.noise(),
+        l.imu,
     )
     .with_mounting(&m);
 
@@ -378,8 +378,7 @@ fn run<const NS: usize>(
             tested.push((a, meas, o));
         }
         let witnessed = !l.witness || tested.iter().any(|(_, _, o)| !o.excluded);
-        let mut ant = s;
-        shift(&mut ant, &(s.q * lever));
+        let ant = antenna(&s, &lever);
         let sig_v = (kf.p[(V, V)] + kf.p[(V + 1, V + 1)] + kf.p[(V + 2, V + 2)]).max(0.0) / 3.0;
         for (a, meas, mut o) in tested {
             o.excluded &= witnessed;
@@ -636,8 +635,7 @@ fn test<const NS: usize>(
     meas: &Meas,
     isolation: bool,
 ) -> Result<Outcome> {
-    let zero = DVector::zeros(meas.res.len());
-    let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
+    let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
     let dof = meas.res.len();
     let mut alarm = false;
     let mut stats = Vec::with_capacity(aid.detectors.len());
@@ -662,8 +660,7 @@ fn test<const NS: usize>(
 
 /// Update the filter with a measurement and feed the correction back into the state.
 fn update<const NS: usize>(kf: &mut ErrorFilter<NS>, s: &mut NavState, meas: &Meas) -> Result<()> {
-    let zero = DVector::zeros(meas.res.len());
-    let inn = kf.innovation(&meas.res, &zero, &meas.h, &meas.r)?;
+    let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
     let dx = kf.update(&inn, &meas.h, &meas.r)?;
     kf.feedback(s, &dx);
     Ok(())
@@ -714,8 +711,7 @@ fn record_nav<const NS: usize>(
     src: &Streams,
     k: usize,
 ) {
-    let mut ant = *s;
-    shift(&mut ant, &(s.q * lever));
+    let ant = antenna(s, lever);
     let (roll, pitch, yaw) = s.q.euler_angles();
     let v_enu = Vector3::new(s.v.y, s.v.x, -s.v.z);
     rec.nav.extend([

@@ -32,11 +32,6 @@ pub const BG: usize = 9;
 /// Index of the accelerometer bias (m/s², body axes).
 pub const BA: usize = 12;
 
-/// 15 × 15 matrix.
-pub type Mat15 = SMatrix<f64, N, N>;
-/// 15-vector.
-pub type Vec15 = SVector<f64, N>;
-
 /// The IMU's noise figures, in SI units.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -90,12 +85,14 @@ pub struct ErrorFilter<const NS: usize = N> {
 /// Outcome of one measurement's innovation, before (and whether) it updated the filter.
 #[derive(Debug, Clone)]
 pub struct Innovation {
-    /// Innovation `z − ẑ` (m components as given).
+    /// Innovation (m components as given).
     pub r: DVector<f64>,
     /// Its covariance `H P Hᵀ + R`.
     pub s: DMatrix<f64>,
     /// `λ = rᵀ S⁻¹ r`.
     pub lambda: f64,
+    /// Cholesky factor of `s`, reused by [`ErrorFilter::update`].
+    chol: Cholesky<f64, nalgebra::Dyn>,
 }
 
 impl<const NS: usize> ErrorFilter<NS> {
@@ -231,24 +228,28 @@ impl<const NS: usize> ErrorFilter<NS> {
         self.p = 0.5 * (p + p.transpose());
     }
 
-    /// The innovation of a measurement `z` with prediction `z_hat`, matrix `h` (m × 15) and
-    /// noise covariance `r` (m × m).
+    /// The innovation `res` of a measurement (its model's prediction from the error state,
+    /// zero after each feedback, subtracted), matrix `h` (m × NS) and noise covariance `r`
+    /// (m × m).
     pub fn innovation(
         &self,
-        z: &DVector<f64>,
-        z_hat: &DVector<f64>,
+        res: &DVector<f64>,
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<Innovation> {
         let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
         let s = h * &p * h.transpose() + r;
-        let res = z - z_hat;
         let chol = Cholesky::new(s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
             name: "innovation covariance".into(),
             detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
         })?;
-        let lambda = res.dot(&chol.solve(&res));
-        Ok(Innovation { r: res, s, lambda })
+        let lambda = res.dot(&chol.solve(res));
+        Ok(Innovation {
+            r: res.clone(),
+            s,
+            lambda,
+            chol,
+        })
     }
 
     /// Update with an innovation `inn` of matrix `h` (Joseph form) and return the error-state
@@ -260,12 +261,8 @@ impl<const NS: usize> ErrorFilter<NS> {
         r: &DMatrix<f64>,
     ) -> Result<SVector<f64, NS>> {
         let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
-        let chol = Cholesky::new(inn.s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
-            name: "innovation covariance".into(),
-            detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
-        })?;
         // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ.
-        let k = chol.solve(&(h * &p)).transpose();
+        let k = inn.chol.solve(&(h * &p)).transpose();
         let dx = &k * &inn.r;
         let ikh = DMatrix::<f64>::identity(NS, NS) - &k * h;
         let pn = &ikh * &p * ikh.transpose() + &k * r * k.transpose();
@@ -329,14 +326,13 @@ mod tests {
         let mut kf =
             ErrorFilter::<N>::new(10.0, 1.0, Vector3::repeat(0.01), Vector3::zeros(), noise());
         // INS 3 m north of a fix with σ 0.1 m: the update moves it almost all the way.
-        let z = DVector::zeros(3);
-        let zh = DVector::from_vec(vec![3.0, 0.0, 0.0]);
+        let res = DVector::from_vec(vec![3.0, 0.0, 0.0]);
         let mut h = DMatrix::zeros(3, N);
         for i in 0..3 {
             h[(i, R + i)] = 1.0;
         }
         let r = DMatrix::identity(3, 3) * 0.01;
-        let inn = kf.innovation(&zh, &z, &h, &r).unwrap();
+        let inn = kf.innovation(&res, &h, &r).unwrap();
         assert!((inn.lambda - 9.0 / (100.0 + 0.01)).abs() < 1e-9);
         let dx = kf.update(&inn, &h, &r).unwrap();
         let lat0 = s.lat;

@@ -47,15 +47,6 @@ impl Increment {
             dt,
         }
     }
-
-    /// The part `fraction` ∈ [0, 1] of this interval (rates held constant over it).
-    pub fn part(&self, fraction: f64) -> Self {
-        Increment {
-            dtheta: self.dtheta * fraction,
-            dvel: self.dvel * fraction,
-            dt: self.dt * fraction,
-        }
-    }
 }
 
 /// Skew-symmetric matrix `[v×]`.
@@ -70,11 +61,6 @@ pub fn euler_to_dcm(r: f64, p: f64, y: f64) -> Matrix3<f64> {
     *UnitQuaternion::from_euler_angles(r, p, y)
         .to_rotation_matrix()
         .matrix()
-}
-
-/// Roll, pitch, yaw (rad) of a body-to-navigation (north-east-down) rotation.
-pub fn attitude(q: &UnitQuaternion<f64>) -> (f64, f64, f64) {
-    q.euler_angles()
 }
 
 /// The IMU-to-body rotation `C_imu^b` of an IMU whose axes have roll, pitch, yaw (rad) in

@@ -148,11 +148,6 @@ impl LooselyCoupledSpec {
         }
         out
     }
-
-    /// The IMU's noise figures as the error filter takes them.
-    pub fn noise(&self) -> ImuNoise {
-        self.imu
-    }
 }
 
 impl ScenarioSpec {

@@ -104,6 +104,13 @@ pub(super) fn rows(m: &Meas, keep: &[usize]) -> Meas {
     }
 }
 
+/// The state moved from the IMU to the antenna at `lever` (m, body forward-right-down).
+pub(super) fn antenna(s: &NavState, lever: &Vector3<f64>) -> NavState {
+    let mut ant = *s;
+    shift(&mut ant, &(s.q * lever));
+    ant
+}
+
 /// Normalised estimation error squared of antenna position, velocity and attitude at epoch
 /// `k` against a reference that has the true attitude (NaN otherwise).
 pub(super) fn nees<const NS: usize>(
@@ -123,8 +130,7 @@ pub(super) fn nees<const NS: usize>(
     if !e.iter().all(|v| v.is_finite()) {
         return f64::NAN;
     }
-    let mut ant = *s;
-    shift(&mut ant, &(s.q * lever));
+    let ant = antenna(s, lever);
     let truth = origin.from_enu(&Vector3::new(e[0], e[1], e[2]));
     let dr = ned(&ant, &truth);
     let dv = s.v - Vector3::new(e[4], e[3], -e[5]);
