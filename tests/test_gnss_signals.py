@@ -11,7 +11,8 @@ import navfdi
 from navfdi.cli import main
 
 D = Path(__file__).parent / "data"
-WALK = (str(D / "walk_0827" / "gnss_1730.obs.gz"), str(D / "walk_0827" / "gnss_1730.nav"))
+PKG = Path(navfdi.__file__).parent / "data" / "walk_0827"
+WALK = (str(PKG / "gnss_1730.obs.gz"), str(PKG / "gnss_1730.nav"))
 STATIC = (str(D / "rinex" / "rover.obs.gz"), str(D / "rinex" / "base.nav"))
 
 

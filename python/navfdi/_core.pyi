@@ -874,18 +874,38 @@ def read_rinex_nav(path: str) -> dict[str, Any]:
 
 @final
 class LoggedSource:
-    """Recorded logs prepared for a scenario (architecture ``loosely_coupled``). Internal:
-    use :func:`navfdi.run_scenario` on a scenario with a ``[source]`` table.
+    """Recorded logs prepared for a scenario (architecture ``loosely_coupled``, or ``tight``
+    with ``tight.strapdown``). Internal: use :func:`navfdi.run_scenario` on a scenario with a
+    ``[source]`` table.
 
     ``imu``: (N, 7) float array — time (s from the run's time 0), angular rate x, y, z (rad/s),
     specific force x, y, z (m/s²), IMU axes. ``gnss``, ``reference``: (M, 13) — time (s),
     latitude, longitude (rad), height (m), velocity east, north, up (m/s), σ of position
-    east, north, up (m) and of velocity (m/s). Raises ValueError naming the array and row."""
+    east, north, up (m) and of velocity (m/s). Or ``rinex`` = (observation path, navigation
+    path) instead of ``gnss`` (tight scenarios): the record epochs are the observation
+    epochs, time 0 the first, and ``imu`` and ``reference`` times are GPS seconds (GPST).
+    Raises ValueError naming the array and row, FileFormatError for a malformed RINEX file."""
 
-    def __new__(cls, spec_json: str, imu: ArrayLike, gnss: ArrayLike, reference: ArrayLike | None = None) -> LoggedSource: ...
+    def __new__(
+        cls,
+        spec_json: str,
+        imu: ArrayLike,
+        gnss: ArrayLike | None = None,
+        reference: ArrayLike | None = None,
+        rinex: tuple[str, str] | None = None,
+    ) -> LoggedSource: ...
     @property
     def epochs(self) -> int:
-        """Number of record epochs (the GNSS log's)."""
+        """Number of record epochs (the GNSS log's or the RINEX observations')."""
+    @property
+    def time0(self) -> float:
+        """GPS seconds (GPST) of time 0 for a source read from RINEX files; 0 otherwise."""
+    @property
+    def times(self) -> NDArray[np.float64]:
+        """Record epoch times (s from time 0), shape (T,)."""
+    @property
+    def satellites(self) -> list[str]:
+        """Satellites in view at some epoch (RINEX sources; empty otherwise)."""
     @property
     def faults_applied(self) -> list[bool]:
         """Per fault (as given, before any draw): whether its sensor measures inside its window."""
@@ -895,9 +915,11 @@ class LoggedSource:
     def run_chunk(self, seed: int, start: int, count: int, threads: int = 0, keep: list[int] | None = None) -> dict[str, Any]:
         """Monte-Carlo runs ``start .. start + count``: run ``i`` draws its faults' ``draw``
         ranges from ``(seed, i)``; the dict of arrays of :meth:`PreparedScenario.run_chunk`
-        plus ``hor_rms``, ``hor_max``, ``fault_hor_max`` (count,) in m and the drawn
-        ``fault_start``, ``fault_magnitude`` (count, faults), ``fault_kind``,
-        ``fault_components`` (lists). GIL released; Ctrl-C stops it."""
+        plus ``hor_rms``, ``hor_max``, ``fault_hor_max``, ``hor_rel_rms``,
+        ``fault_hor_rel_max`` (count,) in m (the last two with the run's mean horizontal offset
+        to the reference removed) and the drawn ``fault_start``, ``fault_magnitude`` (count,
+        faults), ``fault_kind``, ``fault_components``, ``fault_satellite`` (lists). GIL
+        released; Ctrl-C stops it."""
     def run(self, spec_jsons: list[str], isolation: bool = True) -> list[dict[str, Any]]:
         """Run each scenario (the prepared one and its variants) on the recorded measurements
         with the prepared scenario's faults injected; one record dict per scenario, with

@@ -1,12 +1,14 @@
-"""Schema of the ``[loosely_coupled]`` section (strapdown INS on recorded logs): user form
-with units → the SI form of the Rust core's ``LooselyCoupledSpec``."""
+"""Schema of the INS/GNSS coupling sections — ``[loosely_coupled]`` and the strapdown INS on
+recorded logs, ``[tight]`` (with ``[tight.strapdown]``) and ``[ultra_tight]``: user form with
+units → the SI form of the Rust core's ``LooselyCoupledSpec``, ``TightSpec`` and
+``UltraTightSpec``."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from navfdi._errors import ScenarioError
-from navfdi._fields import _bool, _check_keys, _detectors, _list, _need, _str, _unit
+from navfdi._fields import _bool, _check_keys, _detectors, _list, _name, _need, _number, _str, _unit
 
 
 def _constraint(c: Any, p: str, dim: int) -> dict[str, Any]:
@@ -27,33 +29,33 @@ def _constraint(c: Any, p: str, dim: int) -> dict[str, Any]:
     return out
 
 
-def _loosely_coupled(lc: Any) -> dict[str, Any]:
-    p = "loosely_coupled"
-    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate"}, p)
-    imu = _need(lc, "imu", p)
+def _axes(v: Any, dim: str, q: str) -> list[float]:
+    vals = [v] * 3 if isinstance(v, str) else _list(v, q)
+    if len(vals) != 3:
+        raise ScenarioError(f"{q}: expected one value or three (x, y, z), got {len(vals)}")
+    return [_unit(x, dim, f"{q}[{i}]") for i, x in enumerate(vals)]
+
+
+def _strapdown(t: Any, p: str) -> dict[str, Any]:
+    """The strapdown INS fields of table ``t`` at field path ``p``: ``imu``, ``mounting``,
+    ``lever_arm``, ``imu_time_offset``, ``alignment`` (SI)."""
+    imu = _need(t, "imu", p)
     _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau", "gyro_scale", "accel_scale"}, f"{p}.imu")
-
-    def axes(v: Any, dim: str, q: str) -> list[float]:
-        vals = [v] * 3 if isinstance(v, str) else _list(v, q)
-        if len(vals) != 3:
-            raise ScenarioError(f"{q}: expected one value or three (x, y, z), got {len(vals)}")
-        return [_unit(x, dim, f"{q}[{i}]") for i, x in enumerate(vals)]
-
-    al = _need(lc, "alignment", p)
+    al = _need(t, "alignment", p)
     _check_keys(al, {"speed", "heading", "static_speed", "gyro_bias", "sigma_level", "sigma_heading", "sigma_position", "sigma_velocity"}, f"{p}.alignment")
-    out: dict[str, Any] = {
+    return {
         "imu": {
-            "gyro_noise": axes(_need(imu, "gyro_noise", f"{p}.imu"), "angular_rate_density", f"{p}.imu.gyro_noise"),
-            "accel_noise": axes(_need(imu, "accel_noise", f"{p}.imu"), "acceleration_density", f"{p}.imu.accel_noise"),
+            "gyro_noise": _axes(_need(imu, "gyro_noise", f"{p}.imu"), "angular_rate_density", f"{p}.imu.gyro_noise"),
+            "accel_noise": _axes(_need(imu, "accel_noise", f"{p}.imu"), "acceleration_density", f"{p}.imu.accel_noise"),
             "gyro_bias": _unit(_need(imu, "gyro_bias", f"{p}.imu"), "angular_rate", f"{p}.imu.gyro_bias"),
             "accel_bias": _unit(_need(imu, "accel_bias", f"{p}.imu"), "acceleration", f"{p}.imu.accel_bias"),
             "bias_tau": _unit(_need(imu, "bias_tau", f"{p}.imu"), "time", f"{p}.imu.bias_tau"),
             "gyro_scale": _unit(imu.get("gyro_scale", "0 ppm"), "fraction", f"{p}.imu.gyro_scale"),
             "accel_scale": _unit(imu.get("accel_scale", "0 ppm"), "fraction", f"{p}.imu.accel_scale"),
         },
-        "mounting": axes(_need(lc, "mounting", p), "angle", f"{p}.mounting"),
-        "lever_arm": axes(_need(lc, "lever_arm", p), "length", f"{p}.lever_arm"),
-        "imu_time_offset": _unit(lc.get("imu_time_offset", "0 s"), "time", f"{p}.imu_time_offset"),
+        "mounting": _axes(_need(t, "mounting", p), "angle", f"{p}.mounting"),
+        "lever_arm": _axes(_need(t, "lever_arm", p), "length", f"{p}.lever_arm"),
+        "imu_time_offset": _unit(t.get("imu_time_offset", "0 s"), "time", f"{p}.imu_time_offset"),
         "alignment": {
             "speed": _unit(_need(al, "speed", f"{p}.alignment"), "velocity", f"{p}.alignment.speed"),
             "heading": None if "heading" not in al else _unit(al["heading"], "angle", f"{p}.alignment.heading"),
@@ -64,6 +66,21 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
             "sigma_position": _unit(_need(al, "sigma_position", f"{p}.alignment"), "length", f"{p}.alignment.sigma_position"),
             "sigma_velocity": _unit(_need(al, "sigma_velocity", f"{p}.alignment"), "velocity", f"{p}.alignment.sigma_velocity"),
         },
+    }
+
+
+def _tight_strapdown(t: Any) -> dict[str, Any]:
+    """``[tight.strapdown]``: the strapdown INS of a tight filter on recorded logs."""
+    p = "tight.strapdown"
+    _check_keys(t, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment"}, p)
+    return _strapdown(t, p)
+
+
+def _loosely_coupled(lc: Any) -> dict[str, Any]:
+    p = "loosely_coupled"
+    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate"}, p)
+    out: dict[str, Any] = {
+        **_strapdown(lc, p),
         "sensors": [],
         "witness": _bool(lc.get("witness", True), f"{p}.witness"),
         "isolate_components": _bool(lc.get("isolate_components", True), f"{p}.isolate_components"),
@@ -83,3 +100,63 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
     if "nhc" in lc:
         out["nhc"] = _constraint(lc["nhc"], f"{p}.nhc", 2)
     return out
+
+
+def _tight(t: Any) -> dict[str, Any]:
+    """The ``[tight]`` table."""
+    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd", "strapdown"}, "tight")
+    fde = _str(_need(t, "fde", "tight"), "tight.fde")
+    if fde not in ("ls_precheck", "innovation", "gnss_filter", "none"):
+        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter or none")
+    rates = _bool(t.get("rates", True), "tight.rates")
+    return {
+        "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
+        "fde": fde,
+        "alpha": _number(_need(t, "alpha", "tight"), "tight.alpha"),
+        "k": None if t.get("k") is None else _number(t["k"], "tight.k"),
+        "rates": rates,
+        "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
+        "strapdown": None if "strapdown" not in t else _tight_strapdown(t["strapdown"]),
+    }
+
+def _ultra_tight(u: Any) -> dict[str, Any]:
+    """The ``[ultra_tight]`` table (paper 004)."""
+    p = "ultra_tight"
+    _check_keys(
+        u,
+        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_input", "nav_window", "prefilter_window", "stage1_window",
+         "stage2_window", "stage_q", "stage_period", "stage_r0", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
+        p,
+    )
+    method = _str(_need(u, "method", p), f"{p}.method")
+    if method not in ("m1", "m2", "m3"):
+        raise ScenarioError(f"{p}.method = {method!r}: use m1 (navigation-filter AIME), m2 (prefilter AIME) or m3 (two-stage AIME)")
+    nav_input = _str(u.get("nav_input", "discriminator"), f"{p}.nav_input")
+    if nav_input not in ("discriminator", "prefilter"):
+        raise ScenarioError(
+            f"{p}.nav_input = {nav_input!r}: use discriminator (the epoch's discriminator outputs averaged, "
+            "paper eq. 2) or prefilter (the prefilter estimates averaged)"
+        )
+    sats = [_name(s, f"{p}.satellites[{i}]") for i, s in enumerate(_list(_need(u, "satellites", p), f"{p}.satellites"))]
+    return {
+        "sensor": _str(_need(u, "sensor", p), f"{p}.sensor"),
+        "satellites": sats,
+        "method": method,
+        "pf": _number(_need(u, "pf", p), f"{p}.pf"),
+        "cn0": _unit(_need(u, "cn0", p), "carrier_to_noise", f"{p}.cn0"),
+        "integration": _unit(u.get("integration", "20 ms"), "time", f"{p}.integration"),
+        "nav_input": nav_input,
+        "nav_window": _unit(u.get("nav_window", "20 s"), "time", f"{p}.nav_window"),
+        "prefilter_window": _unit(u.get("prefilter_window", "20 s"), "time", f"{p}.prefilter_window"),
+        "stage1_window": _unit(u.get("stage1_window", "2 s"), "time", f"{p}.stage1_window"),
+        "stage2_window": _unit(u.get("stage2_window", "10 s"), "time", f"{p}.stage2_window"),
+        "stage_q": _number(u.get("stage_q", 10.0), f"{p}.stage_q"),
+        "stage_period": _unit(u.get("stage_period", "1 s"), "time", f"{p}.stage_period"),
+        "stage_r0": _number(u.get("stage_r0", 1.0), f"{p}.stage_r0"),
+        "fading_b": _number(u.get("fading_b", 0.99), f"{p}.fading_b"),
+        "jerk_psd": _unit(u.get("jerk_psd", "1 Hz^2/s^3"), "frequency2_per_time3", f"{p}.jerk_psd"),
+        "code_psd": _unit(u.get("code_psd", "0 chips^2/s"), "chips2_per_time", f"{p}.code_psd"),
+        "spacing": _number(u.get("spacing", 1.0), f"{p}.spacing"),
+        "exclude": _bool(u.get("exclude", True), f"{p}.exclude"),
+        "arm_after": _unit(u.get("arm_after", "30 s"), "time", f"{p}.arm_after"),
+    }

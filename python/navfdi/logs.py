@@ -230,7 +230,9 @@ def read_pos(path: str | Path) -> PosLog:
         raise ScenarioError(f"{path}: epoch {i + 2} ({times[i + 1]:.3f} s) does not come after the one before it")
     vel = np.column_stack([get("ve"), get("vn"), get("vu")])
     sd_vel = np.column_stack([get("sdve"), get("sdvn"), get("sdvu")])
-    return PosLog(times, get("latitude"), get("longitude"), get("height"), get("Q", 0), vel,
+    # RTKLIB names the height "height(m)"; an ellipsoidal height may be labelled "ellh(m)".
+    height = get("height") if any(k.startswith("height") for k in col) else get("ellh")
+    return PosLog(times, get("latitude"), get("longitude"), height, get("Q", 0), vel,
                   np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path))
 
 
@@ -244,25 +246,38 @@ def _isfloat(x: str) -> bool:
 
 def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     """Read a scenario's ``[source]`` table (paths relative to ``base``): returns ``imu``
-    (N, 7), ``gnss`` (M, 13), ``reference`` (K, 13) or None arrays for
-    :class:`navfdi._core.LoggedSource`, ``t0`` (GPS seconds of time 0), and the logs."""
+    (N, 7), ``gnss`` (M, 13) or None, ``reference`` (K, 13) or None arrays and ``rinex``
+    (observation and navigation paths, or None) for :class:`navfdi._core.LoggedSource`,
+    ``t0`` (GPS seconds of time 0; None for RINEX logs, whose time 0 is the first observation
+    epoch and whose arrays keep GPS seconds), and the logs."""
     imu_cfg = source.get("imu")
     if not isinstance(imu_cfg, Mapping):
         raise ScenarioError("source.imu: a table with file and columns is required")
     imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg, float(imu_cfg.get("max_gap", 0.1)))
-    pos = read_pos(file_in(source, base, "source.gnss", "gnss"))
     ref = None
     if "reference" in source:
         ref = read_pos(file_in(source, base, "source.reference", "reference"))
         quality = source.get("reference_quality", [1])
         ref = ref.select(np.isin(ref.q, quality))
+    if "rinex_obs" in source:
+        obs = file_in(source, base, "source.rinex_obs", "rinex_obs")
+        nav = file_in(source, base, "source.rinex_nav", "rinex_nav")
+        for p, name in ((obs, "source.rinex_obs"), (nav, "source.rinex_nav")):
+            if not p.is_file():
+                raise ScenarioError(f"{name}: {p}: no such file")
+        return {
+            "imu": np.column_stack([imu.t, imu.gyro, imu.accel]), "gnss": None,
+            "reference": None if ref is None else ref.rows(0.0), "rinex": (str(obs), str(nav)),
+            "t0": None, "imu_log": imu, "gnss_log": None, "reference_log": ref,
+        }
+    pos = read_pos(file_in(source, base, "source.gnss", "gnss"))
     t0 = float(pos.t[0])
     if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
         raise ScenarioError(
             f"{pos.path} ({_gpst(pos.t[0])}–{_gpst(pos.t[-1])} GPST) and {imu.path} ({_gpst(imu.t[0])}–{_gpst(imu.t[-1])} GPST) do not overlap in time")
     imu_rows = np.column_stack([imu.t - t0, imu.gyro, imu.accel])
     return {
-        "imu": imu_rows, "gnss": pos.rows(t0), "reference": None if ref is None else ref.rows(t0),
+        "imu": imu_rows, "gnss": pos.rows(t0), "reference": None if ref is None else ref.rows(t0), "rinex": None,
         "t0": t0, "imu_log": imu, "gnss_log": pos, "reference_log": ref,
     }
 
@@ -296,17 +311,30 @@ def scenario_folder(sc: Any) -> Path:
 
 def logged_source(sc: Any) -> Any:
     """Read scenario ``sc``'s logs and prepare them (:class:`navfdi._core.LoggedSource`).
-    Checks that the scenario's ``duration`` and ``dt`` match the GNSS log."""
+    Checks that the scenario's ``duration`` and ``dt`` match the GNSS log (the RINEX
+    observations' epochs for a tight scenario)."""
     from . import _core
 
     data = load_source(sc.raw["source"], scenario_folder(sc))
-    g = data["gnss"]
-    span = float(g[-1, 0])
-    dt = float(np.median(np.diff(g[:, 0]))) if len(g) > 1 else float("nan")
+    try:
+        if data["rinex"] is not None:
+            src = _core.LoggedSource(sc.to_json(), data["imu"], None, data["reference"], data["rinex"])
+            t = np.asarray(src.times)
+            what = f"the RINEX observations {data['rinex'][0]}"
+        else:
+            src = None
+            t = data["gnss"][:, 0]
+            what = f"the GNSS log {data['gnss_log'].path}"
+    except ValueError as e:
+        raise ScenarioError(str(e)) from None
+    span = float(t[-1] - t[0])
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else float("nan")
     if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
         raise ScenarioError(
-            f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: the GNSS log {data['gnss_log'].path} spans {span:g} s "
+            f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: {what} spans {span:g} s "
             f"at {dt:g} s epochs; set duration = \"{span:g} s\" and dt = \"{dt:g} s\"")
+    if src is not None:
+        return src
     try:
         return _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"])
     except ValueError as e:

@@ -231,8 +231,12 @@ class Campaign:
         recorded logs add ``horizontal_error_rms`` (m, against the reference's non-input
         epochs, over the runs) and ``fault_horizontal_error_max_mean``, ``_p95`` (m, each
         run's largest horizontal error inside its fault window; mean and 95th percentile over
-        the runs); their ``runs`` table also has each run's drawn ``fault_start`` (s),
-        ``fault_magnitude`` (SI), ``fault_kind`` and ``fault_components`` on its fault rows.
+        the runs), and the same three with each run's mean horizontal offset to the reference
+        (over its scored epochs outside the fault windows) removed:
+        ``horizontal_error_rms_offset_removed``, ``fault_horizontal_error_max_offset_removed_mean``,
+        ``_p95`` (m); their ``runs`` table also has each run's drawn ``fault_start`` (s),
+        ``fault_magnitude`` (SI), ``fault_kind``, ``fault_components`` and ``fault_satellite``
+        ("" for none) on its fault rows.
         Fault rows carry NaN
         false-alarm rates; ``none`` rows NaN detection figures. Every point × cell has a row,
         with ``runs = 0`` and NaN figures where an interrupted campaign ran none.
@@ -307,6 +311,10 @@ class Campaign:
                 rec["horizontal_error_rms"] = float(np.sqrt(np.nanmean(hr**2))) if np.isfinite(hr).any() else math.nan
                 rec["fault_horizontal_error_max_mean"] = float(np.nanmean(fm)) if np.isfinite(fm).any() else math.nan
                 rec["fault_horizontal_error_max_p95"] = float(np.nanpercentile(fm, 95)) if np.isfinite(fm).any() else math.nan
+                rr, rm = g["hor_rel_rms"].to_numpy(float), g["fault_hor_rel_max"].to_numpy(float)
+                rec["horizontal_error_rms_offset_removed"] = float(np.sqrt(np.nanmean(rr**2))) if np.isfinite(rr).any() else math.nan
+                rec["fault_horizontal_error_max_offset_removed_mean"] = float(np.nanmean(rm)) if np.isfinite(rm).any() else math.nan
+                rec["fault_horizontal_error_max_offset_removed_p95"] = float(np.nanpercentile(rm, 95)) if np.isfinite(rm).any() else math.nan
             rows.append(rec)
             seen.add((rec["point"], rec["subfilter"], rec["detector"], rec["fault_id"]))
         for point, cells in enumerate(self.cells):
@@ -314,7 +322,10 @@ class Campaign:
                 if (point, sub, det, fid) not in seen:
                     rec = {"point": point, **{c: self.points[point][c] for c in self.sweep_columns}, "subfilter": sub, "detector": det, "fault_id": fid, "pf": float(pf), "runs": 0}
                     rows.append(rec)
-        extra = ["horizontal_error_rms", "fault_horizontal_error_max_mean", "fault_horizontal_error_max_p95"] if "hor_rms" in df else []
+        extra = [
+            "horizontal_error_rms", "fault_horizontal_error_max_mean", "fault_horizontal_error_max_p95", "horizontal_error_rms_offset_removed",
+            "fault_horizontal_error_max_offset_removed_mean", "fault_horizontal_error_max_offset_removed_p95",
+        ] if "hor_rms" in df else []
         cols = [*keys, "runs", *SUMMARY_FIGURES, *extra]
         out = pd.DataFrame(rows, columns=cols) if rows else pd.DataFrame(columns=cols)
         if rows:
@@ -343,7 +354,7 @@ class Campaign:
             head += "  [PARTIAL: interrupted]"
         lines = [head, ""]
         arcsec = math.degrees(1) * 3600
-        sat_of = {f["id"]: f.get("satellite") or "" for f in self.scenario.faults()}
+        sat_of = {f["id"]: "drawn" if (f.get("draw") or {}).get("satellites") else f.get("satellite") or "" for f in self.scenario.faults()}
         cut = lambda v, n: v if len(v) <= n else v[: n - 1] + "…"  # noqa: E731
         f3 = lambda v: "-" if v != v else f"{v:.2f}"  # noqa: E731
         pct = lambda v: "-" if v != v else f"{100 * v:.0f} %"  # noqa: E731
@@ -360,6 +371,13 @@ class Campaign:
                 fm = g["fault_horizontal_error_max_mean"].to_numpy(float)
                 if np.isfinite(fm).any():
                     err += f"; largest in the fault: mean {np.nanmax(fm):.2f} m, p95 {np.nanmax(g['fault_horizontal_error_max_p95'].to_numpy(float)):.2f} m"
+                if r0["horizontal_error_rms_offset_removed"] < 0.5 * r0["horizontal_error_rms"]:
+                    # The error is mostly a steady offset (the reference's own, e.g. walk_tc's).
+                    fr = g["fault_horizontal_error_max_offset_removed_mean"].to_numpy(float)
+                    lines.append(err)
+                    err = f"  run's mean offset removed: RMS {r0['horizontal_error_rms_offset_removed']:.3f} m"
+                    if np.isfinite(fr).any():
+                        err += f"; largest in the fault: mean {np.nanmax(fr):.2f} m, p95 {np.nanmax(g['fault_horizontal_error_max_offset_removed_p95'].to_numpy(float)):.2f} m"
             if r0["fused_alt_rms"] == r0["fused_alt_rms"]:
                 err += f", fused altitude {r0['fused_alt_rms']:.3f} m"
             lines.append(err)
@@ -487,12 +505,14 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             cols[k] = np.repeat(ch[k], c)
         if "fault_start" in ch:
             # Campaigns on recorded logs: each run's drawn fault on its fault rows (NaN / "" on
-            # the "none" rows) and the horizontal errors against the reference.
+            # the "none" rows).
             col = {f: j for j, f in enumerate(fault_ids)}
-            for k, fill in (("fault_start", np.nan), ("fault_magnitude", np.nan), ("fault_kind", ""), ("fault_components", "")):
+            for k, fill in (("fault_start", np.nan), ("fault_magnitude", np.nan), ("fault_kind", ""), ("fault_components", ""), ("fault_satellite", "")):
                 v = np.asarray(ch[k], dtype=object if fill == "" else float).reshape(n, -1)
                 cols[k] = [v[r, col[f]] if f in col and col[f] < v.shape[1] else fill for r in range(n) for f in fid]
-            for k in ("hor_rms", "hor_max", "fault_hor_max"):
+        if np.isfinite(np.asarray(ch["hor_rms"], float)).any():
+            # Runs on recorded logs: the horizontal errors against the reference.
+            for k in ("hor_rms", "hor_max", "fault_hor_max", "hor_rel_rms", "fault_hor_rel_max"):
                 cols[k] = np.repeat(ch[k], c)
         for path, value in points[point].items():
             cols[path] = [value] * (n * c)

@@ -137,7 +137,8 @@ class ScenarioRun(RunRecord):
         if not len(tab):
             return []
         sat = self.record["satellites"]
-        n = sat["in_view"].sum(axis=1)
+        measured = np.asarray(sat["status"]) != sat["status_names"].index("no_measurement")
+        n = sat["in_view"][measured].sum(axis=1) if measured.any() else sat["in_view"].sum(axis=1)
         core = self.scenario.core
         if core.get("architecture") == "ultra_tight":
             u = core["ultra_tight"]
@@ -283,8 +284,13 @@ class ScenarioRun(RunRecord):
         if "nav" in self.record:
             e = self.errors()
             lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
+            if e["hor_rel_rms"] < 0.5 * e["hor_rms"]:
+                lines.append(
+                    f"  mostly a steady offset (E {e['offset_e']:.2f} m, N {e['offset_n']:.2f} m, mean outside faults); without it: "
+                    f"RMS {e['hor_rel_rms']:.3f} m, max {e['hor_rel_max']:.3f} m")
             for name, _, _ in self.windows():
-                lines.append(f"  {name}: horizontal RMS {e[name + '.hor_rms']:.3f} m, max {e[name + '.hor_max']:.3f} m")
+                rel = f" ({e[name + '.hor_rel_max']:.3f} m offset removed)" if e["hor_rel_rms"] < 0.5 * e["hor_rms"] else ""
+                lines.append(f"  {name}: horizontal RMS {e[name + '.hor_rms']:.3f} m, max {e[name + '.hor_max']:.3f} m{rel}")
         elif self.baseline is not None:
             lines.append(self._error_summary())
         return fit("\n".join(lines).rstrip() + "\n")
@@ -422,7 +428,9 @@ class ScenarioRun(RunRecord):
         reference scores (not used as input): ``hor_rms``, ``hor_max`` (m, horizontal),
         ``ver_rms``, ``ver_max`` (m), ``vel_rms``, ``vel_max`` (m/s, 3-D), ``scored`` (epochs),
         and the same horizontal/vertical numbers per outage and fault window
-        (``{window}.hor_rms`` ...)."""
+        (``{window}.hor_rms`` ...); ``offset_e``, ``offset_n``, ``offset_u`` (m, the run's mean
+        error over the scored epochs outside the fault windows) and ``hor_rel_rms``,
+        ``hor_rel_max``, ``{window}.hor_rel_max`` (m, horizontal with that offset removed)."""
         e = self.record["error"]
         hor = np.hypot(e[:, 6], e[:, 7])
         ver = np.abs(e[:, 8])
@@ -439,11 +447,24 @@ class ScenarioRun(RunRecord):
             }
 
         out = stats(np.ones_like(ok), "")
+        # The run's mean offset to the reference (over the scored epochs outside the fault
+        # windows) and the horizontal error without it: for a reference with an offset of its
+        # own (walk_tc's base).
+        clean = ok.copy()
+        for f in self.scenario.faults():
+            clean &= ~((self.t >= f["start"]) & (self.t < f["end"]))
+        off = e[clean, 6:9].mean(axis=0) if clean.any() else np.full(3, np.nan)
+        out.update({"offset_e": float(off[0]), "offset_n": float(off[1]), "offset_u": float(off[2])})
+        rel = np.hypot(e[:, 6] - off[0], e[:, 7] - off[1])
+        out["hor_rel_rms"] = float(np.sqrt(np.mean(rel[ok] ** 2))) if ok.any() else float("nan")
+        out["hor_rel_max"] = float(rel[ok].max()) if ok.any() else float("nan")
         out["vel_rms"] = float(np.sqrt(np.mean(vel[ok] ** 2))) if ok.any() else float("nan")
         out["vel_max"] = float(vel[ok].max()) if ok.any() else float("nan")
         out["scored"] = float(ok.sum())
         for name, a, b in self.windows():
-            out.update(stats((self.t >= a) & (self.t < b), f"{name}."))
+            w = (self.t >= a) & (self.t < b) & ok
+            out.update(stats(w, f"{name}."))
+            out[f"{name}.hor_rel_max"] = float(rel[w].max()) if w.any() else float("nan")
         return out
 
     def summary(self) -> dict[str, Any]:
@@ -586,9 +607,15 @@ class VariantRuns:
             lines = ["navigation error per variant against the reference epochs not used as input: RMS / max"]
             lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
             first = next(iter(self.runs.values()))
+            steady = bool((err["hor_rel_rms"] < 0.5 * err["hor_rms"]).all())
+            if steady:
+                lines[0] += "; horizontal also with each run's mean offset removed"
+                lines[1] = f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'offset removed':>18} {'vertical [m]':>16}"
             for _, row in err.iterrows():
                 for name in ["", *[w[0] + "." for w in first.windows()]]:
-                    lines.append(f"  {row['variant']:<14} {(name[:-1] or 'whole run'):<22} {row[name + 'hor_rms']:>8.3f} / {row[name + 'hor_max']:<7.3f} {row[name + 'ver_rms']:>8.3f} / {row[name + 'ver_max']:<7.3f}")
+                    head = f"  {row['variant']:<14} {(name[:-1] or 'whole run'):<22} {row[name + 'hor_rms']:>8.3f} / {row[name + 'hor_max']:<7.3f}"
+                    rel = f" {(row['hor_rel_rms'] if not name else float('nan')):>8.3f} / {row[name + 'hor_rel_max']:<7.3f}" if steady else ""
+                    lines.append(f"{head}{rel.replace('nan', '  -')} {row[name + 'ver_rms']:>8.3f} / {row[name + 'ver_max']:<7.3f}")
             parts.append("\n".join(lines) + "\n")
             return fit("\n".join(parts))
         lines = ["navigation error per variant (whole run): RMS / max"]
@@ -742,7 +769,7 @@ def _error_unit(c: str) -> str:
         return c
     if c == "fused_alt_predict_only":
         return "fused_alt_predict_only_fraction"
-    if c.startswith(("pos_", "lat_m", "fused_alt", "hor_", "ver_")) or ".hor_" in c or ".ver_" in c:
+    if c.startswith(("pos_", "lat_m", "fused_alt", "hor_", "ver_", "offset_")) or ".hor_" in c or ".ver_" in c:
         return f"{c}_m"
     if c == "scored":
         return "scored_epochs"

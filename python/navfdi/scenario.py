@@ -32,7 +32,7 @@ from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, split
 from navfdi._fields import _bool, _check_keys, _count, _detectors, _list, _name, _need, _number, _str, _unit
-from navfdi._lc_schema import _loosely_coupled
+from navfdi._lc_schema import _loosely_coupled, _tight, _ultra_tight
 
 
 #: Component names and dimensions per sensor kind (order = measurement order).
@@ -70,7 +70,7 @@ _CLOCK = {"bias": "length", "drift": "velocity", "bias_psd": "length2_per_time",
 
 def _ranges(r: Any, p: str) -> dict[str, Any]:
     """The ``ranges`` table of a ``gnss_ranges`` sensor at path ``p``."""
-    _check_keys(r, {"systems", "elevation_mask", "elevation_noise", "epoch", "clock"}, p)
+    _check_keys(r, {"systems", "elevation_mask", "elevation_noise", "epoch", "clock", "cn0_reference"}, p)
     systems = []
     for j, sys_ in enumerate(_list(r.get("systems", ["gps"]), f"{p}.systems")):
         name = _str(sys_, f"{p}.systems[{j}]")
@@ -86,6 +86,7 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
         "elevation_noise": en,
         "epoch": _unit(r.get("epoch", "0 s"), "time", f"{p}.epoch"),
         "clock": {k: _unit(_need(clock, k, f"{p}.clock"), dim, f"{p}.clock.{k}") for k, dim in _CLOCK.items()},
+        "cn0_reference": None if "cn0_reference" not in r else _unit(r["cn0_reference"], "carrier_to_noise", f"{p}.cn0_reference"),
     }
 
 
@@ -164,65 +165,6 @@ def _waypoints(tr: Mapping[str, Any], duration: float) -> dict[str, Any]:
         "heading": f"{first!r} rad",
         "speed": f"{speed!r} m/s",
         "segments": segs,
-    }
-
-
-def _tight(t: Any) -> dict[str, Any]:
-    """The ``[tight]`` table."""
-    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd"}, "tight")
-    fde = _str(_need(t, "fde", "tight"), "tight.fde")
-    if fde not in ("ls_precheck", "innovation", "gnss_filter", "none"):
-        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter or none")
-    rates = _bool(t.get("rates", True), "tight.rates")
-    return {
-        "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
-        "fde": fde,
-        "alpha": _number(_need(t, "alpha", "tight"), "tight.alpha"),
-        "k": None if t.get("k") is None else _number(t["k"], "tight.k"),
-        "rates": rates,
-        "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
-    }
-
-def _ultra_tight(u: Any) -> dict[str, Any]:
-    """The ``[ultra_tight]`` table (paper 004)."""
-    p = "ultra_tight"
-    _check_keys(
-        u,
-        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_input", "nav_window", "prefilter_window", "stage1_window",
-         "stage2_window", "stage_q", "stage_period", "stage_r0", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
-        p,
-    )
-    method = _str(_need(u, "method", p), f"{p}.method")
-    if method not in ("m1", "m2", "m3"):
-        raise ScenarioError(f"{p}.method = {method!r}: use m1 (navigation-filter AIME), m2 (prefilter AIME) or m3 (two-stage AIME)")
-    nav_input = _str(u.get("nav_input", "discriminator"), f"{p}.nav_input")
-    if nav_input not in ("discriminator", "prefilter"):
-        raise ScenarioError(
-            f"{p}.nav_input = {nav_input!r}: use discriminator (the epoch's discriminator outputs averaged, "
-            "paper eq. 2) or prefilter (the prefilter estimates averaged)"
-        )
-    sats = [_name(s, f"{p}.satellites[{i}]") for i, s in enumerate(_list(_need(u, "satellites", p), f"{p}.satellites"))]
-    return {
-        "sensor": _str(_need(u, "sensor", p), f"{p}.sensor"),
-        "satellites": sats,
-        "method": method,
-        "pf": _number(_need(u, "pf", p), f"{p}.pf"),
-        "cn0": _unit(_need(u, "cn0", p), "carrier_to_noise", f"{p}.cn0"),
-        "integration": _unit(u.get("integration", "20 ms"), "time", f"{p}.integration"),
-        "nav_input": nav_input,
-        "nav_window": _unit(u.get("nav_window", "20 s"), "time", f"{p}.nav_window"),
-        "prefilter_window": _unit(u.get("prefilter_window", "20 s"), "time", f"{p}.prefilter_window"),
-        "stage1_window": _unit(u.get("stage1_window", "2 s"), "time", f"{p}.stage1_window"),
-        "stage2_window": _unit(u.get("stage2_window", "10 s"), "time", f"{p}.stage2_window"),
-        "stage_q": _number(u.get("stage_q", 10.0), f"{p}.stage_q"),
-        "stage_period": _unit(u.get("stage_period", "1 s"), "time", f"{p}.stage_period"),
-        "stage_r0": _number(u.get("stage_r0", 1.0), f"{p}.stage_r0"),
-        "fading_b": _number(u.get("fading_b", 0.99), f"{p}.fading_b"),
-        "jerk_psd": _unit(u.get("jerk_psd", "1 Hz^2/s^3"), "frequency2_per_time3", f"{p}.jerk_psd"),
-        "code_psd": _unit(u.get("code_psd", "0 chips^2/s"), "chips2_per_time", f"{p}.code_psd"),
-        "spacing": _number(u.get("spacing", 1.0), f"{p}.spacing"),
-        "exclude": _bool(u.get("exclude", True), f"{p}.exclude"),
-        "arm_after": _unit(u.get("arm_after", "30 s"), "time", f"{p}.arm_after"),
     }
 
 
@@ -408,13 +350,16 @@ def _component_set(v: Any, names: list[str], p: str) -> list[int]:
     return idx
 
 
-def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise: list[float], sensor: str) -> dict[str, Any]:
+def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise: list[float], sensor: str, own: list[int]) -> dict[str, Any]:
     """``faults[i].draw``: what a Monte-Carlo campaign on recorded logs draws per run —
     ``start = [lo, hi]`` (the window's length kept), ``components = [[...], ...]`` (sets to
-    choose from) and ``shapes = [{kind, magnitude = [lo, hi]}, ...]``."""
+    choose from), ``shapes = [{kind, magnitude = [lo, hi]}, ...]`` and ``satellites``
+    (names to choose from, a satellite fault on raw GNSS logs)."""
     q = f"{p}.draw"
-    _check_keys(d, {"start", "components", "shapes"}, q)
-    out: dict[str, Any] = {"start": None, "components": [], "shapes": []}
+    _check_keys(d, {"start", "components", "shapes", "satellites"}, q)
+    out: dict[str, Any] = {"start": None, "components": [], "shapes": [], "satellites": []}
+    for j, sat in enumerate(_list(d.get("satellites", []), f"{q}.satellites")):
+        out["satellites"].append(_str(sat, f"{q}.satellites[{j}]"))
     if "start" in d:
         r = _list(d["start"], f"{q}.start")
         if len(r) != 2:
@@ -422,7 +367,7 @@ def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise:
         out["start"] = [_unit(r[0], "time", f"{q}.start[0]"), _unit(r[1], "time", f"{q}.start[1]")]
     for j, cs in enumerate(_list(d.get("components", []), f"{q}.components")):
         out["components"].append(_component_set(cs, names, f"{q}.components[{j}]"))
-    sets = out["components"] or [list(range(len(comps)))]
+    sets = out["components"] or [own]
     for j, sh in enumerate(_list(d.get("shapes", []), f"{q}.shapes")):
         sp = f"{q}.shapes[{j}]"
         _check_keys(sh, {"kind", "magnitude"}, sp)
@@ -517,7 +462,7 @@ def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
         if "satellite" in f:
             fault["satellite"] = _name(f["satellite"], f"{p}.satellite")
         if "draw" in f:
-            fault["draw"] = _draw(f["draw"], p, comps, names, noise_si[sensor], sensor)
+            fault["draw"] = _draw(f["draw"], p, comps, names, noise_si[sensor], sensor, idx)
         faults.append(fault)
     core["faults"] = faults
 
@@ -526,11 +471,14 @@ def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
     _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "loosely_coupled", "source", "terrain", "state_chi2", "modes", "variants"}, "")
-    logged = raw.get("architecture") == "loosely_coupled"
+    tight = raw.get("tight")
+    logged_tight = raw.get("architecture") == "tight" and isinstance(tight, Mapping) and "strapdown" in tight
+    logged = raw.get("architecture") == "loosely_coupled" or logged_tight
     if logged and "source" not in raw:
-        raise ScenarioError("source: required by architecture = \"loosely_coupled\" (the IMU and GNSS logs the strapdown INS runs on)")
+        what = "tight with [tight.strapdown]" if logged_tight else "architecture = \"loosely_coupled\""
+        raise ScenarioError(f"source: required by {what} (the IMU and GNSS logs the strapdown INS runs on)")
     if "source" in raw and not logged:
-        raise ScenarioError("source: recorded logs run only with architecture = \"loosely_coupled\" so far")
+        raise ScenarioError("source: recorded logs run with architecture = \"loosely_coupled\", or \"tight\" with a [tight.strapdown] INS")
     core: dict[str, Any] = {
         "name": _str(_need(raw, "name", ""), "name"),
         "duration": _unit(_need(raw, "duration", ""), "time", "duration"),
@@ -797,19 +745,30 @@ def _parse_path(path: str) -> list[str | int]:
 
 def _convert_logged(raw: Mapping[str, Any], core: dict[str, Any]) -> dict[str, Any]:
     """A recorded-data scenario: no trajectory or INS error model (the motion and the IMU come
-    from the logs); ``[source]`` stays in the Python layer (see :mod:`navfdi.logs`)."""
+    from the logs); ``[source]`` stays in the Python layer (see :mod:`navfdi.logs`).
+    Architecture ``loosely_coupled`` (GNSS solution logs) or ``tight`` with
+    ``[tight.strapdown]`` (RINEX observations and navigation data)."""
+    arch = str(raw.get("architecture"))
     for k in ("trajectory", "ins", "terrain", "modes", "state_chi2"):
         if k in raw:
-            raise ScenarioError(f"{k}: not used by a loosely_coupled scenario on recorded logs (remove it)")
+            raise ScenarioError(f"{k}: not used by a {arch} scenario on recorded logs (remove it)")
     src = _need(raw, "source", "")
-    _check_keys(src, {"gnss", "reference", "reference_quality", "imu"}, "source")
+    if arch == "tight":
+        _check_keys(src, {"rinex_obs", "rinex_nav", "reference", "reference_quality", "imu"}, "source")
+        for k in ("rinex_obs", "rinex_nav"):
+            _need(src, k, "source")
+    else:
+        _check_keys(src, {"gnss", "reference", "reference_quality", "imu"}, "source")
     _sensors_and_faults(raw, core)
-    core["architecture"] = "loosely_coupled"
+    core["architecture"] = arch
     _variants(raw)
-    for other in ("federated", "centralized", "tight", "ultra_tight"):
-        if other in raw:
-            raise ScenarioError(f"{other}: given, but architecture is 'loosely_coupled' (remove it)")
-    core["loosely_coupled"] = _loosely_coupled(_need(raw, "loosely_coupled", ""))
+    for other in ("federated", "centralized", "tight", "ultra_tight", "loosely_coupled"):
+        if other != arch and other in raw:
+            raise ScenarioError(f"{other}: given, but architecture is {arch!r} (remove it)")
+    if arch == "tight":
+        core["tight"] = _tight(_need(raw, "tight", ""))
+    else:
+        core["loosely_coupled"] = _loosely_coupled(_need(raw, "loosely_coupled", ""))
     return core
 
 

@@ -101,6 +101,12 @@ pub struct RunMetrics {
     pub hor_max: f64,
     /// See [`RunMetrics::hor_rms`].
     pub fault_hor_max: f64,
+    /// [`RunMetrics::hor_rms`] and [`RunMetrics::fault_hor_max`] with the run's mean east and
+    /// north offset to the reference removed (the mean over the scored epochs outside the
+    /// fault windows): for a reference with an offset of its own (m; NaN likewise).
+    pub hor_rel_rms: f64,
+    /// See [`RunMetrics::hor_rel_rms`].
+    pub fault_hor_rel_max: f64,
     /// The run's faults as drawn (campaigns on recorded logs; empty otherwise).
     pub drawn: Vec<crate::spec::FaultSpec>,
     /// Optional full record of the run (kept for chosen runs).
@@ -258,6 +264,8 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
         hor_rms: f64::NAN,
         hor_max: f64::NAN,
         fault_hor_max: f64::NAN,
+        hor_rel_rms: f64::NAN,
+        fault_hor_rel_max: f64::NAN,
         drawn: Vec::new(),
         record: None,
     }
@@ -294,6 +302,36 @@ fn logged_errors(
     }
     let nn = n.max(1) as f64;
     let none = |v: f64| if n == 0 { f64::NAN } else { v };
+    // The run's mean horizontal offset outside the fault windows, and the errors without it.
+    let in_fault = |k: usize| {
+        spec.faults
+            .iter()
+            .any(|f| rec.t[k] >= f.start && rec.t[k] < f.end)
+    };
+    let scored = |row: &[f64]| row[6].is_finite() && row[7].is_finite() && row[8].is_finite();
+    let (mut se, mut sn, mut m) = (0.0, 0.0, 0usize);
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        if scored(row) && !in_fault(k) {
+            se += row[6];
+            sn += row[7];
+            m += 1;
+        }
+    }
+    let (oe, on) = if m > 0 {
+        (se / m as f64, sn / m as f64)
+    } else {
+        (f64::NAN, f64::NAN)
+    };
+    let (mut r2, mut rmax) = (0.0, f64::NAN);
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        if scored(row) {
+            let h = (row[6] - oe).hypot(row[7] - on);
+            r2 += h * h;
+            if in_fault(k) {
+                rmax = f64::max(rmax, h);
+            }
+        }
+    }
     RunMetrics {
         run,
         cells,
@@ -308,6 +346,8 @@ fn logged_errors(
         hor_rms: none((h2 / nn).sqrt()),
         hor_max: none(hmax),
         fault_hor_max: fmax,
+        hor_rel_rms: none((r2 / nn).sqrt()),
+        fault_hor_rel_max: rmax,
         drawn: spec.faults.clone(),
         record: None,
     }

@@ -85,6 +85,10 @@ pub struct Logged {
     /// Per sensor and epoch: the σ of each measurement component as recorded (NaN-free where
     /// the sensor is available; empty vectors elsewhere).
     pub sigma: Vec<Vec<DVector<f64>>>,
+    /// Per epoch, where the source has them: the snapshot (single-point) fix of a raw-GNSS
+    /// log, east, north, up (m, from the origin) and velocity east, north, up (m/s), NaN
+    /// where there is none (the tight filter aligns on them); empty otherwise.
+    pub fixes: Vec<[f64; 6]>,
 }
 
 impl Nominal {

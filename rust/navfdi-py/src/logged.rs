@@ -45,35 +45,42 @@ fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: usize) -> PyResult<DMatrix<
     matrix(name, obj)
 }
 
-/// Recorded logs prepared for a scenario: ``LoggedSource(spec_json, imu, gnss, reference=None)``.
+/// Recorded logs prepared for a scenario:
+/// ``LoggedSource(spec_json, imu, gnss=None, reference=None, rinex=None)``.
 ///
 /// ``imu``: (N, 7) float array, columns time (s from the run's time 0), angular rate x, y, z
 /// (rad/s) and specific force x, y, z (m/s²) in the IMU's axes. ``gnss`` and ``reference``:
 /// (M, 13) arrays, columns time (s), latitude, longitude (rad), height (m), velocity east,
 /// north, up (m/s), σ of position east, north, up (m) and of velocity east, north, up (m/s).
 /// The record epochs are ``gnss``'s; the reference is scored where no GNSS measurement was an
-/// input. Raises ValueError naming the array and row of bad input.
+/// input. Or, for a tight scenario (``tight.strapdown``), ``rinex`` = (observation path,
+/// navigation path) instead of ``gnss``: the record epochs are the observation epochs, time 0
+/// the first of them, and ``imu`` and ``reference`` times are GPS seconds (since 1980-01-06,
+/// GPST); the reference is scored at every epoch it has. Raises ValueError naming the array
+/// and row of bad input, FileFormatError for a malformed RINEX file.
 #[pyclass(name = "LoggedSource", module = "navfdi._core", frozen)]
 pub struct PyLoggedSource {
     src: LoggedSource,
     spec: ScenarioSpec,
+    time0: f64,
 }
 
 #[pymethods]
 impl PyLoggedSource {
     #[new]
-    #[pyo3(signature = (spec_json, imu, gnss, reference=None))]
+    #[pyo3(signature = (spec_json, imu, gnss=None, reference=None, rinex=None))]
     fn new(
         py: Python<'_>,
         spec_json: &str,
         imu: &Bound<'_, PyAny>,
-        gnss: &Bound<'_, PyAny>,
+        gnss: Option<&Bound<'_, PyAny>>,
         reference: Option<&Bound<'_, PyAny>>,
+        rinex: Option<(String, String)>,
     ) -> PyResult<Self> {
         let spec = ScenarioSpec::from_json(spec_json).py()?;
         let m = columns("imu", imu, 7)?;
         let n = m.nrows();
-        let imu = ImuSamples {
+        let mut imu = ImuSamples {
             t: (0..n).map(|r| m[(r, 0)]).collect(),
             gyro: (0..n)
                 .map(|r| Vector3::new(m[(r, 1)], m[(r, 2)], m[(r, 3)]))
@@ -82,13 +89,62 @@ impl PyLoggedSource {
                 .map(|r| Vector3::new(m[(r, 4)], m[(r, 5)], m[(r, 6)]))
                 .collect(),
         };
-        let gnss = gnss_log("gnss", gnss)?;
-        let reference = reference.map(|r| gnss_log("reference", r)).transpose()?;
+        let mut reference = reference.map(|r| gnss_log("reference", r)).transpose()?;
         let sp = spec.clone();
-        let src = py
-            .detach(move || LoggedSource::new(&sp, imu, &gnss, reference.as_ref()))
-            .py()?;
-        Ok(PyLoggedSource { src, spec })
+        let (src, time0) = match (gnss, rinex) {
+            (Some(g), None) => {
+                let gnss = gnss_log("gnss", g)?;
+                let src = py
+                    .detach(move || LoggedSource::new(&sp, imu, &gnss, reference.as_ref()))
+                    .py()?;
+                (src, 0.0)
+            }
+            (None, Some((obs_path, nav_path))) => crate::interrupt::run(py, move |_| {
+                let obs = navfdi_core::gnss::rinex::read_obs(&obs_path)?;
+                let nav = navfdi_core::gnss::rinex::read_nav(&nav_path)?;
+                // Times in GPS seconds; time 0 is the first observation epoch.
+                let t0 = obs.epochs.first().map_or(0.0, |e| e.time.seconds());
+                imu.t.iter_mut().for_each(|t| *t -= t0);
+                if let Some(r) = reference.as_mut() {
+                    r.t.iter_mut().for_each(|t| *t -= t0);
+                }
+                let src = LoggedSource::from_rinex(&sp, imu, &obs, &nav, reference.as_ref())?;
+                Ok((src, t0))
+            })?,
+            _ => {
+                return Err(PyValueError::new_err(
+                    "give either gnss (a GNSS solution log) or rinex (observation and navigation files), not both or neither",
+                ))
+            }
+        };
+        Ok(PyLoggedSource { src, spec, time0 })
+    }
+
+    /// GPS seconds (since 1980-01-06, GPST) of time 0 for a source read from RINEX files (its
+    /// first observation epoch); 0 for one built from a GNSS solution log (whose times are
+    /// already relative).
+    #[getter]
+    fn time0(&self) -> f64 {
+        self.time0
+    }
+
+    /// Record epoch times (s from time 0), shape (T,).
+    #[getter]
+    fn times<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let t = self.src.models.t.clone();
+        let n = t.len();
+        Ok(crate::convert::to_numpy(py, t, &[n])?.into_any())
+    }
+
+    /// Satellite names of a source read from RINEX files (every satellite in view at some
+    /// epoch, above the mask with an ephemeris); empty otherwise.
+    #[getter]
+    fn satellites(&self) -> Vec<String> {
+        self.src
+            .models
+            .ranges
+            .as_ref()
+            .map_or_else(Vec::new, |r| r.names.clone())
     }
 
     /// Number of record epochs.
@@ -113,7 +169,8 @@ impl PyLoggedSource {
     /// Monte-Carlo runs ``start .. start + count`` on the recorded data: run ``i`` draws its
     /// faults' ``draw`` ranges from ``(seed, i)``; on ``threads`` threads (0: all cores), GIL
     /// released. Returns the dict of arrays of ``PreparedScenario.run_chunk`` (plus
-    /// ``hor_rms``, ``hor_max``, ``fault_hor_max`` in m).
+    /// ``hor_rms``, ``hor_max``, ``fault_hor_max``, and ``hor_rel_rms``, ``fault_hor_rel_max`` with the
+    /// run's mean horizontal offset to the reference removed, in m).
     #[pyo3(signature = (seed, start, count, threads = 0, keep = None))]
     fn run_chunk<'py>(
         &self,

@@ -181,11 +181,13 @@ pub fn rows_to_py<'py>(
         ("hor_rms", |r| r.hor_rms),
         ("hor_max", |r| r.hor_max),
         ("fault_hor_max", |r| r.fault_hor_max),
+        ("hor_rel_rms", |r| r.hor_rel_rms),
+        ("fault_hor_rel_max", |r| r.fault_hor_rel_max),
     ] {
         d.set_item(key, to_numpy(py, rows.iter().map(f).collect(), &[n])?)?;
     }
-    // The faults each run drew (campaigns on recorded logs): start (s), magnitude (SI), kind
-    // and components (comma-separated indices), (runs, faults).
+    // The faults each run drew (campaigns on recorded logs): start (s), magnitude (SI), kind,
+    // components (comma-separated indices) and satellite ("" for none), (runs, faults).
     let nf = rows.first().map_or(0, |r| r.drawn.len());
     if nf > 0 && rows.iter().all(|r| r.drawn.len() == nf) {
         let f = |g: &dyn Fn(&navfdi_core::spec::FaultSpec) -> f64| -> Vec<f64> {
@@ -221,8 +223,17 @@ pub fn rows_to_py<'py>(
                 })
             })
             .collect();
+        let sats: Vec<String> = rows
+            .iter()
+            .flat_map(|r| {
+                r.drawn
+                    .iter()
+                    .map(|x| x.satellite.clone().unwrap_or_default())
+            })
+            .collect();
         d.set_item("fault_kind", kinds)?;
         d.set_item("fault_components", comps)?;
+        d.set_item("fault_satellite", sats)?;
     }
     let recs = PyDict::new(py);
     for r in rows {

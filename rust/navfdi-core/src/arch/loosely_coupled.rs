@@ -17,17 +17,18 @@
 mod checks;
 
 use super::common::make_detector;
+use super::inertial::{align, record_nav, BodyImu, Mechaniser};
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
 use crate::ins::earth;
-use crate::ins::error_filter::{ErrorFilter, BA, BG, N, N_SCALE, PHI, R, V};
-use crate::ins::strapdown::{level, mechanise, mounting, skew, Increment, NavState};
+use crate::ins::error_filter::{ErrorFilter, N, N_SCALE, PHI, R, V};
+use crate::ins::strapdown::{mounting, skew, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
-use checks::{antenna, isolate, ned, nees, rows, shift, Meas, Track};
-use nalgebra::{DMatrix, DVector, Matrix3, UnitQuaternion, Vector3};
+use checks::{antenna, isolate, ned, rows, shift, Meas, Track};
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
 struct Aid {
@@ -106,15 +107,7 @@ fn run<const NS: usize>(
 
     // IMU in body axes on the corrected time line.
     let m = mounting(l.mounting[0], l.mounting[1], l.mounting[2]);
-    let imu = &logged.imu;
-    let t_imu: Vec<f64> = imu.t.iter().map(|t| t + l.imu_time_offset).collect();
-    let gyro: Vec<Vector3<f64>> = imu.gyro.iter().map(|w| m * w).collect();
-    let acc: Vec<Vector3<f64>> = imu.accel.iter().map(|f| m * f).collect();
-    if t_imu.len() < 2 {
-        return Err(Error::Invalid(
-            "the IMU log has fewer than two samples".into(),
-        ));
-    }
+    let imu = BodyImu::new(&logged.imu, l.mounting, l.imu_time_offset)?;
     let lever = Vector3::from(l.lever_arm);
 
     let mut aids = build_aids(spec)?;
@@ -143,109 +136,33 @@ fn run<const NS: usize>(
         let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
         v.iter().all(|x| x.is_finite()).then_some(v)
     };
-    let speed_at = |k: usize| measure(&aids[vel_aid], k, aids[vel_aid].vel).map(|v| v.xy().norm());
-    let ka = (0..epochs)
-        .find(|&k| {
-            speed_at(k).is_some_and(|s| s >= l.alignment.speed)
-                && measure(&aids[pos_aid], k, aids[pos_aid].pos).is_some()
-                && models.t[k] > t_imu[0]
-        })
-        .ok_or_else(|| {
-            Error::Invalid(format!(
-                "alignment: no epoch with a GNSS fix and a GNSS speed of at least loosely_coupled.alignment.speed = {} m/s inside the IMU log",
-                l.alignment.speed
-            ))
-        })?;
-    // The last static stretch before ka.
-    let mut end = None;
-    let mut start = None;
-    for k in (0..ka).rev() {
-        match speed_at(k) {
-            Some(s) if s < l.alignment.static_speed => {
-                end.get_or_insert(k);
-                start = Some(k);
-            }
-            Some(_) if end.is_some() => break,
-            _ => {}
-        }
-    }
-    let (Some(k0), Some(k1)) = (start, end) else {
-        return Err(Error::Invalid(format!(
-            "alignment: no static start (GNSS speed below loosely_coupled.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s: levelling needs the vehicle at rest",
-            l.alignment.static_speed, l.alignment.speed
-        )));
-    };
-    let (t0, t1) = (models.t[k0], models.t[k1]);
-    let idx: Vec<usize> = (0..t_imu.len())
-        .filter(|&i| t_imu[i] >= t0 && t_imu[i] <= t1)
-        .collect();
-    if idx.len() < 50 {
-        return Err(Error::Invalid(format!(
-            "alignment: the static start {t0:.2}–{t1:.2} s holds {} IMU samples; levelling needs at least 50",
-            idx.len()
-        )));
-    }
-    let mean =
-        |v: &[Vector3<f64>]| idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len() as f64;
-    let f_mean = mean(&acc);
-    let bg0 = if l.alignment.gyro_bias {
-        mean(&gyro)
-    } else {
-        Vector3::zeros()
-    };
-    let (roll, pitch) = level(&f_mean);
-    let v_enu = measure(&aids[vel_aid], ka, aids[vel_aid].vel).unwrap_or_default();
-    let speed = v_enu.xy().norm();
-    let yaw = l
-        .alignment
-        .heading
-        .unwrap_or_else(|| v_enu.x.atan2(v_enu.y));
-    let sig_v = logged
-        .sigma
-        .get(aids[vel_aid].sensor.unwrap_or(0))
-        .and_then(|s| s.get(ka))
-        .and_then(|s| s.get(aids[vel_aid].vel.unwrap_or(0)).copied())
-        .unwrap_or(0.1);
-    let sig_heading = if l.alignment.heading.is_some() {
-        l.alignment.sigma_heading
-    } else {
-        l.alignment.sigma_heading.max(sig_v / speed.max(1e-3))
-    };
-    let q = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
-    // The static mean rate holds the Earth's rotation as well as the bias: remove it with the
-    // attitude at rest (level from the static start, heading from the first motion).
-    let bg0 = if l.alignment.gyro_bias {
-        let lat = logged.origin.lat;
-        let w_ie = Vector3::new(
-            earth::OMEGA_IE * lat.cos(),
-            0.0,
-            -earth::OMEGA_IE * lat.sin(),
-        );
-        bg0 - q.inverse() * w_ie
-    } else {
-        bg0
-    };
-    let fix = logged
-        .origin
-        .from_enu(&measure(&aids[pos_aid], ka, aids[pos_aid].pos).unwrap_or_default());
-    let mut s = NavState {
-        lat: fix.lat,
-        lon: fix.lon,
-        h: fix.h,
-        v: Vector3::new(v_enu.y, v_enu.x, -v_enu.z),
-        q,
-    };
+    let aligned = align(
+        &l.alignment,
+        "loosely_coupled",
+        &imu,
+        &models.t,
+        &logged.origin,
+        |k| measure(&aids[vel_aid], k, aids[vel_aid].vel),
+        |k| measure(&aids[pos_aid], k, aids[pos_aid].pos),
+        |k| {
+            logged
+                .sigma
+                .get(aids[vel_aid].sensor.unwrap_or(0))
+                .and_then(|s| s.get(k))
+                .and_then(|s| s.get(aids[vel_aid].vel.unwrap_or(0)).copied())
+                .unwrap_or(0.1)
+        },
+    )?;
+    let ka = aligned.epoch;
+    let mut s = aligned.state;
+    let q = s.q;
     // The INS point is the IMU's: move from the antenna by −C l.
     shift(&mut s, &-(q * lever));
     let mut kf = ErrorFilter::<NS>::new(
         l.alignment.sigma_position,
         l.alignment.sigma_velocity,
-        Vector3::new(
-            l.alignment.sigma_level,
-            l.alignment.sigma_level,
-            sig_heading,
-        ),
-        bg0,
+        aligned.sig_att,
+        aligned.bg0,
         l.imu,
     )
     .with_mounting(&m);
@@ -254,10 +171,7 @@ fn run<const NS: usize>(
     for _ in 0..ka {
         push_empty(&mut rec, &mut outcomes);
     }
-    let mut i = t_imu.partition_point(|&t| t <= models.t[ka]);
-    let mut t_cur = models.t[ka];
-    let mut prev = Increment::zero(0.0);
-    let mut w_last = gyro[i.min(gyro.len() - 1)] - kf.bg;
+    let mut mech = Mechaniser::new(&imu, models.t[ka], &kf.bg);
     let mut excluded_before = vec![false; aids.len()];
     let mut track: Vec<Option<Track>> = (0..aids.len()).map(|_| None).collect();
     // Accommodation of an isolated position component: its offset from the INS when it was
@@ -270,43 +184,18 @@ fn run<const NS: usize>(
             cancel.check()?;
         }
         let tk = models.t[k];
-        if tk > t_imu[t_imu.len() - 1] {
+        if tk > imu.end() {
             // The IMU log has ended: no navigation.
             push_empty(&mut rec, &mut outcomes);
             continue;
         }
-        // Mechanise to tk.
-        while t_cur < tk {
-            let ip = i.min(t_imu.len() - 1);
-            let im = ip.saturating_sub(1);
-            let (w, f) =
-                kf.compensate(&(0.5 * (gyro[im] + gyro[ip])), &(0.5 * (acc[im] + acc[ip])));
-            let t_next = t_imu[ip].min(tk);
-            let dt = t_next - t_cur;
-            if dt > 0.0 {
-                let inc = Increment {
-                    dtheta: w * dt,
-                    dvel: f * dt,
-                    dt,
-                };
-                mechanise(&mut s, &prev, &inc);
-                kf.propagate(&s, &f, &w, dt);
-                prev = inc;
-                w_last = w;
-            }
-            t_cur = t_next;
-            if t_imu[ip] <= tk {
-                i = ip + 1;
-                if i >= t_imu.len() {
-                    break;
-                }
-            }
-        }
+        mech.advance(&imu, &mut s, &mut kf, tk);
+        let (i, w_last) = (mech.i, mech.w_last);
         outcomes.iter_mut().for_each(|o| *o = NOT_MEASURED.clone());
         // Constraints first, then GNSS in configuration order.
         let mut at_rest = false;
         if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
-            if still(&t_imu, &acc, &gyro, &kf.bg, i, tk, c) {
+            if still(&imu.t, &imu.acc, &imu.gyro, &kf.bg, i, tk, c) {
                 at_rest = true;
                 let mut h = DMatrix::zeros(3, NS);
                 for j in 0..3 {
@@ -700,52 +589,6 @@ fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome]) {
     rec.error.extend([f64::NAN; 9]);
     rec.sigma.extend([f64::NAN; 9]);
     rec.nav.extend([f64::NAN; NAV_COLUMNS.len()]);
-}
-
-fn record_nav<const NS: usize>(
-    rec: &mut RunRecord,
-    s: &NavState,
-    kf: &ErrorFilter<NS>,
-    lever: &Vector3<f64>,
-    origin: &Nominal,
-    src: &Streams,
-    k: usize,
-) {
-    let ant = antenna(s, lever);
-    let (roll, pitch, yaw) = s.q.euler_angles();
-    let v_enu = Vector3::new(s.v.y, s.v.x, -s.v.z);
-    rec.nav.extend([
-        ant.lat, ant.lon, ant.h, v_enu.x, v_enu.y, v_enu.z, roll, pitch, yaw,
-    ]);
-    rec.nav.extend(kf.bg.iter().chain(kf.ba.iter()).copied());
-    let sig = kf.sigma();
-    rec.nav.extend((BG..BA + 3).map(|j| sig[j]));
-    rec.nav.push(nees(s, kf, lever, origin, src, k));
-    let p = origin.to_enu(&Nominal {
-        lat: ant.lat,
-        lon: ant.lon,
-        h: ant.h,
-    });
-    match src.reference.and_then(|r| r.enu.get(k)) {
-        Some(r) => {
-            rec.error.extend([f64::NAN; 3]);
-            rec.error
-                .extend([v_enu.x - r[3], v_enu.y - r[4], v_enu.z - r[5]]);
-            rec.error.extend([p.x - r[0], p.y - r[1], p.z - r[2]]);
-        }
-        None => rec.error.extend([f64::NAN; 9]),
-    }
-    rec.sigma.extend([
-        sig[PHI + 1],
-        sig[PHI],
-        sig[PHI + 2],
-        sig[V + 1],
-        sig[V],
-        sig[V + 2],
-        sig[R + 1],
-        sig[R],
-        sig[R + 2],
-    ]);
 }
 
 fn build_aids(spec: &ScenarioSpec) -> Result<Vec<Aid>> {

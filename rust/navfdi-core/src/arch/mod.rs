@@ -10,8 +10,10 @@
 pub mod centralized;
 pub mod common;
 pub mod federated;
+pub mod inertial;
 pub mod loosely_coupled;
 pub mod tight;
+pub mod tight_ins;
 pub mod ultra_tight;
 
 use crate::cancel::Cancel;
@@ -38,6 +40,9 @@ pub fn run_architecture(
         Architecture::Centralized => {
             let isolate = spec.centralized.as_ref().is_none_or(|c| c.isolate);
             centralized::run_centralized(spec, src, isolation && isolate, full, cancel)
+        }
+        Architecture::Tight if spec.runs_on_logs() => {
+            tight_ins::run_tight_ins(spec, src, isolation, full, cancel)
         }
         Architecture::Tight => tight::run_tight(spec, src, isolation, full, cancel),
         Architecture::UltraTight => {

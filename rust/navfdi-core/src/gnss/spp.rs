@@ -44,7 +44,7 @@ use std::collections::btree_map::{BTreeMap, Entry};
 /// Earth rotation rate used for the Sagnac term (rad/s, WGS-84).
 const OMEGA_E: f64 = 7.292_115_146_7e-5;
 /// GPS L1 frequency (Hz).
-const F_L1: f64 = 1_575.42e6;
+pub const F_L1: f64 = 1_575.42e6;
 
 /// Carrier frequency (Hz) of a first-band code of `sys` (`C1C` → L1/E1, `C2I` → B1I).
 pub fn frequency(sys: Sys, code: &str) -> Option<f64> {

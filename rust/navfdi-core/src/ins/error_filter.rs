@@ -21,6 +21,13 @@ pub const N_SCALE: usize = 21;
 pub const SG: usize = 15;
 /// Index of the accelerometer scale-factor error.
 pub const SA: usize = 18;
+/// Number of error states with receiver clock states (tight coupling): the 15 plus one
+/// clock bias per system (GPS, Galileo; m) and the common clock drift (m/s).
+pub const N_CLOCK: usize = 18;
+/// Index of the first clock-bias error (GPS; Galileo's follows) in [`N_CLOCK`] states (m).
+pub const CB: usize = 15;
+/// Index of the clock-drift error in [`N_CLOCK`] states (m/s).
+pub const CD: usize = 17;
 /// Index of the position error (north, east, down; m).
 pub const R: usize = 0;
 /// Index of the velocity error (north, east, down; m/s).
@@ -76,6 +83,10 @@ pub struct ErrorFilter<const NS: usize = N> {
     pub bg: Vector3<f64>,
     /// Estimated accelerometer bias (m/s², body).
     pub ba: Vector3<f64>,
+    /// Estimated receiver clock ([`N_CLOCK`] states): bias GPS, bias Galileo (m), drift (m/s).
+    pub clock: [f64; 3],
+    /// Spectral densities of the clock's bias (m²/s) and drift (m²/s³) noise.
+    clock_psd: (f64, f64),
     noise: ImuNoise,
     /// White-noise spectral densities in body axes (`M diag(n²) Mᵀ`).
     q_gyro: Matrix3<f64>,
@@ -127,6 +138,8 @@ impl<const NS: usize> ErrorFilter<NS> {
             sa: Vector3::zeros(),
             bg: bg0,
             ba: Vector3::zeros(),
+            clock: [0.0; 3],
+            clock_psd: (0.0, 0.0),
             noise,
             q_gyro: sq(noise.gyro_noise),
             q_acc: sq(noise.accel_noise),
@@ -138,6 +151,20 @@ impl<const NS: usize> ErrorFilter<NS> {
     pub fn with_mounting(mut self, m: &Matrix3<f64>) -> Self {
         self.q_gyro = m * self.q_gyro * m.transpose();
         self.q_acc = m * self.q_acc * m.transpose();
+        self
+    }
+
+    /// Receiver clock states ([`N_CLOCK`] states): start values `x0` (bias GPS, bias Galileo in
+    /// m, drift in m/s), their σ `sig0` (m, m, m/s) and the spectral densities of the bias
+    /// (m²/s) and drift (m²/s³) noise. Does nothing with fewer states.
+    pub fn with_clock(mut self, x0: [f64; 3], sig0: [f64; 3], psd: (f64, f64)) -> Self {
+        if NS == N_CLOCK {
+            for (j, s) in sig0.iter().enumerate() {
+                self.p[(CB + j, CB + j)] = s * s;
+            }
+            self.clock = x0;
+            self.clock_psd = psd;
+        }
         self
     }
 
@@ -189,8 +216,17 @@ impl<const NS: usize> ErrorFilter<NS> {
             .copy_from(&(-skew(&w_in)));
         f.fixed_view_mut::<3, 3>(PHI, BG).copy_from(&(-c));
         let tau = self.noise.bias_tau;
-        for i in BG..NS {
+        let gauss_markov_end = if NS == N_CLOCK { BA + 3 } else { NS };
+        for i in BG..gauss_markov_end {
             f[(i, i)] = -1.0 / tau;
+        }
+        if NS == N_CLOCK {
+            // The estimated biases integrate the estimated drift.
+            self.clock[0] += self.clock[2] * dt;
+            self.clock[1] += self.clock[2] * dt;
+            // Clock: each system's bias integrates the common drift.
+            f[(CB, CD)] = 1.0;
+            f[(CB + 1, CD)] = 1.0;
         }
         if NS == N_SCALE {
             // Scale factors: δv' += C diag(f_b) δs_a, φ' −= C diag(ω_b) δs_g.
@@ -224,6 +260,18 @@ impl<const NS: usize> ErrorFilter<NS> {
                 p[(SG + i, SG + i)] += 2.0 * self.noise.gyro_scale.powi(2) / tau * dt;
                 p[(SA + i, SA + i)] += 2.0 * self.noise.accel_scale.powi(2) / tau * dt;
             }
+        }
+        if NS == N_CLOCK {
+            // The biases share the receiver oscillator's noise (one clock, per-system offsets).
+            let (qb, qd) = self.clock_psd;
+            for i in 0..2 {
+                for j in 0..2 {
+                    p[(CB + i, CB + j)] += qb * dt + qd * dt.powi(3) / 3.0;
+                }
+                p[(CB + i, CD)] += qd * dt * dt / 2.0;
+                p[(CD, CB + i)] += qd * dt * dt / 2.0;
+            }
+            p[(CD, CD)] += qd * dt;
         }
         self.p = 0.5 * (p + p.transpose());
     }
@@ -289,6 +337,11 @@ impl<const NS: usize> ErrorFilter<NS> {
         if NS == N_SCALE {
             self.sg += Vector3::new(dx[SG], dx[SG + 1], dx[SG + 2]);
             self.sa += Vector3::new(dx[SA], dx[SA + 1], dx[SA + 2]);
+        }
+        if NS == N_CLOCK {
+            for j in 0..3 {
+                self.clock[j] -= dx[CB + j];
+            }
         }
     }
 

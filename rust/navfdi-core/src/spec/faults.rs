@@ -58,6 +58,10 @@ pub struct FaultDraw {
     /// Component sets to choose from (indices, as `components`); empty: the fault's own.
     #[serde(default)]
     pub components: Vec<Vec<usize>>,
+    /// Satellites to choose from (names, faults on a `gnss_ranges` sensor of recorded logs);
+    /// empty: the fault's own.
+    #[serde(default)]
+    pub satellites: Vec<String>,
 }
 
 /// Stream of the fault draws: separate from the simulator's noise streams of the same run.
@@ -84,6 +88,9 @@ impl FaultSpec {
         if !d.components.is_empty() {
             f.components = d.components[rng.random_range(0..d.components.len())].clone();
         }
+        if !d.satellites.is_empty() {
+            f.satellite = Some(d.satellites[rng.random_range(0..d.satellites.len())].clone());
+        }
         f.draw = None;
         f
     }
@@ -91,10 +98,10 @@ impl FaultSpec {
 
 impl ScenarioSpec {
     fn validate_draw(&self, p: &str, f: &FaultSpec, d: &FaultDraw, dim: usize) -> Result<()> {
-        if self.architecture != Architecture::LooselyCoupled {
+        if !self.runs_on_logs() {
             return Err(bad(
                 format!("{p}.draw"),
-                "drawn faults run on recorded logs (architecture loosely_coupled); a simulated campaign varies a fault with --sweep",
+                "drawn faults run on recorded logs (architecture loosely_coupled, or tight with tight.strapdown); a simulated campaign varies a fault with --sweep",
             ));
         }
         let range = |q: String, r: [f64; 2]| -> Result<()> {
@@ -134,6 +141,21 @@ impl ScenarioSpec {
                 if c >= dim || set[..k].contains(&c) {
                     return Err(bad(q, format!("component index {c} is out of range or repeated (sensor {:?} has {dim} components)", f.sensor)));
                 }
+            }
+        }
+        for (j, name) in d.satellites.iter().enumerate() {
+            let q = format!("{p}.draw.satellites[{j}]");
+            if f.satellite.is_none() {
+                return Err(bad(
+                    q,
+                    "only a fault on a satellite (with satellite = \"G13\", …) draws its satellite",
+                ));
+            }
+            if crate::gnss::broadcast::Sat::parse(name).is_none() {
+                return Err(bad(
+                    q,
+                    format!("{name:?} is not a satellite name (e.g. \"G13\")"),
+                ));
             }
         }
         Ok(())
@@ -226,6 +248,16 @@ impl ScenarioSpec {
                 self.validate_draw(&p, f, d, dim)?;
             }
             match (&self.sensors[si].ranges, &f.satellite) {
+                // On recorded logs the satellites are the RINEX file's: the source checks the
+                // name.
+                (Some(_), Some(sat)) if self.runs_on_logs() => {
+                    if crate::gnss::broadcast::Sat::parse(sat).is_none() {
+                        return Err(bad(
+                            format!("{p}.satellite"),
+                            format!("{sat:?} is not a satellite name (a system letter and a number, e.g. \"G13\", \"E05\")"),
+                        ));
+                    }
+                }
                 (Some(r), Some(sat)) => {
                     let orbits = r.orbits();
                     if !orbits.iter().any(|o| &o.name == sat) {

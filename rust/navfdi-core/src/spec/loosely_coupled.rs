@@ -154,58 +154,14 @@ impl ScenarioSpec {
     pub(super) fn validate_loosely_coupled(&self) -> Result<()> {
         let l = self.loosely_coupled()?;
         let p = "loosely_coupled";
-        for (n, v) in l
-            .imu
-            .gyro_noise
-            .iter()
-            .map(|v| ("imu.gyro_noise", *v))
-            .chain(l.imu.accel_noise.iter().map(|v| ("imu.accel_noise", *v)))
-            .chain([
-                ("imu.gyro_bias", l.imu.gyro_bias),
-                ("imu.accel_bias", l.imu.accel_bias),
-                ("imu.bias_tau", l.imu.bias_tau),
-                ("alignment.speed", l.alignment.speed),
-                ("alignment.static_speed", l.alignment.static_speed),
-                ("alignment.sigma_level", l.alignment.sigma_level),
-                ("alignment.sigma_heading", l.alignment.sigma_heading),
-                ("alignment.sigma_position", l.alignment.sigma_position),
-                ("alignment.sigma_velocity", l.alignment.sigma_velocity),
-            ])
-        {
-            positive(&format!("{p}.{n}"), v)?;
-        }
-        for (n, v) in [
-            ("imu.gyro_scale", l.imu.gyro_scale),
-            ("imu.accel_scale", l.imu.accel_scale),
-        ] {
-            non_negative(&format!("{p}.{n}"), v)?;
-            if v >= 0.1 {
-                return Err(bad(
-                    format!("{p}.{n}"),
-                    format!("{v}: a scale-factor σ is a small fraction (e.g. 1e-3 for 1000 ppm)"),
-                ));
-            }
-        }
-        for (i, v) in l.mounting.iter().chain(l.lever_arm.iter()).enumerate() {
-            if !v.is_finite() {
-                let f = if i < 3 { "mounting" } else { "lever_arm" };
-                return Err(bad(format!("{p}.{f}"), "must be finite numbers"));
-            }
-        }
-        if l.lever_arm.iter().any(|v| v.abs() > 100.0) {
-            return Err(bad(
-                format!("{p}.lever_arm"),
-                "a component exceeds 100 m: give it in metres",
-            ));
-        }
-        if !(l.imu_time_offset.abs() <= 10.0) {
-            return Err(bad(format!("{p}.imu_time_offset"), "must be within ±10 s"));
-        }
-        if let Some(h) = l.alignment.heading {
-            if !h.is_finite() {
-                return Err(bad(format!("{p}.alignment.heading"), "must be finite"));
-            }
-        }
+        validate_strapdown(
+            p,
+            &l.imu,
+            &l.mounting,
+            &l.lever_arm,
+            l.imu_time_offset,
+            &l.alignment,
+        )?;
         if l.sensors.is_empty() {
             return Err(bad(
                 format!("{p}.sensors"),
@@ -253,6 +209,70 @@ impl ScenarioSpec {
         }
         Ok(())
     }
+}
+
+/// Check a strapdown INS's IMU noise figures, mounting, lever arm, time offset and alignment
+/// (errors name the field under `p`).
+pub(super) fn validate_strapdown(
+    p: &str,
+    imu: &ImuNoise,
+    mounting: &[f64; 3],
+    lever_arm: &[f64; 3],
+    imu_time_offset: f64,
+    alignment: &AlignmentSpec,
+) -> Result<()> {
+    for (n, v) in imu
+        .gyro_noise
+        .iter()
+        .map(|v| ("imu.gyro_noise", *v))
+        .chain(imu.accel_noise.iter().map(|v| ("imu.accel_noise", *v)))
+        .chain([
+            ("imu.gyro_bias", imu.gyro_bias),
+            ("imu.accel_bias", imu.accel_bias),
+            ("imu.bias_tau", imu.bias_tau),
+            ("alignment.speed", alignment.speed),
+            ("alignment.static_speed", alignment.static_speed),
+            ("alignment.sigma_level", alignment.sigma_level),
+            ("alignment.sigma_heading", alignment.sigma_heading),
+            ("alignment.sigma_position", alignment.sigma_position),
+            ("alignment.sigma_velocity", alignment.sigma_velocity),
+        ])
+    {
+        positive(&format!("{p}.{n}"), v)?;
+    }
+    for (n, v) in [
+        ("imu.gyro_scale", imu.gyro_scale),
+        ("imu.accel_scale", imu.accel_scale),
+    ] {
+        non_negative(&format!("{p}.{n}"), v)?;
+        if v >= 0.1 {
+            return Err(bad(
+                format!("{p}.{n}"),
+                format!("{v}: a scale-factor σ is a small fraction (e.g. 1e-3 for 1000 ppm)"),
+            ));
+        }
+    }
+    for (i, v) in mounting.iter().chain(lever_arm.iter()).enumerate() {
+        if !v.is_finite() {
+            let f = if i < 3 { "mounting" } else { "lever_arm" };
+            return Err(bad(format!("{p}.{f}"), "must be finite numbers"));
+        }
+    }
+    if lever_arm.iter().any(|v| v.abs() > 100.0) {
+        return Err(bad(
+            format!("{p}.lever_arm"),
+            "a component exceeds 100 m: give it in metres",
+        ));
+    }
+    if !(imu_time_offset.abs() <= 10.0) {
+        return Err(bad(format!("{p}.imu_time_offset"), "must be within ±10 s"));
+    }
+    if let Some(h) = alignment.heading {
+        if !h.is_finite() {
+            return Err(bad(format!("{p}.alignment.heading"), "must be finite"));
+        }
+    }
+    Ok(())
 }
 
 fn check_decision(q: &str, decision: &Option<String>, dets: &[DetectorSpec]) -> Result<()> {

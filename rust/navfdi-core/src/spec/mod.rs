@@ -410,8 +410,18 @@ impl ScenarioSpec {
         }
     }
 
+    /// Whether the scenario runs a strapdown INS on recorded logs (architecture
+    /// `loosely_coupled`, or `tight` with `tight.strapdown`) rather than a simulation.
+    pub fn runs_on_logs(&self) -> bool {
+        match self.architecture {
+            Architecture::LooselyCoupled => true,
+            Architecture::Tight => self.tight.as_ref().is_some_and(|t| t.strapdown.is_some()),
+            _ => false,
+        }
+    }
+
     fn validate_ins(&self) -> Result<()> {
-        let logged = self.architecture == Architecture::LooselyCoupled;
+        let logged = self.runs_on_logs();
         let Some(ins) = self.ins.as_ref() else {
             if logged {
                 return Ok(());
@@ -422,7 +432,7 @@ impl ScenarioSpec {
             ));
         };
         if logged {
-            return Err(bad("ins", "given, but a loosely_coupled scenario runs a strapdown INS on recorded IMU samples: its noise figures are loosely_coupled.imu"));
+            return Err(bad("ins", "given, but this scenario runs a strapdown INS on recorded IMU samples: its noise figures are loosely_coupled.imu or tight.strapdown.imu"));
         }
 
         for (p, v) in [

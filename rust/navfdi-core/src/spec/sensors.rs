@@ -111,6 +111,11 @@ pub struct RangesSpec {
     pub epoch: f64,
     /// Receiver clock.
     pub clock: ClockSpec,
+    /// Recorded logs only: C/N0 weighting, the C/N0 (dB-Hz) at which σ is `noise`; σ grows
+    /// as `10^((cn0_reference − C/N0)/20)` (the σ–ε model's `σ² ∝ 10^(−C/N0/10)`, Hartinger
+    /// and Brunner 1999), on top of the elevation growth. None: no C/N0 weighting.
+    #[serde(default)]
+    pub cn0_reference: Option<f64>,
 }
 
 impl RangesSpec {
@@ -190,6 +195,20 @@ impl ScenarioSpec {
                     crate::error::num(r.elevation_mask.to_degrees())
                 ),
             ));
+        }
+        if let Some(c) = r.cn0_reference {
+            if !self.runs_on_logs() {
+                return Err(bad(
+                    format!("{p}.ranges.cn0_reference"),
+                    "C/N0 weighting needs recorded C/N0 (a scenario on RINEX logs); the simulated ranges have none",
+                ));
+            }
+            if !(c > 10.0 && c < 70.0) {
+                return Err(bad(
+                    format!("{p}.ranges.cn0_reference"),
+                    format!("{c} dB-Hz: expected a carrier-to-noise density in (10, 70) dB-Hz"),
+                ));
+            }
         }
         if !r.epoch.is_finite() {
             return Err(bad(format!("{p}.ranges.epoch"), "must be finite"));

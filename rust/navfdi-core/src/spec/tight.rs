@@ -1,8 +1,10 @@
 //! Tightly coupled filter configuration (paper 001).
 
 use super::check::{bad, positive};
-use super::{default_true, ScenarioSpec, SensorKind};
+use super::loosely_coupled::validate_strapdown;
+use super::{default_true, AlignmentSpec, ScenarioSpec, SensorKind};
 use crate::error::{Error, Result};
+use crate::ins::error_filter::ImuNoise;
 use serde::{Deserialize, Serialize};
 
 /// Where a tightly coupled filter detects and excludes faulty satellites (paper 001).
@@ -44,6 +46,30 @@ pub struct TightSpec {
     /// (default 1).
     #[serde(default = "default_accel_psd")]
     pub accel_psd: f64,
+    /// The strapdown INS of a tight filter on recorded IMU and RINEX logs (None: the simulated
+    /// INS error model of `ins`).
+    #[serde(default)]
+    pub strapdown: Option<StrapdownSpec>,
+}
+
+/// A strapdown INS on a recorded IMU log, as the tight filter runs it: the IMU's noise figures
+/// and mounting, the antenna lever arm (body axes, m), the IMU time offset (s) and the
+/// alignment (as the loosely coupled filter's; the GNSS fixes it needs are single-point
+/// solutions of the same pseudoranges and Dopplers).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrapdownSpec {
+    /// IMU noise figures (SI).
+    pub imu: ImuNoise,
+    /// IMU-to-body mounting roll, pitch, yaw (rad).
+    pub mounting: [f64; 3],
+    /// Antenna position from the IMU in body axes forward, right, down (m).
+    pub lever_arm: [f64; 3],
+    /// Added to the IMU time stamps (s).
+    #[serde(default)]
+    pub imu_time_offset: f64,
+    /// Initial alignment.
+    pub alignment: AlignmentSpec,
 }
 
 fn default_accel_psd() -> f64 {
@@ -80,6 +106,25 @@ impl ScenarioSpec {
             positive("tight.k", k)?;
         }
         positive("tight.accel_psd", t.accel_psd)?;
+        if let Some(sd) = &t.strapdown {
+            validate_strapdown(
+                "tight.strapdown",
+                &sd.imu,
+                &sd.mounting,
+                &sd.lever_arm,
+                sd.imu_time_offset,
+                &sd.alignment,
+            )?;
+            if sd.imu.scale_factors() {
+                return Err(bad("tight.strapdown.imu", "scale-factor states (gyro_scale, accel_scale) are not available in the tight filter yet (its 18 states are the 15 INS errors and the receiver clock); set them to 0"));
+            }
+            if t.fde == FdePlacement::GnssFilter {
+                return Err(bad("tight.fde", "gnss_filter is not available on recorded logs; use ls_precheck, innovation or none"));
+            }
+            if self.state_chi2.is_some() {
+                return Err(bad("state_chi2", "the state chi-square test needs the error model's Φ and Q of a simulated scenario; it is not available on recorded logs"));
+            }
+        }
         Ok(())
     }
 }

@@ -212,10 +212,10 @@ impl ScenarioSpec {
 
     /// Start point, segments and terrain.
     pub(super) fn validate_trajectory(&self) -> Result<()> {
-        let logged = self.architecture == super::Architecture::LooselyCoupled;
+        let logged = self.runs_on_logs();
         let tr = match (self.trajectory.as_ref(), logged) {
             (None, true) => return Ok(()),
-            (Some(_), true) => return Err(bad("trajectory", "given, but a loosely_coupled scenario takes its motion from its recorded logs (remove [trajectory])")),
+            (Some(_), true) => return Err(bad("trajectory", "given, but a scenario on recorded logs (loosely_coupled, or tight with tight.strapdown) takes its motion from them (remove [trajectory])")),
             (None, false) => return Err(bad("trajectory", "required: the truth trajectory of a simulated scenario")),
             (Some(tr), false) => tr,
         };

@@ -11,6 +11,8 @@
 //! the scenario takes a measurement at the epochs on its `rate` grid outside its outages.
 //! The reference is scored only at epochs where no GNSS measurement was an input.
 
+mod ranges;
+
 use crate::error::{Error, Result};
 use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{inject, ImuSamples, Logged, Measurements, Models, Nominal, Reference};
@@ -34,7 +36,7 @@ pub struct GnssLog {
 }
 
 impl GnssLog {
-    fn check(&self, what: &str) -> Result<()> {
+    pub(crate) fn check(&self, what: &str) -> Result<()> {
         let n = self.t.len();
         if self.pos.len() != n
             || self.vel.len() != n
@@ -111,13 +113,7 @@ impl LoggedSource {
         if let Some(r) = reference {
             r.check("reference log")?;
         }
-        let (i0, i1) = (imu.t[0], imu.t[imu.t.len() - 1]);
-        let (g0, g1) = (gnss.t[0], gnss.t[gnss.t.len() - 1]);
-        if i1 <= g0 || g1 <= i0 {
-            return Err(Error::Invalid(format!(
-                "the GNSS log ({g0:.3}–{g1:.3} s) and the IMU log ({i0:.3}–{i1:.3} s) do not overlap in time"
-            )));
-        }
+        overlap(&imu, &gnss.t, "GNSS log")?;
         let epochs = gnss.t.len();
         let origin = gnss.pos[0];
         let ns = spec.sensors.len();
@@ -184,7 +180,12 @@ impl LoggedSource {
             available,
             ranges: None,
             mode: Vec::new(),
-            logged: Some(Logged { imu, origin, sigma }),
+            logged: Some(Logged {
+                imu,
+                origin,
+                sigma,
+                fixes: Vec::new(),
+            }),
         };
         Ok(LoggedSource {
             models,
@@ -214,6 +215,30 @@ impl LoggedSource {
             if faults.is_empty() || si >= m.z.len() {
                 continue;
             }
+            if let Some(rp) = self.models.ranges.as_ref().filter(|rp| rp.sensor == si) {
+                // Per satellite: component c of satellite j is row c·m + j.
+                for (k, v) in m.z[si].iter_mut().enumerate() {
+                    if !self.models.available[si][k] {
+                        continue;
+                    }
+                    let ep = &rp.epochs[k];
+                    let n = ep.len();
+                    for f in &faults {
+                        let Some(j) = ep
+                            .sats
+                            .iter()
+                            .position(|&s| f.satellite.as_ref() == Some(&rp.names[s]))
+                        else {
+                            continue;
+                        };
+                        let d = f.value(self.models.t[k]);
+                        for &c in &f.components {
+                            v[c * n + j] += d;
+                        }
+                    }
+                }
+                continue;
+            }
             for (k, v) in m.z[si].iter_mut().enumerate() {
                 if self.models.available[si][k] {
                     inject(&faults, self.models.t[k], v);
@@ -224,7 +249,19 @@ impl LoggedSource {
     }
 }
 
-fn check_imu(imu: &ImuSamples) -> Result<()> {
+/// An error unless the IMU log and the GNSS epochs `t` (s) overlap in time.
+fn overlap(imu: &ImuSamples, t: &[f64], what: &str) -> Result<()> {
+    let (i0, i1) = (imu.t[0], imu.t[imu.t.len() - 1]);
+    let (g0, g1) = (t[0], t[t.len() - 1]);
+    if i1 <= g0 || g1 <= i0 {
+        return Err(Error::Invalid(format!(
+            "the {what} ({g0:.3}–{g1:.3} s) and the IMU log ({i0:.3}–{i1:.3} s) do not overlap in time"
+        )));
+    }
+    Ok(())
+}
+
+pub(crate) fn check_imu(imu: &ImuSamples) -> Result<()> {
     let n = imu.t.len();
     if imu.gyro.len() != n || imu.accel.len() != n {
         return Err(Error::Invalid(

@@ -1,0 +1,366 @@
+//! What the architectures on a strapdown INS share: the IMU log in body axes on the corrected
+//! time line, the initial alignment, and the mechanisation (with the error filter's
+//! propagation) from one record epoch to the next.
+//!
+//! Alignment: levelling and gyro biases from the mean IMU output over the last static stretch
+//! (GNSS speed below `static_speed`) before the first GNSS velocity above `speed`; heading
+//! from that velocity's course (or given); position and velocity from that epoch's fix. The
+//! static mean rate holds the Earth's rotation as well as the bias: it is removed with the
+//! attitude at rest.
+
+use crate::error::{Error, Result};
+use crate::ins::earth;
+use crate::ins::error_filter::{ErrorFilter, BA, BG, PHI, R, V};
+use crate::ins::strapdown::skew;
+use crate::ins::strapdown::{level, mechanise, mounting, Increment, NavState};
+use crate::record::RunRecord;
+use crate::spec::AlignmentSpec;
+use crate::stream::Streams;
+use crate::stream::{ImuSamples, Nominal};
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// The IMU log in body axes: sample times with the time offset applied (s), angular rate
+/// (rad/s) and specific force (m/s²).
+pub struct BodyImu {
+    /// Sample times (s from the run's time 0, offset applied).
+    pub t: Vec<f64>,
+    /// Angular rate per sample (rad/s, body axes).
+    pub gyro: Vec<Vector3<f64>>,
+    /// Specific force per sample (m/s², body axes).
+    pub acc: Vec<Vector3<f64>>,
+}
+
+impl BodyImu {
+    /// The samples of `imu` rotated by the mounting roll, pitch, yaw `mount` (rad) and shifted
+    /// by `time_offset` (s); an error with fewer than two samples.
+    pub fn new(imu: &ImuSamples, mount: [f64; 3], time_offset: f64) -> Result<Self> {
+        let m = mounting(mount[0], mount[1], mount[2]);
+        if imu.t.len() < 2 {
+            return Err(Error::Invalid(
+                "the IMU log has fewer than two samples".into(),
+            ));
+        }
+        Ok(BodyImu {
+            t: imu.t.iter().map(|t| t + time_offset).collect(),
+            gyro: imu.gyro.iter().map(|w| m * w).collect(),
+            acc: imu.accel.iter().map(|f| m * f).collect(),
+        })
+    }
+
+    /// Time of the last sample (s).
+    pub fn end(&self) -> f64 {
+        self.t[self.t.len() - 1]
+    }
+}
+
+/// The aligned start: epoch index, INS state at the antenna (position from the fix, the lever
+/// arm not yet applied), initial gyro bias (rad/s) and attitude σ (rad; roll, pitch, yaw).
+pub struct Aligned {
+    /// Record epoch of the alignment.
+    pub epoch: usize,
+    /// State at the antenna.
+    pub state: NavState,
+    /// Initial gyro bias (rad/s, body axes).
+    pub bg0: Vector3<f64>,
+    /// Initial attitude σ (rad).
+    pub sig_att: Vector3<f64>,
+}
+
+/// Align on record epochs `t` (s): `vel(k)`, `pos(k)` the GNSS velocity and position east,
+/// north, up (m/s; m from `origin`) at epoch k where measured; `sig_v` the velocity σ at the
+/// alignment epoch (m/s, given its index). `section` names the configuration in errors.
+#[allow(clippy::too_many_arguments)]
+pub fn align(
+    a: &AlignmentSpec,
+    section: &str,
+    imu: &BodyImu,
+    t: &[f64],
+    origin: &Nominal,
+    vel: impl Fn(usize) -> Option<Vector3<f64>>,
+    pos: impl Fn(usize) -> Option<Vector3<f64>>,
+    sig_v: impl Fn(usize) -> f64,
+) -> Result<Aligned> {
+    let speed_at = |k: usize| vel(k).map(|v| v.xy().norm());
+    let ka = (0..t.len())
+        .find(|&k| {
+            speed_at(k).is_some_and(|s| s >= a.speed) && pos(k).is_some() && t[k] > imu.t[0]
+        })
+        .ok_or_else(|| {
+            Error::Invalid(format!(
+                "alignment: no epoch with a GNSS fix and a GNSS speed of at least {section}.alignment.speed = {} m/s inside the IMU log",
+                a.speed
+            ))
+        })?;
+    // The last static stretch before ka.
+    let mut end = None;
+    let mut start = None;
+    for k in (0..ka).rev() {
+        match speed_at(k) {
+            Some(s) if s < a.static_speed => {
+                end.get_or_insert(k);
+                start = Some(k);
+            }
+            Some(_) if end.is_some() => break,
+            _ => {}
+        }
+    }
+    let (Some(k0), Some(k1)) = (start, end) else {
+        return Err(Error::Invalid(format!(
+            "alignment: no static start (GNSS speed below {section}.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s: levelling needs the vehicle at rest",
+            a.static_speed, a.speed
+        )));
+    };
+    let (t0, t1) = (t[k0], t[k1]);
+    let idx: Vec<usize> = (0..imu.t.len())
+        .filter(|&i| imu.t[i] >= t0 && imu.t[i] <= t1)
+        .collect();
+    if idx.len() < 50 {
+        return Err(Error::Invalid(format!(
+            "alignment: the static start {t0:.2}–{t1:.2} s holds {} IMU samples; levelling needs at least 50",
+            idx.len()
+        )));
+    }
+    let mean =
+        |v: &[Vector3<f64>]| idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len() as f64;
+    let f_mean = mean(&imu.acc);
+    let bg0 = if a.gyro_bias {
+        mean(&imu.gyro)
+    } else {
+        Vector3::zeros()
+    };
+    let (roll, pitch) = level(&f_mean);
+    let v_enu = vel(ka).unwrap_or_default();
+    let speed = v_enu.xy().norm();
+    let yaw = a.heading.unwrap_or_else(|| v_enu.x.atan2(v_enu.y));
+    let sig_heading = if a.heading.is_some() {
+        a.sigma_heading
+    } else {
+        a.sigma_heading.max(sig_v(ka) / speed.max(1e-3))
+    };
+    let q = UnitQuaternion::from_euler_angles(roll, pitch, yaw);
+    let bg0 = if a.gyro_bias {
+        let lat = origin.lat;
+        let w_ie = Vector3::new(
+            earth::OMEGA_IE * lat.cos(),
+            0.0,
+            -earth::OMEGA_IE * lat.sin(),
+        );
+        bg0 - q.inverse() * w_ie
+    } else {
+        bg0
+    };
+    let fix = origin.from_enu(&pos(ka).unwrap_or_default());
+    Ok(Aligned {
+        epoch: ka,
+        state: NavState {
+            lat: fix.lat,
+            lon: fix.lon,
+            h: fix.h,
+            v: Vector3::new(v_enu.y, v_enu.x, -v_enu.z),
+            q,
+        },
+        bg0,
+        sig_att: Vector3::new(a.sigma_level, a.sigma_level, sig_heading),
+    })
+}
+
+/// Mechanisation from one record epoch to the next: the strapdown state and the error
+/// filter's covariance advanced over the IMU samples (trapezoidal rate and force between
+/// samples, compensated with the filter's biases).
+pub struct Mechaniser {
+    /// Index of the next IMU sample.
+    pub i: usize,
+    /// Time reached (s).
+    pub t: f64,
+    prev: Increment,
+    /// The last compensated angular rate (rad/s, body).
+    pub w_last: Vector3<f64>,
+}
+
+impl Mechaniser {
+    /// Start at time `t0` (s) with the filter's gyro bias `bg` (rad/s).
+    pub fn new(imu: &BodyImu, t0: f64, bg: &Vector3<f64>) -> Self {
+        let i = imu.t.partition_point(|&t| t <= t0);
+        Mechaniser {
+            i,
+            t: t0,
+            prev: Increment::zero(0.0),
+            w_last: imu.gyro[i.min(imu.gyro.len() - 1)] - bg,
+        }
+    }
+
+    /// Advance state `s` and filter `kf` to time `tk` (s).
+    pub fn advance<const NS: usize>(
+        &mut self,
+        imu: &BodyImu,
+        s: &mut NavState,
+        kf: &mut ErrorFilter<NS>,
+        tk: f64,
+    ) {
+        let n = imu.t.len();
+        while self.t < tk {
+            let ip = self.i.min(n - 1);
+            let im = ip.saturating_sub(1);
+            let (w, f) = kf.compensate(
+                &(0.5 * (imu.gyro[im] + imu.gyro[ip])),
+                &(0.5 * (imu.acc[im] + imu.acc[ip])),
+            );
+            let t_next = imu.t[ip].min(tk);
+            let dt = t_next - self.t;
+            if dt > 0.0 {
+                let inc = Increment {
+                    dtheta: w * dt,
+                    dvel: f * dt,
+                    dt,
+                };
+                mechanise(s, &self.prev, &inc);
+                kf.propagate(s, &f, &w, dt);
+                self.prev = inc;
+                self.w_last = w;
+            }
+            self.t = t_next;
+            if imu.t[ip] <= tk {
+                self.i = ip + 1;
+                if self.i >= n {
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Move the state's position by `d` metres north, east, down.
+pub fn shift(s: &mut NavState, d: &Vector3<f64>) {
+    let rm = earth::r_meridian(s.lat) + s.h;
+    let rn = earth::r_normal(s.lat) + s.h;
+    s.lat += d.x / rm;
+    s.lon += d.y / (rn * s.lat.cos());
+    s.h -= d.z;
+}
+
+/// North, east, down (m) of `p` from `q` (at `q`'s radii).
+pub fn ned(p: &impl Point, q: &impl Point) -> Vector3<f64> {
+    let (la, lo, h) = q.llh();
+    let (pa, po, ph) = p.llh();
+    let rm = earth::r_meridian(la) + h;
+    let rn = earth::r_normal(la) + h;
+    Vector3::new((pa - la) * rm, (po - lo) * rn * la.cos(), -(ph - h))
+}
+
+/// A point with latitude, longitude (rad) and height (m).
+pub trait Point {
+    /// Latitude, longitude (rad) and height (m).
+    fn llh(&self) -> (f64, f64, f64);
+}
+
+impl Point for Nominal {
+    fn llh(&self) -> (f64, f64, f64) {
+        (self.lat, self.lon, self.h)
+    }
+}
+
+impl Point for NavState {
+    fn llh(&self) -> (f64, f64, f64) {
+        (self.lat, self.lon, self.h)
+    }
+}
+
+/// The state moved from the IMU to the antenna at `lever` (m, body forward-right-down).
+pub fn antenna(s: &NavState, lever: &Vector3<f64>) -> NavState {
+    let mut ant = *s;
+    shift(&mut ant, &(s.q * lever));
+    ant
+}
+
+/// Normalised estimation error squared of antenna position, velocity and attitude at epoch
+/// `k` against a reference that has the true attitude (NaN otherwise).
+pub fn nees<const NS: usize>(
+    s: &NavState,
+    kf: &ErrorFilter<NS>,
+    lever: &Vector3<f64>,
+    origin: &Nominal,
+    src: &Streams,
+    k: usize,
+) -> f64 {
+    let Some(r) = src.reference else {
+        return f64::NAN;
+    };
+    let (Some(q_true), Some(e)) = (r.attitude.get(k), r.enu.get(k)) else {
+        return f64::NAN;
+    };
+    if !e.iter().all(|v| v.is_finite()) {
+        return f64::NAN;
+    }
+    let ant = antenna(s, lever);
+    let truth = origin.from_enu(&Vector3::new(e[0], e[1], e[2]));
+    let dr = ned(&ant, &truth);
+    let dv = s.v - Vector3::new(e[4], e[3], -e[5]);
+    let phi = (q_true * s.q.inverse()).scaled_axis();
+    let mut err = nalgebra::SVector::<f64, 9>::zeros();
+    err.fixed_rows_mut::<3>(0).copy_from(&dr);
+    err.fixed_rows_mut::<3>(3).copy_from(&dv);
+    err.fixed_rows_mut::<3>(6).copy_from(&phi);
+    // Antenna position error = δr + [(C l)×] φ.
+    let mut t = nalgebra::SMatrix::<f64, 9, NS>::zeros();
+    for j in 0..3 {
+        t[(j, R + j)] = 1.0;
+        t[(3 + j, V + j)] = 1.0;
+        t[(6 + j, PHI + j)] = 1.0;
+    }
+    t.fixed_view_mut::<3, 3>(0, PHI)
+        .copy_from(&skew(&(s.q * lever)));
+    let cov = t * kf.p * t.transpose();
+    match cov.cholesky() {
+        Some(ch) => err.dot(&ch.solve(&err)),
+        None => f64::NAN,
+    }
+}
+
+/// Record epoch `k` of a strapdown INS: the antenna's position, velocity, attitude, the
+/// biases and their σ, the NEES ([`crate::record::NAV_COLUMNS`]), the errors against the
+/// reference (east, north, up) and the σ of the error states.
+pub fn record_nav<const NS: usize>(
+    rec: &mut RunRecord,
+    s: &NavState,
+    kf: &ErrorFilter<NS>,
+    lever: &Vector3<f64>,
+    origin: &Nominal,
+    src: &Streams,
+    k: usize,
+) {
+    let ant = antenna(s, lever);
+    let (roll, pitch, yaw) = s.q.euler_angles();
+    let v_enu = Vector3::new(s.v.y, s.v.x, -s.v.z);
+    rec.nav.extend([
+        ant.lat, ant.lon, ant.h, v_enu.x, v_enu.y, v_enu.z, roll, pitch, yaw,
+    ]);
+    rec.nav.extend(kf.bg.iter().chain(kf.ba.iter()).copied());
+    let sig = kf.sigma();
+    rec.nav.extend((BG..BA + 3).map(|j| sig[j]));
+    rec.nav.push(nees(s, kf, lever, origin, src, k));
+    let p = origin.to_enu(&Nominal {
+        lat: ant.lat,
+        lon: ant.lon,
+        h: ant.h,
+    });
+    match src.reference.and_then(|r| r.enu.get(k)) {
+        Some(r) => {
+            rec.error.extend([f64::NAN; 3]);
+            rec.error
+                .extend([v_enu.x - r[3], v_enu.y - r[4], v_enu.z - r[5]]);
+            rec.error.extend([p.x - r[0], p.y - r[1], p.z - r[2]]);
+        }
+        None => rec.error.extend([f64::NAN; 9]),
+    }
+    rec.sigma.extend([
+        sig[PHI + 1],
+        sig[PHI],
+        sig[PHI + 2],
+        sig[V + 1],
+        sig[V],
+        sig[V + 2],
+        sig[R + 1],
+        sig[R],
+        sig[R + 2],
+    ]);
+}

@@ -1,0 +1,486 @@
+//! Tightly coupled INS/GNSS on a recorded IMU and raw GNSS logs, with paper 001's satellite
+//! FDE placements (METHODS §10): the strapdown INS of [`super::inertial`] in an 18-state
+//! closed-loop error filter (the 15 INS errors, a receiver clock bias per system — GPS with
+//! QZSS, Galileo — and the common clock drift; [`crate::ins::error_filter::N_CLOCK`]), updated
+//! at each GNSS epoch with the pseudoranges and (with `rates`) Doppler range rates of every
+//! satellite in view, predicted from the mechanised state at the antenna (lever arm applied):
+//!
+//! `ρ̂ᵢ = |sᵢ − r| + ω_e (sᵢ,x r_y − sᵢ,y r_x)/c + b_sys`, `ρ̇̂ᵢ = eᵢ·(vᵢ − v) + d` with `eᵢ` the
+//! unit vector to the satellite; the rows of `H` are `−eᵢᵀ` (north-east-down) on position or
+//! velocity, `−eᵢᵀ [(C l)×]` or `−eᵢᵀ [(C (ω × l))×]` on the attitude error and 1 on the clock.
+//! The recorded observations come corrected for the satellite clock, group delay and
+//! atmosphere ([`crate::logs`]).
+//!
+//! Placements (as on simulated ranges, [`super::tight`]): `innovation` — the innovation
+//! chi-square test and the w-test with iterative exclusion of the satellite of the largest
+//! |w| ([`crate::gnss::innovation::innovation_fde`]); `ls_precheck` — snapshot least squares
+//! on the raw pseudoranges (and rates) from the INS antenna position and the filter's clocks
+//! (the Galileo pseudoranges moved onto the GPS clock by the filter's inter-system bias; the
+//! Sagnac rotation applied to the satellite positions), global test and w-test exclusion,
+//! before the filter; `none` — every satellite updates the filter, the innovation test is
+//! recorded. With `rates`, a satellite without a Doppler at an epoch is left out of it.
+//!
+//! Alignment as the loosely coupled filter's ([`super::inertial::align`]) on the source's
+//! snapshot fixes; the clocks start from the alignment epoch's observations at the aligned
+//! position.
+
+use super::inertial::{align, antenna, record_nav, shift, BodyImu, Mechaniser};
+use crate::cancel::Cancel;
+use crate::error::{Error, Result};
+use crate::gnss::broadcast::{Sat, Sys};
+use crate::gnss::geodesy::{ecef_to_enu, lla_to_ecef};
+use crate::gnss::innovation::{innovation_fde, SatFde};
+use crate::gnss::ranges::RangeEpoch;
+use crate::gnss::snapshot::{fde, FdeConfig, ObsCov, PositionModel, RateModel, StackedModel};
+use crate::gnss::C;
+use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
+use crate::ins::strapdown::{skew, NavState};
+use crate::record::{RunRecord, SatRecord, NAV_COLUMNS, SAT_NO_MEASUREMENT};
+use crate::spec::{FdePlacement, ScenarioSpec};
+use crate::stream::Streams;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+/// Earth rotation rate of the Sagnac term (rad/s, WGS-84).
+const OMEGA_E: f64 = 7.292_115_146_7e-5;
+/// FDE status code of an epoch whose global test alarms with placement `none`.
+const ALARM: u8 = 4;
+
+/// One epoch's rows: pseudoranges of `m` satellites, then (with rates) their range rates.
+struct Rows {
+    /// Local satellite index (into the epoch's) of each used satellite.
+    idx: Vec<usize>,
+    /// `ẑ − z` (pseudoranges, then rates).
+    res: DVector<f64>,
+    h: DMatrix<f64>,
+    sigma: Vec<f64>,
+    /// Unit vectors antenna → satellite (ECEF), satellite positions rotated for the Sagnac
+    /// effect, the pseudoranges on the GPS clock and the rates: the snapshot check's inputs.
+    los: Vec<Vector3<f64>>,
+    sat_rot: Vec<Vector3<f64>>,
+    rho_gps: Vec<f64>,
+    rate: Vec<f64>,
+    sat_vel: Vec<Vector3<f64>>,
+}
+
+/// Clock column of a satellite system (GPS and QZSS 0, Galileo 1).
+fn clock_column(name: &str) -> usize {
+    match Sat::parse(name).map(|s| s.sys) {
+        Some(Sys::Galileo) => 1,
+        _ => 0,
+    }
+}
+
+/// Run the tight filter of scenario `spec` (with `tight.strapdown`) over one run's streams of
+/// a recorded-data source (`isolation = false`: FDE reports, never excludes). `full`: the
+/// w-test of every epoch for the record.
+pub fn run_tight_ins(
+    spec: &ScenarioSpec,
+    src: &Streams,
+    isolation: bool,
+    full: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    let t = spec.tight()?;
+    let sd = t
+        .strapdown
+        .as_ref()
+        .ok_or_else(|| Error::Invalid("tight.strapdown: missing".into()))?;
+    let models = src.models;
+    let logged = models.logged.as_ref().ok_or_else(|| {
+        Error::Invalid(
+            "tight.strapdown runs a strapdown INS on recorded IMU samples: run the scenario from its [source] logs".into(),
+        )
+    })?;
+    let rp = models
+        .ranges
+        .as_ref()
+        .ok_or_else(|| Error::Invalid("tight: the source has no satellite ranges".into()))?;
+    let si = rp.sensor;
+    let sensor = &spec.sensors[si];
+    let clock = sensor
+        .ranges
+        .as_ref()
+        .map(|r| r.clock)
+        .ok_or_else(|| Error::Invalid(format!("sensors[{si}].ranges: missing")))?;
+    let cfg = FdeConfig::new(t.alpha, t.k)?;
+    let epochs = models.epochs();
+    let mut rec = RunRecord::empty(spec, models);
+    rec.nav = Vec::with_capacity(epochs * NAV_COLUMNS.len());
+    let s_count = rp.names.len();
+    let cols: Vec<usize> = rp.names.iter().map(|n| clock_column(n)).collect();
+    let mut sat = SatRecord {
+        names: rp.names.clone(),
+        in_view: vec![false; epochs * s_count],
+        excluded: vec![false; epochs * s_count],
+        w: vec![f64::NAN; epochs * s_count],
+        status: Vec::with_capacity(epochs),
+        used: Vec::with_capacity(epochs),
+        metrics: Vec::new(),
+    };
+    let imu = BodyImu::new(&logged.imu, sd.mounting, sd.imu_time_offset)?;
+    let lever = Vector3::from(sd.lever_arm);
+    let fix = |k: usize, o: usize| -> Option<Vector3<f64>> {
+        let f = logged.fixes.get(k)?;
+        let v = Vector3::new(f[o], f[o + 1], f[o + 2]);
+        v.iter().all(|x| x.is_finite()).then_some(v)
+    };
+    let sig_rate = sensor.noise.get(1).copied().unwrap_or(0.1);
+    let aligned = align(
+        &sd.alignment,
+        "tight.strapdown",
+        &imu,
+        &models.t,
+        &logged.origin,
+        |k| fix(k, 3),
+        |k| fix(k, 0),
+        |_| sig_rate,
+    )?;
+    let ka = aligned.epoch;
+    let mut s = aligned.state;
+    let to_imu = -(s.q * lever);
+    shift(&mut s, &to_imu);
+    let clocks = initial_clocks(&s, &lever, &rp.epochs[ka], &src.meas.z[si][ka], &cols);
+    let mut kf = ErrorFilter::<N_CLOCK>::new(
+        sd.alignment.sigma_position,
+        sd.alignment.sigma_velocity,
+        aligned.sig_att,
+        aligned.bg0,
+        sd.imu,
+    )
+    .with_mounting(&crate::ins::strapdown::mounting(
+        sd.mounting[0],
+        sd.mounting[1],
+        sd.mounting[2],
+    ))
+    .with_clock(
+        clocks,
+        [clock.bias, clock.bias, clock.drift],
+        (clock.bias_psd, clock.drift_psd),
+    );
+    for _ in 0..ka {
+        skip(&mut rec, &mut sat);
+    }
+    let mut mech = Mechaniser::new(&imu, models.t[ka], &kf.bg);
+    for k in ka..epochs {
+        if k % 64 == 0 {
+            cancel.check()?;
+        }
+        let tk = models.t[k];
+        if tk > imu.end() {
+            skip(&mut rec, &mut sat);
+            continue;
+        }
+        mech.advance(&imu, &mut s, &mut kf, tk);
+        let ep = &rp.epochs[k];
+        for &j in &ep.sats {
+            sat.in_view[k * s_count + j] = true;
+        }
+        let rows = if models.available[si][k] {
+            build_rows(
+                &s,
+                &kf,
+                &lever,
+                &mech.w_last,
+                ep,
+                &src.meas.z[si][k],
+                &cols,
+                t.rates,
+            )
+        } else {
+            None
+        };
+        let Some(rows) = rows else {
+            let sub = &mut rec.subs[0];
+            sub.statistic.push(f64::NAN);
+            sub.dof.push(0);
+            sub.isolated.push(false);
+            sub.reinstated.push(false);
+            sub.fused.push(false);
+            let det = &mut sub.detectors[0];
+            det.statistic.push(f64::NAN);
+            det.threshold.push(f64::NAN);
+            det.alarm.push(false);
+            sat.status.push(SAT_NO_MEASUREMENT);
+            sat.used.push(0);
+            rec.sources.push(0);
+            record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
+            continue;
+        };
+        let m = rows.idx.len();
+        let r = DMatrix::from_diagonal(&DVector::from_iterator(
+            rows.sigma.len(),
+            rows.sigma.iter().map(|x| x * x),
+        ));
+        let inn = kf
+            .innovation(&rows.res, &rows.h, &r)
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+        let out = match t.fde {
+            FdePlacement::LsPrecheck => ls_precheck(&rows, &s, &kf, &lever, t.rates, &cfg)?,
+            _ => innovation_fde(
+                &inn.r,
+                &inn.s,
+                m,
+                t.fde == FdePlacement::Innovation,
+                Some(inn.lambda),
+                full,
+                &cfg,
+            )?,
+        };
+        let (stat, thr, dof) = out.first;
+        let sub = &mut rec.subs[0];
+        let det = &mut sub.detectors[0];
+        det.statistic.push(stat);
+        det.threshold.push(thr);
+        det.alarm.push(stat >= thr);
+        sub.statistic.push(stat);
+        sub.dof.push(dof as u32);
+        sub.isolated.push(!out.excluded.is_empty());
+        sub.reinstated.push(false);
+        for (j, &i) in rows.idx.iter().enumerate() {
+            sat.w[k * s_count + ep.sats[i]] = out.w[j];
+        }
+        for &j in &out.excluded {
+            sat.excluded[k * s_count + ep.sats[rows.idx[j]]] = true;
+        }
+        sat.status
+            .push(if t.fde == FdePlacement::None && stat >= thr {
+                ALARM
+            } else {
+                out.status.code()
+            });
+        let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
+        let used = m - excluded.len();
+        if excluded.is_empty() {
+            let dx = kf
+                .update(&inn, &rows.h, &r)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            kf.feedback(&mut s, &dx);
+        } else if used > 0 {
+            let keep: Vec<usize> = (0..rows.res.len())
+                .filter(|i| !excluded.contains(&(i % m)))
+                .collect();
+            let res = rows.res.select_rows(&keep);
+            let h = rows.h.select_rows(&keep);
+            let rr = r.select_rows(&keep).select_columns(&keep);
+            let inn = kf
+                .innovation(&res, &h, &rr)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            let dx = kf
+                .update(&inn, &h, &rr)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            kf.feedback(&mut s, &dx);
+        }
+        sub.fused.push(used > 0);
+        sat.used.push(used as u32);
+        rec.sources.push(u32::from(used > 0));
+        record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
+    }
+    sat.score(&rec.t, &spec.faults, &sensor.name);
+    rec.sats = Some(sat);
+    Ok(rec)
+}
+
+/// An epoch without navigation (before the alignment, after the IMU log).
+fn skip(rec: &mut RunRecord, sat: &mut SatRecord) {
+    let sub = &mut rec.subs[0];
+    sub.statistic.push(f64::NAN);
+    sub.dof.push(0);
+    sub.isolated.push(false);
+    sub.reinstated.push(false);
+    sub.fused.push(false);
+    for d in &mut sub.detectors {
+        d.statistic.push(f64::NAN);
+        d.threshold.push(f64::NAN);
+        d.alarm.push(false);
+    }
+    sat.status.push(SAT_NO_MEASUREMENT);
+    sat.used.push(0);
+    rec.sources.push(0);
+    rec.error.extend([f64::NAN; 9]);
+    rec.sigma.extend([f64::NAN; 9]);
+    rec.nav.extend([f64::NAN; NAV_COLUMNS.len()]);
+}
+
+/// The antenna's ECEF position (m) and the ECEF → north-east-down rotation there.
+fn antenna_ecef(s: &NavState, lever: &Vector3<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+    let a = antenna(s, lever);
+    let enu = ecef_to_enu(a.lat, a.lon);
+    let ned = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0) * enu;
+    (lla_to_ecef(a.lat, a.lon, a.h), ned)
+}
+
+/// Satellite position rotated by the Earth's rotation over the signal's travel from it to
+/// `r` (the Sagnac correction as a position).
+fn sagnac(sat: &Vector3<f64>, r: &Vector3<f64>) -> Vector3<f64> {
+    let a = OMEGA_E * (sat - r).norm() / C;
+    Vector3::new(sat.x + a * sat.y, sat.y - a * sat.x, sat.z)
+}
+
+/// Per-system clock biases (m) and drift (m/s) from the observations `z` of epoch `ep` at the
+/// state `s` (the mean of each system's ranges minus the geometry; the mean rate residual).
+fn initial_clocks(
+    s: &NavState,
+    lever: &Vector3<f64>,
+    ep: &RangeEpoch,
+    z: &DVector<f64>,
+    cols: &[usize],
+) -> [f64; 3] {
+    let m = ep.len();
+    if z.len() != 2 * m || m == 0 {
+        return [0.0; 3];
+    }
+    let (r, _) = antenna_ecef(s, lever);
+    let mut sum = [0.0; 2];
+    let mut n = [0usize; 2];
+    let (mut d, mut nd) = (0.0, 0usize);
+    let (_, c_en) = antenna_ecef(s, lever);
+    let v_ecef = c_en.transpose() * s.v;
+    for j in 0..m {
+        let sp = sagnac(&ep.sat_pos[j], &r);
+        let c = cols[ep.sats[j]];
+        let res = z[j] - (sp - r).norm();
+        if res.is_finite() {
+            sum[c] += res;
+            n[c] += 1;
+        }
+        let e = (sp - r).normalize();
+        let rd = z[m + j] - e.dot(&(ep.sat_vel[j] - v_ecef));
+        if rd.is_finite() {
+            d += rd;
+            nd += 1;
+        }
+    }
+    let mean = |c: usize| (n[c] > 0).then(|| sum[c] / n[c] as f64);
+    let g = mean(0).or(mean(1)).unwrap_or(0.0);
+    let e = mean(1).unwrap_or(g);
+    [g, e, if nd > 0 { d / nd as f64 } else { 0.0 }]
+}
+
+/// The rows of epoch `ep` at state `s`: every satellite in view (with rates, those with a
+/// finite range rate).
+#[allow(clippy::too_many_arguments)]
+fn build_rows(
+    s: &NavState,
+    kf: &ErrorFilter<N_CLOCK>,
+    lever: &Vector3<f64>,
+    w: &Vector3<f64>,
+    ep: &RangeEpoch,
+    z: &DVector<f64>,
+    cols: &[usize],
+    rates: bool,
+) -> Option<Rows> {
+    let m_all = ep.len();
+    if m_all == 0 || z.len() != 2 * m_all {
+        return None;
+    }
+    let idx: Vec<usize> = (0..m_all)
+        .filter(|&j| z[j].is_finite() && (!rates || z[m_all + j].is_finite()))
+        .collect();
+    let m = idx.len();
+    if m == 0 {
+        return None;
+    }
+    let (r, c_en) = antenna_ecef(s, lever);
+    let cbn = s.q.to_rotation_matrix().into_inner();
+    let cl = cbn * lever;
+    let vl = cbn * w.cross(lever);
+    let v_ecef = c_en.transpose() * (s.v + vl);
+    let n_rows = if rates { 2 * m } else { m };
+    let mut out = Rows {
+        idx: idx.clone(),
+        res: DVector::zeros(n_rows),
+        h: DMatrix::zeros(n_rows, N_CLOCK),
+        sigma: Vec::with_capacity(n_rows),
+        los: Vec::with_capacity(m),
+        sat_rot: Vec::with_capacity(m),
+        rho_gps: Vec::with_capacity(m),
+        rate: Vec::with_capacity(m),
+        sat_vel: Vec::with_capacity(m),
+    };
+    let (skew_cl, skew_vl) = (skew(&cl), skew(&vl));
+    for (row, &j) in idx.iter().enumerate() {
+        let col = cols[ep.sats[j]];
+        let sp = sagnac(&ep.sat_pos[j], &r);
+        let d = sp - r;
+        let range = d.norm();
+        let e = d / range;
+        let e_ned = c_en * e;
+        out.res[row] = range + kf.clock[col] - z[j];
+        let hp = -e_ned.transpose();
+        let hphi_r = hp * skew_cl;
+        for q in 0..3 {
+            out.h[(row, R + q)] = hp[q];
+            out.h[(row, PHI + q)] = hphi_r[q];
+        }
+        out.h[(row, CB + col)] = 1.0;
+        out.sigma.push(ep.sigma[j]);
+        out.los.push(e);
+        out.sat_rot.push(sp);
+        out.rho_gps.push(z[j] - kf.clock[col] + kf.clock[0]);
+        out.rate.push(z[m_all + j]);
+        out.sat_vel.push(ep.sat_vel[j]);
+        if rates {
+            let rr = m + row;
+            out.res[rr] = e.dot(&(ep.sat_vel[j] - v_ecef)) + kf.clock[2] - z[m_all + j];
+            let hphi_v = hp * skew_vl;
+            for q in 0..3 {
+                out.h[(rr, V + q)] = hp[q];
+                out.h[(rr, PHI + q)] = hphi_v[q];
+            }
+            out.h[(rr, CD)] = 1.0;
+        }
+    }
+    if rates {
+        out.sigma.extend(idx.iter().map(|&j| ep.sigma_rate[j]));
+    }
+    Some(out)
+}
+
+/// Method 1: snapshot FDE on the raw pseudoranges (and rates) from the INS antenna and the
+/// filter's clocks.
+fn ls_precheck(
+    rows: &Rows,
+    s: &NavState,
+    kf: &ErrorFilter<N_CLOCK>,
+    lever: &Vector3<f64>,
+    rates: bool,
+    cfg: &FdeConfig,
+) -> Result<SatFde> {
+    let m = rows.idx.len();
+    let (r, _) = antenna_ecef(s, lever);
+    let x0 = [r.x, r.y, r.z, kf.clock[0]];
+    let model = PositionModel::new(&rows.sat_rot, &rows.rho_gps, x0);
+    let out = if rates {
+        let mut stacked = StackedModel {
+            position: model,
+            rate: RateModel::new(&rows.los, &rows.sat_vel, &rows.rate),
+        };
+        let groups: Vec<usize> = (0..2 * m).map(|i| i % m).collect();
+        fde(
+            &mut stacked,
+            &ObsCov::Sigma(rows.sigma.clone()),
+            &vec![true; 2 * m],
+            Some(&groups),
+            cfg,
+        )?
+    } else {
+        let mut model = model;
+        fde(
+            &mut model,
+            &ObsCov::Sigma(rows.sigma.clone()),
+            &vec![true; m],
+            None,
+            cfg,
+        )?
+    };
+    let mut w: Vec<f64> = out.w[..m].to_vec();
+    for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
+        w[i % m] = wi;
+    }
+    Ok(SatFde {
+        excluded: out.excluded.iter().map(|i| i % m).collect(),
+        status: out.status,
+        first: out.first,
+        w,
+    })
+}
