@@ -31,7 +31,9 @@ use crate::gnss::broadcast::{Sat, Sys};
 use crate::gnss::geodesy::{ecef_to_enu, lla_to_ecef};
 use crate::gnss::innovation::{innovation_fde, SatFde};
 use crate::gnss::ranges::RangeEpoch;
-use crate::gnss::snapshot::{fde, FdeConfig, ObsCov, PositionModel, RateModel, StackedModel};
+use crate::gnss::snapshot::{
+    fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
+};
 use crate::gnss::C;
 use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
@@ -207,24 +209,40 @@ pub fn run_tight_ins(
             continue;
         };
         let m = rows.idx.len();
-        let r = DMatrix::from_diagonal(&DVector::from_iterator(
-            rows.sigma.len(),
-            rows.sigma.iter().map(|x| x * x),
-        ));
-        let inn = kf
-            .innovation(&rows.res, &rows.h, &r)
+        let r_diag: Vec<f64> = rows.sigma.iter().map(|x| x * x).collect();
+        // The update row by row yields the global statistic without factoring the m × m
+        // innovation covariance; only an epoch whose test fails under `innovation` (or whose
+        // w are recorded) goes on to the batch innovation and the w-test.
+        let (p_seq, dx_seq, lambda) = kf
+            .sequential(&rows.res, &rows.h, &r_diag)
             .map_err(|e| crate::run::at_epoch(k, e))?;
+        let thr = cfg.threshold(rows.res.len())?;
         let out = match t.fde {
             FdePlacement::LsPrecheck => ls_precheck(&rows, &s, &kf, &lever, t.rates, &cfg)?,
-            _ => innovation_fde(
-                &inn.r,
-                &inn.s,
-                m,
-                t.fde == FdePlacement::Innovation,
-                Some(inn.lambda),
-                full,
-                &cfg,
-            )?,
+            _ if lambda < thr || t.fde == FdePlacement::None => {
+                let w = if full {
+                    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+                    let inn = kf
+                        .innovation(&rows.res, &rows.h, &r)
+                        .map_err(|e| crate::run::at_epoch(k, e))?;
+                    innovation_fde(&inn.r, &inn.s, m, false, Some(lambda), true, &cfg)?.w
+                } else {
+                    vec![f64::NAN; m]
+                };
+                SatFde {
+                    excluded: Vec::new(),
+                    status: FdeStatus::Passed,
+                    first: (lambda, thr, rows.res.len()),
+                    w,
+                }
+            }
+            _ => {
+                let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+                let inn = kf
+                    .innovation(&rows.res, &rows.h, &r)
+                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                innovation_fde(&inn.r, &inn.s, m, true, Some(lambda), full, &cfg)?
+            }
         };
         let (stat, thr, dof) = out.first;
         let sub = &mut rec.subs[0];
@@ -251,23 +269,19 @@ pub fn run_tight_ins(
         let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
         let used = m - excluded.len();
         if excluded.is_empty() {
-            let dx = kf
-                .update(&inn, &rows.h, &r)
-                .map_err(|e| crate::run::at_epoch(k, e))?;
-            kf.feedback(&mut s, &dx);
+            kf.p = p_seq;
+            kf.feedback(&mut s, &dx_seq);
         } else if used > 0 {
             let keep: Vec<usize> = (0..rows.res.len())
                 .filter(|i| !excluded.contains(&(i % m)))
                 .collect();
             let res = rows.res.select_rows(&keep);
             let h = rows.h.select_rows(&keep);
-            let rr = r.select_rows(&keep).select_columns(&keep);
-            let inn = kf
-                .innovation(&res, &h, &rr)
+            let rk: Vec<f64> = keep.iter().map(|&i| r_diag[i]).collect();
+            let (p, dx, _) = kf
+                .sequential(&res, &h, &rk)
                 .map_err(|e| crate::run::at_epoch(k, e))?;
-            let dx = kf
-                .update(&inn, &h, &rr)
-                .map_err(|e| crate::run::at_epoch(k, e))?;
+            kf.p = p;
             kf.feedback(&mut s, &dx);
         }
         sub.fused.push(used > 0);

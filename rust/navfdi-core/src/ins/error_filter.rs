@@ -322,6 +322,39 @@ impl<const NS: usize> ErrorFilter<NS> {
         Ok(SVector::<f64, NS>::from_iterator(dx.iter().copied()))
     }
 
+    /// The update with the rows of `h` (m × NS) and residual `res` one at a time, for a
+    /// diagonal noise `r_diag` (m variances): the updated covariance (not committed), the
+    /// error-state estimate and the global statistic `λ = Σ νᵢ²/sᵢ` of the sequential
+    /// innovations (`rᵀS⁻¹r` of the batch, to rounding) — no m × m factorisation. Commit with
+    /// `self.p = p` and [`ErrorFilter::feedback`].
+    pub fn sequential(
+        &self,
+        res: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r_diag: &[f64],
+    ) -> Result<(SMatrix<f64, NS, NS>, SVector<f64, NS>, f64)> {
+        let mut p = self.p;
+        let mut dx = SVector::<f64, NS>::zeros();
+        let mut lambda = 0.0;
+        for i in 0..res.len() {
+            let hi = SVector::<f64, NS>::from_iterator(h.row(i).iter().copied());
+            let ph = p * hi;
+            let s = hi.dot(&ph) + r_diag[i];
+            if !(s > 0.0 && s.is_finite()) {
+                return Err(Error::NotPositiveDefinite {
+                    name: "innovation variance".into(),
+                    detail: format!("row {i} of a sequential strapdown update: {s}"),
+                });
+            }
+            let nu = res[i] - hi.dot(&dx);
+            lambda += nu * nu / s;
+            let k = ph / s;
+            dx += k * nu;
+            p -= k * ph.transpose();
+        }
+        Ok((0.5 * (p + p.transpose()), dx, lambda))
+    }
+
     /// Feed an error-state estimate `dx` back into the mechanised state `s` and the biases.
     pub fn feedback(&mut self, s: &mut NavState, dx: &SVector<f64, NS>) {
         let rm = earth::r_meridian(s.lat) + s.h;
@@ -415,5 +448,63 @@ mod tests {
         // Symmetric and positive definite after 1000 steps.
         assert!((kf.p - kf.p.transpose()).norm() < 1e-12);
         assert!(kf.p.cholesky().is_some());
+    }
+
+    #[test]
+    fn sequential_update_equals_the_batch_and_clocks_follow_their_drift() {
+        let s = NavState {
+            lat: 0.7,
+            lon: 0.2,
+            h: 10.0,
+            v: Vector3::new(1.0, 0.5, 0.0),
+            q: UnitQuaternion::from_euler_angles(0.01, -0.02, 0.5),
+        };
+        let kf =
+            ErrorFilter::<N_CLOCK>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise())
+                .with_clock([100.0, 102.0, -60.0], [10.0, 10.0, 1.0], (0.1, 0.1));
+        // Eight range-like rows with unit vectors, clock columns, and four rate-like rows.
+        let m = 12;
+        let mut h = DMatrix::zeros(m, N_CLOCK);
+        let mut res = DVector::zeros(m);
+        for i in 0..m {
+            let a = i as f64 * 0.7;
+            let e = Vector3::new(a.cos() * 0.6, a.sin() * 0.6, -0.8);
+            let (blk, clk) = if i < 8 { (R, CB + i % 2) } else { (V, CD) };
+            for q in 0..3 {
+                h[(i, blk + q)] = -e[q];
+                h[(i, PHI + q)] = 0.01 * e[(q + 1) % 3];
+            }
+            h[(i, clk)] = 1.0;
+            res[i] = (i as f64 * 1.3).sin() * 2.0;
+        }
+        let r_diag: Vec<f64> = (0..m)
+            .map(|i| if i < 8 { 1.0 + i as f64 * 0.1 } else { 0.01 })
+            .collect();
+        let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+        let (p_seq, dx_seq, lambda) = kf.sequential(&res, &h, &r_diag).unwrap();
+        let mut batch = kf.clone();
+        let inn = batch.innovation(&res, &h, &r).unwrap();
+        let dx = batch.update(&inn, &h, &r).unwrap();
+        assert!(
+            (lambda - inn.lambda).abs() < 1e-9 * inn.lambda.max(1.0),
+            "{lambda} vs {}",
+            inn.lambda
+        );
+        assert!((dx_seq - dx).norm() < 1e-9 * dx.norm().max(1.0));
+        assert!((p_seq - batch.p).norm() < 1e-9 * batch.p.norm());
+        // The clock estimates integrate the drift; feedback removes the clock errors.
+        let mut kf = kf;
+        let mut st = s;
+        kf.propagate(&st, &Vector3::new(0.0, 0.0, -9.8), &Vector3::zeros(), 0.25);
+        assert!((kf.clock[0] - (100.0 - 15.0)).abs() < 1e-12 && (kf.clock[1] - 87.0).abs() < 1e-12);
+        assert!(
+            kf.p[(CB, CD)] > 0.0,
+            "the bias error correlates with the drift error"
+        );
+        let mut d = SVector::<f64, N_CLOCK>::zeros();
+        d[CB] = 2.0;
+        d[CD] = -0.5;
+        kf.feedback(&mut st, &d);
+        assert!((kf.clock[0] - 83.0).abs() < 1e-12 && (kf.clock[2] + 59.5).abs() < 1e-12);
     }
 }
