@@ -221,5 +221,80 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The tight update of a strapdown filter on recorded logs (issue 25's target: ≤ 15 µs per
+/// epoch with FDE at 25 satellites): the 18-state error filter updated with 25 pseudoranges and
+/// 25 rates row by row (which yields the global statistic), the test, and the commit with the
+/// feedback into the state — `tight_ins_update_18x50`; the rows themselves (geometry, lever
+/// arm, Sagnac) are built before it in `arch::tight_ins` and are not in this figure.
+fn bench_tight_ins(c: &mut Criterion) {
+    use navfdi_core::ins::error_filter::{ErrorFilter, ImuNoise, CB, CD, N_CLOCK, PHI, R, V};
+    use navfdi_core::ins::strapdown::NavState;
+    let noise = ImuNoise {
+        gyro_noise: [1e-3; 3],
+        accel_noise: [5e-3; 3],
+        gyro_bias: 1e-4,
+        accel_bias: 1e-2,
+        bias_tau: 300.0,
+        gyro_scale: 0.0,
+        accel_scale: 0.0,
+    };
+    let mut kf =
+        ErrorFilter::<N_CLOCK>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise)
+            .with_clock([0.0; 3], [10.0, 10.0, 1.0], (0.1, 0.1));
+    let st = NavState {
+        lat: 0.7,
+        lon: -1.8,
+        h: 1580.0,
+        v: Vector3::new(1.0, 0.5, 0.0),
+        q: nalgebra::UnitQuaternion::from_euler_angles(0.0, 0.0, 0.4),
+    };
+    for _ in 0..40 {
+        kf.propagate(
+            &st,
+            &Vector3::new(0.0, 0.0, -9.8),
+            &Vector3::zeros(),
+            0.00667,
+        );
+    }
+    let m = 25;
+    let mut h = DMatrix::zeros(2 * m, N_CLOCK);
+    let mut res = DVector::zeros(2 * m);
+    let mut r_diag = vec![0.0; 2 * m];
+    for i in 0..m {
+        let (az, el) = (i as f64 * 2.4, 0.2 + (i as f64 * 0.37) % 1.3);
+        let e = Vector3::new(az.cos() * el.cos(), az.sin() * el.cos(), -el.sin());
+        for q in 0..3 {
+            h[(i, R + q)] = -e[q];
+            h[(i, PHI + q)] = 0.01 * e[(q + 1) % 3];
+            h[(m + i, V + q)] = -e[q];
+        }
+        h[(i, CB + i % 2)] = 1.0;
+        h[(m + i, CD)] = 1.0;
+        res[i] = (i as f64).sin();
+        res[m + i] = 0.1 * (i as f64).cos();
+        r_diag[i] = 0.5 / el.sin().powi(2);
+        r_diag[m + i] = 0.02 / el.sin().powi(2);
+    }
+    let cfg = FdeConfig::new(1e-3, None).expect("config");
+    let thr = cfg.threshold(2 * m).expect("threshold");
+    let mut g = c.benchmark_group("tight_ins");
+    g.bench_function("tight_ins_update_18x50", |b| {
+        b.iter(|| {
+            let mut f = kf.clone();
+            let mut s = st;
+            let (p, dx, lambda) = f.sequential(black_box(&res), &h, &r_diag).expect("update");
+            if lambda < thr {
+                f.p = p;
+                f.feedback(&mut s, &dx);
+            }
+            black_box((f.p[(0, 0)], s.lat))
+        })
+    });
+    g.bench_function("error_filter_clone_18", |b| {
+        b.iter(|| black_box(kf.clone()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_tight_ins);
 criterion_main!(benches);

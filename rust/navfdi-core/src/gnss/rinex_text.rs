@@ -20,7 +20,8 @@ pub(crate) fn label(line: &str) -> &str {
 }
 
 /// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
-/// corrupt gzip, not text, Hatanaka-compressed).
+/// corrupt gzip, not text). Compact RINEX (Hatanaka) 1 and 3 is expanded
+/// ([`expand_compact`]).
 pub fn read_text(path: &str) -> Result<String> {
     let meta = std::fs::metadata(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
     if meta.is_dir() {
@@ -62,16 +63,9 @@ pub fn read_text(path: &str) -> Result<String> {
     if bytes.is_empty() {
         return Err(format_err(path, None, "the file is empty"));
     }
-    if bytes.starts_with(b"1.0                 COMPACT RINEX")
-        || bytes.starts_with(b"3.0                 COMPACT RINEX")
-    {
-        return Err(format_err(
-            path,
-            Some(1),
-            "Hatanaka-compressed (Compact RINEX); expand it first with CRX2RNX",
-        ));
-    }
-    String::from_utf8(bytes).map_err(|e| {
+    let compact = bytes.starts_with(b"1.0                 COMPACT RINEX")
+        || bytes.starts_with(b"3.0                 COMPACT RINEX");
+    let text = String::from_utf8(bytes).map_err(|e| {
         format_err(
             path,
             None,
@@ -80,7 +74,160 @@ pub fn read_text(path: &str) -> Result<String> {
                 e.utf8_error().valid_up_to()
             ),
         )
-    })
+    })?;
+    if compact {
+        return expand_compact(path, &text);
+    }
+    Ok(text)
+}
+
+/// Expand Hatanaka-compressed text (Compact RINEX 1 or 3) to RINEX with the `rinex` crate's
+/// decompressor. The header is copied here (without its two CRINEX lines) and the
+/// decompressor, built from its observation types, is driven line by line over the records:
+/// the crate's `Read` adapter (`DecompressorIO`) does not parse the header and returns 0
+/// bytes for an input line that completes no output line, which a reader takes for the end of
+/// the file (rinex 0.24).
+pub(crate) fn expand_compact(path: &str, text: &str) -> Result<String> {
+    use rinex::prelude::{Constellation, Observable};
+    use std::collections::HashMap;
+    use std::str::FromStr;
+    let v3 = text.starts_with("3.0");
+    let mut out = String::with_capacity(text.len() * 4);
+    let mut lines = text.lines().enumerate();
+    let mut codes: HashMap<Constellation, Vec<Observable>> = HashMap::new();
+    let mut v2_codes: Vec<Observable> = Vec::new();
+    let mut last_sys: Option<Constellation> = None;
+    let mut file_sys = Constellation::Mixed;
+    let mut ended = false;
+    let obs = |c: &str, i: usize| {
+        Observable::from_str(c.trim()).map_err(|_| {
+            format_err(
+                path,
+                Some(i + 1),
+                format!("unknown observation type '{}'", c.trim()),
+            )
+        })
+    };
+    for (i, line) in lines.by_ref() {
+        let line = line.trim_end_matches('\r');
+        let lab = label(line);
+        if lab == "CRINEX VERS   / TYPE" || lab == "CRINEX PROG / DATE" {
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+        match lab {
+            "RINEX VERSION / TYPE" => {
+                let c = line.get(40..41).unwrap_or("M").trim();
+                file_sys = Constellation::from_str(if c.is_empty() { "G" } else { c })
+                    .unwrap_or(Constellation::Mixed);
+            }
+            "SYS / # / OBS TYPES" => {
+                let body = line.get(..60).unwrap_or(line);
+                let sys = match body.get(..1).map(str::trim) {
+                    Some(c) if !c.is_empty() => {
+                        let k = Constellation::from_str(c).map_err(|_| {
+                            format_err(path, Some(i + 1), format!("unknown system '{c}'"))
+                        })?;
+                        last_sys = Some(k);
+                        k
+                    }
+                    _ => last_sys.ok_or_else(|| {
+                        format_err(path, Some(i + 1), "observation types without a system")
+                    })?,
+                };
+                let list = codes.entry(sys).or_default();
+                for c in body.get(7..).unwrap_or("").split_whitespace() {
+                    list.push(obs(c, i)?);
+                }
+            }
+            "# / TYPES OF OBSERV" => {
+                let body = line.get(6..60).unwrap_or("");
+                for c in body.split_whitespace() {
+                    v2_codes.push(obs(c, i)?);
+                }
+            }
+            "END OF HEADER" => {
+                ended = true;
+                break;
+            }
+            _ => {}
+        }
+    }
+    if !ended {
+        return Err(format_err(
+            path,
+            None,
+            "Compact RINEX: no END OF HEADER line",
+        ));
+    }
+    if !v2_codes.is_empty() {
+        for c in [
+            Constellation::GPS,
+            Constellation::Glonass,
+            Constellation::Galileo,
+            Constellation::BeiDou,
+            Constellation::QZSS,
+            Constellation::SBAS,
+        ] {
+            codes.entry(c).or_insert_with(|| v2_codes.clone());
+        }
+    }
+    let mut dec = rinex::hatanaka::DecompressorExpert::<5>::new(v3, file_sys, codes);
+    const CAP: usize = 1 << 16;
+    let mut buf = vec![0u8; CAP];
+    for (i, line) in lines {
+        let line = line.trim_end_matches('\r');
+        // The decompressor accepts any text and turns it into numbers (rinex 0.24): refuse a
+        // record line with a character no compressed record has (digits, '&', '-', '.', '>',
+        // blanks and system letters), unless it carries a header label (an event's records).
+        let ok = |c: char| c.is_ascii_digit() || " &-.>GRECJSIM".contains(c);
+        let lab = label(line);
+        let header_like = lab.chars().any(|c| c.is_ascii_uppercase())
+            && lab
+                .chars()
+                .all(|c| c.is_ascii_uppercase() || " /#".contains(c));
+        if !line.chars().all(ok) && !header_like {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                "not Compact RINEX data (a character no compressed record has); the file is damaged",
+            ));
+        }
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            dec.decompress(line, line.len(), &mut buf, CAP)
+        }));
+        let size = match caught {
+            Ok(Ok(n)) => n,
+            Ok(Err(e)) => {
+                return Err(format_err(
+                    path,
+                    Some(i + 1),
+                    format!("Compact RINEX (Hatanaka) decompression failed: {e:?}"),
+                ))
+            }
+            Err(_) => {
+                return Err(format_err(
+                    path,
+                    Some(i + 1),
+                    "Compact RINEX (Hatanaka) decompression failed on this line",
+                ))
+            }
+        };
+        let chunk = std::str::from_utf8(&buf[..size]).map_err(|_| {
+            format_err(
+                path,
+                Some(i + 1),
+                "Compact RINEX decompression produced non-text",
+            )
+        })?;
+        if !chunk.is_empty() {
+            // Each recovered line (or group of lines) comes without its end of line.
+            out.push_str(chunk);
+            out.push('\n');
+        }
+    }
+    Ok(out)
 }
 
 /// Read all of `src`, stopping at the first NUL byte with an error that names its line and
@@ -475,4 +622,65 @@ pub(crate) fn check_nav_body(path: &str, lines: &[&str], start: usize) -> Result
         records += 1;
     }
     Ok(records)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn data(name: &str) -> String {
+        format!(
+            "{}/../../tests/data/rinex_formats/{name}",
+            env!("CARGO_MANIFEST_DIR")
+        )
+    }
+
+    /// Lines with trailing blanks removed (the plain files pad some lines to 80 columns).
+    fn lines(t: &str) -> Vec<String> {
+        t.lines().map(|l| l.trim_end().to_string()).collect()
+    }
+
+    #[test]
+    fn compact_rinex_3_and_1_expand_to_their_plain_pairs() {
+        for (crx, plain) in [
+            (
+                "ACOR00ESP_R_20213550000_01D_30S_MO.crx",
+                "ACOR00ESP_R_20213550000_01D_30S_MO.rnx.gz",
+            ),
+            ("delf0010.21d.gz", "delf0010.21o.gz"),
+        ] {
+            let a = read_text(&data(crx)).unwrap();
+            let b = read_text(&data(plain)).unwrap();
+            let (la, lb) = (lines(&a), lines(&b));
+            assert_eq!(la.len(), lb.len(), "{crx}");
+            for (i, (x, y)) in la.iter().zip(&lb).enumerate() {
+                assert_eq!(x, y, "{crx}, line {}", i + 1);
+            }
+        }
+    }
+
+    #[test]
+    fn a_broken_compact_file_names_its_line() {
+        let text = read_text(&data("ACOR00ESP_R_20213550000_01D_30S_MO.crx")).unwrap();
+        let raw = std::fs::read_to_string(data("ACOR00ESP_R_20213550000_01D_30S_MO.crx")).unwrap();
+        assert!(text.len() > raw.len());
+        // Header without its end: refused with the reason.
+        let cut: String = raw
+            .lines()
+            .take_while(|l| !l.contains("END OF HEADER"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        let e = expand_compact("x.crx", &cut).unwrap_err().to_string();
+        assert!(e.contains("no END OF HEADER"), "{e}");
+        // A satellite line that is not compressed data: an error, never a panic.
+        let mut bad: Vec<&str> = raw.lines().collect();
+        let k = bad.iter().position(|l| l.starts_with('>')).unwrap() + 2;
+        bad[k] = "3&x&&y 3&not numbers";
+        let joined = bad.join("\n");
+        let e = expand_compact("x.crx", &joined).unwrap_err().to_string();
+        assert!(
+            e.contains(&format!("line {}", k + 1)) && e.contains("damaged"),
+            "{e}"
+        );
+    }
 }
