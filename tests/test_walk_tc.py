@@ -65,6 +65,14 @@ def test_fault_free_spread_beats_single_point_and_nothing_is_excluded(clean, fau
     assert len(en_spp) == ok.sum()
     tight, single = _spread(e[ok, 6:8]), _spread(en_spp)
     assert tight < 0.6 * single, (tight, single)
+    # Also below the single-point solution with C/N0 weighting (the best SPP setting here).
+    cn0 = navfdi.gnss_solve(str(folder / src["rinex_obs"]), str(folder / src["rinex_nav"]), systems="G,E", weighting="cn0", noise_scale="auto").solution
+    assert np.allclose(cn0["gps_seconds"], spp["gps_seconds"])
+    en_cn0 = np.column_stack([
+        np.radians(cn0["lon"].to_numpy(float) - ref.lon[k]) * R_EARTH * np.cos(np.radians(ref.lat[k])),
+        np.radians(cn0["lat"].to_numpy(float) - ref.lat[k]) * R_EARTH,
+    ])[same]
+    assert tight < _spread(en_cn0) < single
     # The reference's own offset (its base): several metres east and north, the same for both.
     assert 4.0 < e[ok, 6].mean() < 9.0 and 3.0 < e[ok, 7].mean() < 7.0
     alpha = clean.core["tight"]["alpha"]

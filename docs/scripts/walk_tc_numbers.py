@@ -83,6 +83,9 @@ def main() -> None:
     ok_spp &= np.isfinite(en_spp).all(axis=1)
     common = np.isin(np.round(s["gps_seconds"].to_numpy(float), 2), np.round(t_gps[alive], 2)) & ok_spp
     peers = {"navfdi gnss (SPP + FDE)": en_spp[common]}
+    s2 = navfdi.gnss_solve(str(obs), str(nav), systems="G,E", weighting="cn0", noise_scale="auto").solution
+    en2, ok2 = reference_en(s2["gps_seconds"].to_numpy(float), s2["lat"].to_numpy(float), s2["lon"].to_numpy(float), ref)
+    peers["navfdi gnss --weighting cn0 --noise auto"] = en2[common & ok2]
     if "--rtklib" in sys.argv and shutil.which("rnx2rtkp"):
         with tempfile.TemporaryDirectory() as d:
             o = Path(d) / "walk.obs"

@@ -949,6 +949,7 @@ class GnssRun:
         sprt: tuple[float, float],
         aime: tuple[float, int],
         cusum: tuple[float, float, float, int, float],
+        cn0_reference: float = 45.0,
     ) -> GnssRun: ...
     @property
     def codes(self) -> dict[str, str]:

@@ -122,7 +122,8 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--alpha", type=float, default=0.01, help="false-alarm probability of the global test (default 0.01)")
     gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
-    gn.add_argument("--weighting", choices=["elevation", "rtklib"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2)")
+    gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^((ref - C/N0)/10), for low-cost receivers)")
+    gn.add_argument("--cn0-reference", type=float, default=45.0, metavar="DBHZ", help="C/N0 (dB-Hz) at which --weighting cn0 gives the elevation model (default 45)")
     gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' estimates the factor from the file (a first pass without exclusion), or give a number")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
     gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
@@ -272,6 +273,7 @@ def _gnss(args: argparse.Namespace) -> int:
         k=args.k,
         exclude=not args.no_exclusion,
         weighting=args.weighting,
+        cn0_reference=args.cn0_reference,
         faults=faults,
         noise_factors=factors,
         codes=codes,

@@ -474,6 +474,7 @@ def gnss_solve(
     exclude: bool = True,
     noise: tuple[float, float] = (0.3, 0.3),
     weighting: str = "elevation",
+    cn0_reference: float = 45.0,
     ionosphere: bool = True,
     troposphere: bool = True,
     faults: Iterable[GnssFault | str] = (),
@@ -506,8 +507,13 @@ def gnss_solve(
     exclude : bool
         Run the exclusion loop (False: weighted least squares, test reported only).
     noise : (a, b)
-        Code noise (m): ``σ² = a² + b²/sin² el`` (``weighting="elevation"``), or RTKLIB's
-        ``pntpos`` variance with these a, b (``weighting="rtklib"``).
+        Code noise (m): ``σ² = a² + b²/sin² el`` (``weighting="elevation"``), RTKLIB's
+        ``pntpos`` variance with these a, b (``weighting="rtklib"``), or for low-cost receivers
+        and phones the elevation model times ``10^((cn0_reference − C/N0)/10)`` with the
+        recorded C/N0 (``weighting="cn0"``; ``S1C`` beside ``C1C``, a satellite without one
+        keeps the elevation model).
+    cn0_reference : float
+        The C/N0 (dB-Hz) at which ``weighting="cn0"`` gives the elevation model (default 45).
     ionosphere, troposphere : bool
         Apply the broadcast Klobuchar and the Saastamoinen models.
     faults : GnssFault or str
@@ -559,7 +565,7 @@ def gnss_solve(
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise)
+        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise)
         first = gnss_solve(obs, nav, exclude=False, **common)
         scale = estimate_noise_scale(first.solution)
         out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=scale, **common)
@@ -598,6 +604,7 @@ def gnss_solve(
         (float(sprt[0]), float(sprt[1])),
         (float(aime[0]), int(aime[1])),
         (float(cusum[0]), float(cusum[1]), float(cusum[2]), int(cusum[3]), float(cusum[4])),
+        float(cn0_reference),
     )
     bar = None
     if progress:
@@ -661,6 +668,7 @@ def gnss_solve(
         "exclude": bool(exclude),
         "noise": list(noise),
         "weighting": weighting,
+        "cn0_reference": float(cn0_reference),
         "ionosphere": bool(ionosphere),
         "troposphere": bool(troposphere),
         "codes": dict(run.codes),

@@ -176,13 +176,14 @@ fn parse_sys(s: &str) -> PyResult<Sys> {
 impl PyGnssRun {
     /// Read `obs_path` and `nav_path` and set up the solution. `systems` letters (G, E, C,
     /// J); `mask_deg` elevation mask (deg); `alpha`, `k` of the tests; `exclude` runs the
-    /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"`` or ``"rtklib"``;
+    /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"``, ``"rtklib"`` or
+    /// ``"cn0"`` (with `cn0_reference`, dB-Hz: the C/N0 at which σ is the elevation model's);
     /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
     /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
     /// per-system σ factors; `sprt` (P_f, P_m), `aime` (P_f, window epochs) and `cusum` (drift, threshold, tau epochs,
     /// warm-up epochs, floor m) of the sequential detectors.
     #[new]
-    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum))]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum, cn0_reference = 45.0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -203,6 +204,7 @@ impl PyGnssRun {
         sprt: (f64, f64),
         aime: (f64, usize),
         cusum: (f64, f64, f64, usize, f64),
+        cn0_reference: f64,
     ) -> PyResult<Self> {
         let mut cfg = SppConfig::new(FdeConfig::new(alpha, k).py()?);
         cfg.systems = systems
@@ -230,9 +232,15 @@ impl PyGnssRun {
         cfg.weighting = match weighting {
             "elevation" => Weighting::Elevation,
             "rtklib" => Weighting::Rtklib,
+            "cn0" if cn0_reference > 10.0 && cn0_reference < 70.0 => Weighting::Cn0(cn0_reference),
+            "cn0" => {
+                return Err(PyValueError::new_err(format!(
+                    "cn0_reference: {cn0_reference} dB-Hz; expected a carrier-to-noise density in (10, 70) dB-Hz"
+                )))
+            }
             other => {
                 return Err(PyValueError::new_err(format!(
-                    "weighting: '{other}' is not 'elevation' or 'rtklib'"
+                    "weighting: '{other}' is not 'elevation', 'rtklib' or 'cn0'"
                 )))
             }
         };

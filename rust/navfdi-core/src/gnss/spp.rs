@@ -234,7 +234,7 @@ impl SppConfig {
 }
 
 /// Pseudorange variance model.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Weighting {
     /// `σ² = a² + b²/sin² el`: the measurement noise only, so the χ² and w tests are scaled
     /// by what the residuals scatter by.
@@ -244,6 +244,12 @@ pub enum Weighting {
     /// positions compare with RTKLIB, tests are far from their nominal α (the model errors are
     /// common to all satellites and mostly absorbed by the clock).
     Rtklib,
+    /// C/N0 weighting for low-cost receivers and phones: the elevation model scaled by
+    /// `10^((C/N0_ref − C/N0)/10)` with the recorded C/N0 (`S1C` beside `C1C`, dB-Hz; the σ–ε
+    /// model's `σ² ∝ 10^(−C/N0/10)`, Hartinger and Brunner 1999), `a`, `b` being the noise at
+    /// the reference C/N0 (the value, dB-Hz); a satellite without a recorded C/N0 keeps the
+    /// elevation model.
+    Cn0(f64),
 }
 
 /// What happened to a satellite at an epoch.
@@ -443,6 +449,8 @@ pub struct SppState {
 }
 
 struct Candidate {
+    /// Recorded C/N0 (dB-Hz; NaN without one).
+    cn0: f64,
     sat: Sat,
     pos: Vector3<f64>,
     rho_c: f64,
@@ -472,13 +480,14 @@ pub fn solve(
         return Ok(());
     };
     let t0 = first.time;
-    let codes: Vec<(Sys, Option<u16>, f64)> = cfg
+    let codes: Vec<(Sys, Option<u16>, f64, Option<u16>)> = cfg
         .systems
         .iter()
         .map(|&s| {
             let code = cfg.code(s).unwrap_or("C1C");
             let f = frequency(s, code).unwrap_or(F_L1);
-            (s, obs.code_index(code), (F_L1 / f).powi(2))
+            let snr = obs.code_index(&format!("S{}", code.get(1..).unwrap_or("")));
+            (s, obs.code_index(code), (F_L1 / f).powi(2), snr)
         })
         .collect();
     let klob = if cfg.ionosphere {
@@ -503,9 +512,9 @@ pub fn solve(
         let mut faulty = Vec::new();
         let first_row = out.sats.len();
         for o in &ep.obs {
-            let Some(&(_, _, scale)) = codes
+            let Some(&(_, _, scale, snr)) = codes
                 .iter()
-                .find(|(s, c, _)| *s == o.sat.sys && *c == Some(o.code))
+                .find(|(s, c, _, _)| *s == o.sat.sys && *c == Some(o.code))
             else {
                 continue;
             };
@@ -576,7 +585,13 @@ pub fn solve(
                     sr.sat_pos = st.pos;
                     sr.sat_clock = st.clock;
                     out.sats.push(sr);
+                    let cn0 = snr
+                        .and_then(|c| ep.obs.iter().find(|x| x.sat == o.sat && x.code == c))
+                        .map(|x| x.value)
+                        .filter(|v| v.is_finite() && *v > 0.0)
+                        .unwrap_or(f64::NAN);
                     cands.push(Candidate {
+                        cn0,
                         sat: o.sat,
                         pos: st.pos,
                         rho_c: rho + C * st.clock - C * eph.tgd,
@@ -711,6 +726,14 @@ fn solve_epoch(
         let ura = if c.ura.is_finite() { c.ura } else { 0.0 };
         let var = match cfg.weighting {
             Weighting::Elevation => a * a + b * b / (s * s),
+            Weighting::Cn0(reference) => {
+                let f = if c.cn0.is_finite() {
+                    10f64.powf((reference - c.cn0) / 10.0)
+                } else {
+                    1.0
+                };
+                (a * a + b * b / (s * s)) * f
+            }
             Weighting::Rtklib => {
                 let mut v = a * a + b * b / s + ura * ura + 0.09 + (0.5 * iono).powi(2);
                 if cfg.troposphere {

@@ -1,0 +1,68 @@
+"""C/N0 weighting of the single-point solution (issue 23, item 2): on the handheld u-blox walk,
+whose weak satellites are its noisy ones, ``weighting="cn0"`` cuts the fault-free exclusions of
+the elevation model and keeps a 20 m step on a high satellite excluded; with ``--noise auto``
+none is excluded fault-free."""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import pytest
+
+import navfdi
+from navfdi.cli import main
+
+P = Path(navfdi.__file__).parent / "data" / "walk_0827"
+OBS, NAV = str(P / "gnss_1730.obs.gz"), str(P / "gnss_1730.nav")
+
+
+def _exclusion_rate(sol) -> float:
+    return float((sol.solution["excluded"].fillna("").astype(str) != "").mean())
+
+
+def _exact(sol, sat: str) -> float:
+    s = sol.satellites
+    ep = s[(s["satellite"] == sat) & (s["fault"] != 0)]["epoch"].to_numpy()
+    return float((sol.solution.iloc[ep]["excluded"].astype(str) == sat).mean())
+
+
+@pytest.fixture(scope="module")
+def quiet():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def test_cn0_weighting_fits_a_low_cost_receiver(quiet) -> None:
+    elev = navfdi.gnss_solve(OBS, NAV, systems="G,E")
+    cn0 = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0")
+    assert _exclusion_rate(elev) > 0.25
+    assert _exclusion_rate(cn0) < 0.5 * _exclusion_rate(elev)
+    auto = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", noise_scale="auto")
+    assert _exclusion_rate(auto) <= 0.01
+    assert 1.0 < auto.config["noise_scale"] < 2.0
+    assert auto.config["weighting"] == "cn0" and auto.config["cn0_reference"] == 45.0
+    step = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", noise_scale="auto", faults=["E26:step:20m:40s:100s"])
+    assert _exact(step, "E26") >= 0.95
+
+
+def test_cn0_reference_moves_the_weights_and_bad_values_are_named(quiet) -> None:
+    a = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=45.0)
+    b = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=35.0)
+    # A lower reference shrinks every σ by 10 dB: the same solution, ten times the statistic.
+    ratio = (b.solution["first_statistic"] / a.solution["first_statistic"]).median()
+    assert 9.0 < ratio < 11.0
+    with pytest.raises(ValueError, match=r"cn0_reference: 90 dB-Hz"):
+        navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=90.0)
+    with pytest.raises(ValueError, match="weighting: 'snr' is not 'elevation', 'rtklib' or 'cn0'"):
+        navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="snr")
+
+
+def test_cli_weighting_cn0(tmp_path, capsys, quiet) -> None:
+    assert main(["gnss", OBS, NAV, "--systems", "G,E", "--weighting", "cn0", "--cn0-reference", "45", "--out", str(tmp_path)]) == 0
+    import json
+
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    text = json.dumps(summary)
+    assert '"weighting": "cn0"' in text and '"cn0_reference": 45.0' in text
