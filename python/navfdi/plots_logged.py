@@ -1,5 +1,6 @@
-"""Figures of a run on recorded logs (architecture ``loosely_coupled``): the track, the
-errors against the reference with the filter's ±3σ, and the estimated IMU biases."""
+"""Figures of a run on recorded logs (``loosely_coupled``, or ``tight`` with a strapdown INS):
+the track, the errors against the reference with the filter's ±3σ, and the estimated IMU
+biases."""
 
 from __future__ import annotations
 
@@ -42,7 +43,8 @@ def _legend_patches(ax: Any, run: RunRecord) -> None:
 
 def plot_logged(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     """Write ``{prefix}track.png`` (east/north of the GNSS antenna from the first epoch, m;
-    the reference's scored epochs grey; outages and fault windows highlighted),
+    the reference's scored epochs grey, shifted by the run's mean offset when the error is
+    mostly that offset; outages and fault windows highlighted),
     ``{prefix}errors.png`` (east, north, up error against the reference at the epochs it
     scores, m, with the filter's ±3σ; outages grey, faults red) and ``{prefix}biases.png``
     (estimated gyro biases in deg/h and accelerometer biases in mg with ±1σ). Returns the
@@ -67,7 +69,12 @@ def plot_logged(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
 
     fig, ax = plt.subplots(figsize=(7.5, 7), constrained_layout=True)
     scored = np.isfinite(err[:, 6])
-    ax.plot(east - err[:, 6], north - err[:, 7], ".", ms=2, color="tab:gray", label="reference (scored epochs)")
+    # A reference with a steady offset of its own (walk_tc's base) is drawn shifted by the
+    # run's mean offset, said in the legend, so that the tracks can be compared.
+    off = run.reference_offset()
+    shift = (float(off[0]), float(off[1])) if run.steady_offset() else (0.0, 0.0)
+    label = "reference (scored epochs)" if shift == (0.0, 0.0) else f"reference + the run's mean offset ({shift[0]:.1f} m E, {shift[1]:.1f} m N)"
+    ax.plot(east - err[:, 6] + shift[0], north - err[:, 7] + shift[1], ".", ms=2, color="tab:gray", label=label)
     ax.plot(east, north, lw=0.9, color="tab:blue", label="navfdi (GNSS antenna)")
     outs, faults = windows(run)
     for j, (a, b) in enumerate(outs):

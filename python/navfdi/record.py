@@ -45,6 +45,28 @@ class RunRecord:
         self.variant = variant
         self.t: np.ndarray = record["t"]
 
+    def reference_offset(self) -> np.ndarray:
+        """Runs on recorded logs: the mean error (m; east, north, up) against the reference
+        over its scored epochs outside the fault windows — the reference's own offset when it
+        has one (shape (3,); NaN without scored epochs)."""
+        e = self.record["error"]
+        clean = np.isfinite(e[:, 6])
+        for f in self.scenario.faults():
+            clean &= ~((self.t >= f["start"]) & (self.t < f["end"]))
+        return e[clean, 6:9].mean(axis=0) if clean.any() else np.full(3, np.nan)
+
+    def steady_offset(self) -> bool:
+        """Whether the horizontal error against the reference is mostly a steady offset: its
+        RMS with :meth:`reference_offset` removed below half the RMS with it."""
+        e = self.record["error"]
+        ok = np.isfinite(e[:, 6])
+        if not ok.any():
+            return False
+        off = self.reference_offset()
+        raw = np.mean(e[ok, 6] ** 2 + e[ok, 7] ** 2)
+        rel = np.mean((e[ok, 6] - off[0]) ** 2 + (e[ok, 7] - off[1]) ** 2)
+        return bool(rel < 0.25 * raw)
+
     # ---- per sub-filter access -------------------------------------------------------------
     def subfilters(self) -> list[str]:
         """Sub-filter (sensor) names in configuration order."""

@@ -450,10 +450,7 @@ class ScenarioRun(RunRecord):
         # The run's mean offset to the reference (over the scored epochs outside the fault
         # windows) and the horizontal error without it: for a reference with an offset of its
         # own (walk_tc's base).
-        clean = ok.copy()
-        for f in self.scenario.faults():
-            clean &= ~((self.t >= f["start"]) & (self.t < f["end"]))
-        off = e[clean, 6:9].mean(axis=0) if clean.any() else np.full(3, np.nan)
+        off = self.reference_offset()
         out.update({"offset_e": float(off[0]), "offset_n": float(off[1]), "offset_u": float(off[2])})
         rel = np.hypot(e[:, 6] - off[0], e[:, 7] - off[1])
         out["hor_rel_rms"] = float(np.sqrt(np.mean(rel[ok] ** 2))) if ok.any() else float("nan")

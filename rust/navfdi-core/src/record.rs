@@ -66,6 +66,21 @@ pub struct SatRecord {
 }
 
 impl SatRecord {
+    /// An empty record of satellites `names` over `epochs` epochs (nothing in view, nothing
+    /// excluded, w NaN; status and used filled per epoch).
+    pub fn new(names: Vec<String>, epochs: usize) -> Self {
+        let s_count = names.len();
+        SatRecord {
+            names,
+            in_view: vec![false; epochs * s_count],
+            excluded: vec![false; epochs * s_count],
+            w: vec![f64::NAN; epochs * s_count],
+            status: Vec::with_capacity(epochs),
+            used: Vec::with_capacity(epochs),
+            metrics: Vec::new(),
+        }
+    }
+
     /// Fill [`SatRecord::metrics`]: satellite-FDE counts per fault of `faults` on sensor
     /// `sensor` whose satellite is one of [`SatRecord::names`], then outside faults, over the
     /// epochs `t` with a measurement.

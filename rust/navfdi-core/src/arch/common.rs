@@ -1,8 +1,11 @@
 //! Helpers shared by the architectures: detectors built from their specs, the sensor of each
-//! detection channel, which measurement matrices change along the run.
+//! detection channel, which measurement matrices change along the run, and the record of a
+//! tight filter's satellite FDE per epoch.
 
 use crate::detect::{Detector, ImprovedSprt, JointChi2Sprt, ResidualChi2, SprtVariance};
 use crate::error::Result;
+use crate::gnss::innovation::SatFde;
+use crate::record::{RunRecord, SatRecord, SAT_NO_MEASUREMENT};
 use crate::spec::{DetectorKind, ScenarioSpec, SensorKind};
 
 /// Build a detector from its spec (validated by the scenario). `min_samples` (SPRT and joint)
@@ -67,4 +70,62 @@ pub fn varying_h(spec: &ScenarioSpec, sensor_idx: &[usize]) -> Vec<bool> {
             )
         })
         .collect()
+}
+
+/// FDE status code of an epoch whose global test alarms with placement `none`.
+const ALARM: u8 = 4;
+
+/// Record a tight filter's epoch `k` on its one channel: the first global test of `out`, the
+/// w of each tested satellite and the excluded ones (`global[j]`: the satellite index of
+/// local satellite j, `s_count` satellites in the record), the status (`alarm` for an alarm
+/// of placement `none`).
+pub fn record_sat_fde(
+    rec: &mut RunRecord,
+    sat: &mut SatRecord,
+    k: usize,
+    out: &SatFde,
+    global: impl Fn(usize) -> usize,
+    none_placement: bool,
+) {
+    let s_count = sat.names.len();
+    let (stat, thr, dof) = out.first;
+    let sub = &mut rec.subs[0];
+    let det = &mut sub.detectors[0];
+    det.statistic.push(stat);
+    det.threshold.push(thr);
+    det.alarm.push(stat >= thr);
+    sub.statistic.push(stat);
+    sub.dof.push(dof as u32);
+    sub.isolated.push(!out.excluded.is_empty());
+    sub.reinstated.push(false);
+    for (j, w) in out.w.iter().enumerate() {
+        sat.w[k * s_count + global(j)] = *w;
+    }
+    for &j in &out.excluded {
+        sat.excluded[k * s_count + global(j)] = true;
+    }
+    sat.status.push(if none_placement && stat >= thr {
+        ALARM
+    } else {
+        out.status.code()
+    });
+}
+
+/// Record a tight filter's epoch without a test (no measurement, or no navigation): NaN
+/// statistics, nothing fused, no satellite used.
+pub fn record_untested(rec: &mut RunRecord, sat: &mut SatRecord) {
+    let sub = &mut rec.subs[0];
+    sub.statistic.push(f64::NAN);
+    sub.dof.push(0);
+    sub.isolated.push(false);
+    sub.reinstated.push(false);
+    sub.fused.push(false);
+    for d in &mut sub.detectors {
+        d.statistic.push(f64::NAN);
+        d.threshold.push(f64::NAN);
+        d.alarm.push(false);
+    }
+    sat.status.push(SAT_NO_MEASUREMENT);
+    sat.used.push(0);
+    rec.sources.push(0);
 }

@@ -35,23 +35,19 @@
 //! updated the filter; and the per-satellite [`SatRecord`] with its FDE counts. With
 //! `isolation = false` the FDE runs and reports but every satellite updates the filter.
 
+use super::common::{record_sat_fde, record_untested};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::gnss::innovation::{innovation_fde, update_without, SatFde};
+use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
-use crate::gnss::snapshot::{
-    fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
-};
+use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
 
 use crate::kalman::{KalmanFilter, Sequential};
-use crate::record::SAT_NO_MEASUREMENT as NO_MEASUREMENT;
 use crate::record::{RunRecord, SatRecord};
 use crate::spec::{FdePlacement, ScenarioSpec};
 use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector};
-
-const ALARM: u8 = 4;
 
 /// Run the tight filter of scenario `spec` over one run's streams (`isolation = false`: FDE reports, never
 /// excludes). `full`: also compute the innovation w-test of epochs whose global test passes
@@ -77,15 +73,7 @@ pub fn run_tight(
     let s_count = rp.names.len();
     let epochs = src.epochs();
     let mut rec = RunRecord::empty(spec, models);
-    let mut sat = SatRecord {
-        names: rp.names.clone(),
-        in_view: vec![false; epochs * s_count],
-        excluded: vec![false; epochs * s_count],
-        w: vec![f64::NAN; epochs * s_count],
-        status: Vec::with_capacity(epochs),
-        used: Vec::with_capacity(epochs),
-        metrics: Vec::new(),
-    };
+    let mut sat = SatRecord::new(rp.names.clone(), epochs);
     let mut sig = DVector::zeros(crate::ins::N_STATES);
     let mut pv = match (t.fde, &spec.sensors[si].ranges) {
         (FdePlacement::GnssFilter, Some(r)) => Some(PvFilter::new(spec.dt, t.accel_psd, &r.clock)),
@@ -105,20 +93,8 @@ pub fn run_tight(
         for &s in &ep.sats {
             sat.in_view[k * s_count + s] = true;
         }
-        let sub = &mut rec.subs[0];
-        let det = &mut sub.detectors[0];
         if !(models.available[si][k] && m > 0) {
-            sub.statistic.push(f64::NAN);
-            sub.dof.push(0);
-            sub.isolated.push(false);
-            sub.reinstated.push(false);
-            sub.fused.push(false);
-            det.statistic.push(f64::NAN);
-            det.threshold.push(f64::NAN);
-            det.alarm.push(false);
-            sat.status.push(NO_MEASUREMENT);
-            sat.used.push(0);
-            rec.sources.push(0);
+            record_untested(&mut rec, &mut sat);
             rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
             continue;
         }
@@ -198,26 +174,14 @@ pub fn run_tight(
                 (out, pending)
             }
         };
-        let (stat, thr, dof) = out.first;
-        det.statistic.push(stat);
-        det.threshold.push(thr);
-        det.alarm.push(stat >= thr);
-        sub.statistic.push(stat);
-        sub.dof.push(dof as u32);
-        sub.isolated.push(!out.excluded.is_empty());
-        sub.reinstated.push(false);
-        for (j, &s) in ep.sats.iter().enumerate() {
-            sat.w[k * s_count + s] = out.w[j];
-        }
-        for &j in &out.excluded {
-            sat.excluded[k * s_count + ep.sats[j]] = true;
-        }
-        sat.status
-            .push(if t.fde == FdePlacement::None && stat >= thr {
-                ALARM
-            } else {
-                out.status.code()
-            });
+        record_sat_fde(
+            &mut rec,
+            &mut sat,
+            k,
+            &out,
+            |j| ep.sats[j],
+            t.fde == FdePlacement::None,
+        );
         let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
         let updated = if sequential {
             kf.commit_sequential(&mut seq)
@@ -227,7 +191,7 @@ pub fn run_tight(
             update_without(&mut kf, &z, &h, &r, m, excluded, pending)
                 .map_err(|e| crate::run::at_epoch(k, e))?
         };
-        sub.fused.push(updated > 0);
+        rec.subs[0].fused.push(updated > 0);
         sat.used.push(updated as u32);
         rec.sources.push(u32::from(updated > 0));
         rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
@@ -276,40 +240,11 @@ fn ls_precheck(
     let x0 = [r_ins.x, r_ins.y, r_ins.z, x_hat[CLOCK_BIAS]];
     let rho = &raw.as_slice()[..m];
     let model = PositionModel::new(&ep.sat_pos, rho, x0);
-    let out = if rates {
-        let mut stacked = StackedModel {
-            position: model,
-            rate: RateModel::new(&ep.los, &ep.sat_vel, &raw.as_slice()[m..2 * m]),
-        };
+    if rates {
+        let rate = RateModel::new(&ep.los, &ep.sat_vel, &raw.as_slice()[m..2 * m]);
         let sigma: Vec<f64> = ep.sigma.iter().chain(&ep.sigma_rate).copied().collect();
-        let groups: Vec<usize> = (0..2 * m).map(|i| i % m).collect();
-        fde(
-            &mut stacked,
-            &ObsCov::Sigma(sigma),
-            &vec![true; 2 * m],
-            Some(&groups),
-            cfg,
-        )?
+        snapshot_sat_fde(model, Some(rate), sigma, cfg)
     } else {
-        let mut model = model;
-        fde(
-            &mut model,
-            &ObsCov::Sigma(ep.sigma.clone()),
-            &vec![true; m],
-            None,
-            cfg,
-        )?
-    };
-    // Per satellite: its pseudorange's w (or, excluded, the |w| that excluded it); an
-    // excluded rate row (index m + j) names satellite j.
-    let mut w: Vec<f64> = out.w[..m].to_vec();
-    for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
-        w[i % m] = wi;
+        snapshot_sat_fde(model, None, ep.sigma.clone(), cfg)
     }
-    Ok(SatFde {
-        excluded: out.excluded.iter().map(|i| i % m).collect(),
-        status: out.status,
-        first: out.first,
-        w,
-    })
 }

@@ -24,28 +24,25 @@
 //! snapshot fixes; the clocks start from the alignment epoch's observations at the aligned
 //! position.
 
+use super::common::{record_sat_fde, record_untested};
 use super::inertial::{align, antenna, record_nav, shift, BodyImu, Mechaniser};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::broadcast::{Sat, Sys};
 use crate::gnss::geodesy::{ecef_to_enu, lla_to_ecef};
-use crate::gnss::innovation::{innovation_fde, SatFde};
+use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, SatFde};
 use crate::gnss::ranges::RangeEpoch;
-use crate::gnss::snapshot::{
-    fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel,
-};
+use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
 use crate::gnss::C;
 use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
-use crate::record::{RunRecord, SatRecord, NAV_COLUMNS, SAT_NO_MEASUREMENT};
+use crate::record::{RunRecord, SatRecord, NAV_COLUMNS};
 use crate::spec::{FdePlacement, ScenarioSpec};
 use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// Earth rotation rate of the Sagnac term (rad/s, WGS-84).
 const OMEGA_E: f64 = 7.292_115_146_7e-5;
-/// FDE status code of an epoch whose global test alarms with placement `none`.
-const ALARM: u8 = 4;
 
 /// One epoch's rows: pseudoranges of `m` satellites, then (with rates) their range rates.
 struct Rows {
@@ -110,15 +107,7 @@ pub fn run_tight_ins(
     rec.nav = Vec::with_capacity(epochs * NAV_COLUMNS.len());
     let s_count = rp.names.len();
     let cols: Vec<usize> = rp.names.iter().map(|n| clock_column(n)).collect();
-    let mut sat = SatRecord {
-        names: rp.names.clone(),
-        in_view: vec![false; epochs * s_count],
-        excluded: vec![false; epochs * s_count],
-        w: vec![f64::NAN; epochs * s_count],
-        status: Vec::with_capacity(epochs),
-        used: Vec::with_capacity(epochs),
-        metrics: Vec::new(),
-    };
+    let mut sat = SatRecord::new(rp.names.clone(), epochs);
     let imu = BodyImu::new(&logged.imu, sd.mounting, sd.imu_time_offset)?;
     let lever = Vector3::from(sd.lever_arm);
     let fix = |k: usize, o: usize| -> Option<Vector3<f64>> {
@@ -192,19 +181,7 @@ pub fn run_tight_ins(
             None
         };
         let Some(rows) = rows else {
-            let sub = &mut rec.subs[0];
-            sub.statistic.push(f64::NAN);
-            sub.dof.push(0);
-            sub.isolated.push(false);
-            sub.reinstated.push(false);
-            sub.fused.push(false);
-            let det = &mut sub.detectors[0];
-            det.statistic.push(f64::NAN);
-            det.threshold.push(f64::NAN);
-            det.alarm.push(false);
-            sat.status.push(SAT_NO_MEASUREMENT);
-            sat.used.push(0);
-            rec.sources.push(0);
+            record_untested(&mut rec, &mut sat);
             record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
             continue;
         };
@@ -244,28 +221,14 @@ pub fn run_tight_ins(
                 innovation_fde(&inn.r, &inn.s, m, true, Some(lambda), full, &cfg)?
             }
         };
-        let (stat, thr, dof) = out.first;
-        let sub = &mut rec.subs[0];
-        let det = &mut sub.detectors[0];
-        det.statistic.push(stat);
-        det.threshold.push(thr);
-        det.alarm.push(stat >= thr);
-        sub.statistic.push(stat);
-        sub.dof.push(dof as u32);
-        sub.isolated.push(!out.excluded.is_empty());
-        sub.reinstated.push(false);
-        for (j, &i) in rows.idx.iter().enumerate() {
-            sat.w[k * s_count + ep.sats[i]] = out.w[j];
-        }
-        for &j in &out.excluded {
-            sat.excluded[k * s_count + ep.sats[rows.idx[j]]] = true;
-        }
-        sat.status
-            .push(if t.fde == FdePlacement::None && stat >= thr {
-                ALARM
-            } else {
-                out.status.code()
-            });
+        record_sat_fde(
+            &mut rec,
+            &mut sat,
+            k,
+            &out,
+            |j| ep.sats[rows.idx[j]],
+            t.fde == FdePlacement::None,
+        );
         let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
         let used = m - excluded.len();
         if excluded.is_empty() {
@@ -284,7 +247,7 @@ pub fn run_tight_ins(
             kf.p = p;
             kf.feedback(&mut s, &dx);
         }
-        sub.fused.push(used > 0);
+        rec.subs[0].fused.push(used > 0);
         sat.used.push(used as u32);
         rec.sources.push(u32::from(used > 0));
         record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
@@ -296,20 +259,7 @@ pub fn run_tight_ins(
 
 /// An epoch without navigation (before the alignment, after the IMU log).
 fn skip(rec: &mut RunRecord, sat: &mut SatRecord) {
-    let sub = &mut rec.subs[0];
-    sub.statistic.push(f64::NAN);
-    sub.dof.push(0);
-    sub.isolated.push(false);
-    sub.reinstated.push(false);
-    sub.fused.push(false);
-    for d in &mut sub.detectors {
-        d.statistic.push(f64::NAN);
-        d.threshold.push(f64::NAN);
-        d.alarm.push(false);
-    }
-    sat.status.push(SAT_NO_MEASUREMENT);
-    sat.used.push(0);
-    rec.sources.push(0);
+    record_untested(rec, sat);
     rec.error.extend([f64::NAN; 9]);
     rec.sigma.extend([f64::NAN; 9]);
     rec.nav.extend([f64::NAN; NAV_COLUMNS.len()]);
@@ -460,41 +410,9 @@ fn ls_precheck(
     rates: bool,
     cfg: &FdeConfig,
 ) -> Result<SatFde> {
-    let m = rows.idx.len();
     let (r, _) = antenna_ecef(s, lever);
     let x0 = [r.x, r.y, r.z, kf.clock[0]];
     let model = PositionModel::new(&rows.sat_rot, &rows.rho_gps, x0);
-    let out = if rates {
-        let mut stacked = StackedModel {
-            position: model,
-            rate: RateModel::new(&rows.los, &rows.sat_vel, &rows.rate),
-        };
-        let groups: Vec<usize> = (0..2 * m).map(|i| i % m).collect();
-        fde(
-            &mut stacked,
-            &ObsCov::Sigma(rows.sigma.clone()),
-            &vec![true; 2 * m],
-            Some(&groups),
-            cfg,
-        )?
-    } else {
-        let mut model = model;
-        fde(
-            &mut model,
-            &ObsCov::Sigma(rows.sigma.clone()),
-            &vec![true; m],
-            None,
-            cfg,
-        )?
-    };
-    let mut w: Vec<f64> = out.w[..m].to_vec();
-    for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
-        w[i % m] = wi;
-    }
-    Ok(SatFde {
-        excluded: out.excluded.iter().map(|i| i % m).collect(),
-        status: out.status,
-        first: out.first,
-        w,
-    })
+    let rate = rates.then(|| RateModel::new(&rows.los, &rows.sat_vel, &rows.rate));
+    snapshot_sat_fde(model, rate, rows.sigma.clone(), cfg)
 }

@@ -238,15 +238,7 @@ pub fn run_ultra_tight(
     let epochs = src.epochs();
     let s_count = chans.len();
     let mut rec = RunRecord::empty(spec, models);
-    let mut sat = SatRecord {
-        names: u.satellites.clone(),
-        in_view: vec![false; epochs * s_count],
-        excluded: vec![false; epochs * s_count],
-        w: vec![f64::NAN; epochs * s_count],
-        status: Vec::with_capacity(epochs),
-        used: Vec::with_capacity(epochs),
-        metrics: Vec::new(),
-    };
+    let mut sat = SatRecord::new(u.satellites.clone(), epochs);
     let mut sig = DVector::zeros(crate::ins::N_STATES);
     let mut x_post = kf.x().clone();
     for k in 0..epochs {

@@ -3,7 +3,7 @@
 //! observation (Teunissen 1990, the paper's ref. 9) with iterative exclusion of the satellite
 //! of the largest |w| above K (both its rows: pseudorange `j` and, with rates, `m + j`).
 
-use super::snapshot::{FdeConfig, FdeStatus};
+use super::snapshot::{fde, FdeConfig, FdeStatus, ObsCov, PositionModel, RateModel, StackedModel};
 use crate::error::{Error, Result};
 use crate::kalman::{KalmanFilter, Pending};
 use nalgebra::{Cholesky, DMatrix, DVector};
@@ -142,4 +142,44 @@ pub fn innovation_fde(
         out.w[j] = w_at_exclusion[j];
     }
     Ok(out)
+}
+
+/// Method 1 of a tight filter (`ls_precheck`): the snapshot test and exclusion loop on the
+/// pseudoranges of `position` (m satellites) and, with `rate`, their rates stacked (rows `j`
+/// and `m + j` of satellite j, excluded together), σ per row `sigma`; as [`SatFde`] with the w
+/// of each satellite's pseudorange (for an excluded one the |w| that excluded it).
+pub fn snapshot_sat_fde(
+    position: PositionModel<'_>,
+    rate: Option<RateModel<'_>>,
+    sigma: Vec<f64>,
+    cfg: &FdeConfig,
+) -> Result<SatFde> {
+    let m = position.rho.len();
+    let out = match rate {
+        Some(rate) => {
+            let mut stacked = StackedModel { position, rate };
+            let groups: Vec<usize> = (0..2 * m).map(|i| i % m).collect();
+            fde(
+                &mut stacked,
+                &ObsCov::Sigma(sigma),
+                &vec![true; 2 * m],
+                Some(&groups),
+                cfg,
+            )?
+        }
+        None => {
+            let mut model = position;
+            fde(&mut model, &ObsCov::Sigma(sigma), &vec![true; m], None, cfg)?
+        }
+    };
+    let mut w: Vec<f64> = out.w[..m].to_vec();
+    for (&i, &wi) in out.excluded.iter().zip(&out.excluded_w) {
+        w[i % m] = wi;
+    }
+    Ok(SatFde {
+        excluded: out.excluded.iter().map(|i| i % m).collect(),
+        status: out.status,
+        first: out.first,
+        w,
+    })
 }

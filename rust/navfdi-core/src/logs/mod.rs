@@ -153,41 +153,29 @@ impl LoggedSource {
                 sigma[si][k] = DVector::from_vec(s);
             }
         }
-        let mut enu = vec![[f64::NAN; 6]; epochs];
-        if let Some(r) = reference {
-            for (j, &tr) in r.t.iter().enumerate() {
-                let k = gnss.t.partition_point(|&t| t < tr - 1e-3);
-                if k >= epochs || (gnss.t[k] - tr).abs() > 1e-3 {
-                    continue;
-                }
-                if available.iter().any(|a| a[k]) {
-                    continue;
-                }
-                let p = origin.to_enu(&r.pos[j]);
-                let v = r.vel[j];
-                enu[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
-            }
-        }
-        let models = Models {
-            t: gnss.t.clone(),
-            nominal: gnss.pos.clone(),
-            phi: Vec::new(),
-            q: Vec::new(),
-            p0: DMatrix::zeros(0, 0),
-            h: vec![Vec::new(); ns],
-            r: vec![DMatrix::zeros(0, 0); ns],
-            r_epoch: vec![Vec::new(); ns],
-            available,
-            ranges: None,
-            mode: Vec::new(),
-            logged: Some(Logged {
-                imu,
-                origin,
-                sigma,
-                fixes: Vec::new(),
-            }),
+        // Scored only where no GNSS measurement was an input.
+        let enu = reference.map_or_else(
+            || vec![[f64::NAN; 6]; epochs],
+            |r| {
+                reference_enu(r, &gnss.t, &origin, 1e-3, |k| {
+                    available.iter().any(|a| a[k])
+                })
+            },
+        );
+        let logged = Logged {
+            imu,
+            origin,
+            sigma,
+            fixes: Vec::new(),
         };
-        Ok(LoggedSource {
+        let models = logged_models(gnss.t.clone(), gnss.pos.clone(), available, None, logged);
+        Ok(LoggedSource::assemble(models, z, enu))
+    }
+
+    /// A source of `models`, the recorded measurements `z` (per sensor and epoch) and the
+    /// reference east, north, up and velocity per epoch `enu`.
+    fn assemble(models: Models, z: Vec<Vec<DVector<f64>>>, enu: Vec<[f64; 6]>) -> Self {
+        LoggedSource {
             models,
             recorded: Measurements {
                 z,
@@ -199,7 +187,7 @@ impl LoggedSource {
                 enu,
                 attitude: Vec::new(),
             },
-        })
+        }
     }
 
     /// The measurements of a run of scenario `spec` (the one prepared, or a variant of it with
@@ -246,6 +234,55 @@ impl LoggedSource {
             }
         }
         m
+    }
+}
+
+/// The reference's antenna east, north, up (m, from `origin`) and velocity per record epoch
+/// `t` (s): its epochs matched within `tol` s, NaN where unmatched or where `skip(k)`.
+fn reference_enu(
+    r: &GnssLog,
+    t: &[f64],
+    origin: &Nominal,
+    tol: f64,
+    skip: impl Fn(usize) -> bool,
+) -> Vec<[f64; 6]> {
+    let mut enu = vec![[f64::NAN; 6]; t.len()];
+    for (j, &tr) in r.t.iter().enumerate() {
+        let k = t.partition_point(|&x| x < tr - tol);
+        if k >= t.len() || (t[k] - tr).abs() > tol || skip(k) {
+            continue;
+        }
+        let p = origin.to_enu(&r.pos[j]);
+        let v = r.vel[j];
+        enu[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
+    }
+    enu
+}
+
+/// The [`Models`] of a recorded-data source: epochs `t`, linearisation points, availability
+/// per sensor, the satellite ranges (raw GNSS logs) and the logged IMU (no Φ, Q or H: the
+/// strapdown architectures build their own).
+fn logged_models(
+    t: Vec<f64>,
+    nominal: Vec<Nominal>,
+    available: Vec<Vec<bool>>,
+    ranges: Option<crate::gnss::ranges::RangeStream>,
+    logged: Logged,
+) -> Models {
+    let ns = available.len();
+    Models {
+        t,
+        nominal,
+        phi: Vec::new(),
+        q: Vec::new(),
+        p0: DMatrix::zeros(0, 0),
+        h: vec![Vec::new(); ns],
+        r: vec![DMatrix::zeros(0, 0); ns],
+        r_epoch: vec![Vec::new(); ns],
+        available,
+        ranges,
+        mode: Vec::new(),
+        logged: Some(logged),
     }
 }
 

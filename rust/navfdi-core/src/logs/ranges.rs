@@ -17,7 +17,7 @@
 //! view. Faults are injected into these recorded observations by
 //! [`super::LoggedSource::measurements`].
 
-use super::{check_imu, overlap, GnssLog, LoggedSource};
+use super::{check_imu, logged_models, overlap, reference_enu, GnssLog, LoggedSource};
 use crate::error::{Error, Result};
 use crate::gnss::atmosphere::{klobuchar, saastamoinen};
 use crate::gnss::broadcast::{select, Sat, Sys};
@@ -31,7 +31,7 @@ use crate::gnss::snapshot::FdeConfig;
 use crate::gnss::spp::{frequency, solve, SppConfig, SppRun, SppState, F_L1};
 use crate::gnss::C;
 use crate::spec::{ScenarioSpec, SensorKind};
-use crate::stream::{ImuSamples, Logged, Measurements, Models, Nominal, Reference};
+use crate::stream::{ImuSamples, Logged, Nominal};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One satellite's recorded observables at one epoch.
@@ -69,6 +69,15 @@ impl LoggedSource {
         }
         if let Some(r) = reference {
             r.check("reference log")?;
+        }
+        if spec
+            .sensors
+            .iter()
+            .any(|s| s.kind != SensorKind::GnssRanges)
+        {
+            return Err(Error::Invalid(
+                "sensors: a tight scenario on RINEX logs takes its gnss_ranges sensor only".into(),
+            ));
         }
         let si = spec.sensor_index(&t.sensor).unwrap_or(0);
         let sen = &spec.sensors[si];
@@ -289,62 +298,22 @@ impl LoggedSource {
                 DVector::zeros(0)
             };
         }
-        let mut enu = vec![[f64::NAN; 6]; epochs];
-        if let Some(r) = reference {
-            for (j, &tr) in r.t.iter().enumerate() {
-                let k = times.partition_point(|&t| t < tr - 2e-3);
-                if k >= epochs || (times[k] - tr).abs() > 2e-3 {
-                    continue;
-                }
-                let p = origin.to_enu(&r.pos[j]);
-                let v = r.vel[j];
-                enu[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
-            }
-        }
-        let models = Models {
-            t: times,
-            nominal,
-            phi: Vec::new(),
-            q: Vec::new(),
-            p0: DMatrix::zeros(0, 0),
-            h: vec![Vec::new(); ns],
-            r: vec![DMatrix::zeros(0, 0); ns],
-            r_epoch: vec![Vec::new(); ns],
-            available,
-            ranges: Some(RangeStream {
-                sensor: si,
-                names,
-                epochs: range_epochs,
-            }),
-            mode: Vec::new(),
-            logged: Some(Logged {
-                imu,
-                origin,
-                sigma: Vec::new(),
-                fixes,
-            }),
+        let enu = reference.map_or_else(
+            || vec![[f64::NAN; 6]; epochs],
+            |r| reference_enu(r, &times, &origin, 2e-3, |_| false),
+        );
+        let logged = Logged {
+            imu,
+            origin,
+            sigma: Vec::new(),
+            fixes,
         };
-        if spec
-            .sensors
-            .iter()
-            .any(|s| s.kind != SensorKind::GnssRanges)
-        {
-            return Err(Error::Invalid(
-                "sensors: a tight scenario on RINEX logs takes its gnss_ranges sensor only".into(),
-            ));
-        }
-        Ok(LoggedSource {
-            models,
-            recorded: Measurements {
-                z,
-                raw: Vec::new(),
-                ins_position: Vec::new(),
-            },
-            reference: Reference {
-                x_true: Vec::new(),
-                enu,
-                attitude: Vec::new(),
-            },
-        })
+        let ranges = RangeStream {
+            sensor: si,
+            names,
+            epochs: range_epochs,
+        };
+        let models = logged_models(times, nominal, available, Some(ranges), logged);
+        Ok(LoggedSource::assemble(models, z, enu))
     }
 }
