@@ -1,6 +1,9 @@
-"""Compact RINEX (Hatanaka) files read directly (issue 23, item 4): CRINEX 3 gives exactly the
-observations of its plain RINEX 3 pair; CRINEX 1 expands to RINEX 2.11, which is then refused
-with what to do; a damaged compressed file names its line."""
+"""File formats (issue 23, item 4): Compact RINEX (Hatanaka) read directly — CRINEX 3 gives
+exactly the observations of its plain RINEX 3 pair, CRINEX 1 expands to RINEX 2.11, which is
+then refused with what to do, a damaged compressed file names its line; RINEX 4 navigation
+files (their `> EPH` records, the GPS Klobuchar `> ION` record) and RINEX 4 observation files.
+The RINEX 4 navigation converter is also tested against a RINEX 3 file written as RINEX 4 in
+the Rust tests (same ephemerides, errors on the original lines)."""
 
 from __future__ import annotations
 
@@ -41,3 +44,28 @@ def test_a_damaged_compact_file_names_its_line(tmp_path) -> None:
     p.write_text("\n".join(raw) + "\n")
     with pytest.raises(navfdi.FileFormatError, match=rf"bad\.crx, line {k + 1}: not Compact RINEX data.*damaged"):
         _core.read_rinex_obs(str(p))
+
+
+def test_rinex4_navigation_file_reads() -> None:
+    df = navfdi.read_rinex(D / "KMS300DNK_R_20221591000_01H_MN.rnx.gz")
+    assert df.attrs["kind"] == "navigation" and df.attrs["version"] == "4.00"
+    counts = df["satellite"].str[0].value_counts().to_dict()
+    # 30 GPS and 1 QZSS LNAV, 108 Galileo INAV/FNAV, 36 BeiDou D1/D2 records in the file.
+    assert counts == {"E": 108, "C": 36, "G": 30, "J": 1}
+    assert np.allclose(df.attrs["klobuchar"], [1.024454832077e-08, 2.235174179077e-08, -5.960464477539e-08, -1.192092895508e-07, 9.6256e04, 1.31072e05, -6.5536e04, -5.89824e05])
+    assert (df["sqrt_a"].between(5e3, 6.5e3)).all()
+
+
+def test_rinex4_observation_file_reads_as_rinex3(tmp_path) -> None:
+    import gzip
+
+    lines = gzip.open(D / f"{ACOR}.rnx.gz", "rt").read().splitlines()
+    lines[0] = "     4.00" + lines[0][9:]
+    p = tmp_path / "acor4.rnx"
+    p.write_text("\n".join(lines) + "\n")
+    a = _core.read_rinex_obs(str(p))
+    b = _core.read_rinex_obs(str(D / f"{ACOR}.rnx.gz"))
+    assert a["version"] == "4.00"
+    for k in ("epoch", "time", "sat", "code", "value"):
+        assert np.array_equal(a[k], b[k], equal_nan=True), k
+

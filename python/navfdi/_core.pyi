@@ -857,7 +857,7 @@ class WeightedFusion:
         """Pickle support."""
 
 def read_rinex_obs(path: str) -> dict[str, Any]:
-    """Read a RINEX 3 observation file (plain or .gz) into columns: ``epoch`` (uint32),
+    """Read a RINEX 3 or 4 observation file (plain, .gz or Hatanaka .crx) into columns: ``epoch`` (uint32),
     ``time`` (GPS seconds since 1980-01-06, float64), ``sat`` (uint32 code into
     ``satellites``), ``code`` (uint32 code into ``observables``), ``value`` (float64), each
     (n,); ``satellites``, ``observables`` (list[str]); ``epoch_times`` (GPS s) and ``flags``
@@ -865,7 +865,7 @@ def read_rinex_obs(path: str) -> dict[str, Any]:
     ``approx_position`` ([x, y, z] m or None). Malformed files raise :class:`FileFormatError`."""
 
 def read_rinex_nav(path: str) -> dict[str, Any]:
-    """Read a RINEX 3 navigation file into columns, one row per GPS/Galileo/BeiDou/QZSS
+    """Read a RINEX 3 or 4 navigation file into columns, one row per GPS/Galileo/BeiDou/QZSS
     ephemeris: ``satellite`` (list[str]); ``toc``, ``toe`` (GPS s); ``af0`` s, ``af1`` s/s,
     ``af2`` s/s²; ``sqrt_a`` √m; ``e``; ``i0``, ``omega0``, ``omega``, ``m0`` rad; ``delta_n``,
     ``idot``, ``omega_dot`` rad/s; ``tgd`` s; ``health``; ``accuracy`` m; ``iod`` (float64

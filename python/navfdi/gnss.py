@@ -81,8 +81,8 @@ def _kind(path: str) -> str:
 
 
 def read_rinex(path: str | os.PathLike[str]) -> pd.DataFrame:
-    """Read a RINEX 3 observation or navigation file (plain or ``.gz``; observation files also
-    Hatanaka-compressed, ``.crx`` / ``.crx.gz``) with the ``rinex`` crate.
+    """Read a RINEX 3 or 4 observation or navigation file (plain or ``.gz``; observation files
+    also Hatanaka-compressed, ``.crx`` / ``.crx.gz``) with the ``rinex`` crate.
 
     Observation files give a long table, one row per epoch, satellite and observable:
     ``time`` (GPST timestamp), ``epoch`` (int), ``satellite`` (category, ``G05``),

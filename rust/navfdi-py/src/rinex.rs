@@ -27,7 +27,7 @@ fn sat_names(sats: impl Iterator<Item = Sat>) -> (Vec<u32>, Vec<String>) {
     (ids.iter().map(|s| table[s]).collect(), names)
 }
 
-/// Read a RINEX 3 observation file (plain or .gz) into columns: ``epoch`` (int, index of the
+/// Read a RINEX 3 or 4 observation file (plain, .gz or Hatanaka .crx) into columns: ``epoch`` (int, index of the
 /// epoch), ``time`` (GPS seconds since 1980-01-06, GPST), ``sat`` (int code into
 /// ``satellites``), ``code`` (int code into ``observables``), ``value`` (float64); plus
 /// ``satellites``, ``observables``, ``flags`` (per epoch), ``epoch_times``, ``dropped``
@@ -90,7 +90,7 @@ fn obs_dict<'py>(py: Python<'py>, data: &ObsData) -> PyResult<Bound<'py, PyDict>
     Ok(d)
 }
 
-/// Read a RINEX 3 navigation file (plain or .gz): one row per GPS/Galileo/BeiDou/QZSS
+/// Read a RINEX 3 or 4 navigation file (plain or .gz): one row per GPS/Galileo/BeiDou/QZSS
 /// ephemeris as columns (``satellite`` str; ``toc``, ``toe`` GPS seconds; ``af0`` s, ``af1``
 /// s/s, ``af2`` s/s²; ``sqrt_a`` √m; ``e``; ``i0``, ``omega0``, ``omega``, ``m0`` rad;
 /// ``delta_n``, ``idot``, ``omega_dot`` rad/s; ``tgd`` s; ``health`` int; ``unhealthy``

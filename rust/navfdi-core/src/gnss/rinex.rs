@@ -26,7 +26,7 @@ use super::atmosphere::Klobuchar;
 use super::broadcast::{Ephemeris, GpsTime, Sat, Sys};
 pub use super::rinex_text::read_text;
 use super::rinex_text::{
-    check_nav_body, check_obs_body, check_version, format_err, header_end, label,
+    check_nav_body, check_obs_body, check_version, format_err, header_end, label, rinex4_nav,
 };
 use crate::error::Result;
 use nalgebra::Vector3;
@@ -449,15 +449,130 @@ pub fn read_obs(path: &str) -> Result<ObsData> {
     parse_obs(path, &read_text(path)?)
 }
 
-/// Read and parse a navigation file from disk.
+/// Read and parse a navigation file from disk (RINEX 3, or RINEX 4 through
+/// [`super::rinex_text::rinex4_nav`]; errors name the original file's lines).
 pub fn read_nav(path: &str) -> Result<NavData> {
-    parse_nav(path, &read_text(path)?)
+    let text = read_text(path)?;
+    let first = text.lines().next().unwrap_or("");
+    if label(first) == "RINEX VERSION / TYPE"
+        && first.get(..9).unwrap_or("").trim().starts_with('4')
+    {
+        let (v3, map, _dropped, klobuchar) = rinex4_nav(path, &text)?;
+        let mut nav = parse_nav(path, &v3).map_err(|e| remap_line(e, path, &map))?;
+        nav.version = first.get(..9).unwrap_or("").trim().to_string();
+        nav.klobuchar = klobuchar;
+        return Ok(nav);
+    }
+    parse_nav(path, &text)
+}
+
+/// An error about line `l` of a converted text, about the original's line `map[l − 1]`.
+fn remap_line(e: crate::error::Error, path: &str, map: &[usize]) -> crate::error::Error {
+    let crate::error::Error::Format(msg) = &e else {
+        return e;
+    };
+    let prefix = format!("{path}, line ");
+    let Some(rest) = msg.strip_prefix(&prefix) else {
+        return e;
+    };
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    match digits
+        .parse::<usize>()
+        .ok()
+        .and_then(|l| map.get(l.wrapping_sub(1)))
+    {
+        Some(orig) => {
+            crate::error::Error::Format(format!("{prefix}{orig}{}", &rest[digits.len()..]))
+        }
+        None => e,
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::error::Error;
+
+    /// The bundled RINEX 3 navigation file written as RINEX 4 (a `> EPH` line before each
+    /// record, the Klobuchar header lines as a `> ION G01 LNAV` record, a CNAV record and a
+    /// system-time record to leave out) reads to the same ephemerides and coefficients.
+    #[test]
+    fn rinex4_navigation_reads_as_its_rinex3_form() {
+        let path = format!(
+            "{}/../../tests/data/rinex/base.nav",
+            env!("CARGO_MANIFEST_DIR")
+        );
+        let v3 = read_text(&path).unwrap();
+        let lines: Vec<&str> = v3.lines().collect();
+        let end = lines
+            .iter()
+            .position(|l| label(l) == "END OF HEADER")
+            .unwrap();
+        let mut v4 = String::new();
+        let (mut a, mut b) = (String::new(), String::new());
+        for (i, l) in lines.iter().enumerate().take(end + 1) {
+            match label(l) {
+                "IONOSPHERIC CORR" if l.starts_with("GPSA") => a = l[5..53].to_string(),
+                "IONOSPHERIC CORR" if l.starts_with("GPSB") => b = l[5..53].to_string(),
+                "IONOSPHERIC CORR" => {}
+                _ if i == 0 => v4.push_str(&format!("     4.00{}\n", &l[9..])),
+                _ => v4.push_str(&format!("{l}\n")),
+            }
+        }
+        let d19 = |f: &str| -> String {
+            f.split_whitespace()
+                .map(|x| format!("{:>19.12E}", x.parse::<f64>().unwrap()))
+                .collect()
+        };
+        let (da, db) = (d19(&a), d19(&b));
+        v4.push_str("> ION G01 LNAV\n");
+        v4.push_str(&format!("    2024 06 24 08 00 00{}\n", &da[..57]));
+        v4.push_str(&format!("    {}{}\n", &da[57..], &db[..57]));
+        v4.push_str(&format!("    {}{:>19.12E}\n", &db[57..], 0.0));
+        v4.push_str("> STO G01 LNAV\n    2024 06 24 08 00 00 GPUT                                  UTC(USNO)\n     2.952840000000E+05 9.313225746155E-10 2.664535259100E-15 0.000000000000E+00\n");
+        v4.push_str(
+            "> EPH G01 CNAV\nG01 2024 06 24 08 00 00 1.0E-04 0.0E+00 0.0E+00\n     1.0E+00\n",
+        );
+        for l in &lines[end + 1..] {
+            if let Some(c) = l.chars().next().filter(char::is_ascii_alphabetic) {
+                let kind = match c {
+                    'E' => "INAV",
+                    'C' => "D1",
+                    'R' => "FDMA",
+                    _ => "LNAV",
+                };
+                v4.push_str(&format!("> EPH {} {kind}\n", &l[..3]));
+            }
+            v4.push_str(&format!("{l}\n"));
+        }
+        let (conv, map, dropped, klob) = rinex4_nav("x.rnx", &v4).unwrap();
+        assert_eq!(dropped, 3);
+        assert_eq!(conv.lines().count(), map.len());
+        let from4 = parse_nav("x.rnx", &conv).unwrap();
+        let from3 = parse_nav(&path, &v3).unwrap();
+        assert_eq!(from4.ephemerides, from3.ephemerides);
+        let (k4, k3) = (klob.unwrap(), from3.klobuchar.unwrap());
+        for (x, y) in k4.iter().zip(&k3) {
+            assert!((x - y).abs() <= 1e-12 * y.abs().max(1e-30), "{x} vs {y}");
+        }
+        // An error in the data names the original file's line.
+        let bad = v4.replacen("E+00", "E+0x", 40);
+        let dir = std::env::temp_dir().join("navfdi_rnx4_test.rnx");
+        std::fs::write(&dir, &bad).unwrap();
+        let e = read_nav(dir.to_str().unwrap()).unwrap_err().to_string();
+        let line: usize = e
+            .split("line ")
+            .nth(1)
+            .and_then(|r| r.split(':').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or(0);
+        assert!(
+            bad.lines()
+                .nth(line.saturating_sub(1))
+                .is_some_and(|l| l.contains("E+0x")),
+            "{e}"
+        );
+    }
 
     const OBS: &str =
         "     3.04           OBSERVATION DATA    M                   RINEX VERSION / TYPE

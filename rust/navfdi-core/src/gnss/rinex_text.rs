@@ -230,6 +230,111 @@ pub(crate) fn expand_compact(path: &str, text: &str) -> Result<String> {
     Ok(out)
 }
 
+/// A RINEX 4 navigation file as the RINEX 3 text the reader parses, and for each of its lines
+/// the line of the original (1-based). The `> EPH` records whose body has the RINEX 3 layout
+/// (GPS/QZSS `LNAV`, Galileo `INAV`/`FNAV`, BeiDou `D1`/`D2`, GLONASS `FDMA`) are kept
+/// without their `>` line; the other records (CNAV/CNV1–3 messages, SBAS, system time offsets,
+/// Earth orientation, ionosphere models) are left out and counted in the returned number, and
+/// the GPS Klobuchar coefficients of the first `> ION G… LNAV` record are returned (they are
+/// in the header in RINEX 3).
+#[allow(clippy::type_complexity)]
+pub(crate) fn rinex4_nav(
+    path: &str,
+    text: &str,
+) -> Result<(String, Vec<usize>, usize, Option<[f64; 8]>)> {
+    const KEEP: [&str; 6] = ["LNAV", "INAV", "FNAV", "D1", "D2", "FDMA"];
+    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+    let end = lines
+        .iter()
+        .position(|l| label(l) == "END OF HEADER")
+        .ok_or_else(|| format_err(path, None, "no END OF HEADER line"))?;
+    let mut out = String::with_capacity(text.len());
+    let mut map = Vec::with_capacity(lines.len());
+    fn push(out: &mut String, map: &mut Vec<usize>, line: &str, orig: usize) {
+        out.push_str(line);
+        out.push('\n');
+        map.push(orig);
+    }
+    // The Klobuchar record, read first: it goes into the header.
+    let mut iono: Option<[f64; 8]> = None;
+    for (i, l) in lines.iter().enumerate().skip(end + 1) {
+        let f: Vec<&str> = l.split_whitespace().collect();
+        if f.len() >= 4 && f[0] == ">" && f[1] == "ION" && f[2].starts_with('G') && f[3] == "LNAV" {
+            let mut vals = Vec::new();
+            for (j, b) in lines.iter().enumerate().skip(i + 1).take(3) {
+                let body = if j == i + 1 {
+                    b.get(23..).unwrap_or("")
+                } else {
+                    b.get(4..).unwrap_or("")
+                };
+                for k in 0..4 {
+                    if vals.len() == 8 {
+                        break; // the rest is the region flag
+                    }
+                    let Some(field) = body.get(k * 19..(k + 1) * 19) else {
+                        break;
+                    };
+                    let field = field.trim();
+                    if field.is_empty() {
+                        continue;
+                    }
+                    let v: f64 = field.replace(['D', 'd'], "E").parse().map_err(|_| {
+                        format_err(
+                            path,
+                            Some(j + 1),
+                            format!("ionosphere coefficient '{field}' is not a number"),
+                        )
+                    })?;
+                    vals.push(v);
+                }
+            }
+            if vals.len() < 8 {
+                return Err(format_err(
+                    path,
+                    Some(i + 1),
+                    "a GPS Klobuchar record (ION LNAV) needs 8 coefficients",
+                ));
+            }
+            let mut k = [0.0; 8];
+            k.copy_from_slice(&vals[..8]);
+            iono = Some(k);
+            break;
+        }
+    }
+    for (i, l) in lines.iter().enumerate().take(end) {
+        if i == 0 {
+            let rest = l.get(9..).unwrap_or("");
+            push(&mut out, &mut map, &format!("{:>9}{rest}", "3.05"), 1);
+        } else {
+            push(&mut out, &mut map, l, i + 1);
+        }
+    }
+    push(&mut out, &mut map, lines[end], end + 1);
+    let mut keep = false;
+    let mut started = false;
+    let mut dropped = 0usize;
+    for (i, l) in lines.iter().enumerate().skip(end + 1) {
+        if l.starts_with('>') {
+            let f: Vec<&str> = l.split_whitespace().collect();
+            keep = f.len() >= 4 && f[1] == "EPH" && KEEP.contains(&f[3]);
+            dropped += usize::from(!keep);
+            started = true;
+            continue;
+        }
+        if !started && !l.trim().is_empty() {
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                "RINEX 4 navigation data must start with a '>' record line",
+            ));
+        }
+        if keep {
+            push(&mut out, &mut map, l, i + 1);
+        }
+    }
+    Ok((out, map, dropped, iono))
+}
+
 /// Read all of `src`, stopping at the first NUL byte with an error that names its line and
 /// byte offset (a file padded or overwritten with zeros is not text; reading on would cost
 /// the whole padding in time and memory).
@@ -304,11 +409,13 @@ pub(crate) fn check_version(path: &str, text: &str, kind: char) -> Result<String
     }
     let version = first.get(..9).unwrap_or("").trim().to_string();
     let major = version.split('.').next().unwrap_or("");
-    if major != "3" {
+    // RINEX 4 observation records have the RINEX 3 layout (navigation files are converted
+    // before this check, `rinex4_nav`).
+    if !(major == "3" || (major == "4" && kind == 'O')) {
         return Err(format_err(
             path,
             Some(1),
-            format!("RINEX version '{version}' is not supported (only 3.xx); convert the file to RINEX 3 (e.g. gfzrnx or RTKLIB convbin)"),
+            format!("RINEX version '{version}' is not supported (3.xx and 4.xx are); convert the file to RINEX 3 (e.g. gfzrnx or RTKLIB convbin)"),
         ));
     }
     let t = first
