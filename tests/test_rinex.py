@@ -212,7 +212,9 @@ def _write(path: Path, text: str) -> str:
     "mutate, match",
     [
         (lambda t: t[: len(t) // 2], "line"),  # truncated inside an epoch
-        (lambda t: t.replace("     3.04           OBSERVATION", "     2.11           OBSERVATION", 1), "version '2.11' is not supported"),
+        # A RINEX 3 body under a RINEX 2 version line: read as RINEX 2, whose header it lacks.
+        (lambda t: t.replace("     3.04           OBSERVATION", "     2.11           OBSERVATION", 1), "no '# / TYPES OF OBSERV' header line"),
+        (lambda t: t.replace("     3.04           OBSERVATION", "     1.00           OBSERVATION", 1), "version '1.00' is not supported"),
         (lambda t: "", "empty"),
         (lambda t: t.replace("END OF HEADER", "END OF HEADXX", 1), "END OF HEADER"),
         (lambda t: t.replace("G05  20590792.555", "G05  2059O792.555", 1) if "G05  20590792.555" in t else t[:5000] + "\n> garbage\n", "line"),

@@ -32,6 +32,7 @@ pub mod prefilter;
 pub mod pv_filter;
 pub mod ranges;
 pub mod rinex;
+pub mod rinex2;
 pub mod rinex_text;
 pub mod sequential;
 pub mod signals;

@@ -444,19 +444,48 @@ pub fn parse_nav(path: &str, text: &str) -> Result<NavData> {
     })
 }
 
-/// Read and parse an observation file from disk.
-pub fn read_obs(path: &str) -> Result<ObsData> {
-    parse_obs(path, &read_text(path)?)
+/// The RINEX major version of a file's first line (`'3'`), if it has one.
+fn major(text: &str) -> Option<char> {
+    let first = text.lines().next()?;
+    if label(first) != "RINEX VERSION / TYPE" {
+        return None;
+    }
+    first.get(..9)?.trim().chars().next()
 }
 
-/// Read and parse a navigation file from disk (RINEX 3, or RINEX 4 through
-/// [`super::rinex_text::rinex4_nav`]; errors name the original file's lines).
+/// Read and parse an observation file from disk (RINEX 3 or 4; RINEX 2.11 through
+/// [`super::rinex2::obs_to_v3`], errors naming the original lines).
+pub fn read_obs(path: &str) -> Result<ObsData> {
+    let text = read_text(path)?;
+    if major(&text) == Some('2') {
+        let (v3, map) = super::rinex2::obs_to_v3(path, &text)?;
+        let mut obs = parse_obs(path, &v3).map_err(|e| remap_line(e, path, &map))?;
+        obs.version = text
+            .lines()
+            .next()
+            .unwrap_or("")
+            .get(..9)
+            .unwrap_or("")
+            .trim()
+            .to_string();
+        return Ok(obs);
+    }
+    parse_obs(path, &text)
+}
+
+/// Read and parse a navigation file from disk (RINEX 3; RINEX 4 through
+/// [`super::rinex_text::rinex4_nav`], RINEX 2 GPS through [`super::rinex2::nav_to_v3`];
+/// errors name the original file's lines).
 pub fn read_nav(path: &str) -> Result<NavData> {
     let text = read_text(path)?;
     let first = text.lines().next().unwrap_or("");
-    if label(first) == "RINEX VERSION / TYPE"
-        && first.get(..9).unwrap_or("").trim().starts_with('4')
-    {
+    if major(&text) == Some('2') {
+        let (v3, map) = super::rinex2::nav_to_v3(path, &text)?;
+        let mut nav = parse_nav(path, &v3).map_err(|e| remap_line(e, path, &map))?;
+        nav.version = first.get(..9).unwrap_or("").trim().to_string();
+        return Ok(nav);
+    }
+    if major(&text) == Some('4') {
         let (v3, map, _dropped, klobuchar) = rinex4_nav(path, &text)?;
         let mut nav = parse_nav(path, &v3).map_err(|e| remap_line(e, path, &map))?;
         nav.version = first.get(..9).unwrap_or("").trim().to_string();
