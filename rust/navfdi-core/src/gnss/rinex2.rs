@@ -12,7 +12,7 @@
 //! GPS. Navigation (GPS): `ION ALPHA`/`ION BETA` become `GPSA`/`GPSB`, each record's first
 //! line `Gnn yyyy …` and its `D` exponents `E`.
 
-use super::rinex_text::{format_err, label};
+use super::rinex_text::{format_err, label, split_header};
 use crate::error::Result;
 
 /// RINEX 3 code of RINEX 2 observation type `t` for system `sys`.
@@ -34,11 +34,7 @@ fn code3(sys: char, t: &str) -> Option<String> {
 
 /// The RINEX 3 text of a RINEX 2.11 observation file and the original line of each line.
 pub(crate) fn obs_to_v3(path: &str, text: &str) -> Result<(String, Vec<usize>)> {
-    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
-    let end = lines
-        .iter()
-        .position(|l| label(l) == "END OF HEADER")
-        .ok_or_else(|| format_err(path, None, "no END OF HEADER line"))?;
+    let (lines, end) = split_header(path, text)?;
     let mut types: Vec<String> = Vec::new();
     let mut file_sys = 'G';
     for l in &lines[..end] {
@@ -191,11 +187,7 @@ pub(crate) fn obs_to_v3(path: &str, text: &str) -> Result<(String, Vec<usize>)> 
 
 /// The RINEX 3 text of a RINEX 2 GPS navigation file and the original line of each line.
 pub(crate) fn nav_to_v3(path: &str, text: &str) -> Result<(String, Vec<usize>)> {
-    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
-    let end = lines
-        .iter()
-        .position(|l| label(l) == "END OF HEADER")
-        .ok_or_else(|| format_err(path, None, "no END OF HEADER line"))?;
+    let (lines, end) = split_header(path, text)?;
     let first = lines[0];
     if first.get(20..21) != Some("N") {
         return Err(format_err(path, Some(1), "a RINEX 2 navigation file must be GPS ('N'); GLONASS ('G') and Galileo files are not read"));

@@ -14,6 +14,16 @@ pub(crate) fn format_err(path: &str, line: Option<usize>, what: impl std::fmt::D
     })
 }
 
+/// The lines of `text` (carriage returns removed) and the index of its `END OF HEADER` line.
+pub(crate) fn split_header<'a>(path: &str, text: &'a str) -> Result<(Vec<&'a str>, usize)> {
+    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
+    let end = lines
+        .iter()
+        .position(|l| label(l) == "END OF HEADER")
+        .ok_or_else(|| format_err(path, None, "no END OF HEADER line"))?;
+    Ok((lines, end))
+}
+
 /// Label of a header line (columns 61–80), trimmed.
 pub(crate) fn label(line: &str) -> &str {
     line.get(60..).map(str::trim).unwrap_or("")
@@ -243,11 +253,7 @@ pub(crate) fn rinex4_nav(
     text: &str,
 ) -> Result<(String, Vec<usize>, usize, Option<[f64; 8]>)> {
     const KEEP: [&str; 6] = ["LNAV", "INAV", "FNAV", "D1", "D2", "FDMA"];
-    let lines: Vec<&str> = text.lines().map(|l| l.trim_end_matches('\r')).collect();
-    let end = lines
-        .iter()
-        .position(|l| label(l) == "END OF HEADER")
-        .ok_or_else(|| format_err(path, None, "no END OF HEADER line"))?;
+    let (lines, end) = split_header(path, text)?;
     let mut out = String::with_capacity(text.len());
     let mut map = Vec::with_capacity(lines.len());
     fn push(out: &mut String, map: &mut Vec<usize>, line: &str, orig: usize) {
