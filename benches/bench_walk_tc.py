@@ -17,6 +17,7 @@ import time
 
 import numpy as np
 
+from bench_drive_lc import best
 from navfdi import load_scenario, logs, montecarlo
 
 
@@ -25,25 +26,16 @@ def _setup():
     return sc, logs.logged_source(sc)
 
 
-def best(f, reps: int = 9) -> float:
-    out = []
-    for _ in range(reps):
-        t = time.perf_counter()
-        f()
-        out.append(time.perf_counter() - t)
-    return min(out)
-
-
 def main() -> None:
     sc, src = _setup()
     for name, v in sc.variants():
-        run = best(lambda: src.run([v.to_json()]))
+        run = best(lambda: src.run([v.to_json()]), 9)
         print(f"whole walk, {name}: {run * 1e3:.1f} ms (target 500 ms)")
     inn = sc.variants()[0][1]
     blind = inn.with_value("sensors[0].outages", [["-1 s", "1000 s"]], create=True)
     src_blind = logs.logged_source(blind)
-    full = best(lambda: src.run([inn.to_json()]))
-    ins_only = best(lambda: src_blind.run([blind.to_json()]))
+    full = best(lambda: src.run([inn.to_json()]), 9)
+    ins_only = best(lambda: src_blind.run([blind.to_json()]), 9)
     rec = src.run([inn.to_json()])[0]
     used = np.asarray(rec["satellites"]["used"])
     n = int((used > 0).sum())

@@ -284,12 +284,13 @@ class ScenarioRun(RunRecord):
         if "nav" in self.record:
             e = self.errors()
             lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
-            if e["hor_rel_rms"] < 0.5 * e["hor_rms"]:
+            steady = self.steady_offset()
+            if steady:
                 lines.append(
                     f"  mostly a steady offset (E {e['offset_e']:.2f} m, N {e['offset_n']:.2f} m, mean outside faults); without it: "
                     f"RMS {e['hor_rel_rms']:.3f} m, max {e['hor_rel_max']:.3f} m")
             for name, _, _ in self.windows():
-                rel = f" ({e[name + '.hor_rel_max']:.3f} m offset removed)" if e["hor_rel_rms"] < 0.5 * e["hor_rms"] else ""
+                rel = f" ({e[name + '.hor_rel_max']:.3f} m offset removed)" if steady else ""
                 lines.append(f"  {name}: horizontal RMS {e[name + '.hor_rms']:.3f} m, max {e[name + '.hor_max']:.3f} m{rel}")
         elif self.baseline is not None:
             lines.append(self._error_summary())
@@ -604,7 +605,7 @@ class VariantRuns:
             lines = ["navigation error per variant against the reference epochs not used as input: RMS / max"]
             lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
             first = next(iter(self.runs.values()))
-            steady = bool((err["hor_rel_rms"] < 0.5 * err["hor_rms"]).all())
+            steady = all(r.steady_offset() for r in self.runs.values())
             if steady:
                 lines[0] += "; horizontal also with each run's mean offset removed"
                 lines[1] = f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'offset removed':>18} {'vertical [m]':>16}"

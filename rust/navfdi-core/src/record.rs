@@ -44,6 +44,22 @@ pub struct SubRecord {
     pub mdb: Vec<f64>,
 }
 
+impl SubRecord {
+    /// An epoch without a test: NaN statistics, not isolated, nothing fused.
+    pub fn push_untested(&mut self) {
+        self.statistic.push(f64::NAN);
+        self.dof.push(0);
+        self.isolated.push(false);
+        self.reinstated.push(false);
+        self.fused.push(false);
+        for d in &mut self.detectors {
+            d.statistic.push(f64::NAN);
+            d.threshold.push(f64::NAN);
+            d.alarm.push(false);
+        }
+    }
+}
+
 /// Per-epoch satellite FDE record of a tight filter (S satellites of the constellation).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SatRecord {

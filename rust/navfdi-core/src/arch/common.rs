@@ -114,17 +114,7 @@ pub fn record_sat_fde(
 /// Record a tight filter's epoch without a test (no measurement, or no navigation): NaN
 /// statistics, nothing fused, no satellite used.
 pub fn record_untested(rec: &mut RunRecord, sat: &mut SatRecord) {
-    let sub = &mut rec.subs[0];
-    sub.statistic.push(f64::NAN);
-    sub.dof.push(0);
-    sub.isolated.push(false);
-    sub.reinstated.push(false);
-    sub.fused.push(false);
-    for d in &mut sub.detectors {
-        d.statistic.push(f64::NAN);
-        d.threshold.push(f64::NAN);
-        d.alarm.push(false);
-    }
+    rec.subs[0].push_untested();
     sat.status.push(SAT_NO_MEASUREMENT);
     sat.used.push(0);
     rec.sources.push(0);

@@ -573,17 +573,7 @@ fn apply<const NS: usize>(
 fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome]) {
     for (c, o) in outcomes.iter_mut().enumerate() {
         *o = NOT_MEASURED.clone();
-        let sub = &mut rec.subs[c];
-        sub.statistic.push(f64::NAN);
-        sub.dof.push(0);
-        sub.isolated.push(false);
-        sub.reinstated.push(false);
-        sub.fused.push(false);
-        for d in &mut sub.detectors {
-            d.statistic.push(f64::NAN);
-            d.threshold.push(f64::NAN);
-            d.alarm.push(false);
-        }
+        rec.subs[c].push_untested();
     }
     rec.sources.push(0);
     rec.error.extend([f64::NAN; 9]);

@@ -299,6 +299,13 @@ impl Ephemeris {
         }
     }
 
+    /// Velocity (ECEF, m/s) and clock drift (s/s) at `t`: central differences of
+    /// [`Ephemeris::state`] over ±0.5 s.
+    pub fn rates(&self, t: &GpsTime) -> (Vector3<f64>, f64) {
+        let (a, b) = (self.state(&t.add(-0.5)), self.state(&t.add(0.5)));
+        (b.pos - a.pos, b.clock - a.clock)
+    }
+
     /// Transmission time for a signal received at `t_rx` with pseudorange `rho` (m):
     /// `t_rx − ρ/c`, then corrected by the satellite clock polynomial (two fixed-point
     /// iterations, as RTKLIB's `eph2clk`).

@@ -2,7 +2,7 @@
 //! the Doppler observations (`D1C` beside `C1C`, `D1X` beside `C1X`, `D2I` beside `C2I`) of the
 //! satellites the position used give pseudorange rates `ρ̇ᵢ = −λᵢ Dᵢ`; with the satellites'
 //! velocities and clock drifts from the broadcast ephemerides (central differences over
-//! ±0.5 s), the linear model `ρ̇ᵢ + c δṫ_sᵢ = uᵢᵀ(v_sᵢ − v) + d` ([`super::snapshot::RateModel`])
+//! ±0.5 s, `Ephemeris::rates`), the linear model `ρ̇ᵢ + c δṫ_sᵢ = uᵢᵀ(v_sᵢ − v) + d` ([`super::snapshot::RateModel`])
 //! gives the ECEF velocity v and the clock drift d (m/s), by the same weighted least squares,
 //! global test and w-test exclusion as the positions, with the elevation weighting
 //! `σ² = a² + b²/sin² el` of the rate noise (a, b). The Sagnac rate term (below 1 mm/s) is
@@ -95,9 +95,7 @@ pub fn doppler_velocity(
             };
             let range = (sr.sat_pos - r).norm();
             let ttx = eph.transmission_time(&ep.time, range);
-            let (a, b) = (eph.state(&ttx.add(-0.5)), eph.state(&ttx.add(0.5)));
-            let v_s = b.pos - a.pos;
-            let drift_s = b.clock - a.clock;
+            let (v_s, drift_s) = eph.rates(&ttx);
             let u = (sr.sat_pos - r) / range;
             los.push(u);
             vel.push(v_s);

@@ -179,11 +179,11 @@ impl LoggedSource {
                     };
                     let ttx = eph.transmission_time(&ep.time, o.value);
                     let st = eph.state(&ttx);
-                    let (a, b) = (eph.state(&ttx.add(-0.5)), eph.state(&ttx.add(0.5)));
                     let rn = st.pos.norm();
                     if !(rn > 1e7 && rn < 6e7 && st.clock.is_finite() && st.clock.abs() < 1.0) {
                         continue;
                     }
+                    let (vel, drift) = eph.rates(&ttx);
                     let (el, az) = elevation_azimuth(&last, lat, lon, &st.pos);
                     if !(el >= rs.elevation_mask) {
                         continue;
@@ -209,9 +209,9 @@ impl LoggedSource {
                     out.push(Row {
                         sat: o.sat,
                         rho: o.value + C * st.clock - C * eph.tgd - iono - tropo,
-                        rate: doppler.map_or(f64::NAN, |d| -lambda * d + C * (b.clock - a.clock)),
+                        rate: doppler.map_or(f64::NAN, |d| -lambda * d + C * drift),
                         pos: st.pos,
-                        vel: b.pos - a.pos,
+                        vel,
                         el,
                         cn0,
                     });
