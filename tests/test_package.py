@@ -98,3 +98,37 @@ def test_cli_unwritable_output_is_a_clear_error(tmp_path):
     assert "is not a directory" in out.stderr and "Traceback" not in out.stderr
     assert out.stdout == ""  # refused before the run, not after it
     assert blocker.read_text() == "not a directory"
+
+
+def _features(package: str, edges: str) -> dict[tuple[str, str], set[str]]:
+    """{(crate, version): {feature list as printed}} of `cargo tree -p package -e edges`."""
+    import shutil
+    from pathlib import Path
+
+    if shutil.which("cargo") is None:
+        pytest.skip("cargo is not installed")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run(
+        ["cargo", "tree", "--offline", "-q", "-p", package, "-e", edges, "-f", "{p} {f}", "--prefix", "none"],
+        cwd=root, capture_output=True, text=True, timeout=120,
+    )
+    if out.returncode != 0:
+        pytest.skip(f"cargo tree unavailable offline: {out.stderr.strip()[:200]}")
+    found: dict[tuple[str, str], set[str]] = {}
+    for line in out.stdout.splitlines():
+        parts = line.replace(" (*)", "").split()
+        if len(parts) < 2:
+            continue
+        feats = parts[2] if len(parts) > 2 and not parts[2].startswith("(") else ""
+        found.setdefault((parts[0], parts[1]), set()).add(feats)
+    return found
+
+
+def test_the_wheel_and_the_rust_tests_build_the_same_dependencies():
+    """The Quick start's `cargo test --release` reuses what `pip install` built only if every
+    dependency the two share has the same features (rust/navfdi-core/Cargo.toml): a changed
+    dependency would silently double the build time and target/ (issue 21)."""
+    wheel = _features("navfdi-py", "normal,build")
+    tests = _features("navfdi-core", "normal,build,dev")
+    differ = {k: (wheel[k], tests[k]) for k in set(wheel) & set(tests) if wheel[k] != tests[k]}
+    assert not differ, f"features differ between the wheel and the Rust tests: {differ}"

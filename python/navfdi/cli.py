@@ -291,6 +291,22 @@ def _gnss(args: argparse.Namespace) -> int:
     return 0
 
 
+def _probe_scheduler(address: str) -> None:
+    """Open and close one TCP connection to a ``tcp://host:port`` Dask scheduler address.
+
+    A refused or unroutable address fails here at once (Dask's client retries it for its whole
+    10 s timeout); other address schemes are left to Dask. Raises OSError when unreachable.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    parts = urlsplit(address)
+    if parts.scheme != "tcp" or not parts.hostname or parts.port is None:
+        return
+    with socket.create_connection((parts.hostname, parts.port), timeout=5.0):
+        pass
+
+
 def _montecarlo(args: argparse.Namespace) -> int:
     from navfdi.montecarlo import montecarlo, parse_sweep
 
@@ -304,6 +320,7 @@ def _montecarlo(args: argparse.Namespace) -> int:
             print("navfdi: error: --scheduler needs Dask: pip install 'navfdi[dask]'", file=sys.stderr)
             return 2
         try:
+            _probe_scheduler(args.scheduler)
             client = Client(args.scheduler, timeout="10s")
         except (OSError, TimeoutError, ValueError) as e:
             raise ValueError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({' '.join(str(e).split())})") from None
