@@ -4,7 +4,8 @@
 
 Per epoch: ARAIM (``navfdi.araim``: Python call with its checks, and ``_core.araim_epoch``
 alone) with 10 satellites in two constellations and 40 satellites in two constellations
-(fault modes up to P_THRES), and the snapshot-RAIM slope levels (``_core.snapshot_pl``) with
+(fault modes up to P_THRES), with fault detection and exclusion on residuals (consistent, and
+a 60 m bias on one satellite: every candidate subset recomputed), and the snapshot-RAIM slope levels (``_core.snapshot_pl``) with
 10 satellites. The peer, sidereon's ``araim`` (PyPI ``sidereon``, in the ``test`` extra), runs
 on the same geometries (the receiver on the equator at the prime meridian, so the east/north/up
 lines of sight map to ECEF y/z/x), the same ISM (σ_URA 0.75 m, σ_URE 0.5 m, b_nom 0.5 m,
@@ -49,7 +50,17 @@ def main() -> None:
         tropo, user = navfdi.integrity.elevation_variances(np.arcsin(los[:, 2]))
         args = ((-los).tolist(), [letters.index(s) for s in sys_], (0.5625 + tropo + user).tolist(), (0.25 + tropo + user).tolist(), [0.5] * n, [1e-5] * n, [1e-4, 1e-4], (9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5))
         tc = best(lambda: _core.araim_epoch(*args), reps)
-        print(f"ARAIM {n} satellites (2 constellations, {len(r.modes)} modes): navfdi.araim {t * 1e6:.1f} µs, _core.araim_epoch {tc * 1e6:.1f} µs")
+        print(f"ARAIM {n} satellites (2 constellations, {len(r.mode_table['prior'])} modes): navfdi.araim {t * 1e6:.1f} µs, _core.araim_epoch {tc * 1e6:.1f} µs")
+        # Fault detection and exclusion: consistent residuals (tests only), and a 60 m bias
+        # on one satellite (detection, every single-satellite and constellation candidate).
+        y = -los @ np.array([3.0, -2.0, 5.0]) + np.where(np.array(sys_) == "G", 40.0, -25.0)
+        tf = best(lambda: _core.araim_epoch(*args, y.tolist()), reps)
+        yb = y.copy()
+        yb[n // 2] += 60.0
+        reps_x = max(reps // 20, 3)
+        tx = best(lambda: _core.araim_epoch(*args, yb.tolist()), reps_x)
+        rx = navfdi.araim(los, sys_, residuals=yb)
+        print(f"  with residuals: {tf * 1e6:.1f} µs; with a 60 m bias (excluded {rx.excluded}, {'available' if rx.available else 'unavailable'}): {tx * 1e6:.1f} µs")
     sidereon_peer()
     los, sys_ = geometry(10)
     clock = [0 if s == "G" else 1 for s in sys_]

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import navfdi
@@ -21,7 +22,7 @@ TRUTH = read_truth_file(D / "rover_position.txt")
 
 def _hmi(s) -> int:
     ig = s.summary()["integrity"]
-    return sum(ig[f"{k}_{d}_hazardously_misleading"] for k in ("araim", "raim") for d in ("horizontal", "vertical"))
+    return sum(ig[f"{k}_{d}_hazardously_misleading"] for k in ("araim", "raim", "araim_fde") for d in ("horizontal", "vertical"))
 
 
 @pytest.fixture(scope="module")
@@ -53,6 +54,62 @@ def test_no_hazardously_misleading_epoch_with_a_20m_step_on_any_satellite(gps_ga
     for sat in used:
         s = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=TRUTH, integrity="lpv200", faults=[f"{sat}:step:20m:100s:200s"])
         assert _hmi(s) == 0, sat
+        # ARAIM's own detection and exclusion (on the satellites before the snapshot test's
+        # exclusion): the faulty satellite and no other, levels recomputed, no misleading epoch
+        sol = s.solution
+        st = s.satellites
+        faulty = set(st.loc[(st["satellite"].astype(str) == sat) & (st["fault"] != 0), "epoch"].astype(int))
+        fault = pd.Series([i in faulty for i in range(len(sol))], index=sol.index)
+        assert fault.sum() == 100, sat
+        assert set(sol.loc[sol["fde_excluded"] != "", "fde_excluded"]) <= {sat}, sat
+        assert (sol.loc[fault, "fde_excluded"] == sat).mean() >= 0.95, sat
+        assert (sol.loc[~fault, "fde_excluded"] == "").all(), sat
+        ig = s.summary()["integrity"]
+        assert ig["araim_fde_alarms"] == 0, sat
+        assert ig["araim_fde_horizontal_misleading"] == 0 and ig["araim_fde_vertical_misleading"] == 0, sat
+        # where the snapshot test excluded the same satellite, ARAIM after its exclusion has
+        # the levels of ARAIM on the snapshot test's satellites (availability included: E33
+        # out leaves VPL ≈ 62 m > VAL)
+        snap = set(st.loc[(st["satellite"].astype(str) == sat) & (st["status"] == "excluded"), "epoch"].astype(int))
+        both = fault & (sol["fde_excluded"] == sat) & pd.Series([i in snap for i in range(len(sol))], index=sol.index)
+        assert both.sum() >= 90, sat
+        np.testing.assert_allclose(sol.loc[both, "vpl_fde"], sol.loc[both, "vpl"], rtol=1e-9)
+        assert (sol.loc[both, "integrity_fde"] == sol.loc[both, "integrity"]).all(), sat
+
+
+def test_fault_free_araim_fde_detects_nothing(gps_galileo) -> None:
+    sol = gps_galileo.solution
+    assert (sol["fde_ratio"] < 1).all() and (sol["fde_excluded"] == "").all()
+    assert (sol["integrity_fde"] == "available").all()
+    np.testing.assert_allclose(sol["hpl_fde"], sol["hpl"], rtol=1e-12)
+
+
+def test_araim_fde_correction_is_the_least_squares_step() -> None:
+    """With the solution's own weights (σ_URA → 0), the all-in-view ARAIM position (the
+    solution plus its correction) is the solution without the snapshot test's exclusion: checks
+    the residuals' sign and the ENU axes against an independent solve."""
+    f = ["G13:step:20m:100s:200s"]
+    kept = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=TRUTH, faults=f)
+    plain = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=TRUTH, faults=f, exclude=False)
+    sats = kept.satellites
+    ep = 150
+    g = sats[(sats["epoch"] == ep) & sats["status"].isin(["used", "excluded"])]
+    assert "G13" in set(g.loc[g["status"] == "excluded", "satellite"].astype(str))
+    el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
+    los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+    s2 = g["sigma"].to_numpy(float) ** 2
+    r = navfdi.araim(los, [str(x)[0] for x in g["satellite"]], c_int=s2 + 1e-12, c_acc=s2 + 1e-12, residuals=g["residual"].to_numpy(float))
+    # the correction of the subset kept (without G13) plus the G13 mode's separation gives
+    # back the all-in-view step S₀y
+    names = [str(x) for x in g["satellite"]]
+    assert r.excluded == (names.index("G13"),)
+    mode = next(m for m in r.modes if m["satellites"] == [names.index("G13")])
+    step0 = np.array(r.correction) - np.array(mode["separation"])
+    got = np.array([kept.solution[c].iat[ep] for c in ("east", "north", "up")]) + step0
+    want = np.array([plain.solution[c].iat[ep] for c in ("east", "north", "up")])
+    np.testing.assert_allclose(got, want, atol=0.02)
+    # and without G13 the ARAIM position is the snapshot test's (same satellites, weights)
+    np.testing.assert_allclose(r.correction, 0.0, atol=0.02)
 
 
 def test_outputs_and_errors(tmp_path: Path, gps_galileo) -> None:

@@ -17,6 +17,15 @@ VPL ≤ VAL, EMT ≤ the EMT limit), ``unavailable``, ``alarm`` (the global test
 exclusion) or ``no_solution``. With a truth, :func:`integrity_summary` counts the epochs where
 the error exceeds the protection level: misleading (MI) when the epoch was available,
 hazardously misleading (HMI) when the error also exceeds the alert limit.
+
+ARAIM's own fault detection and exclusion runs beside them (:func:`navfdi.araim` with
+``residuals``) over the satellites the snapshot test saw (used and excluded), from their
+residuals about the solution: ``hpl_fde``, ``vpl_fde`` (m, after ARAIM's exclusion),
+``fde_ratio`` (largest separation / threshold), ``fde_excluded`` (satellite names),
+``fde_de``, ``fde_dn``, ``fde_du`` (m: ARAIM's position minus the solution's, east/north/up)
+and ``integrity_fde`` (``available`` / ``unavailable`` / ``alarm`` / ``no_solution``); the
+summary's ``araim_fde_*`` entries count its detections, exclusions, alarms and the misleading
+epochs of ARAIM's own position against its levels.
 """
 
 from __future__ import annotations
@@ -67,10 +76,16 @@ def add_integrity(solution: Any, name: str = "lpv200", p_md: float = 1e-3, ism: 
     sol, sats = solution.solution, solution.satellites
     used = sats[sats["status"] == "used"]
     by_epoch = {int(e): g for e, g in used.groupby("epoch", observed=True)}
+    tested = sats[sats["status"].isin(["used", "excluded"]) & np.isfinite(sats["residual"].to_numpy(float))]
+    all_by_epoch = {int(e): g for e, g in tested.groupby("epoch", observed=True)}
     n = len(sol)
-    cols = {k: np.full(n, np.nan) for k in ("hpl", "vpl", "emt", "hpl_raim", "vpl_raim")}
+    cols = {k: np.full(n, np.nan) for k in ("hpl", "vpl", "emt", "hpl_raim", "vpl_raim", "hpl_fde", "vpl_fde", "fde_ratio", "fde_de", "fde_dn", "fde_du")}
     state = np.full(n, "no_solution", dtype=object)
+    state_fde = np.full(n, "no_solution", dtype=object)
+    fde_excluded = np.full(n, "", dtype=object)
     for i in range(n):
+        if sol["status"].iat[i] != "no_solution" and i in all_by_epoch:
+            state_fde[i], fde_excluded[i] = _araim_fde_epoch(all_by_epoch[i], cols, i, ism, alloc, limits)
         if sol["status"].iat[i] == "no_solution" or i not in by_epoch:
             continue
         g = by_epoch[i]
@@ -98,7 +113,33 @@ def add_integrity(solution: Any, name: str = "lpv200", p_md: float = 1e-3, ism: 
     for k, v in cols.items():
         sol[k] = v
     sol["integrity"] = state
+    sol["integrity_fde"] = state_fde
+    sol["fde_excluded"] = fde_excluded
     solution.config["integrity"] = {"allocation": name, **limits, "p_md_raim": p_md, "sigma_ura": np.asarray(ism.sigma_ura, dtype=float).tolist(), "sigma_ure": np.asarray(ism.sigma_ure, dtype=float).tolist()}
+
+
+def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float]) -> tuple[str, str]:
+    """ARAIM's own fault detection and exclusion on one epoch's tested satellites (used and
+    excluded by the snapshot test), from their residuals about the solution: fills
+    ``hpl_fde``, ``vpl_fde``, ``fde_ratio`` and the correction ``fde_de/dn/du`` (m) of row
+    ``i``; returns the state and the excluded satellites' names."""
+    el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
+    los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+    names = [str(s) for s in g["satellite"]]
+    s2 = g["sigma"].to_numpy(float) ** 2
+    ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
+    ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
+    try:
+        r = araim(los, [s[0] for s in names], c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc, residuals=g["residual"].to_numpy(float))
+    except ValueError:
+        return "unavailable", ""
+    cols["hpl_fde"][i], cols["vpl_fde"][i], cols["fde_ratio"][i] = r.hpl, r.vpl, r.test_ratio
+    cols["fde_de"][i], cols["fde_dn"][i], cols["fde_du"][i] = r.correction
+    excluded = " ".join(names[k] for k in r.excluded)
+    if r.alarm:
+        return "alarm", excluded
+    ok = r.available and r.hpl <= limits["hal"] and r.vpl <= limits["val"]
+    return ("available" if ok else "unavailable"), excluded
 
 
 def integrity_summary(solution: Any) -> dict[str, Any]:
@@ -114,12 +155,28 @@ def integrity_summary(solution: Any) -> dict[str, Any]:
         "availability": float((st == "available").sum() / solved.sum()) if solved.any() else math.nan,
         "alarm_epochs": int((st == "alarm").sum()),
     }
+    if "integrity_fde" in sol:
+        sf = sol["integrity_fde"]
+        out["araim_fde_availability"] = float((sf == "available").sum() / solved.sum()) if solved.any() else math.nan
+        out["araim_fde_detections"] = int((sol["fde_ratio"].to_numpy(float) > 1).sum())
+        out["araim_fde_exclusions"] = {str(k): int(v) for k, v in sol.loc[sol["fde_excluded"] != "", "fde_excluded"].value_counts().items()}
+        out["araim_fde_alarms"] = int((sf == "alarm").sum())
     if solution.truth is None:
         return out
-    avail = (st == "available").to_numpy()
-    he = np.hypot(sol["east"].to_numpy(float), sol["north"].to_numpy(float))
-    ve = np.abs(sol["up"].to_numpy(float))
-    for kind, h, v in (("araim", "hpl", "vpl"), ("raim", "hpl_raim", "vpl_raim")):
+    e, nn, u = (sol[c].to_numpy(float) for c in ("east", "north", "up"))
+    errors = {"araim": (np.hypot(e, nn), np.abs(u), (st == "available").to_numpy())}
+    errors["raim"] = errors["araim"]
+    if "integrity_fde" in sol:
+        # ARAIM's own output position: the solution plus the kept subset's correction.
+        errors["araim_fde"] = (
+            np.hypot(e + sol["fde_de"].to_numpy(float), nn + sol["fde_dn"].to_numpy(float)),
+            np.abs(u + sol["fde_du"].to_numpy(float)),
+            (sol["integrity_fde"] == "available").to_numpy(),
+        )
+    for kind, h, v in (("araim", "hpl", "vpl"), ("raim", "hpl_raim", "vpl_raim"), ("araim_fde", "hpl_fde", "vpl_fde")):
+        if kind not in errors:
+            continue
+        he, ve, avail = errors[kind]
         for d, err, pl, al in (("horizontal", he, sol[h].to_numpy(float), cfg["hal"]), ("vertical", ve, sol[v].to_numpy(float), cfg["val"])):
             ok = np.isfinite(pl) & np.isfinite(err)
             mi = ok & (err > pl)

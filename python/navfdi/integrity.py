@@ -1,4 +1,4 @@
-"""Integrity: ARAIM protection levels (issue 24, in progress).
+"""Integrity: ARAIM protection levels and fault detection and exclusion (issue 24).
 
 :func:`araim` runs the EU–US ARAIM Technical Subgroup's Reference Airborne Algorithm (ADD v3.0,
 multiple-hypothesis solution separation) on one epoch, in Rust
@@ -61,10 +61,24 @@ def lpv200() -> Allocation:
 
 @dataclass(frozen=True)
 class AraimResult:
-    """Result of :func:`araim` (lengths in m). ``sigma_acc_v``, ``sigma_acc_h`` (east, north);
-    ``available``: the unmonitored probability is at most P_THRES and both PLs are finite;
-    ``p_unmonitored``; ``k_fa_v``; ``modes``: one dict per monitored fault mode (satellite
-    indices, constellations, prior, σ, σ_ss, b and thresholds per axis east/north/up)."""
+    """Result of :func:`araim` (lengths in m). ``vpl``, ``hpl``, ``emt``; ``sigma_acc_v``,
+    ``sigma_acc_h`` (east, north); ``available``: the unmonitored probability is at most
+    P_THRES and both PLs are finite; ``p_unmonitored``; ``k_fa_v``; ``modes``: one dict per
+    monitored fault mode (``satellites`` indices, ``constellations``, ``prior``, and per axis
+    east/north/up ``sigma``, ``sigma_ss``, ``bias``, ``threshold``, ``separation``), built on
+    first access from the columns in ``mode_table`` (arrays: ``prior`` (N,), the per-axis
+    values (N, 3)).
+
+    With ``residuals`` (fault detection and exclusion): ``detected`` (a solution separation
+    test failed), ``test_ratio`` (largest |separation| / threshold), ``excluded`` (indices of
+    the satellites excluded), ``alarm`` (a detection no single exclusion resolves; then
+    ``vpl``/``hpl`` are inf), and ``vpl``, ``hpl``, ``available`` are those of the solution
+    kept (after exclusion: the subset's own levels); ``vpl_any``/``hpl_any`` the largest over
+    every exclusion candidate that passed (a bound if the wrong one was excluded);
+    ``correction`` (east, north, up, m) the kept solution's least-squares correction: its
+    position is the residuals' linearisation point plus it (NaN on an alarm). Without
+    residuals: ``detected``/``alarm`` False, ``test_ratio``/``vpl_any``/``hpl_any`` NaN,
+    ``excluded`` ``()``, and ``vpl``/``hpl`` the all-in-view levels."""
 
     vpl: float
     hpl: float
@@ -74,7 +88,30 @@ class AraimResult:
     available: bool
     p_unmonitored: float
     k_fa_v: float
-    modes: list[dict[str, Any]]
+    mode_table: dict[str, np.ndarray]
+    detected: bool = False
+    test_ratio: float = math.nan
+    excluded: tuple[int, ...] = ()
+    alarm: bool = False
+    vpl_any: float = math.nan
+    hpl_any: float = math.nan
+    correction: tuple[float, float, float] = (math.nan, math.nan, math.nan)
+
+    @property
+    def modes(self) -> list[dict[str, Any]]:
+        """The fault modes as dicts (see the class docs); built from ``mode_table``."""
+        t = self.mode_table
+        sats = np.split(t["satellites"], np.cumsum(t["satellites_count"])[:-1]) if len(t["prior"]) else []
+        cons = np.split(t["constellations"], np.cumsum(t["constellations_count"])[:-1]) if len(t["prior"]) else []
+        return [
+            {
+                "satellites": [int(i) for i in sats[k]],
+                "constellations": [int(c) for c in cons[k]],
+                "prior": float(t["prior"][k]),
+                **{name: [float(v) for v in t[name][k]] for name in ("sigma", "sigma_ss", "bias", "threshold", "separation")},
+            }
+            for k in range(len(t["prior"]))
+        ]
 
 
 def elevation_variances(elevation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -98,8 +135,10 @@ def araim(
     c_acc: ArrayLike | None = None,
     ism: Ism | None = None,
     allocation: Allocation | None = None,
+    residuals: ArrayLike | None = None,
 ) -> AraimResult:
-    """ARAIM protection levels of one epoch (ADD v3.0; see the module docs).
+    """ARAIM protection levels of one epoch (ADD v3.0; see the module docs), with fault
+    detection and exclusion when ``residuals`` are given.
 
     Parameters
     ----------
@@ -115,12 +154,19 @@ def araim(
         Default :class:`Ism` ().
     allocation : Allocation, optional
         Default :func:`lpv200`.
+    residuals : array_like, shape (n,), optional
+        Pseudorange residuals (m) of the linearised model, e.g. the all-in-view least-squares
+        residuals (the separations do not depend on the linearisation point): each mode's
+        solution separation is tested against its threshold; on a detection each single
+        satellite, then each constellation, is tried for exclusion (ARAIM recomputed on the
+        subset, which must pass all of its own tests), and the levels are recomputed after
+        the exclusion.
 
     Raises
     ------
     ValueError
         Wrong shapes, non-finite or non-unit lines of sight, non-positive variances, a system
-        without a constellation prior.
+        without a constellation prior, non-finite residuals.
     """
     ism = ism or Ism()
     allocation = allocation or lpv200()
@@ -155,18 +201,40 @@ def araim(
         per_sat(ism.p_sat, "ism.p_sat").tolist(),
         [float(ism.p_const[s]) for s in letters],
         (allocation.p_hmi_vert, allocation.p_hmi_hor, allocation.p_fa_vert, allocation.p_fa_hor, allocation.p_thres, allocation.p_emt),
+        None if residuals is None else _residuals(residuals, n),
     )
-    return AraimResult(
-        vpl=r["vpl"],
-        hpl=r["hpl"],
+    common = dict(
         emt=r["emt"],
         sigma_acc_v=r["sigma_acc"][2],
         sigma_acc_h=(r["sigma_acc"][0], r["sigma_acc"][1]),
-        available=bool(r["available"]) and math.isfinite(r["vpl"]),
         p_unmonitored=r["p_unmonitored"],
         k_fa_v=r["k_fa"][2],
-        modes=r["modes"],
+        mode_table=r["modes"],
     )
+    if residuals is None:
+        return AraimResult(vpl=r["vpl"], hpl=r["hpl"], available=bool(r["available"]) and math.isfinite(r["vpl"]), **common)
+    f = r["fde"]
+    return AraimResult(
+        vpl=f["vpl"],
+        hpl=f["hpl"],
+        available=bool(f["available"]),
+        detected=bool(f["detected"]),
+        test_ratio=float(f["test_ratio"]),
+        excluded=tuple(int(i) for i in f["excluded"]),
+        alarm=bool(f["alarm"]),
+        vpl_any=float(f["vpl_any"]),
+        hpl_any=float(f["hpl_any"]),
+        correction=(float(f["correction"][0]), float(f["correction"][1]), float(f["correction"][2])),
+        **common,
+    )
+
+
+def _residuals(v: ArrayLike, n: int) -> list[float]:
+    """``v`` as n floats; ``ValueError`` for another shape (non-finite values: from Rust)."""
+    y = np.asarray(v, dtype=float)
+    if y.shape != (n,):
+        raise ValueError(f"residuals: expected shape ({n},), one per satellite, got {y.shape}")
+    return [float(x) for x in y]
 
 
 def _per_satellite(v: Any, name: str, n: int) -> np.ndarray:

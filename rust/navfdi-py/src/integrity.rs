@@ -1,18 +1,27 @@
 //! Integrity bindings: ARAIM protection levels of one epoch (`navfdi_core::integrity::araim`).
 
+use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
-use navfdi_core::integrity::araim::{araim, Allocation, Ism};
+use navfdi_core::integrity::araim::{araim, Allocation, FaultMode, Ism};
+use navfdi_core::integrity::araim_fde::araim_fde;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 
 /// ARAIM (ADD v3.0 multiple-hypothesis solution separation) on one epoch. `rows` (n, 3): ENU
 /// geometry rows (minus the unit lines of sight); `constellation` (n): index of each
 /// satellite's constellation; `c_int`, `c_acc` (n, m²); `b_nom`, `p_sat` (n); `p_const` (one per
-/// constellation); `allocation`: (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR, P_THRES, P_EMT).
-/// Returns a dict of the results and the fault modes; the GIL is released.
+/// constellation); `allocation`: (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR, P_THRES, P_EMT);
+/// `residuals` (n, m, optional): fault detection and exclusion on them
+/// (`navfdi_core::integrity::araim_fde::araim_fde`). Returns a dict of the all-in-view results,
+/// the fault modes as columns (`modes`: `prior` (N,), `sigma`, `sigma_ss`, `bias`,
+/// `threshold`, `separation` (N, 3), `satellites` and `constellations` flattened with their
+/// per-mode counts), and with residuals `fde` (`detected`, `test_ratio`, `excluded`, `tried`,
+/// `passed`, `vpl`, `hpl`, `vpl_any`, `hpl_any`, `correction` (east, north, up, m), `alarm`,
+/// `available`); the GIL is released.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (rows, constellation, c_int, c_acc, b_nom, p_sat, p_const, allocation, residuals=None))]
 pub fn araim_epoch<'py>(
     py: Python<'py>,
     rows: Vec<[f64; 3]>,
@@ -23,6 +32,7 @@ pub fn araim_epoch<'py>(
     p_sat: Vec<f64>,
     p_const: Vec<f64>,
     allocation: (f64, f64, f64, f64, f64, f64),
+    residuals: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     finite_rows(&rows)?;
     let (p_hmi_vert, p_hmi_hor, p_fa_vert, p_fa_hor, p_thres, p_emt) = allocation;
@@ -41,8 +51,14 @@ pub fn araim_epoch<'py>(
         p_sat,
         p_const,
     };
-    let r = py
-        .detach(move || araim(&rows, &constellation, &ism, &alloc))
+    let (r, fde) = py
+        .detach(move || match residuals {
+            None => araim(&rows, &constellation, &ism, &alloc).map(|r| (r, None)),
+            Some(y) => araim_fde(&rows, &constellation, &ism, &alloc, &y).map(|f| {
+                let r = f.all_in_view.clone();
+                (r, Some(f))
+            }),
+        })
         .py()?;
     let d = PyDict::new(py);
     d.set_item("vpl", r.vpl)?;
@@ -55,19 +71,62 @@ pub fn araim_epoch<'py>(
     d.set_item("p_unmonitored", r.p_unmonitored)?;
     d.set_item("n_max", r.n_max)?;
     d.set_item("available", r.available)?;
-    let modes = PyList::empty(py);
-    for m in r.modes {
-        let md = PyDict::new(py);
-        md.set_item("satellites", m.satellites)?;
-        md.set_item("constellations", m.constellations)?;
-        md.set_item("prior", m.prior)?;
-        md.set_item("sigma", m.sigma.to_vec())?;
-        md.set_item("sigma_ss", m.sigma_ss.to_vec())?;
-        md.set_item("bias", m.bias.to_vec())?;
-        md.set_item("threshold", m.threshold.to_vec())?;
-        modes.append(md)?;
+    let n_modes = r.modes.len();
+    let table =
+        |f: &dyn Fn(&FaultMode) -> [f64; 3]| -> Vec<f64> { r.modes.iter().flat_map(f).collect() };
+    let modes = PyDict::new(py);
+    modes.set_item(
+        "prior",
+        to_numpy(py, r.modes.iter().map(|m| m.prior).collect(), &[n_modes])?,
+    )?;
+    for (name, col) in [
+        ("sigma", table(&|m| m.sigma)),
+        ("sigma_ss", table(&|m| m.sigma_ss)),
+        ("bias", table(&|m| m.bias)),
+        ("threshold", table(&|m| m.threshold)),
+        ("separation", table(&|m| m.separation)),
+    ] {
+        modes.set_item(name, to_numpy(py, col, &[n_modes, 3])?)?;
+    }
+    for (name, lists) in [
+        (
+            "satellites",
+            r.modes.iter().map(|m| &m.satellites).collect::<Vec<_>>(),
+        ),
+        (
+            "constellations",
+            r.modes
+                .iter()
+                .map(|m| &m.constellations)
+                .collect::<Vec<_>>(),
+        ),
+    ] {
+        let flat: Vec<i64> = lists
+            .iter()
+            .flat_map(|v| v.iter().map(|&i| i as i64))
+            .collect();
+        let counts: Vec<i64> = lists.iter().map(|v| v.len() as i64).collect();
+        let n_flat = flat.len();
+        modes.set_item(name, to_numpy(py, flat, &[n_flat])?)?;
+        modes.set_item(format!("{name}_count"), to_numpy(py, counts, &[n_modes])?)?;
     }
     d.set_item("modes", modes)?;
+    if let Some(f) = fde {
+        let e = PyDict::new(py);
+        e.set_item("detected", f.detected)?;
+        e.set_item("test_ratio", f.test_ratio)?;
+        e.set_item("excluded", f.excluded)?;
+        e.set_item("tried", f.tried)?;
+        e.set_item("passed", f.passed)?;
+        e.set_item("vpl", f.vpl)?;
+        e.set_item("hpl", f.hpl)?;
+        e.set_item("vpl_any", f.vpl_any)?;
+        e.set_item("hpl_any", f.hpl_any)?;
+        e.set_item("correction", f.correction.to_vec())?;
+        e.set_item("alarm", f.alarm)?;
+        e.set_item("available", f.available)?;
+        d.set_item("fde", e)?;
+    }
     Ok(d)
 }
 

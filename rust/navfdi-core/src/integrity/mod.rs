@@ -1,8 +1,11 @@
 //! Integrity: how large an undetected position error can be (protection levels).
 //!
 //! * [`araim`]: advanced RAIM by multiple-hypothesis solution separation (ARAIM ADD v3.0),
-//!   one epoch from the geometry and the integrity support message.
+//!   one epoch from the geometry and the integrity support message;
+//!   [`araim_fde`]: its fault detection and exclusion on residuals.
 //! * [`snapshot`]: slope-based protection levels of the snapshot least-squares global test.
 
 pub mod araim;
+pub mod araim_fde;
 pub mod snapshot;
+mod subsets;
