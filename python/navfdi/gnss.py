@@ -528,13 +528,15 @@ def gnss_solve(
         Factor on σ per system letter (default 1), e.g. ``{"C": 3.0}`` where a system's
         broadcast biases exceed the code noise.
     sprt : (P_f, P_m)
-        Improved SPRT on each satellite's normalised residual stream (known variance).
+        Improved SPRT on each satellite's whitened residual stream (known unit variance).
     aime : (P_f, window)
-        AIME (:class:`navfdi.Aime`) on each satellite's normalised residual stream.
+        AIME (:class:`navfdi.Aime`) on each satellite's whitened residual stream.
     cusum : (drift, threshold, tau, warmup, floor)
-        Rate CUSUM on each satellite's residual changes: drift ν and threshold h in units of
-        the changes' running RMS, its time constant (epochs), epochs without alarm after a
-        restart, RMS floor (m). See ``navfdi_core::gnss::sequential``.
+        The whitening in front of the three sequential detectors and the CUSUM on its output:
+        drift ν and threshold h of Page's CUSUM (in units of the whitened residual), the
+        whitening's time constant (epochs) for each satellite's bias, variance and lag-1
+        correlation, epochs without output after a restart, floor of the innovation's σ (m).
+        See ``navfdi_core::gnss::sequential``.
     truth : (3,) ECEF m, ``"LAT,LON,H"`` or None
         Reference position; adds ``east, north, up`` error columns and RMS to the summary.
     progress : bool

@@ -615,7 +615,7 @@ pub fn solve(
                 Entry::Occupied(e) => e.into_mut(),
                 Entry::Vacant(v) => v.insert(SatDetectors::new(&cfg.sequential)?),
             };
-            row.seq = det.step(row.residual, row.sigma, &cfg.sequential);
+            row.seq = det.step(row.residual, &cfg.sequential);
             seen.push(row.sat);
         }
         state.detectors.retain(|s, _| seen.contains(s));
