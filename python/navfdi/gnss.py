@@ -276,7 +276,7 @@ class GnssSolution:
         sequential detectors' alarms per clean satellite-epoch, and per injected fault the
         epochs it was active, the share in which exactly that satellite was excluded, and the
         first epoch (s after the fault's start) at which the global test failed, the satellite
-        was excluded, and its SPRT, AIME and rate CUSUM alarmed (alarm onsets)."""
+        was excluded, and its SPRT, AIME and CUSUM (on the whitened residuals) alarmed (alarm onsets)."""
         sol, sats = self.solution, self.satellites
         solved = sol["status"] != "no_solution"
         out: dict[str, Any] = {"epochs": int(len(sol)), "solved": int(solved.sum()), "alpha": self.config["alpha"], "systems": self.config["systems"], "codes": self.config.get("codes", {})}
@@ -380,7 +380,7 @@ class GnssSolution:
         lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
         lines.append(f"exclusions per satellite: {ex}")
-        lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, rate CUSUM {s['cusum_false_alarm_rate']:.4f}")
+        lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
         if self.config.get("noise_scale_estimated"):
             lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto)")
@@ -391,7 +391,7 @@ class GnssSolution:
                 lines.append(f"fault {f['fault']}: never applied ({f['note']}); left out of the statistics")
                 continue
             lines.append(
-                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, AIME {f['first_aime_after']:g} s, rate CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
+                f"fault {f['fault']}: {f['epochs']} epochs tested, {f['satellite']} alone excluded in {f['excluded_exactly']} ({f['excluded_rate']:.1%}); first alarm {f['first_alarm_after']:g} s, first exclusion {f['first_exclusion_after']:g} s after the start (SPRT {f['first_sprt_after']:g} s, AIME {f['first_aime_after']:g} s, CUSUM {f['first_cusum_after']:g} s); other satellites excluded {f['other_exclusions']} times"
             )
         from navfdi._text import fit
 
