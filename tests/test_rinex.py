@@ -390,3 +390,15 @@ def test_corrupt_ephemeris_values_never_give_nan_positions(tmp_path):
     assert st.loc[st["satellite"] == "G13", "status"].isin(["no_ephemeris"]).all()
     assert st.loc[st["satellite"] == "G05", "status"].isin(["bad_ephemeris"]).all()
     assert sol.summary()["skipped"]["bad_ephemeris"] == 301
+
+
+@pytest.mark.parametrize("rate", ["0.5m/s", "5m/s", "50m/s"])
+def test_no_epoch_is_lost_under_a_growing_fault(rate):
+    """Issue 23, item 3: a ramp on one satellite from the first epoch (0.5 m/s reaches 150 m
+    by the end of the file, 50 m/s 15 km) never costs a solution: every epoch is solved, and
+    the faulty satellite is excluded — alone — from the 16th epoch on."""
+    for sat in ("G13", "E12"):
+        sol = navfdi.gnss_solve(OBS, NAV, systems="G,E", faults=[f"{sat}:ramp:{rate}:0s:end"]).solution
+        assert (sol["status"] != "no_solution").all(), (rate, sat)
+        late = sol.iloc[15:]
+        assert (late["excluded"] == sat).all(), (rate, sat, late["excluded"].value_counts().to_dict())
