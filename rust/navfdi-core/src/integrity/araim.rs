@@ -605,20 +605,17 @@ pub(crate) mod tests {
         assert!(r.available && r.p_unmonitored < 8e-8);
     }
 
-    #[test]
-    fn thirty_satellites_monitor_the_combined_modes() {
-        // 15 GPS and 15 Galileo satellites spread over the sky, P_const = 1e-4 each: one event
-        // at a time leaves P(two or more) = 1.2e-7 > P_THRES unmonitored, so every pair of
-        // events (a constellation with a satellite of the other, two satellites, …) is a mode.
+    /// n satellites spread over the sky (golden-angle azimuths, elevations 10–85°), even
+    /// indices GPS and odd Galileo, with a plain ISM (C_int 1, C_acc 0.6 m², P_const 1e-4).
+    pub(crate) fn sky(n: usize) -> (Vec<[f64; 3]>, Vec<usize>, Ism) {
         let mut rows = Vec::new();
         let mut cons = Vec::new();
-        for i in 0..30 {
+        for i in 0..n {
             let az = (i as f64) * 2.399_963; // golden angle
-            let el = (10.0 + 75.0 * ((i * 7 % 30) as f64) / 29.0).to_radians();
+            let el = (10.0 + 75.0 * ((i * 7 % n) as f64) / (n - 1) as f64).to_radians();
             rows.push([-el.cos() * az.sin(), -el.cos() * az.cos(), -el.sin()]);
             cons.push(i % 2);
         }
-        let n = rows.len();
         let ism = Ism {
             c_int: vec![1.0; n],
             c_acc: vec![0.6; n],
@@ -626,6 +623,15 @@ pub(crate) mod tests {
             p_sat: vec![1e-5; n],
             p_const: vec![1e-4, 1e-4],
         };
+        (rows, cons, ism)
+    }
+
+    #[test]
+    fn thirty_satellites_monitor_the_combined_modes() {
+        // 15 GPS and 15 Galileo satellites spread over the sky, P_const = 1e-4 each: one event
+        // at a time leaves P(two or more) = 1.2e-7 > P_THRES unmonitored, so every pair of
+        // events (a constellation with a satellite of the other, two satellites, …) is a mode.
+        let (rows, cons, ism) = sky(30);
         let r = araim(&rows, &cons, &ism, &Allocation::lpv200()).unwrap();
         assert_eq!(r.n_max, 2);
         assert!(r.p_unmonitored < 8e-8, "{}", r.p_unmonitored);

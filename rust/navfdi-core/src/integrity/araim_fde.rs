@@ -207,7 +207,7 @@ pub fn araim_fde(
 mod tests {
     use super::*;
     use crate::integrity::araim::araim;
-    use crate::integrity::araim::tests::add_example;
+    use crate::integrity::araim::tests::{add_example, sky};
 
     /// Residuals of the ADD example's geometry for a receiver offset (east, north, up, one
     /// clock per constellation) plus `bias` on some satellites.
@@ -287,25 +287,6 @@ mod tests {
             assert!(r.vpl >= sub.vpl && r.hpl >= sub.hpl, "sat {faulty}");
             assert!(r.vpl.is_finite() && r.vpl > 0.0);
         }
-    }
-
-    fn sky(n: usize) -> (Vec<[f64; 3]>, Vec<usize>, Ism) {
-        let mut rows = Vec::new();
-        let mut cons = Vec::new();
-        for i in 0..n {
-            let az = (i as f64) * 2.399_963; // golden angle
-            let el = (10.0 + 75.0 * ((i * 7 % n) as f64) / (n - 1) as f64).to_radians();
-            rows.push([-el.cos() * az.sin(), -el.cos() * az.cos(), -el.sin()]);
-            cons.push(i % 2);
-        }
-        let ism = Ism {
-            c_int: vec![1.0; n],
-            c_acc: vec![0.6; n],
-            b_nom: vec![0.5; n],
-            p_sat: vec![1e-5; n],
-            p_const: vec![1e-4, 1e-4],
-        };
-        (rows, cons, ism)
     }
 
     #[test]
