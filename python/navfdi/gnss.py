@@ -656,7 +656,10 @@ def gnss_solve(
     sol["vel_used"] = vel["used"]
     sol["vel_excluded"] = vel["excluded"]
     st = run.satellite_table()
+    used_codes, dropped, receiver = dict(run.codes), run.dropped, run.receiver
+    del run  # the file's observations: freed before the tables are built (peak memory)
     sats = pd.DataFrame(st)
+    del st
     sats["epoch"] = sats["epoch"].astype("int64")
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
     sats["satellite"] = sats["satellite"].astype("category")
@@ -673,7 +676,7 @@ def gnss_solve(
         "cn0_reference": float(cn0_reference),
         "ionosphere": bool(ionosphere),
         "troposphere": bool(troposphere),
-        "codes": dict(run.codes),
+        "codes": used_codes,
         "codes_given": dict(codes or {}),
         "noise_factors": dict(noise_factors or {}),
         "sprt": list(sprt),
@@ -682,8 +685,8 @@ def gnss_solve(
         "faults": [f.__dict__ for f in parsed],
         "doppler_noise": list(doppler_noise),
         "noise_scale": float(noise_scale),
-        "dropped_observation_types": run.dropped,
-        "receiver": run.receiver,
+        "dropped_observation_types": dropped,
+        "receiver": receiver,
     }
     out = GnssSolution(sol, sats, t_ecef, config, parsed)
     if integrity is not None:
