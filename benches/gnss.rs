@@ -14,7 +14,8 @@
 //!   test with the w of every satellite (factorisation and inverse), as recorded by
 //!   `navfdi run`;
 //! * `shao2018_{variant}`: a whole 1000-epoch run of each FDE placement (per epoch: divide by
-//!   1000), on one simulated run.
+//!   1000), on one simulated run; `shao2018_innovation_pl` / `_separation_pl`: the same with
+//!   filter protection levels (the sub-filter bank and a snapshot ARAIM per epoch).
 //!
 //! Targets: snapshot ≤ 10 µs; tight epoch ≤ 6 µs. The numpy peers run in
 //! `benches/bench_gnss.py` (same machine, same algorithm).
@@ -211,6 +212,24 @@ fn bench(c: &mut Criterion) {
         let mut s = spec.clone();
         if let Some(t) = s.tight.as_mut() {
             t.fde = fde;
+        }
+        prep.spec.check_variant(&s).expect("variant");
+        let src = sim.streams(&prep);
+        g.bench_function(format!("shao2018_{name}"), |b| {
+            b.iter(|| run_architecture(&s, &src, true, false, &NEVER).expect("run"))
+        });
+    }
+    // Filter protection levels (issue 24: a filter-PL epoch with 10 satellites ≤ 20× a plain
+    // tight epoch): the innovation run with the sub-filter bank and the snapshot ARAIM of each
+    // epoch beside it, and the separation placement; compare with `shao2018_innovation`.
+    for (name, fde) in [
+        ("innovation_pl", FdePlacement::Innovation),
+        ("separation_pl", FdePlacement::Separation),
+    ] {
+        let mut s = spec.clone();
+        if let Some(t) = s.tight.as_mut() {
+            t.fde = fde;
+            t.integrity = Some(navfdi_core::spec::FilterIntegritySpec::default());
         }
         prep.spec.check_variant(&s).expect("variant");
         let src = sim.streams(&prep);

@@ -555,8 +555,11 @@ def scenario_trajectory(spec_json: str) -> dict[str, NDArray[np.float64]]:
 def run_scenario(spec_json: str, seed: int, stream: int = 0, isolation: list[bool] | None = None) -> list[dict[str, Any]]:
     """Simulate one run (noise from ``(seed, stream)``) and filter it once per entry of
     ``isolation`` (default ``[True]``); returns one record dict per entry (arrays over T epochs: ``t``, ``error``
-    (T, 9), ``sigma`` (T, 9), ``sources``, ``subfilters`` with per-detector arrays). Use
-    :func:`navfdi.run_scenario` for the typed result."""
+    (T, 9), ``sigma`` (T, 9), ``sources``, ``subfilters`` with per-detector arrays; tight
+    filters ``satellites``, and with ``[tight.integrity]`` ``integrity``: ``hpl``, ``vpl``,
+    ``hpl_snapshot``, ``vpl_snapshot`` (m), ``statistic``, ``alarm``, ``modes`` (T,) and
+    ``metrics`` (the metrics engine's counts)). Use :func:`navfdi.run_scenario` for the typed
+    result."""
 
 @final
 class FederatedStep:

@@ -104,10 +104,10 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
 
 def _tight(t: Any) -> dict[str, Any]:
     """The ``[tight]`` table."""
-    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd", "strapdown"}, "tight")
+    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd", "strapdown", "integrity"}, "tight")
     fde = _str(_need(t, "fde", "tight"), "tight.fde")
-    if fde not in ("ls_precheck", "innovation", "gnss_filter", "none"):
-        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter or none")
+    if fde not in ("ls_precheck", "innovation", "gnss_filter", "separation", "none"):
+        raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter, separation or none")
     rates = _bool(t.get("rates", True), "tight.rates")
     return {
         "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
@@ -117,7 +117,21 @@ def _tight(t: Any) -> dict[str, Any]:
         "rates": rates,
         "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
         "strapdown": None if "strapdown" not in t else _tight_strapdown(t["strapdown"]),
+        "integrity": None if "integrity" not in t else _tight_integrity(t["integrity"]),
     }
+
+
+_INTEGRITY_KEYS = ("p_sat", "p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor")
+
+
+def _tight_integrity(a: Any) -> dict[str, Any]:
+    """The ``[tight.integrity]`` table: filter protection levels (probabilities per epoch;
+    absent keys take the LPV-200 defaults in Rust)."""
+    p = "tight.integrity"
+    if not isinstance(a, dict):
+        raise ScenarioError(f"{p}: expected a table, got {type(a).__name__}")
+    _check_keys(a, set(_INTEGRITY_KEYS), p)
+    return {key: _number(a[key], f"{p}.{key}") for key in _INTEGRITY_KEYS if key in a}
 
 def _ultra_tight(u: Any) -> dict[str, Any]:
     """The ``[ultra_tight]`` table (paper 004)."""

@@ -336,6 +336,70 @@ class Campaign:
         out["partial"] = [per_point[int(p)] < self.runs_requested for p in out["point"]] if len(out) else []
         return out.drop(columns=["point"])
 
+    def integrity_summary(self):
+        """Filter protection levels against the true position error, one row per sweep point
+        (pandas DataFrame; empty unless the scenario's tight filter has ``[tight.integrity]``).
+
+        Columns: swept fields, ``runs``, ``epochs`` (epochs with finite levels, over the runs),
+        ``misleading_h``, ``misleading_v`` (epochs whose horizontal / vertical error exceeds the
+        HPL / VPL), ``hazardous_h``, ``hazardous_v`` (of those, epochs without an alarm of the
+        separation test: hazardously misleading), ``hmi_rate_h``, ``hmi_rate_v`` (per epoch),
+        ``alarm_epochs``, ``error_over_hpl_max``, ``error_over_vpl_max`` (the largest error /
+        level over all runs: below 1 means no epoch came near), ``hpl_mean``, ``vpl_mean`` (m),
+        ``hpl_ratio_mean``, ``vpl_ratio_mean`` (filter level / snapshot ARAIM level of the same
+        epoch's pseudoranges, mean over the epochs with both)."""
+        import pandas as pd
+
+        df = self.runs
+        cols = [*self.sweep_columns, "runs", "epochs", "misleading_h", "misleading_v", "hazardous_h", "hazardous_v", "hmi_rate_h", "hmi_rate_v",
+                "alarm_epochs", "error_over_hpl_max", "error_over_vpl_max", "hpl_mean", "vpl_mean", "hpl_ratio_mean", "vpl_ratio_mean"]
+        if "pl_epochs" not in df or not len(df):
+            return pd.DataFrame(columns=cols)
+        per_run = df.drop_duplicates(["point", "run"])
+        rows = []
+        for point, g in per_run.groupby("point", sort=True):
+            ep = int(g["pl_epochs"].sum())
+            cmp_ = int(g["pl_compared_epochs"].sum())
+            div = lambda a, b: a / b if b else math.nan  # noqa: E731
+            rows.append({
+                **{c: self.points[int(point)][c] for c in self.sweep_columns},
+                "runs": len(g),
+                "epochs": ep,
+                "misleading_h": int(g["mi_h_epochs"].sum()),
+                "misleading_v": int(g["mi_v_epochs"].sum()),
+                "hazardous_h": int(g["hmi_h_epochs"].sum()),
+                "hazardous_v": int(g["hmi_v_epochs"].sum()),
+                "hmi_rate_h": div(int(g["hmi_h_epochs"].sum()), ep),
+                "hmi_rate_v": div(int(g["hmi_v_epochs"].sum()), ep),
+                "alarm_epochs": int(g["pl_alarm_epochs"].sum()),
+                "error_over_hpl_max": float(g["error_over_hpl_max"].max()),
+                "error_over_vpl_max": float(g["error_over_vpl_max"].max()),
+                "hpl_mean": div(float(g["hpl_sum"].sum()), ep),
+                "vpl_mean": div(float(g["vpl_sum"].sum()), ep),
+                "hpl_ratio_mean": div(float(g["hpl_ratio_sum"].sum()), cmp_),
+                "vpl_ratio_mean": div(float(g["vpl_ratio_sum"].sum()), cmp_),
+            })
+        return pd.DataFrame(rows, columns=cols)
+
+    def _integrity_lines(self) -> list[str]:
+        """The integrity block of :meth:`format_table` (empty without protection levels)."""
+        t = self.integrity_summary()
+        if not len(t):
+            return []
+        lines = ["filter protection levels (error > PL: misleading; without an alarm: hazardous):"]
+        lines.append(f"  {'point':<20} {'epochs':>8} {'MI h/v':>13} {'HMI h/v':>9} {'err/PL max':>11} {'PL h/v [m]':>11} {'/snapshot':>10}")
+        for _, r in t.iterrows():
+            name = ", ".join(str(r[c]) for c in self.sweep_columns) or "all"
+            name = name if len(name) <= 20 else name[:19] + "…"
+            mi = f"{int(r['misleading_h'])}/{int(r['misleading_v'])}"
+            hmi = f"{int(r['hazardous_h'])}/{int(r['hazardous_v'])}"
+            worst = f"{r['error_over_hpl_max']:.2f}/{r['error_over_vpl_max']:.2f}"
+            pl = f"{r['hpl_mean']:.1f}/{r['vpl_mean']:.1f}"
+            ratio = f"{r['hpl_ratio_mean']:.2f}/{r['vpl_ratio_mean']:.2f}"
+            lines.append(f"  {name:<20} {int(r['epochs']):>8} {mi:>13} {hmi:>9} {worst:>11} {pl:>11} {ratio:>10}")
+        lines.append("")
+        return lines
+
     def format_table(self) -> str:
         """The summary as printed by ``navfdi montecarlo``: one block per sweep point (and
         variant) with its navigation error, then one row per channel × detector × fault, at
@@ -416,6 +480,7 @@ class Campaign:
                     seen.add(vals)
                     lines.append(f"  {'':<23} {cut(vals[0], 10):<10} {vals[1]:<4} {vals[2]:>9} {vals[3]:>9} {vals[4]:>7} {vals[5]:>18}")
             lines.append("")
+        lines += self._integrity_lines()
         lines.append("P(det): share of runs with an alarm raised inside the fault window (or 1 s after);")
         lines.append("onset: share already in alarm when the fault began (not detections); alarm: mean share")
         lines.append("of the fault's epochs in alarm. summary.csv has every figure with its interval.")
@@ -438,7 +503,8 @@ class Campaign:
         }
 
     def write(self, out: str | Path, figures: bool = True) -> list[Path]:
-        """Write ``runs.parquet``, ``summary.csv``, ``campaign.json`` and PNG plots to ``out``."""
+        """Write ``runs.parquet``, ``summary.csv``, ``campaign.json`` (and ``integrity.csv``
+        with filter protection levels) and PNG plots to ``out``."""
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
         paths = [out / "runs.parquet", out / "summary.csv", out / "campaign.json"]
@@ -447,6 +513,10 @@ class Campaign:
             runs[c] = runs[c].astype(str)
         runs.to_parquet(paths[0], index=False)
         self.summary().to_csv(paths[1], index=False)
+        integ = self.integrity_summary()
+        if len(integ):
+            paths.append(out / "integrity.csv")
+            integ.to_csv(paths[-1], index=False)
         paths[2].write_text(_json.dumps(self.campaign_info(), default=str), encoding="utf-8")
         figs: list[Path] = []
         if figures and len(self.runs):
@@ -476,11 +546,19 @@ class Campaign:
             f"navfdi montecarlo {self.scenario.name}",
             f"{self.runs_requested} runs per point, seed {self.seed}, {self.backend}" + (" — PARTIAL (interrupted)" if self.partial else ""),
             headline,
-            [("summary.csv", s)],
+            [("summary.csv", s)] + ([("integrity.csv", self.integrity_summary())] if len(self.integrity_summary()) else []),
             figures,
             scenario_text=self.scenario.text(),
             notes="P(det): share of runs with an alarm raised inside the fault window (or 1 s after); in_alarm_at_onset: share already in alarm when the fault began; alarm_fraction: mean share of the fault's epochs in alarm.",
         )
+
+
+#: Per-run filter-integrity columns of :attr:`Campaign.runs` (tight filter with
+#: ``[tight.integrity]``; repeated on each of the run's cell rows).
+INTEGRITY_COLUMNS = (
+    "pl_epochs", "mi_h_epochs", "mi_v_epochs", "hmi_h_epochs", "hmi_v_epochs", "pl_alarm_epochs", "pl_compared_epochs",
+    "error_over_hpl_max", "error_over_vpl_max", "hpl_sum", "vpl_sum", "hpl_ratio_sum", "vpl_ratio_sum",
+)
 
 
 def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[str, str, str, float]]], points: list[dict[str, Any]], fault_ids: Sequence[str] = ()):
@@ -510,6 +588,9 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             for k, fill in (("fault_start", np.nan), ("fault_magnitude", np.nan), ("fault_kind", ""), ("fault_components", ""), ("fault_satellite", "")):
                 v = np.asarray(ch[k], dtype=object if fill == "" else float).reshape(n, -1)
                 cols[k] = [v[r, col[f]] if f in col and col[f] < v.shape[1] else fill for r in range(n) for f in fid]
+        if "pl_epochs" in ch:
+            for k in INTEGRITY_COLUMNS:
+                cols[k] = np.repeat(ch[k], c)
         if np.isfinite(np.asarray(ch["hor_rms"], float)).any():
             # Runs on recorded logs: the horizontal errors against the reference.
             for k in ("hor_rms", "hor_max", "fault_hor_max", "hor_rel_rms", "fault_hor_rel_max"):

@@ -29,6 +29,8 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
       threshold, faulty channels highlighted, exclusions marked (paper 004's Fig. 11–15);
     * ``master_attitude_error.png``: master attitude error (arcsec) per axis with and without
       isolation (simulated runs);
+    * ``protection_levels.png`` (tight filter with ``[tight.integrity]``): horizontal and
+      vertical error against the filter and snapshot protection levels;
     * runs on recorded logs: every GNSS channel's detectors, and ``track.png``,
       ``errors.png``, ``biases.png`` (:func:`navfdi.plots_logged.plot_logged`).
 
@@ -154,7 +156,42 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     fig.savefig(p, dpi=110)
     plt.close(fig)
     paths.append(p)
+    if run.record.get("integrity") is not None:
+        paths.append(_plot_protection_levels(run, out, prefix, plt))
     return paths
+
+
+def _plot_protection_levels(run: RunRecord, out: Path, prefix: str, plt: Any) -> Path:
+    """``protection_levels.png``: horizontal and vertical position error (m, log scale)
+    against the filter's HPL / VPL and the snapshot ARAIM levels of the same epochs, the
+    separation test's alarms marked, fault windows shaded."""
+    it = run.record["integrity"]
+    t = run.t
+    e = run.record["error"]
+    errs = (np.hypot(e[:, 6], e[:, 7]), np.abs(e[:, 8]))
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True, constrained_layout=True)
+    for ax, err, key, name in zip(axes, errs, ("hpl", "vpl"), ("horizontal", "vertical")):
+        for f in run.scenario.faults():
+            ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.1, lw=0)
+        ax.plot(t, err, lw=0.8, color="tab:blue", label=f"{name} error")
+        ax.plot(t, it[key], lw=1.0, color="tab:green", label=f"filter {key.upper()}")
+        ax.plot(t, it[f"{key}_snapshot"], lw=0.8, color="tab:orange", ls="--", label=f"snapshot ARAIM {key.upper()}")
+        alarm = np.asarray(it["alarm"], bool)
+        if alarm.any():
+            ax.plot(t[alarm], err[alarm], "v", ms=4, color="tab:red", label="separation alarm")
+        ax.set_yscale("log")
+        ax.set_ylabel(f"{name} [m]")
+        ax.grid(alpha=0.3, which="both")
+    if run.scenario.faults():
+        axes[0].axvspan(np.nan, np.nan, color="tab:red", alpha=0.1, lw=0, label="fault window")
+    axes[0].legend(loc="upper left", fontsize=8, ncol=3)
+    what = "" if run.variant is None else f" ({run.variant})"
+    axes[0].set_title(f"{run.scenario.name}{what}: position error against the protection levels (seed {run.seed})")
+    axes[-1].set_xlabel("time [s]")
+    p = out / f"{prefix}protection_levels.png"
+    fig.savefig(p, dpi=110)
+    plt.close(fig)
+    return p
 
 
 def _plot_channels(run: RunRecord, out: Path, prefix: str, plt: Any) -> Path:

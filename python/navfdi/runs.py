@@ -132,6 +132,51 @@ class ScenarioRun(RunRecord):
             )
         return pd.DataFrame(rows, columns=cols)
 
+    # ---- filter protection levels (tight architecture with [tight.integrity]) ---------------
+    def integrity(self) -> dict[str, float] | None:
+        """The filter protection levels of the run against its true position error (None
+        without ``[tight.integrity]``), counted by the Rust metrics engine Monte-Carlo uses:
+        ``epochs`` (with finite levels), ``misleading_h``, ``misleading_v`` (epochs whose
+        horizontal / vertical error exceeds the HPL / VPL), ``hazardous_h``, ``hazardous_v`` (of
+        those, without an alarm of the separation test), ``alarm_epochs``,
+        ``error_over_hpl_max``, ``error_over_vpl_max`` (largest error / level), ``hpl_mean``,
+        ``vpl_mean`` (m), ``hpl_snapshot_mean``, ``vpl_snapshot_mean`` (m, snapshot ARAIM of
+        the same epochs' pseudoranges) and ``hpl_ratio_mean``, ``vpl_ratio_mean`` (filter /
+        snapshot, mean over the epochs with both)."""
+        it = self.record.get("integrity")
+        if it is None or "metrics" not in it:
+            return None
+        m = it["metrics"]
+        div = lambda a, b: float(a) / b if b else float("nan")  # noqa: E731
+        mean = lambda v: float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")  # noqa: E731
+        return {
+            "epochs": int(m["epochs"]),
+            "misleading_h": int(m["mi_h_epochs"]),
+            "misleading_v": int(m["mi_v_epochs"]),
+            "hazardous_h": int(m["hmi_h_epochs"]),
+            "hazardous_v": int(m["hmi_v_epochs"]),
+            "alarm_epochs": int(m["alarm_epochs"]),
+            "error_over_hpl_max": float(m["error_over_hpl_max"]),
+            "error_over_vpl_max": float(m["error_over_vpl_max"]),
+            "hpl_mean": div(m["hpl_sum"], m["epochs"]),
+            "vpl_mean": div(m["vpl_sum"], m["epochs"]),
+            "hpl_snapshot_mean": mean(it["hpl_snapshot"]),
+            "vpl_snapshot_mean": mean(it["vpl_snapshot"]),
+            "hpl_ratio_mean": div(m["hpl_ratio_sum"], m["compared_epochs"]),
+            "vpl_ratio_mean": div(m["vpl_ratio_sum"], m["compared_epochs"]),
+        }
+
+    def _integrity_lines(self) -> list[str]:
+        i = self.integrity()
+        if i is None:
+            return []
+        return [
+            f"filter protection levels ({i['epochs']} epochs): HPL/VPL mean {i['hpl_mean']:.2f}/{i['vpl_mean']:.2f} m, "
+            f"{i['hpl_ratio_mean']:.2f}/{i['vpl_ratio_mean']:.2f} of snapshot ARAIM's",
+            f"  error > PL h/v: {i['misleading_h']}/{i['misleading_v']} epochs; with no alarm (hazardous) "
+            f"{i['hazardous_h']}/{i['hazardous_v']}; largest error/PL {i['error_over_hpl_max']:.2f}/{i['error_over_vpl_max']:.2f}",
+        ]
+
     def _satellite_lines(self) -> list[str]:
         tab = self.satellite_table()
         if not len(tab):
@@ -281,6 +326,9 @@ class ScenarioRun(RunRecord):
         sat_lines = self._satellite_lines()
         if sat_lines:
             lines += sat_lines + [""]
+        pl_lines = self._integrity_lines()
+        if pl_lines:
+            lines += pl_lines + [""]
         if "nav" in self.record:
             e = self.errors()
             lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
@@ -329,7 +377,11 @@ class ScenarioRun(RunRecord):
         ``state_chi2.statistic, .threshold, .alarm, .ready, .ill_conditioned``. Tight architecture: ``fde.status`` (passed, excluded, unidentified, no_solution, alarm,
         no_measurement), ``fde.used`` (satellites updating the filter), ``fde.excluded``
         (comma-separated names) and per satellite ever in view ``sat.{name}.in_view``,
-        ``.excluded`` and ``.w`` (w-test statistic of its pseudorange, NaN when not tested)."""
+        ``.excluded`` and ``.w`` (w-test statistic of its pseudorange, NaN when not tested);
+        with ``[tight.integrity]``: ``integrity.hpl``, ``.vpl`` (filter protection levels, m),
+        ``.hpl_snapshot``, ``.vpl_snapshot`` (snapshot ARAIM of the same epoch, m),
+        ``.statistic`` (largest normalised separation ``|Δ|/T``), ``.alarm``, ``.modes``
+        (sub-filters)."""
         import pandas as pd
 
         cols: dict[str, Any] = {"t": self.t}
@@ -369,6 +421,10 @@ class ScenarioRun(RunRecord):
                     cols[f"sat.{nm}.in_view"] = sat["in_view"][:, j]
                     cols[f"sat.{nm}.excluded"] = sat["excluded"][:, j]
                     cols[f"sat.{nm}.w"] = sat["w"][:, j]
+        it = self.record.get("integrity")
+        if it is not None:
+            for k in ("hpl", "vpl", "hpl_snapshot", "vpl_snapshot", "statistic", "alarm", "modes"):
+                cols[f"integrity.{k}"] = it[k]
         nav = self.record.get("nav")
         if nav is not None:
             cols["time"] = self.t
@@ -476,6 +532,7 @@ class ScenarioRun(RunRecord):
             "seed": self.seed,
             "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": numpy.__version__},
             "faults": [m.__dict__ for m in self.fault_table()],
+            "integrity": self.integrity(),
         }
 
     def write(self, out: str | Path, figures: bool = True) -> list[Path]:
@@ -521,6 +578,12 @@ class ScenarioRun(RunRecord):
             key = f"{m.fault_id} · {m.subfilter}/{m.detector}"
             out[f"{key}: delay [s]"] = float("nan") if m.delay is None else m.delay
             out[f"{key}: in alarm [%]"] = 100 * m.alarm_fraction
+        i = self.integrity()
+        if i is not None:
+            out["HPL mean [m]"], out["VPL mean [m]"] = i["hpl_mean"], i["vpl_mean"]
+            out["VPL filter/snapshot"] = i["vpl_ratio_mean"]
+            out["hazardously misleading epochs, horizontal"] = i["hazardous_h"]
+            out["hazardously misleading epochs, vertical"] = i["hazardous_v"]
         return out
 
 
@@ -649,6 +712,7 @@ class VariantRuns:
                     "faults": [m.__dict__ for m in r.fault_table()],
                     "errors": r.errors(),
                     "satellites": r.satellite_table().to_dict(orient="records"),
+                    "integrity": r.integrity(),
                 }
                 for name, r in self.runs.items()
             },

@@ -109,8 +109,85 @@ pub struct RunMetrics {
     pub fault_hor_rel_max: f64,
     /// The run's faults as drawn (campaigns on recorded logs; empty otherwise).
     pub drawn: Vec<crate::spec::FaultSpec>,
+    /// Filter protection levels against the true error (tight filter with
+    /// `[tight.integrity]`; None otherwise).
+    pub integrity: Option<IntegrityMetrics>,
     /// Optional full record of the run (kept for chosen runs).
     pub record: Option<RunRecord>,
+}
+
+/// Protection levels of one run against its true position error (see [`integrity_metrics`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct IntegrityMetrics {
+    /// Epochs with finite filter protection levels.
+    pub epochs: u32,
+    /// Epochs whose horizontal (vertical) error exceeds the HPL (VPL): misleading.
+    pub mi_h: u32,
+    /// See [`IntegrityMetrics::mi_h`].
+    pub mi_v: u32,
+    /// Of those, epochs without an alarm of the separation test: hazardously misleading.
+    pub hmi_h: u32,
+    /// See [`IntegrityMetrics::hmi_h`].
+    pub hmi_v: u32,
+    /// Epochs in which the separation test alarmed.
+    pub alarms: u32,
+    /// Largest horizontal error / HPL and vertical error / VPL over the run.
+    pub max_ratio_h: f64,
+    /// See [`IntegrityMetrics::max_ratio_h`].
+    pub max_ratio_v: f64,
+    /// Epochs with both filter and snapshot levels finite, and the sums over them of
+    /// filter HPL / snapshot HPL and filter VPL / snapshot VPL.
+    pub compared: u32,
+    /// See [`IntegrityMetrics::compared`].
+    pub sum_pl_ratio_h: f64,
+    /// See [`IntegrityMetrics::compared`].
+    pub sum_pl_ratio_v: f64,
+    /// Sums of the filter HPL and VPL over [`IntegrityMetrics::epochs`] (m).
+    pub sum_hpl: f64,
+    /// See [`IntegrityMetrics::sum_hpl`].
+    pub sum_vpl: f64,
+}
+
+/// The protection levels of `rec` (when it has them) against its position error (m,
+/// columns pos_e, pos_n, pos_u of [`RunRecord::error`]): counts of misleading and
+/// hazardously misleading epochs, the worst error-to-level ratios, and the filter levels
+/// beside the snapshot levels of the same epochs.
+pub fn integrity_metrics(rec: &RunRecord) -> Option<IntegrityMetrics> {
+    let ir = rec.integrity.as_ref()?;
+    let mut m = IntegrityMetrics::default();
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        let (hpl, vpl) = (ir.hpl[k], ir.vpl[k]);
+        if !(hpl.is_finite() && vpl.is_finite()) {
+            continue;
+        }
+        let hor = row[6].hypot(row[7]);
+        let up = row[8].abs();
+        if !(hor.is_finite() && up.is_finite()) {
+            continue;
+        }
+        m.epochs += 1;
+        m.sum_hpl += hpl;
+        m.sum_vpl += vpl;
+        let alarm = ir.alarm[k];
+        m.alarms += u32::from(alarm);
+        if hor > hpl {
+            m.mi_h += 1;
+            m.hmi_h += u32::from(!alarm);
+        }
+        if up > vpl {
+            m.mi_v += 1;
+            m.hmi_v += u32::from(!alarm);
+        }
+        m.max_ratio_h = m.max_ratio_h.max(hor / hpl);
+        m.max_ratio_v = m.max_ratio_v.max(up / vpl);
+        let (hs, vs) = (ir.hpl_snapshot[k], ir.vpl_snapshot[k]);
+        if hs.is_finite() && vs.is_finite() && hs > 0.0 && vs > 0.0 {
+            m.compared += 1;
+            m.sum_pl_ratio_h += hpl / hs;
+            m.sum_pl_ratio_v += vpl / vs;
+        }
+    }
+    Some(m)
 }
 
 /// The cells of a scenario, in the order metrics are reported.
@@ -267,6 +344,7 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
         hor_rel_rms: f64::NAN,
         fault_hor_rel_max: f64::NAN,
         drawn: Vec::new(),
+        integrity: integrity_metrics(rec),
         record: None,
     }
 }
@@ -349,6 +427,7 @@ fn logged_errors(
         hor_rel_rms: none((r2 / nn).sqrt()),
         fault_hor_rel_max: rmax,
         drawn: spec.faults.clone(),
+        integrity: None,
         record: None,
     }
 }

@@ -183,6 +183,45 @@ pub struct RunRecord {
     /// The navigation solution of a strapdown INS (architecture `loosely_coupled`), T ×
     /// [`NAV_COLUMNS`] row-major; empty otherwise.
     pub nav: Vec<f64>,
+    /// Filter protection levels (tight filter with `[tight.integrity]`).
+    pub integrity: Option<IntegrityRecord>,
+}
+
+/// Per-epoch filter integrity of a tight run ([`crate::integrity::filter_ss`]), each T long.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct IntegrityRecord {
+    /// Filter horizontal and vertical protection levels (m; NaN before the first
+    /// measurement).
+    pub hpl: Vec<f64>,
+    /// See [`IntegrityRecord::hpl`].
+    pub vpl: Vec<f64>,
+    /// Snapshot ARAIM protection levels of the same epoch's pseudoranges (the satellites the
+    /// filter used, their σ, the same allocation and prior; NaN when the epoch has too few
+    /// satellites or no measurement), m.
+    pub hpl_snapshot: Vec<f64>,
+    /// See [`IntegrityRecord::hpl_snapshot`].
+    pub vpl_snapshot: Vec<f64>,
+    /// Largest normalised separation `|Δ|/T` (NaN when no mode is tested).
+    pub statistic: Vec<f64>,
+    /// The separation test alarmed.
+    pub alarm: Vec<bool>,
+    /// Monitored modes (sub-filters).
+    pub modes: Vec<u32>,
+}
+
+impl IntegrityRecord {
+    /// Empty, with room for `epochs`.
+    pub fn with_capacity(epochs: usize) -> Self {
+        IntegrityRecord {
+            hpl: Vec::with_capacity(epochs),
+            vpl: Vec::with_capacity(epochs),
+            hpl_snapshot: Vec::with_capacity(epochs),
+            vpl_snapshot: Vec::with_capacity(epochs),
+            statistic: Vec::with_capacity(epochs),
+            alarm: Vec::with_capacity(epochs),
+            modes: Vec::with_capacity(epochs),
+        }
+    }
 }
 
 /// Columns of [`RunRecord::nav`]: the GNSS antenna's latitude, longitude (rad) and height
@@ -298,6 +337,7 @@ impl RunRecord {
             fusion: None,
             faults_applied: crate::stream::faults_applied(spec, models),
             nav: Vec::new(),
+            integrity: None,
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

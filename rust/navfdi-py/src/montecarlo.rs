@@ -186,6 +186,41 @@ pub fn rows_to_py<'py>(
     ] {
         d.set_item(key, to_numpy(py, rows.iter().map(f).collect(), &[n])?)?;
     }
+    // Filter protection levels against the true error (tight filter with [tight.integrity]).
+    if n > 0 && rows.iter().all(|r| r.integrity.is_some()) {
+        let im: Vec<navfdi_core::montecarlo::IntegrityMetrics> =
+            rows.iter().filter_map(|r| r.integrity).collect();
+        for (key, f) in [
+            (
+                "pl_epochs",
+                (|m| m.epochs) as fn(&navfdi_core::montecarlo::IntegrityMetrics) -> u32,
+            ),
+            ("mi_h_epochs", |m| m.mi_h),
+            ("mi_v_epochs", |m| m.mi_v),
+            ("hmi_h_epochs", |m| m.hmi_h),
+            ("hmi_v_epochs", |m| m.hmi_v),
+            ("pl_alarm_epochs", |m| m.alarms),
+            ("pl_compared_epochs", |m| m.compared),
+        ] {
+            d.set_item(
+                key,
+                to_numpy(py, im.iter().map(|m| f(m) as i64).collect(), &[n])?,
+            )?;
+        }
+        for (key, f) in [
+            (
+                "error_over_hpl_max",
+                (|m| m.max_ratio_h) as fn(&navfdi_core::montecarlo::IntegrityMetrics) -> f64,
+            ),
+            ("error_over_vpl_max", |m| m.max_ratio_v),
+            ("hpl_sum", |m| m.sum_hpl),
+            ("vpl_sum", |m| m.sum_vpl),
+            ("hpl_ratio_sum", |m| m.sum_pl_ratio_h),
+            ("vpl_ratio_sum", |m| m.sum_pl_ratio_v),
+        ] {
+            d.set_item(key, to_numpy(py, im.iter().map(f).collect(), &[n])?)?;
+        }
+    }
     // The faults each run drew (campaigns on recorded logs): start (s), magnitude (SI), kind,
     // components (comma-separated indices) and satellite ("" for none), (runs, faults).
     let nf = rows.first().map_or(0, |r| r.drawn.len());

@@ -58,6 +58,8 @@ pub fn scenario_trajectory<'py>(py: Python<'py>, spec_json: &str) -> PyResult<Bo
 
 pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py, PyDict>> {
     let t = rec.t.len();
+    // The metrics engine's integrity counts (the same function Monte-Carlo uses).
+    let integrity_metrics = navfdi_core::montecarlo::integrity_metrics(&rec);
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, rec.t, &[t])?)?;
     d.set_item("faults_applied", rec.faults_applied)?;
@@ -120,6 +122,34 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         sd.set_item("ready", to_numpy(py, st.ready, &[t])?)?;
         sd.set_item("ill_conditioned", to_numpy(py, st.ill_conditioned, &[t])?)?;
         d.set_item("state_chi2", sd)?;
+    }
+    if let Some(ir) = rec.integrity {
+        let id = PyDict::new(py);
+        id.set_item("hpl", to_numpy(py, ir.hpl, &[t])?)?;
+        id.set_item("vpl", to_numpy(py, ir.vpl, &[t])?)?;
+        id.set_item("hpl_snapshot", to_numpy(py, ir.hpl_snapshot, &[t])?)?;
+        id.set_item("vpl_snapshot", to_numpy(py, ir.vpl_snapshot, &[t])?)?;
+        id.set_item("statistic", to_numpy(py, ir.statistic, &[t])?)?;
+        id.set_item("alarm", to_numpy(py, ir.alarm, &[t])?)?;
+        id.set_item("modes", to_numpy(py, ir.modes, &[t])?)?;
+        if let Some(m) = integrity_metrics {
+            let md = PyDict::new(py);
+            md.set_item("epochs", m.epochs)?;
+            md.set_item("mi_h_epochs", m.mi_h)?;
+            md.set_item("mi_v_epochs", m.mi_v)?;
+            md.set_item("hmi_h_epochs", m.hmi_h)?;
+            md.set_item("hmi_v_epochs", m.hmi_v)?;
+            md.set_item("alarm_epochs", m.alarms)?;
+            md.set_item("error_over_hpl_max", m.max_ratio_h)?;
+            md.set_item("error_over_vpl_max", m.max_ratio_v)?;
+            md.set_item("compared_epochs", m.compared)?;
+            md.set_item("hpl_ratio_sum", m.sum_pl_ratio_h)?;
+            md.set_item("vpl_ratio_sum", m.sum_pl_ratio_v)?;
+            md.set_item("hpl_sum", m.sum_hpl)?;
+            md.set_item("vpl_sum", m.sum_vpl)?;
+            id.set_item("metrics", md)?;
+        }
+        d.set_item("integrity", id)?;
     }
     if let Some(sr) = rec.sats {
         let n = sr.names.len();

@@ -38,13 +38,16 @@
 use super::common::{record_sat_fde, record_untested};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
+use crate::gnss::geodesy::ecef_to_enu;
 use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
 use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
+use crate::integrity::araim::{araim, Allocation, Ism};
 
+use crate::integrity::filter_ss::{SeparationBank, SsEpoch};
 use crate::kalman::{KalmanFilter, Sequential};
-use crate::record::{RunRecord, SatRecord};
+use crate::record::{IntegrityRecord, RunRecord, SatRecord};
 use crate::spec::{FdePlacement, ScenarioSpec};
 use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector};
@@ -81,10 +84,22 @@ pub fn run_tight(
     };
     let mut seq = Sequential::new(n);
     let mut r_diag: Vec<f64> = Vec::new();
+    let mut bank = t
+        .integrity
+        .as_ref()
+        .map(|fi| SeparationBank::new(s_count, n, fi.p_sat, fi.allocation()));
+    let mut integ = bank
+        .as_ref()
+        .map(|_| IntegrityRecord::with_capacity(epochs));
     for k in 0..epochs {
         cancel.check()?;
         kf.predict_trusted(&models.phi[k], &models.q[k], 1.0)
             .map_err(|e| crate::run::at_epoch(k, e))?;
+        if let Some(b) = bank.as_mut() {
+            b.predict(&models.phi[k], &models.q[k])
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            b.sync_view(&kf, &rp.epochs[k].sats);
+        }
         if let Some(pv) = &mut pv {
             pv.predict().map_err(|e| crate::run::at_epoch(k, e))?;
         }
@@ -95,6 +110,12 @@ pub fn run_tight(
         }
         if !(models.available[si][k] && m > 0) {
             record_untested(&mut rec, &mut sat);
+            if let (Some(b), Some(ir)) = (bank.as_ref(), integ.as_mut()) {
+                // Coasting: the levels of the predicted filter, nothing tested.
+                let nom = &models.nominal[k];
+                let lv = b.levels(&kf, nom.lat, nom.h);
+                push_levels(ir, &lv, [f64::NAN; 2], false);
+            }
             rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
             continue;
         }
@@ -110,6 +131,27 @@ pub fn run_tight(
                 .take(rows),
         );
         let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+        if let (FdePlacement::Separation, Some(b), Some(ir)) =
+            (t.fde, bank.as_mut(), integ.as_mut())
+        {
+            let updated = separation_epoch(
+                &mut kf,
+                b,
+                ir,
+                &mut rec,
+                &mut sat,
+                src,
+                k,
+                (&z, &h, &r, &r_diag),
+                isolation,
+            )
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+            rec.subs[0].fused.push(updated > 0);
+            sat.used.push(updated as u32);
+            rec.sources.push(u32::from(updated > 0));
+            rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
+            continue;
+        }
         let mut sequential = false;
         let (out, pending) = match t.fde {
             FdePlacement::LsPrecheck => (ls_precheck(src, k, kf.x(), t.rates, &cfg)?, None),
@@ -158,7 +200,7 @@ pub fn run_tight(
                 });
                 (out, None)
             }
-            FdePlacement::Innovation | FdePlacement::None => {
+            FdePlacement::Innovation | FdePlacement::None | FdePlacement::Separation => {
                 let (inn, pending) = kf
                     .innovation_pending(&z, &h, &r)
                     .map_err(|e| crate::run::at_epoch(k, e))?;
@@ -191,11 +233,23 @@ pub fn run_tight(
             update_without(&mut kf, &z, &h, &r, m, excluded, pending)
                 .map_err(|e| crate::run::at_epoch(k, e))?
         };
+        if let (Some(b), Some(ir)) = (bank.as_mut(), integ.as_mut()) {
+            // Protection levels of the filter as it was updated (the sub-filters leave out
+            // what it left out); the test is reported, the placement decides.
+            let used: Vec<bool> = (0..m).map(|j| !excluded.contains(&j)).collect();
+            b.update(&z, &h, &r_diag, &ep.sats, &used)
+                .map_err(|e| crate::run::at_epoch(k, e))?;
+            let nom = &models.nominal[k];
+            let lv = b.levels(&kf, nom.lat, nom.h);
+            let snap = snapshot_levels(src, k, &used, b.allocation_spec());
+            push_levels(ir, &lv, snap, lv.alarm);
+        }
         rec.subs[0].fused.push(updated > 0);
         sat.used.push(updated as u32);
         rec.sources.push(u32::from(updated > 0));
         rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
     }
+    rec.integrity = integ;
     // Satellite-FDE counts per fault on the sensor.
     sat.score(&rec.t, &spec.faults, &spec.sensors[si].name);
     rec.sats = Some(sat);
@@ -246,5 +300,136 @@ fn ls_precheck(
         snapshot_sat_fde(model, Some(rate), sigma, cfg)
     } else {
         snapshot_sat_fde(model, None, ep.sigma.clone(), cfg)
+    }
+}
+
+/// Append one epoch's levels to the record (`snap`: snapshot HPL, VPL).
+fn push_levels(ir: &mut IntegrityRecord, lv: &SsEpoch, snap: [f64; 2], alarm: bool) {
+    ir.hpl.push(lv.hpl);
+    ir.vpl.push(lv.vpl);
+    ir.hpl_snapshot.push(snap[0]);
+    ir.vpl_snapshot.push(snap[1]);
+    ir.statistic.push(lv.statistic);
+    ir.alarm.push(alarm);
+    ir.modes.push(lv.modes as u32);
+}
+
+/// One epoch of placement `separation`: the filter updates with every satellite in view not
+/// excluded, the bank with the same less its own; on an alarm (and `isolation`) the satellite
+/// of the largest normalised separation is excluded ([`SeparationBank::exclude`]), and the
+/// levels are those after it. Excluded satellites rejoin after a consistent spell
+/// ([`SeparationBank::readmit`]). Returns the satellites that updated the filter.
+#[allow(clippy::too_many_arguments)]
+fn separation_epoch(
+    kf: &mut KalmanFilter,
+    bank: &mut SeparationBank,
+    ir: &mut IntegrityRecord,
+    rec: &mut RunRecord,
+    sat: &mut SatRecord,
+    src: &Streams,
+    k: usize,
+    (z, h, r, r_diag): (&DVector<f64>, &DMatrix<f64>, &DMatrix<f64>, &[f64]),
+    isolation: bool,
+) -> Result<usize> {
+    let rp = src
+        .models
+        .ranges
+        .as_ref()
+        .ok_or_else(|| Error::Invalid("no ranges".into()))?;
+    let ep = &rp.epochs[k];
+    let m = ep.len();
+    let before: Vec<usize> = (0..m).filter(|&j| bank.is_excluded(ep.sats[j])).collect();
+    let mut updated = update_without(kf, z, h, r, m, &before, None)?;
+    let used: Vec<bool> = (0..m).map(|j| !before.contains(&j)).collect();
+    bank.update(z, h, r_diag, &ep.sats, &used)?;
+    let nom = &src.models.nominal[k];
+    let first = bank.levels(kf, nom.lat, nom.h);
+    let mut excluded = before.clone();
+    let mut lv = first;
+    if first.alarm {
+        if let Some(s) = first.worst {
+            let j = ep.sats.iter().position(|&x| x == s);
+            if isolation && bank.exclude(kf, s)? {
+                updated -= 1;
+                lv = bank.levels(kf, nom.lat, nom.h);
+            }
+            excluded.extend(j);
+        }
+    }
+    // Satellites excluded earlier that agree with the filter again rejoin from the next epoch.
+    bank.readmit(kf, z, h, r_diag, &ep.sats);
+    let status = if first.alarm && first.worst.is_none() {
+        FdeStatus::Unidentified
+    } else if excluded.is_empty() {
+        FdeStatus::Passed
+    } else {
+        FdeStatus::Excluded
+    };
+    let out = SatFde {
+        excluded,
+        status,
+        first: (first.statistic, 1.0, first.modes),
+        w: vec![f64::NAN; m],
+    };
+    record_sat_fde(rec, sat, k, &out, |j| ep.sats[j], false);
+    let used_now: Vec<bool> = (0..m)
+        .map(|j| !out.excluded.contains(&j) || !isolation)
+        .collect();
+    let snap = snapshot_levels(src, k, &used_now, bank.allocation_spec());
+    push_levels(ir, &lv, snap, first.alarm);
+    Ok(updated)
+}
+
+/// Snapshot ARAIM HPL and VPL (m) of epoch `k`'s pseudoranges of the satellites `used[j]`:
+/// their σ as `C_int = C_acc`, no nominal bias, the satellite prior and allocation of the
+/// filter's integrity, no constellation fault (the bank does not monitor one either), one
+/// clock per system. NaN when the satellites cannot give a solution with redundancy.
+fn snapshot_levels(
+    src: &Streams,
+    k: usize,
+    used: &[bool],
+    (p_sat, alloc): (f64, Allocation),
+) -> [f64; 2] {
+    let Some(rp) = src.models.ranges.as_ref() else {
+        return [f64::NAN; 2];
+    };
+    let ep = &rp.epochs[k];
+    let nom = &src.models.nominal[k];
+    let c = ecef_to_enu(nom.lat, nom.lon);
+    let mut rows = Vec::new();
+    let mut systems: Vec<char> = Vec::new();
+    let mut constellation = Vec::new();
+    let mut c_int = Vec::new();
+    for (j, &s) in ep.sats.iter().enumerate() {
+        if !used.get(j).copied().unwrap_or(false) {
+            continue;
+        }
+        let e = c * ep.los[j];
+        rows.push([-e.x, -e.y, -e.z]);
+        let sys = rp.names[s].chars().next().unwrap_or('G');
+        let ci = match systems.iter().position(|&x| x == sys) {
+            Some(i) => i,
+            None => {
+                systems.push(sys);
+                systems.len() - 1
+            }
+        };
+        constellation.push(ci);
+        c_int.push(ep.sigma[j] * ep.sigma[j]);
+    }
+    let n = rows.len();
+    if n <= 3 + systems.len() {
+        return [f64::NAN; 2];
+    }
+    let ism = Ism {
+        c_acc: c_int.clone(),
+        c_int,
+        b_nom: vec![0.0; n],
+        p_sat: vec![p_sat; n],
+        p_const: vec![0.0; systems.len()],
+    };
+    match araim(&rows, &constellation, &ism, &alloc) {
+        Ok(a) if a.vpl.is_finite() && a.hpl.is_finite() => [a.hpl, a.vpl],
+        _ => [f64::NAN; 2],
     }
 }

@@ -244,6 +244,78 @@ fn solve_level(fd: impl Fn(f64) -> (f64, f64), target: f64, mut lo: f64, mut hi:
     }
 }
 
+/// The ADD's false-alert multipliers `K_fa` east, north, up for `n_modes` monitored modes:
+/// `Q⁻¹(P_FA,H / 4N)` twice and `Q⁻¹(P_FA,V / 2N)`.
+pub(crate) fn k_fa(n_modes: usize, alloc: &Allocation) -> [f64; 3] {
+    let nm = n_modes.max(1) as f64;
+    [
+        q_inv(alloc.p_fa_hor / (4.0 * nm)),
+        q_inv(alloc.p_fa_hor / (4.0 * nm)),
+        q_inv(alloc.p_fa_vert / (2.0 * nm)),
+    ]
+}
+
+/// One fault mode's terms in the protection-level equation, east, north, up (m): prior,
+/// `T_k,q + b_k,q` and `σ_k,q`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ModeTerm {
+    pub prior: f64,
+    pub shift: [f64; 3],
+    pub sigma: [f64; 3],
+}
+
+/// VPL and HPL (m) by the ADD's equations (Appendix, PL root finding) from the fault-free
+/// `σ_0,q` and `b_0,q` (east, north, up) and the modes' terms: the level `L` where
+/// `2Q((L − b_0)/σ_0) + Σ_k p_k Q((L − T_k − b_k)/σ_k)` equals the budget (P_HMI,V for the
+/// vertical; half P_HMI,H for each horizontal axis, HPL the root sum square), the budgets
+/// scaled by `1 − P_unmonitored / (P_HMI,V + P_HMI,H)`. Infinite when that scale is not
+/// positive.
+pub(crate) fn protection_levels(
+    sigma0: [f64; 3],
+    bias0: [f64; 3],
+    modes: &[ModeTerm],
+    p_unmonitored: f64,
+    alloc: &Allocation,
+) -> (f64, f64) {
+    let scale = 1.0 - p_unmonitored / (alloc.p_hmi_vert + alloc.p_hmi_hor);
+    let level = |qd: usize, target: f64| -> f64 {
+        // (prior, T + b, 1/σ) per mode; the bracket [lo, hi] from the fault-free term alone
+        // (every term is ≥ 0) and from each term held to target/(N+1) by the Chernoff bound
+        // Q(x) ≤ exp(−x²/2)/2, so the root search needs no doubling.
+        let terms: Vec<(f64, f64, f64)> = modes
+            .iter()
+            .map(|m| (m.prior, m.shift[qd], 1.0 / m.sigma[qd]))
+            .collect();
+        let inv0 = 1.0 / sigma0[qd];
+        let fd = |l: f64| {
+            let x0 = (l - bias0[qd]) * inv0;
+            let (mut f, mut d) = (2.0 * q(x0), -2.0 * phi(x0) * inv0);
+            for &(p, shift, inv) in &terms {
+                let x = (l - shift) * inv;
+                f += p * q(x);
+                d -= p * phi(x) * inv;
+            }
+            (f, d)
+        };
+        let share = target / (terms.len() + 1) as f64;
+        let lo = bias0[qd] + sigma0[qd] * q_inv(0.5 * target);
+        let mut hi = bias0[qd] + sigma0[qd] * (2.0 * (1.0 / share).ln()).sqrt();
+        for &(p, shift, inv) in &terms {
+            let x = (2.0 * (0.5 * p / share).ln()).max(0.0).sqrt();
+            hi = hi.max(shift + x / inv);
+        }
+        solve_level(fd, target, lo.max(0.0), hi)
+    };
+    if scale > 0.0 {
+        let v = level(2, alloc.p_hmi_vert * scale);
+        let h1 = level(0, 0.5 * alloc.p_hmi_hor * scale);
+        let h2 = level(1, 0.5 * alloc.p_hmi_hor * scale);
+        (v, h1.hypot(h2))
+    } else {
+        (f64::INFINITY, f64::INFINITY)
+    }
+}
+
 /// ARAIM protection levels of one epoch. `rows` (n): ENU geometry rows (minus the unit lines of
 /// sight); `constellation` (n): index of each satellite's constellation (0..C); `ism`, `alloc`.
 pub fn araim(
@@ -414,12 +486,7 @@ pub(crate) fn araim_inner(
         }
         solved.push((removed, consts, prior, var, ss2, bias, separation));
     }
-    let nm = solved.len().max(1) as f64;
-    let k_fa = [
-        q_inv(alloc.p_fa_hor / (4.0 * nm)),
-        q_inv(alloc.p_fa_hor / (4.0 * nm)),
-        q_inv(alloc.p_fa_vert / (2.0 * nm)),
-    ];
+    let k_fa = k_fa(solved.len(), alloc);
     let bias_of = |s: &DMatrix<f64>, qd: usize| -> f64 {
         (0..n).map(|i| s[(qd, i)].abs() * ism.b_nom[i]).sum()
     };
@@ -446,43 +513,15 @@ pub(crate) fn araim_inner(
             }
         })
         .collect();
-    let scale = 1.0 - p_unmonitored / (alloc.p_hmi_vert + alloc.p_hmi_hor);
-    let level = |qd: usize, target: f64| -> f64 {
-        // (prior, T + b, 1/σ) per mode; the bracket [lo, hi] from the fault-free term alone
-        // (every term is ≥ 0) and from each term held to target/(N+1) by the Chernoff bound
-        // Q(x) ≤ exp(−x²/2)/2, so the root search needs no doubling.
-        let terms: Vec<(f64, f64, f64)> = modes
-            .iter()
-            .map(|m| (m.prior, m.threshold[qd] + m.bias[qd], 1.0 / m.sigma[qd]))
-            .collect();
-        let inv0 = 1.0 / sigma0[qd];
-        let fd = |l: f64| {
-            let x0 = (l - bias0[qd]) * inv0;
-            let (mut f, mut d) = (2.0 * q(x0), -2.0 * phi(x0) * inv0);
-            for &(p, shift, inv) in &terms {
-                let x = (l - shift) * inv;
-                f += p * q(x);
-                d -= p * phi(x) * inv;
-            }
-            (f, d)
-        };
-        let share = target / (terms.len() + 1) as f64;
-        let lo = bias0[qd] + sigma0[qd] * q_inv(0.5 * target);
-        let mut hi = bias0[qd] + sigma0[qd] * (2.0 * (1.0 / share).ln()).sqrt();
-        for &(p, shift, inv) in &terms {
-            let x = (2.0 * (0.5 * p / share).ln()).max(0.0).sqrt();
-            hi = hi.max(shift + x / inv);
-        }
-        solve_level(fd, target, lo.max(0.0), hi)
-    };
-    let (vpl, hpl) = if scale > 0.0 {
-        let v = level(2, alloc.p_hmi_vert * scale);
-        let h1 = level(0, 0.5 * alloc.p_hmi_hor * scale);
-        let h2 = level(1, 0.5 * alloc.p_hmi_hor * scale);
-        (v, h1.hypot(h2))
-    } else {
-        (f64::INFINITY, f64::INFINITY)
-    };
+    let terms: Vec<ModeTerm> = modes
+        .iter()
+        .map(|m| ModeTerm {
+            prior: m.prior,
+            shift: [0, 1, 2].map(|q| m.threshold[q] + m.bias[q]),
+            sigma: m.sigma,
+        })
+        .collect();
+    let (vpl, hpl) = protection_levels(sigma0, bias0, &terms, p_unmonitored, alloc);
     let emt = modes
         .iter()
         .filter(|m| m.prior >= alloc.p_emt)

@@ -28,7 +28,7 @@ pub use faults::{FaultKind, FaultSpec};
 pub use federated::{FederatedSpec, SubfilterSpec};
 pub use loosely_coupled::{AlignmentSpec, ConstraintSpec, LooselyCoupledSpec};
 pub use sensors::{ModesSpec, RangesSpec, SensorKind, SensorSpec};
-pub use tight::{FdePlacement, TightSpec, TIGHT_DETECTOR};
+pub use tight::{FdePlacement, FilterIntegritySpec, TightSpec, TIGHT_DETECTOR};
 pub use trajectory::{SegmentSpec, TerrainSpec, TerrainWave, TrajectorySpec};
 pub use ultra_tight::{AimeMethod, NavInput, UltraTightSpec};
 
@@ -182,6 +182,10 @@ impl ScenarioSpec {
         }
         for ch in self.channels() {
             run += 8.0 + 4.0 + 3.0 + ch.detectors.len() as f64 * 17.0;
+        }
+        if self.tight.as_ref().is_some_and(|t| t.integrity.is_some()) {
+            // The integrity record: four levels, the statistic, the alarm and the mode count.
+            run += 5.0 * 8.0 + 1.0 + 4.0;
         }
         epochs * (prep + runs * run)
     }

@@ -24,6 +24,11 @@ pub enum FdePlacement {
     /// position-velocity Kalman filter before the integration filter
     /// ([`crate::gnss::pv_filter`]); excluded satellites update neither filter.
     GnssFilter,
+    /// Filter solution separation ([`crate::integrity::filter_ss`]): a bank of sub-filters,
+    /// each without one satellite, beside the filter; a separation beyond its threshold
+    /// excludes the satellite whose sub-filter separates most (the filter takes that
+    /// sub-filter's state). Needs `[tight.integrity]`.
+    Separation,
 }
 
 /// Tightly coupled filter configuration.
@@ -50,6 +55,73 @@ pub struct TightSpec {
     /// INS error model of `ins`).
     #[serde(default)]
     pub strapdown: Option<StrapdownSpec>,
+    /// Filter protection levels by solution separation (None: not computed).
+    #[serde(default)]
+    pub integrity: Option<FilterIntegritySpec>,
+}
+
+/// Integrity allocation and fault prior of the filter protection levels
+/// ([`crate::integrity::filter_ss`]); the defaults are LPV-200's (ARAIM ADD) and the ADD's
+/// satellite prior.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FilterIntegritySpec {
+    /// Prior probability of a fault of each satellite per epoch (default 1e-5).
+    #[serde(default = "default_p_sat")]
+    pub p_sat: f64,
+    /// Integrity budget of the vertical (default 9.8e-8).
+    #[serde(default = "default_p_hmi_vert")]
+    pub p_hmi_vert: f64,
+    /// Integrity budget of the horizontal (default 2e-9).
+    #[serde(default = "default_p_hmi_hor")]
+    pub p_hmi_hor: f64,
+    /// Continuity budget of the vertical separation tests (default 3.9e-6).
+    #[serde(default = "default_p_fa_vert")]
+    pub p_fa_vert: f64,
+    /// Continuity budget of the horizontal separation tests (default 9e-8).
+    #[serde(default = "default_p_fa_hor")]
+    pub p_fa_hor: f64,
+}
+
+impl Default for FilterIntegritySpec {
+    fn default() -> Self {
+        FilterIntegritySpec {
+            p_sat: default_p_sat(),
+            p_hmi_vert: default_p_hmi_vert(),
+            p_hmi_hor: default_p_hmi_hor(),
+            p_fa_vert: default_p_fa_vert(),
+            p_fa_hor: default_p_fa_hor(),
+        }
+    }
+}
+
+impl FilterIntegritySpec {
+    /// The allocation in the ARAIM module's form (P_THRES and P_EMT from LPV-200).
+    pub fn allocation(&self) -> crate::integrity::araim::Allocation {
+        crate::integrity::araim::Allocation {
+            p_hmi_vert: self.p_hmi_vert,
+            p_hmi_hor: self.p_hmi_hor,
+            p_fa_vert: self.p_fa_vert,
+            p_fa_hor: self.p_fa_hor,
+            ..crate::integrity::araim::Allocation::lpv200()
+        }
+    }
+}
+
+fn default_p_sat() -> f64 {
+    1e-5
+}
+fn default_p_hmi_vert() -> f64 {
+    9.8e-8
+}
+fn default_p_hmi_hor() -> f64 {
+    2e-9
+}
+fn default_p_fa_vert() -> f64 {
+    3.9e-6
+}
+fn default_p_fa_hor() -> f64 {
+    9e-8
 }
 
 /// A strapdown INS on a recorded IMU log, as the tight filter runs it: the IMU's noise figures
@@ -106,6 +178,28 @@ impl ScenarioSpec {
             positive("tight.k", k)?;
         }
         positive("tight.accel_psd", t.accel_psd)?;
+        if let Some(fi) = &t.integrity {
+            for (name, v) in [
+                ("p_sat", fi.p_sat),
+                ("p_hmi_vert", fi.p_hmi_vert),
+                ("p_hmi_hor", fi.p_hmi_hor),
+                ("p_fa_vert", fi.p_fa_vert),
+                ("p_fa_hor", fi.p_fa_hor),
+            ] {
+                if !(v > 0.0 && v < 0.5) {
+                    return Err(bad(
+                        format!("tight.integrity.{name}"),
+                        format!("{v}: a probability in (0, 0.5) is required"),
+                    ));
+                }
+            }
+        }
+        if t.fde == FdePlacement::Separation && t.integrity.is_none() {
+            return Err(bad(
+                "tight.fde",
+                "separation needs a [tight.integrity] table (empty for the LPV-200 defaults)",
+            ));
+        }
         if let Some(sd) = &t.strapdown {
             validate_strapdown(
                 "tight.strapdown",
@@ -117,6 +211,9 @@ impl ScenarioSpec {
             )?;
             if sd.imu.scale_factors() {
                 return Err(bad("tight.strapdown.imu", "scale-factor states (gyro_scale, accel_scale) are not available in the tight filter yet (its 18 states are the 15 INS errors and the receiver clock); set them to 0"));
+            }
+            if t.integrity.is_some() || t.fde == FdePlacement::Separation {
+                return Err(bad("tight.integrity", "filter protection levels are not available on recorded logs yet (simulated tight scenarios only); remove [tight.integrity] and use ls_precheck, innovation or none"));
             }
             if t.fde == FdePlacement::GnssFilter {
                 return Err(bad("tight.fde", "gnss_filter is not available on recorded logs; use ls_precheck, innovation or none"));

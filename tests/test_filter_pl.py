@@ -1,0 +1,126 @@
+"""Filter protection levels of the tight INS/GNSS filter (issue 24, item 4): a bank of
+sub-filters beside the filter, solution-separation test and exclusion, HPL/VPL per epoch,
+the snapshot ARAIM levels of the same epochs, and the metrics engine's misleading /
+hazardously misleading counts in `run` and `montecarlo`."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from navfdi.montecarlo import montecarlo
+from navfdi.runs import run_scenario
+from navfdi.scenario import ScenarioError, load_scenario
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return run_scenario("shao2018_integrity", seed=3)
+
+
+def test_levels_are_finite_positive_and_below_the_snapshot_levels(runs):
+    for name, r in runs.runs.items():
+        it = r.record["integrity"]
+        for k in ("hpl", "vpl"):
+            v = it[k]
+            assert np.isfinite(v).all() and (v > 0).all(), (name, k)
+            snap = it[f"{k}_snapshot"]
+            both = np.isfinite(snap)
+            assert both.mean() > 0.95, (name, k)
+            # The INS's contribution: the filter bounds the error far tighter than a snapshot
+            # of the same epoch's pseudoranges (measured ratio ~0.05-0.12).
+            assert (v[both] < snap[both]).all(), (name, k)
+        assert np.all(it["modes"][10:] >= 9), name
+
+
+def test_separation_excludes_the_faulty_satellite_and_the_levels_hold(runs):
+    sep = runs.runs["separation"]
+    tab = sep.satellite_table().set_index("fault_id")
+    # 20 m step and 0.5 m/s ramp on G03: excluded in most of their epochs, never another one.
+    assert tab.loc["step", "detection_rate"] >= 0.9
+    assert tab.loc["ramp", "detection_rate"] >= 0.75
+    assert tab.loc["step", "identification_rate"] == 1.0
+    assert tab.loc["ramp", "identification_rate"] == 1.0
+    assert tab.loc["none", "false_exclusion_rate"] == 0.0
+    i = sep.integrity()
+    assert i["epochs"] == len(sep.t)
+    assert i["hazardous_h"] == 0 and i["hazardous_v"] == 0
+    assert i["misleading_h"] == 0 and i["misleading_v"] == 0
+    assert i["error_over_vpl_max"] < 1.0 and i["error_over_hpl_max"] < 1.0
+
+
+def test_without_exclusion_the_error_leaves_the_levels_and_the_counts_show_it(runs):
+    # Variant none: nothing excluded, the fault drags the solution beyond its levels; the
+    # separation test alarms there, so the epochs are misleading but not hazardous.
+    r = runs.runs["none"]
+    i = r.integrity()
+    assert i["misleading_h"] > 50 and i["misleading_v"] > 50
+    assert i["error_over_vpl_max"] > 1.5
+    # The Rust metrics engine's counts equal a recount from the time series.
+    ts = r.timeseries()
+    hor = np.hypot(ts["error.pos_e"], ts["error.pos_n"])
+    up = np.abs(ts["error.pos_u"])
+    alarm = ts["integrity.alarm"].to_numpy(bool)
+    assert i["misleading_h"] == int((hor > ts["integrity.hpl"]).sum())
+    assert i["misleading_v"] == int((up > ts["integrity.vpl"]).sum())
+    assert i["hazardous_v"] == int(((up > ts["integrity.vpl"]) & ~alarm).sum())
+    assert i["error_over_vpl_max"] == pytest.approx(float((up / ts["integrity.vpl"]).max()))
+
+
+def test_outputs_carry_the_levels(runs, tmp_path):
+    paths = runs.write(tmp_path)
+    names = {p.name for p in paths}
+    assert "separation_protection_levels.png" in names
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    integ = summary["variants"]["separation"]["integrity"]
+    assert integ["hazardous_v"] == 0 and integ["vpl_mean"] > 0
+    text = runs.format_tables()
+    assert "filter protection levels" in text
+    assert max(len(line) for line in text.splitlines()) <= 100
+
+
+def test_campaign_counts_hazardous_epochs_per_point(tmp_path):
+    c = montecarlo("shao2018_integrity", runs=4, seed=1)
+    t = c.integrity_summary().set_index("variant")
+    assert set(t.index) == {"separation", "innovation", "none"}
+    assert (t["epochs"] == 4 * 1000).all()
+    assert t.loc["separation", "hazardous_v"] == 0 and t.loc["separation", "hazardous_h"] == 0
+    assert t.loc["none", "misleading_v"] > 0
+    assert (t["vpl_ratio_mean"] < 0.5).all() and (t["hpl_ratio_mean"] < 0.5).all()
+    assert "filter protection levels" in c.format_table()
+    assert max(len(line) for line in c.format_table().splitlines()) <= 100
+    paths = c.write(tmp_path, figures=False)
+    assert (tmp_path / "integrity.csv") in paths
+
+
+def test_separation_without_an_integrity_table_is_refused():
+    sc = load_scenario("shao2018")
+    with pytest.raises(ScenarioError, match=r"tight\.integrity"):
+        sc.with_values({"tight.fde": "separation"}).validate()
+
+
+@pytest.mark.parametrize("key,value", [("p_sat", 0.7), ("p_hmi_vert", 0.0), ("p_fa_hor", -1e-9)])
+def test_impossible_integrity_probabilities_are_refused(key, value):
+    sc = load_scenario("shao2018_integrity")
+    with pytest.raises(ScenarioError, match=rf"tight\.integrity\.{key}"):
+        sc.with_values({f"tight.integrity.{key}": value}).validate()
+
+
+def test_unknown_integrity_keys_are_refused():
+    sc = load_scenario("shao2018_integrity")
+    with pytest.raises(ScenarioError, match=r"tight\.integrity"):
+        sc.with_values({"tight.integrity.p_md": 1e-3}, create=True).validate()
+
+
+def test_integrity_on_recorded_logs_is_refused_with_a_reason():
+    sc = load_scenario("walk_tc")
+    with pytest.raises(ScenarioError, match="recorded logs"):
+        sc.with_values({"tight.integrity": {}}, create=True).validate()
+
+
+def test_the_bundled_scenario_is_listed():
+    from navfdi._bundled import bundled_scenarios
+
+    assert "shao2018_integrity" in bundled_scenarios()
