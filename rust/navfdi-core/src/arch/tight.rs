@@ -346,8 +346,10 @@ fn separation_epoch(
     let first = bank.levels(kf, nom.lat, nom.h);
     let mut excluded = before.clone();
     let mut lv = first;
+    let mut identified = false;
     if first.alarm {
-        if let Some(s) = first.worst {
+        if let Some(s) = bank.identify(kf) {
+            identified = true;
             let j = ep.sats.iter().position(|&x| x == s);
             if isolation && bank.exclude(kf, s)? {
                 updated -= 1;
@@ -358,7 +360,8 @@ fn separation_epoch(
     }
     // Satellites excluded earlier that agree with the filter again rejoin from the next epoch.
     bank.readmit(kf, z, h, r_diag, &ep.sats);
-    let status = if first.alarm && first.worst.is_none() {
+    // An alarm without a clear culprit stands without an exclusion (`unidentified`).
+    let status = if first.alarm && !identified {
         FdeStatus::Unidentified
     } else if excluded.is_empty() {
         FdeStatus::Passed

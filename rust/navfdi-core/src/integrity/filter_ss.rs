@@ -18,11 +18,15 @@
 //!   none), the budgets scaled by the probability of two or more simultaneous satellite
 //!   faults, which the bank does not monitor ([`super::araim::protection_levels`]).
 //!
-//! Exclusion (placement `separation`): on an alarm the satellite whose sub-filter separates
-//! most (largest `|Δ_s,q| / T_s,q`) is excluded: the filter takes that sub-filter's state, the
-//! other sub-filters restart as copies of it (they then protect against faults from that
-//! epoch on), and the satellite updates nothing until its own innovation (both rows, against
-//! the filter) has stayed within `Q⁻¹(P_FA,V/2)` σ for [`READMIT_EPOCHS`] epochs in a row;
+//! Exclusion (placement `separation`): on an alarm the satellite whose whole-state separation
+//! is least likely under its covariance ([`SeparationBank::identify`]) is excluded, provided
+//! the runner-up is at least [`AMBIGUITY`] times more likely (otherwise the alarm stands and
+//! nothing is excluded: excluding a good satellite whose geometry resembles the faulty one's
+//! restarts the bank from a contaminated state, which a slow ramp then walks past the levels).
+//! The filter takes that sub-filter's state, the other sub-filters restart as copies of it
+//! (they then protect against faults from that epoch on), and the satellite updates nothing
+//! until its own innovation (both rows, against the filter) has stayed within
+//! `Q⁻¹(P_FA,V/2)` σ for [`READMIT_EPOCHS`] epochs in a row;
 //! it then rejoins with a new sub-filter. A sub-filter is dropped when its satellite leaves
 //! view (its past contribution is no longer monitored: stated, not modelled).
 
@@ -34,6 +38,10 @@ use nalgebra::{DMatrix, DVector};
 
 /// Consecutive consistent epochs after which an excluded satellite rejoins.
 pub const READMIT_EPOCHS: u32 = 10;
+
+/// How much less likely (ratio of the χ² tails) the best exclusion candidate's separation
+/// must be than the runner-up's for [`SeparationBank::identify`] to name it.
+pub const AMBIGUITY: f64 = 100.0;
 
 /// Smallest separation σ (m) a mode needs to be tested.
 const MIN_SIGMA_SS: f64 = 1e-4;
@@ -208,6 +216,57 @@ impl SeparationBank {
         }
     }
 
+    /// The satellite to exclude on an alarm: the sub-filter whose whole-state separation
+    /// `Δ_s = x_s − x₀` is least likely under its covariance `P_s − P₀` (the χ² tail of
+    /// `Δ_sᵀ (P_s − P₀)⁺ Δ_s` with the pseudo-inverse's rank as degrees of freedom). The
+    /// position axes alone (the test's statistic) mistake a satellite whose geometry resembles
+    /// the faulty one's for it under slow ramps; the whole state (velocity, attitude, clock)
+    /// separates them. None when no sub-filter has separated, or when the runner-up's
+    /// separation is within [`AMBIGUITY`] of the best (likelihood ratio of the two tails):
+    /// then two satellites explain the alarm about equally, an exclusion would as likely
+    /// remove a good one (and the restarted bank would no longer see the fault), and the
+    /// alarm stands without an exclusion (the ADD's answer to an exclusion it cannot
+    /// validate).
+    pub fn identify(&self, main: &KalmanFilter) -> Option<usize> {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        let (x0, p0) = (main.x(), main.p());
+        let mut scores: Vec<(f64, usize)> = Vec::new();
+        for (s, f) in self.subs.iter().enumerate() {
+            let Some(f) = f else { continue };
+            let d = f.x() - x0;
+            let c = f.p() - p0;
+            let c = (&c + c.transpose()) * 0.5;
+            let eig = c.symmetric_eigen();
+            let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+            if !(top > 0.0) {
+                continue;
+            }
+            let (mut m2, mut rank) = (0.0, 0usize);
+            for (j, &l) in eig.eigenvalues.iter().enumerate() {
+                if l > 1e-9 * top {
+                    let proj = eig.eigenvectors.column(j).dot(&d);
+                    m2 += proj * proj / l;
+                    rank += 1;
+                }
+            }
+            if rank == 0 {
+                continue;
+            }
+            // log of the χ² tail: comparable across ranks, and finite far in the tail.
+            let tail = ChiSquared::new(rank as f64)
+                .map(|c| c.sf(m2))
+                .unwrap_or(f64::NAN);
+            let score = if tail > 0.0 { -tail.ln() } else { m2 };
+            scores.push((score, s));
+        }
+        scores.sort_by(|a, b| b.0.total_cmp(&a.0));
+        match scores.as_slice() {
+            [] => None,
+            [(_, s)] => Some(*s),
+            [(a, s), (b, _), ..] => (a - b >= AMBIGUITY.ln()).then_some(*s),
+        }
+    }
+
     /// Exclude satellite `s`: `main` takes its sub-filter's state, the other sub-filters
     /// restart as copies of it. False (nothing changed) when `s` has no sub-filter.
     pub fn exclude(&mut self, main: &mut KalmanFilter, s: usize) -> Result<bool> {
@@ -355,6 +414,7 @@ mod tests {
         bank.update(&z, &h, &r_diag, &sats, &used).unwrap();
         let lv = bank.levels(&kf, 0.0, 0.0);
         assert!(lv.alarm && lv.worst == Some(2), "{lv:?}");
+        assert_eq!(bank.identify(&kf), Some(2));
         let before = kf.x().clone();
         assert!(bank.exclude(&mut kf, 2).unwrap());
         assert!(bank.is_excluded(2));
@@ -377,6 +437,53 @@ mod tests {
         }
         assert_eq!(back, vec![2]);
         assert!(!bank.is_excluded(2));
+    }
+
+    #[test]
+    fn two_satellites_that_explain_an_alarm_equally_are_not_excluded() {
+        // Only satellites 0 and 1 see the height (the others east and north only): a bias on
+        // either moves the solution the same way, so the alarm names neither; a third
+        // satellite seeing the height names the biased one.
+        let n = crate::ins::N_STATES;
+        let sc = enu_scale(0.0, 0.0);
+        let mut p0 = DMatrix::identity(n, n);
+        for q in 0..3 {
+            p0[(idx(q), idx(q))] = 1e4 / (sc[q] * sc[q]);
+        }
+        let dirs = [
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.7, 0.7, 0.0],
+            [-0.7, 0.7, 0.0],
+        ];
+        let run = |third: bool| {
+            let mut h = DMatrix::zeros(6, n);
+            for (j, d) in dirs.iter().enumerate() {
+                for q in 0..3 {
+                    h[(j, idx(q))] = d[q] * sc[q];
+                }
+            }
+            if third {
+                h[(5, idx(2))] = 0.7 * sc[2];
+            }
+            let mut kf = KalmanFilter::new(DVector::zeros(n), p0.clone()).unwrap();
+            let mut bank = SeparationBank::new(6, n, 1e-5, Allocation::lpv200());
+            let sats: Vec<usize> = (0..6).collect();
+            let r_diag = vec![1.0; 6];
+            let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+            bank.sync_view(&kf, &sats);
+            let mut z = DVector::zeros(6);
+            z[0] = 12.0;
+            kf.update_trusted(&z, &h, &r).unwrap();
+            bank.update(&z, &h, &r_diag, &sats, &[true; 6]).unwrap();
+            let lv = bank.levels(&kf, 0.0, 0.0);
+            assert!(lv.alarm, "{lv:?}");
+            bank.identify(&kf)
+        };
+        assert_eq!(run(false), None);
+        assert_eq!(run(true), Some(0));
     }
 
     #[test]
