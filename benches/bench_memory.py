@@ -9,8 +9,8 @@ epoch times moved on by 301 s, gives 3 010 epochs and 35 MB of RINEX 3 text, mor
 30 s day (2 880 epochs) of a geodetic station. Its pseudoranges repeat, so the solutions
 are not meaningful (the global test alarms): this measures reading and solving memory only.
 Both programs run as processes (GPS + Galileo, C1C, 10° mask), their peak resident set size
-from ``/usr/bin/time -v``; the Python interpreter with navfdi and its imports (numpy, pandas,
-pyarrow) alone is measured too.
+from ``/usr/bin/time -v``; the Python interpreter with navfdi's imports (numpy and the core:
+pandas is imported where tables are built) alone is measured too.
 """
 
 from __future__ import annotations

@@ -22,20 +22,45 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-import pandas as pd
 
 from navfdi import _core, _json
 from navfdi.scenario import NeverAppliedWarning
 
-GPS_EPOCH = pd.Timestamp("1980-01-06")
+if TYPE_CHECKING:
+    import pandas as pd
+
+# pandas (with pyarrow, ~80 MB resident) is imported where a table is built, not with the
+# package: `gnss_solve` solves a file with only numpy and the core loaded, frees the file's
+# observations, and then builds its tables (peak memory of a day-length file, issue 23).
+
+#: The GPS time origin (1980-01-06 00:00:00 GPST), as numpy datetime64.
+GPS_EPOCH = np.datetime64("1980-01-06T00:00:00", "ns")
 _A = 6_378_137.0
 _E2 = (1 / 298.257223563) * (2 - 1 / 298.257223563)
+
+
+def _release_freed_memory() -> None:
+    """Hand the heap pages freed by a dropped run back to the operating system (glibc's
+    ``malloc_trim``; a no-op elsewhere): without it the freed observations of a large file stay
+    resident and the tables, pyarrow's own pool and the figures are added on top."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        libc.malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
 
 
 def gps_time(seconds: np.ndarray) -> pd.DatetimeIndex:
     """GPS seconds since 1980-01-06 (n,) → GPST timestamps (n,), to the nanosecond."""
     ns = np.round(np.asarray(seconds, dtype=float) * 1e9).astype("int64")
+    import pandas as pd
+
     return pd.DatetimeIndex(GPS_EPOCH + pd.to_timedelta(ns, unit="ns"))
 
 
@@ -96,6 +121,8 @@ def read_rinex(path: str | os.PathLike[str]) -> pd.DataFrame:
     Raises ``FileNotFoundError`` for a missing file and :class:`navfdi.FileFormatError` (a
     ``ValueError``) naming the line for malformed, truncated or unsupported files.
     """
+    import pandas as pd
+
     p = os.fspath(path)
     check_input_file(p, "path")
     kind = _kind(p)
@@ -310,16 +337,16 @@ class GnssSolution:
         out["global_alarm_rate_clean"] = float(gf.sum() / clean.sum()) if clean.any() else math.nan
         t = sol["gps_seconds"].to_numpy()
         tau = t - t[0] if len(t) else t
-        tested_rows = sats[sats["status"].isin(["used", "excluded"])]
-        fault_rows = np.zeros(len(tested_rows), bool)
+        # Masks over the satellite rows, not copies of them (a day file has ~10^5 rows).
+        clean_mask = sats["status"].isin(["used", "excluded"]).to_numpy().copy()
         for f in self.faults:
             active_ep = np.flatnonzero((tau >= f.start) & (tau < f.end))
-            fault_rows |= ((tested_rows["satellite"] == f.satellite) & tested_rows["epoch"].isin(active_ep)).to_numpy()
-        clean_rows = tested_rows[~fault_rows]
-        out["clean_satellite_epochs"] = int(len(clean_rows))
+            clean_mask &= ~((sats["satellite"] == f.satellite) & sats["epoch"].isin(active_ep)).to_numpy()
+        n_clean = int(clean_mask.sum())
+        out["clean_satellite_epochs"] = n_clean
         for det in ("sprt", "aime", "cusum"):
-            a = clean_rows[f"{det}_alarm"]
-            out[f"{det}_false_alarm_rate"] = float(a.mean()) if len(a) else math.nan
+            a = sats[f"{det}_alarm"].to_numpy()[clean_mask]
+            out[f"{det}_false_alarm_rate"] = float(a.mean()) if n_clean else math.nan
         per_fault = []
         for f in self.faults:
             note = self.fault_note(f)
@@ -421,6 +448,8 @@ class GnssSolution:
     def _report(self, d: Path, figures: list[Path]) -> Path:
         """``report.html``: the summary's numbers, per-fault results, the solution (first 200
         epochs as a table; the whole error series interactive), the figures and the settings."""
+        import pandas as pd
+
         from navfdi.report import write_report
 
         s = self.summary()
@@ -455,6 +484,8 @@ def estimate_noise_scale(solution: pd.DataFrame) -> float:
     """The σ factor that makes the global test fit a file (see :func:`gnss_solve`'s
     ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
     ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs."""
+    import pandas as pd
+
     ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
     if ok.sum() < 20:
         raise ValueError(f"noise_scale='auto': {int(ok.sum())} epochs could be tested; at least 20 are needed to estimate the noise")
@@ -622,6 +653,16 @@ def gnss_solve(
         if bar is not None:
             bar.close()
     ep = run.epoch_table()
+    # Receiver velocity from Doppler, the satellite table and the run's facts: everything is
+    # taken from the run, which is then freed (the file's observations) before pandas is
+    # imported and the tables are built (peak memory).
+    vel = run.velocity((float(doppler_noise[0]), float(doppler_noise[1])))
+    st = run.satellite_table()
+    used_codes, dropped, receiver = dict(run.codes), run.dropped, run.receiver
+    del run
+    _release_freed_memory()
+    import pandas as pd
+
     sol = pd.DataFrame({"time": gps_time(ep["time"]).strftime("%Y-%m-%dT%H:%M:%S.%f").str[:-3], "gps_seconds": ep["time"]})
     xyz = np.column_stack([ep["x"], ep["y"], ep["z"]])
     lla = ecef_to_lla(xyz) if len(xyz) else np.zeros((0, 3))
@@ -644,8 +685,7 @@ def gnss_solve(
         enu = (xyz - t_ecef) @ enu_rotation(t_lla[0], t_lla[1]).T
         sol["east"], sol["north"], sol["up"] = enu[:, 0], enu[:, 1], enu[:, 2]
     sol["reason"] = ep["reason"]
-    # Receiver velocity from Doppler (ECEF and east/north/up at each epoch's position).
-    vel = run.velocity((float(doppler_noise[0]), float(doppler_noise[1])))
+    # Receiver velocity (ECEF and east/north/up at each epoch's position).
     v = np.column_stack([vel["vx"], vel["vy"], vel["vz"]])
     sol["vx"], sol["vy"], sol["vz"], sol["clock_drift"] = v[:, 0], v[:, 1], v[:, 2], vel["clock_drift"]
     venu = np.full_like(v, np.nan)
@@ -655,10 +695,12 @@ def gnss_solve(
     sol["vel_statistic"], sol["vel_threshold"] = vel["statistic"], vel["threshold"]
     sol["vel_used"] = vel["used"]
     sol["vel_excluded"] = vel["excluded"]
-    st = run.satellite_table()
-    used_codes, dropped, receiver = dict(run.codes), run.dropped, run.receiver
-    del run  # the file's observations: freed before the tables are built (peak memory)
-    sats = pd.DataFrame(st)
+    # Column by column, each taken out of the run's table as it goes in: one column in flight
+    # at a time rather than the whole table twice (a day file has ~10^5 satellite rows).
+    n_rows = len(next(iter(st.values()))) if st else 0
+    sats = pd.DataFrame(index=pd.RangeIndex(n_rows))
+    for key in list(st):
+        sats[key] = st.pop(key)
     del st
     sats["epoch"] = sats["epoch"].astype("int64")
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))

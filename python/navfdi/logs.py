@@ -13,10 +13,12 @@ import datetime as _dt
 import gzip
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:
+    import pandas as pd
 
 from ._errors import ScenarioError
 
@@ -89,6 +91,8 @@ def _open_text(path: Path) -> list[str]:
 
 
 def _numeric(df: pd.DataFrame, path: Path, first_line: int) -> pd.DataFrame:
+    import pandas as pd
+
     out = df.apply(pd.to_numeric, errors="coerce")
     bad = out.isna() & df.notna() | out.isin([np.inf, -np.inf])
     missing = df.isna()
@@ -112,6 +116,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float = 0.1)
     ``max_gap``: the largest interval between samples (s) accepted. Raises
     :class:`~navfdi.ScenarioError` naming the file, line and column of bad input.
     """
+    import pandas as pd
+
     path = Path(path)
     lines = _open_text(path)
     if not lines:
