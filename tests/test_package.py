@@ -132,3 +132,15 @@ def test_the_wheel_and_the_rust_tests_build_the_same_dependencies():
     tests = _features("navfdi-core", "normal,build,dev")
     differ = {k: (wheel[k], tests[k]) for k in set(wheel) & set(tests) if wheel[k] != tests[k]}
     assert not differ, f"features differ between the wheel and the Rust tests: {differ}"
+
+
+def test_import_navfdi_leaves_pandas_out():
+    """`import navfdi` loads numpy and the core, not pandas (and the pyarrow it loads, ~72 MB
+    resident): a day-length RINEX file is parsed and solved before pandas arrives (issue 23,
+    item 7: 137 MB peak for `navfdi gnss` on benches/bench_memory.py's file)."""
+    import subprocess
+    import sys
+
+    code = "import sys, navfdi, navfdi.cli, navfdi.gnss, navfdi.logs; print(sorted(m for m in ('pandas', 'pyarrow', 'matplotlib') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "[]"
