@@ -114,10 +114,36 @@ def test_unknown_integrity_keys_are_refused():
         sc.with_values({"tight.integrity.p_md": 1e-3}, create=True).validate()
 
 
-def test_integrity_on_recorded_logs_is_refused_with_a_reason():
+def test_separation_exclusion_on_recorded_logs_is_refused_with_a_reason():
     sc = load_scenario("walk_tc")
     with pytest.raises(ScenarioError, match="recorded logs"):
-        sc.with_values({"tight.integrity": {}}, create=True).validate()
+        sc.with_values({"tight.integrity": {}, "tight.fde": "separation"}, create=True).validate()
+
+
+@pytest.fixture(scope="module")
+def walk():
+    sc = load_scenario("walk_tc").with_values({"tight.integrity": {}}, create=True)
+    return run_scenario(sc, seed=0)
+
+
+def test_levels_on_the_recorded_walk_and_why_they_are_not_usable_there(walk):
+    """The strapdown bank on real IMU and RINEX logs: levels every aligned epoch, far below
+    the snapshot ARAIM levels; but the separation test alarms at most fault-free epochs (the
+    filter's white pseudorange noise does not describe a handheld receiver's time-correlated
+    errors), and the console says the levels are not usable."""
+    for name, r in walk.runs.items():
+        it = r.record["integrity"]
+        ok = np.isfinite(it["hpl"])
+        aligned = np.isfinite(r.record["nav"][:, 0])
+        assert (ok == aligned).all(), name
+        both = ok & np.isfinite(it["hpl_snapshot"])
+        assert (it["hpl"][both] < it["hpl_snapshot"][both]).all() and (it["vpl"][both] < it["vpl_snapshot"][both]).all()
+        i = r.integrity()
+        assert i["epochs"] == int(ok.sum())
+        assert i["alarm_rate_before_faults"] > 0.5
+        # About the reference's own datum (8 m off), the horizontal error stays inside the HPL.
+        assert i["misleading_h"] == 0
+    assert "levels are not usable here" in walk.format_tables()
 
 
 def test_the_bundled_scenario_is_listed():

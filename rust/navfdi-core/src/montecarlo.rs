@@ -149,19 +149,39 @@ pub struct IntegrityMetrics {
 }
 
 /// The protection levels of `rec` (when it has them) against its position error (m,
-/// columns pos_e, pos_n, pos_u of [`RunRecord::error`]): counts of misleading and
-/// hazardously misleading epochs, the worst error-to-level ratios, and the filter levels
-/// beside the snapshot levels of the same epochs.
+/// columns pos_e, pos_n, pos_u of [`RunRecord::error`]; on recorded logs about the run's mean
+/// offset to the reference): counts of misleading and hazardously misleading epochs, the worst
+/// error-to-level ratios, and the filter levels beside the snapshot levels of the same epochs.
 pub fn integrity_metrics(rec: &RunRecord) -> Option<IntegrityMetrics> {
     let ir = rec.integrity.as_ref()?;
     let mut m = IntegrityMetrics::default();
+    let scored = |k: usize, row: &[f64]| {
+        ir.hpl[k].is_finite() && ir.vpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite())
+    };
+    // On recorded logs the reference has a datum of its own (walk_tc's is 8 m off): the errors
+    // are taken about the run's mean east, north and up offset to it.
+    let mut offset = [0.0; 3];
+    if !rec.nav.is_empty() {
+        let mut n = 0usize;
+        for (k, row) in rec.error.chunks(9).enumerate() {
+            if scored(k, row) {
+                n += 1;
+                for q in 0..3 {
+                    offset[q] += row[6 + q];
+                }
+            }
+        }
+        if n > 0 {
+            offset = offset.map(|v| v / n as f64);
+        }
+    }
     for (k, row) in rec.error.chunks(9).enumerate() {
         let (hpl, vpl) = (ir.hpl[k], ir.vpl[k]);
-        if !(hpl.is_finite() && vpl.is_finite()) {
+        if !scored(k, row) {
             continue;
         }
-        let hor = row[6].hypot(row[7]);
-        let up = row[8].abs();
+        let hor = (row[6] - offset[0]).hypot(row[7] - offset[1]);
+        let up = (row[8] - offset[2]).abs();
         if !(hor.is_finite() && up.is_finite()) {
             continue;
         }
@@ -427,7 +447,7 @@ fn logged_errors(
         hor_rel_rms: none((r2 / nn).sqrt()),
         fault_hor_rel_max: rmax,
         drawn: spec.faults.clone(),
-        integrity: None,
+        integrity: integrity_metrics(rec),
         record: None,
     }
 }

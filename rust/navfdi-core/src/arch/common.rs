@@ -119,3 +119,55 @@ pub fn record_untested(rec: &mut RunRecord, sat: &mut SatRecord) {
     sat.used.push(0);
     rec.sources.push(0);
 }
+
+/// Snapshot ARAIM HPL and VPL (m) of one epoch's pseudoranges, beside a filter's protection
+/// levels: unit lines of sight `los_ecef` (receiver to satellite), system letters `systems`,
+/// code σ `sigma` (m, as `C_int = C_acc`), no nominal bias, the filter's satellite prior
+/// `p_sat` and allocation `alloc`, no constellation fault (the filter's bank does not monitor
+/// one either), one clock per system, at latitude `lat` and longitude `lon` (rad). NaN when
+/// the satellites give no solution with redundancy.
+pub fn snapshot_araim(
+    los_ecef: &[nalgebra::Vector3<f64>],
+    systems: &[char],
+    sigma: &[f64],
+    lat: f64,
+    lon: f64,
+    p_sat: f64,
+    alloc: &crate::integrity::araim::Allocation,
+) -> [f64; 2] {
+    let c = crate::gnss::geodesy::ecef_to_enu(lat, lon);
+    let mut letters: Vec<char> = Vec::new();
+    let constellation: Vec<usize> = systems
+        .iter()
+        .map(|&sys| match letters.iter().position(|&x| x == sys) {
+            Some(i) => i,
+            None => {
+                letters.push(sys);
+                letters.len() - 1
+            }
+        })
+        .collect();
+    let rows: Vec<[f64; 3]> = los_ecef
+        .iter()
+        .map(|l| {
+            let e = c * l;
+            [-e.x, -e.y, -e.z]
+        })
+        .collect();
+    let n = rows.len();
+    if n <= 3 + letters.len() || sigma.len() != n || constellation.len() != n {
+        return [f64::NAN; 2];
+    }
+    let c_int: Vec<f64> = sigma.iter().map(|s| s * s).collect();
+    let ism = crate::integrity::araim::Ism {
+        c_acc: c_int.clone(),
+        c_int,
+        b_nom: vec![0.0; n],
+        p_sat: vec![p_sat; n],
+        p_const: vec![0.0; letters.len()],
+    };
+    match crate::integrity::araim::araim(&rows, &constellation, &ism, alloc) {
+        Ok(a) if a.vpl.is_finite() && a.hpl.is_finite() => [a.hpl, a.vpl],
+        _ => [f64::NAN; 2],
+    }
+}

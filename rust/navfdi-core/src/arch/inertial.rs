@@ -167,6 +167,7 @@ pub fn align(
 /// Mechanisation from one record epoch to the next: the strapdown state and the error
 /// filter's covariance advanced over the IMU samples (trapezoidal rate and force between
 /// samples, compensated with the filter's biases).
+#[derive(Debug, Clone)]
 pub struct Mechaniser {
     /// Index of the next IMU sample.
     pub i: usize,

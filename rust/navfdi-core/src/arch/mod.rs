@@ -14,6 +14,7 @@ pub mod inertial;
 pub mod loosely_coupled;
 pub mod tight;
 pub mod tight_ins;
+mod tight_ins_pl;
 pub mod ultra_tight;
 
 use crate::cancel::Cancel;

@@ -35,15 +35,14 @@
 //! updated the filter; and the per-satellite [`SatRecord`] with its FDE counts. With
 //! `isolation = false` the FDE runs and reports but every satellite updates the filter.
 
-use super::common::{record_sat_fde, record_untested};
+use super::common::{record_sat_fde, record_untested, snapshot_araim};
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::gnss::geodesy::ecef_to_enu;
 use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
 use crate::gnss::ranges::CLOCK_BIAS;
 use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
-use crate::integrity::araim::{araim, Allocation, Ism};
+use crate::integrity::araim::Allocation;
 
 use crate::integrity::filter_ss::{SeparationBank, SsEpoch};
 use crate::kalman::{KalmanFilter, Sequential};
@@ -304,7 +303,7 @@ fn ls_precheck(
 }
 
 /// Append one epoch's levels to the record (`snap`: snapshot HPL, VPL).
-fn push_levels(ir: &mut IntegrityRecord, lv: &SsEpoch, snap: [f64; 2], alarm: bool) {
+pub(super) fn push_levels(ir: &mut IntegrityRecord, lv: &SsEpoch, snap: [f64; 2], alarm: bool) {
     ir.hpl.push(lv.hpl);
     ir.vpl.push(lv.vpl);
     ir.hpl_snapshot.push(snap[0]);
@@ -383,10 +382,8 @@ fn separation_epoch(
     Ok(updated)
 }
 
-/// Snapshot ARAIM HPL and VPL (m) of epoch `k`'s pseudoranges of the satellites `used[j]`:
-/// their σ as `C_int = C_acc`, no nominal bias, the satellite prior and allocation of the
-/// filter's integrity, no constellation fault (the bank does not monitor one either), one
-/// clock per system. NaN when the satellites cannot give a solution with redundancy.
+/// Snapshot ARAIM HPL and VPL (m) of epoch `k`'s pseudoranges of the satellites `used[j]`
+/// ([`super::common::snapshot_araim`]).
 fn snapshot_levels(
     src: &Streams,
     k: usize,
@@ -398,41 +395,13 @@ fn snapshot_levels(
     };
     let ep = &rp.epochs[k];
     let nom = &src.models.nominal[k];
-    let c = ecef_to_enu(nom.lat, nom.lon);
-    let mut rows = Vec::new();
-    let mut systems: Vec<char> = Vec::new();
-    let mut constellation = Vec::new();
-    let mut c_int = Vec::new();
-    for (j, &s) in ep.sats.iter().enumerate() {
-        if !used.get(j).copied().unwrap_or(false) {
-            continue;
-        }
-        let e = c * ep.los[j];
-        rows.push([-e.x, -e.y, -e.z]);
-        let sys = rp.names[s].chars().next().unwrap_or('G');
-        let ci = match systems.iter().position(|&x| x == sys) {
-            Some(i) => i,
-            None => {
-                systems.push(sys);
-                systems.len() - 1
-            }
-        };
-        constellation.push(ci);
-        c_int.push(ep.sigma[j] * ep.sigma[j]);
-    }
-    let n = rows.len();
-    if n <= 3 + systems.len() {
-        return [f64::NAN; 2];
-    }
-    let ism = Ism {
-        c_acc: c_int.clone(),
-        c_int,
-        b_nom: vec![0.0; n],
-        p_sat: vec![p_sat; n],
-        p_const: vec![0.0; systems.len()],
-    };
-    match araim(&rows, &constellation, &ism, &alloc) {
-        Ok(a) if a.vpl.is_finite() && a.hpl.is_finite() => [a.hpl, a.vpl],
-        _ => [f64::NAN; 2],
-    }
+    let pick = |j: &usize| used.get(*j).copied().unwrap_or(false);
+    let js: Vec<usize> = (0..ep.len()).filter(pick).collect();
+    let los: Vec<_> = js.iter().map(|&j| ep.los[j]).collect();
+    let systems: Vec<char> = js
+        .iter()
+        .map(|&j| rp.names[ep.sats[j]].chars().next().unwrap_or('G'))
+        .collect();
+    let sigma: Vec<f64> = js.iter().map(|&j| ep.sigma[j]).collect();
+    snapshot_araim(&los, &systems, &sigma, nom.lat, nom.lon, p_sat, &alloc)
 }

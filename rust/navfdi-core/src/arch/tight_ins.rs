@@ -20,12 +20,18 @@
 //! before the filter; `none` — every satellite updates the filter, the innovation test is
 //! recorded. With `rates`, a satellite without a Doppler at an epoch is left out of it.
 //!
+//! With `[tight.integrity]` a bank of strapdown sub-filters gives the filter's protection levels
+//! ([`super::tight_ins_pl`]; the test reports, the placement excludes), beside the snapshot
+//! ARAIM levels of the epoch's pseudoranges.
+//!
 //! Alignment as the loosely coupled filter's ([`super::inertial::align`]) on the source's
 //! snapshot fixes; the clocks start from the alignment epoch's observations at the aligned
 //! position.
 
-use super::common::{record_sat_fde, record_untested};
+use super::common::{record_sat_fde, record_untested, snapshot_araim};
 use super::inertial::{align, antenna, record_nav, shift, BodyImu, Mechaniser};
+use super::tight::push_levels;
+use super::tight_ins_pl::StrapdownBank;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::broadcast::{Sat, Sys};
@@ -36,7 +42,7 @@ use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
 use crate::gnss::C;
 use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
-use crate::record::{RunRecord, SatRecord, NAV_COLUMNS};
+use crate::record::{IntegrityRecord, RunRecord, SatRecord, NAV_COLUMNS};
 use crate::spec::{FdePlacement, ScenarioSpec};
 use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -152,6 +158,17 @@ pub fn run_tight_ins(
         skip(&mut rec, &mut sat);
     }
     let mut mech = Mechaniser::new(&imu, models.t[ka], &kf.bg);
+    let mut bank = t
+        .integrity
+        .as_ref()
+        .map(|fi| StrapdownBank::new(s_count, fi.p_sat, fi.allocation()));
+    let mut integ = bank.as_ref().map(|_| {
+        let mut ir = IntegrityRecord::with_capacity(epochs);
+        for _ in 0..ka {
+            push_nan(&mut ir);
+        }
+        ir
+    });
     for k in ka..epochs {
         if k % 64 == 0 {
             cancel.check()?;
@@ -159,10 +176,17 @@ pub fn run_tight_ins(
         let tk = models.t[k];
         if tk > imu.end() {
             skip(&mut rec, &mut sat);
+            if let Some(ir) = integ.as_mut() {
+                push_nan(ir);
+            }
             continue;
         }
         mech.advance(&imu, &mut s, &mut kf, tk);
         let ep = &rp.epochs[k];
+        if let Some(b) = bank.as_mut() {
+            b.advance(&imu, tk);
+            b.sync_view(&s, &kf, &mech, &ep.sats);
+        }
         for &j in &ep.sats {
             sat.in_view[k * s_count + j] = true;
         }
@@ -182,6 +206,11 @@ pub fn run_tight_ins(
         };
         let Some(rows) = rows else {
             record_untested(&mut rec, &mut sat);
+            if let (Some(b), Some(ir)) = (bank.as_ref(), integ.as_mut()) {
+                // Coasting: the levels of the mechanised filter, nothing tested.
+                let lv = b.levels(&s, &kf);
+                push_levels(ir, &lv, [f64::NAN; 2], false);
+            }
             record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
             continue;
         };
@@ -247,11 +276,38 @@ pub fn run_tight_ins(
             kf.p = p;
             kf.feedback(&mut s, &dx);
         }
+        if let (Some(b), Some(ir)) = (bank.as_mut(), integ.as_mut()) {
+            // The sub-filters leave out what the filter left out, and their own satellite.
+            let gone: Vec<usize> = excluded.iter().map(|&j| ep.sats[rows.idx[j]]).collect();
+            let z = &src.meas.z[si][k];
+            b.update(
+                |sn, f, w| {
+                    let r = build_rows(sn, f, &lever, w, ep, z, &cols, t.rates)?;
+                    let m = r.idx.len();
+                    let sats = (0..r.res.len()).map(|i| ep.sats[r.idx[i % m]]).collect();
+                    Some((r.res, r.h, r.sigma, sats))
+                },
+                &gone,
+            )
+            .map_err(|e| crate::run::at_epoch(k, e))?;
+            let lv = b.levels(&s, &kf);
+            let js: Vec<usize> = (0..m).filter(|j| !excluded.contains(j)).collect();
+            let los: Vec<Vector3<f64>> = js.iter().map(|&j| rows.los[j]).collect();
+            let systems: Vec<char> = js
+                .iter()
+                .map(|&j| rp.names[ep.sats[rows.idx[j]]].chars().next().unwrap_or('G'))
+                .collect();
+            let sigma: Vec<f64> = js.iter().map(|&j| rows.sigma[j]).collect();
+            let (p_sat, alloc) = b.allocation();
+            let snap = snapshot_araim(&los, &systems, &sigma, s.lat, s.lon, p_sat, &alloc);
+            push_levels(ir, &lv, snap, lv.alarm);
+        }
         rec.subs[0].fused.push(used > 0);
         sat.used.push(used as u32);
         rec.sources.push(u32::from(used > 0));
         record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
     }
+    rec.integrity = integ;
     sat.score(&rec.t, &spec.faults, &sensor.name);
     rec.sats = Some(sat);
     Ok(rec)
@@ -415,4 +471,15 @@ fn ls_precheck(
     let model = PositionModel::new(&rows.sat_rot, &rows.rho_gps, x0);
     let rate = rates.then(|| RateModel::new(&rows.los, &rows.sat_vel, &rows.rate));
     snapshot_sat_fde(model, rate, rows.sigma.clone(), cfg)
+}
+
+/// An epoch without levels (before the alignment, after the IMU log).
+fn push_nan(ir: &mut IntegrityRecord) {
+    ir.hpl.push(f64::NAN);
+    ir.vpl.push(f64::NAN);
+    ir.hpl_snapshot.push(f64::NAN);
+    ir.vpl_snapshot.push(f64::NAN);
+    ir.statistic.push(f64::NAN);
+    ir.alarm.push(false);
+    ir.modes.push(0);
 }

@@ -65,6 +65,74 @@ pub struct SsEpoch {
     pub p_unmonitored: f64,
 }
 
+/// One sub-filter's position statistics for [`separation_levels`], east, north, up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SsMode {
+    /// The satellite it leaves out (index into the stream's names).
+    pub satellite: usize,
+    /// Its position error variances (m²).
+    pub var: [f64; 3],
+    /// Its separation from the filter, `x_s − x₀` (m).
+    pub separation: [f64; 3],
+}
+
+/// The separation test and the protection levels of a filter with position error variances
+/// `var0` (m², east, north, up) and sub-filters `modes`, each the optimal estimate on a subset
+/// of the filter's data (so `σ_ss² = var_s − var0`), for a satellite prior `p_sat` and the
+/// allocation `alloc` (see the module docs).
+pub fn separation_levels(
+    var0: [f64; 3],
+    modes: &[SsMode],
+    p_sat: f64,
+    alloc: &Allocation,
+) -> SsEpoch {
+    let n_modes = modes.len();
+    let kfa = k_fa(n_modes, alloc);
+    let mut terms = Vec::with_capacity(n_modes);
+    let (mut stat, mut worst) = (f64::NAN, None);
+    for m in modes {
+        let mut shift = [0.0; 3];
+        let mut sigma = [0.0; 3];
+        for q in 0..3 {
+            sigma[q] = m.var[q].max(0.0).sqrt();
+            let ss = (m.var[q] - var0[q]).max(0.0).sqrt();
+            shift[q] = kfa[q] * ss;
+            if ss > MIN_SIGMA_SS {
+                let ratio = m.separation[q].abs() / shift[q];
+                if !(ratio <= stat) {
+                    stat = ratio;
+                    worst = Some(m.satellite);
+                }
+            }
+        }
+        terms.push(ModeTerm {
+            prior: p_sat,
+            shift,
+            sigma,
+        });
+    }
+    let nf = n_modes as f64;
+    // P(two or more of N independent faults), from the complement.
+    let p_unmonitored = if n_modes < 2 {
+        0.0
+    } else {
+        let none = (nf * (-p_sat).ln_1p()).exp();
+        let one = nf * p_sat * ((nf - 1.0) * (-p_sat).ln_1p()).exp();
+        (1.0 - none - one).max(0.0)
+    };
+    let sigma0 = var0.map(|v| v.max(0.0).sqrt());
+    let (vpl, hpl) = protection_levels(sigma0, [0.0; 3], &terms, p_unmonitored, alloc);
+    SsEpoch {
+        vpl,
+        hpl,
+        statistic: stat,
+        alarm: stat > 1.0,
+        worst,
+        modes: n_modes,
+        p_unmonitored,
+    }
+}
+
 /// The bank of sub-filters of one run (see the module docs).
 #[derive(Debug, Clone)]
 pub struct SeparationBank {
@@ -164,56 +232,21 @@ impl SeparationBank {
         let p0 = main.p();
         let x0 = main.x();
         let var0: [f64; 3] = [0, 1, 2].map(|q| p0[(idx(q), idx(q))].max(0.0) * scale[q] * scale[q]);
-        let n_modes = self.subs.iter().flatten().count();
-        let kfa = k_fa(n_modes, &self.alloc);
-        let mut terms = Vec::with_capacity(n_modes);
-        let (mut stat, mut worst) = (f64::NAN, None);
-        for (s, f) in self.subs.iter().enumerate() {
-            let Some(f) = f else { continue };
-            let (ps, xs) = (f.p(), f.x());
-            let mut shift = [0.0; 3];
-            let mut sigma = [0.0; 3];
-            for q in 0..3 {
-                let i = idx(q);
-                let var = ps[(i, i)].max(0.0) * scale[q] * scale[q];
-                sigma[q] = var.sqrt();
-                let ss = (var - var0[q]).max(0.0).sqrt();
-                shift[q] = kfa[q] * ss;
-                if ss > MIN_SIGMA_SS {
-                    let ratio = ((xs[i] - x0[i]) * scale[q]).abs() / shift[q];
-                    if !(ratio <= stat) {
-                        stat = ratio;
-                        worst = Some(s);
-                    }
-                }
-            }
-            terms.push(ModeTerm {
-                prior: self.p_sat,
-                shift,
-                sigma,
-            });
-        }
-        let p = self.p_sat;
-        let nf = n_modes as f64;
-        // P(two or more of N independent faults), from the complement.
-        let p_unmonitored = if n_modes < 2 {
-            0.0
-        } else {
-            let none = (nf * (-p).ln_1p()).exp();
-            let one = nf * p * ((nf - 1.0) * (-p).ln_1p()).exp();
-            (1.0 - none - one).max(0.0)
-        };
-        let sigma0 = var0.map(f64::sqrt);
-        let (vpl, hpl) = protection_levels(sigma0, [0.0; 3], &terms, p_unmonitored, &self.alloc);
-        SsEpoch {
-            vpl,
-            hpl,
-            statistic: stat,
-            alarm: stat > 1.0,
-            worst,
-            modes: n_modes,
-            p_unmonitored,
-        }
+        let modes: Vec<SsMode> = self
+            .subs
+            .iter()
+            .enumerate()
+            .filter_map(|(s, f)| {
+                let f = f.as_ref()?;
+                let (ps, xs) = (f.p(), f.x());
+                Some(SsMode {
+                    satellite: s,
+                    var: [0, 1, 2].map(|q| ps[(idx(q), idx(q))].max(0.0) * scale[q] * scale[q]),
+                    separation: [0, 1, 2].map(|q| (xs[idx(q)] - x0[idx(q)]) * scale[q]),
+                })
+            })
+            .collect();
+        separation_levels(var0, &modes, self.p_sat, &self.alloc)
     }
 
     /// The satellite to exclude on an alarm: the sub-filter whose whole-state separation

@@ -212,8 +212,8 @@ impl ScenarioSpec {
             if sd.imu.scale_factors() {
                 return Err(bad("tight.strapdown.imu", "scale-factor states (gyro_scale, accel_scale) are not available in the tight filter yet (its 18 states are the 15 INS errors and the receiver clock); set them to 0"));
             }
-            if t.integrity.is_some() || t.fde == FdePlacement::Separation {
-                return Err(bad("tight.integrity", "filter protection levels are not available on recorded logs yet (simulated tight scenarios only); remove [tight.integrity] and use ls_precheck, innovation or none"));
+            if t.fde == FdePlacement::Separation {
+                return Err(bad("tight.fde", "separation is not available on recorded logs yet (the protection levels of [tight.integrity] are, beside ls_precheck, innovation or none)"));
             }
             if t.fde == FdePlacement::GnssFilter {
                 return Err(bad("tight.fde", "gnss_filter is not available on recorded logs; use ls_precheck, innovation or none"));

@@ -1,0 +1,151 @@
+//! Filter protection levels of the tight filter on recorded logs ([`super::tight_ins`]): the
+//! bank of [`crate::integrity::filter_ss`] for a closed-loop strapdown filter.
+//!
+//! Each sub-filter is a whole strapdown navigator — its own mechanised state, error filter and
+//! mechanisation — born as a copy of the filter's (after the mechanisation to the epoch, before
+//! the update) at the first epoch its satellite is in view, mechanised from the same IMU
+//! samples, and updated at every epoch with the rows the filter uses (predicted from its own
+//! state, through the closure the filter builds its own rows with) but those of its satellite,
+//! the estimate fed back into its own state. The separation
+//! is the difference of the mechanised (IMU) positions, east, north, up; its variance is taken
+//! as `P_s − P₀` of the position error states, which holds to first order in the closed-loop
+//! filters' linearisation (the Kalman-filter identity is exact only for a linear filter on
+//! nested data: [`crate::integrity::filter_ss`]). The levels are the same equation's
+//! ([`crate::integrity::filter_ss::separation_levels`]). The test reports; the filter's own
+//! placement (`innovation`, `ls_precheck`, `none`) decides the exclusions, which the sub-filters
+//! follow.
+
+use super::inertial::{BodyImu, Mechaniser};
+use crate::error::Result;
+use crate::ins::earth;
+use crate::ins::error_filter::{ErrorFilter, N_CLOCK, R};
+use crate::ins::strapdown::NavState;
+use crate::integrity::araim::Allocation;
+use crate::integrity::filter_ss::{separation_levels, SsEpoch, SsMode};
+use nalgebra::{DMatrix, DVector, Vector3};
+
+/// One epoch's rows at a navigator's state: residuals `ẑ − z`, the rows of `H`, their σ and the
+/// satellite (stream index) of each row.
+pub(super) type EpochRows = (DVector<f64>, DMatrix<f64>, Vec<f64>, Vec<usize>);
+
+/// One sub-filter: a strapdown navigator without one satellite.
+#[derive(Clone)]
+struct Sub {
+    s: NavState,
+    kf: ErrorFilter<N_CLOCK>,
+    mech: Mechaniser,
+}
+
+/// The sub-filters of one logged tight run, one per satellite in view (index into the
+/// stream's names).
+pub(super) struct StrapdownBank {
+    subs: Vec<Option<Sub>>,
+    p_sat: f64,
+    alloc: Allocation,
+}
+
+impl StrapdownBank {
+    /// A bank for `satellites` satellites, the satellite prior `p_sat` and allocation `alloc`.
+    pub(super) fn new(satellites: usize, p_sat: f64, alloc: Allocation) -> Self {
+        StrapdownBank {
+            subs: (0..satellites).map(|_| None).collect(),
+            p_sat,
+            alloc,
+        }
+    }
+
+    /// The prior and allocation (for the snapshot levels beside).
+    pub(super) fn allocation(&self) -> (f64, Allocation) {
+        (self.p_sat, self.alloc)
+    }
+
+    /// Mechanise every sub-filter to time `tk` (s) from the IMU samples.
+    pub(super) fn advance(&mut self, imu: &BodyImu, tk: f64) {
+        for sub in self.subs.iter_mut().flatten() {
+            sub.mech.advance(imu, &mut sub.s, &mut sub.kf, tk);
+        }
+    }
+
+    /// A sub-filter (a copy of the filter's navigator, mechanised to the epoch and not yet
+    /// updated) for each satellite of `sats` without one; none for the others.
+    pub(super) fn sync_view(
+        &mut self,
+        s: &NavState,
+        kf: &ErrorFilter<N_CLOCK>,
+        mech: &Mechaniser,
+        sats: &[usize],
+    ) {
+        for (g, sub) in self.subs.iter_mut().enumerate() {
+            if !sats.contains(&g) {
+                *sub = None;
+            } else if sub.is_none() {
+                *sub = Some(Sub {
+                    s: *s,
+                    kf: kf.clone(),
+                    mech: mech.clone(),
+                });
+            }
+        }
+    }
+
+    /// Update each sub-filter with the epoch's rows at its own state (`rows_of(state, filter,
+    /// last angular rate)`), without its satellite and the satellites the filter excluded
+    /// (`excluded`, stream indices), and feed back.
+    pub(super) fn update(
+        &mut self,
+        rows_of: impl Fn(&NavState, &ErrorFilter<N_CLOCK>, &Vector3<f64>) -> Option<EpochRows>,
+        excluded: &[usize],
+    ) -> Result<()> {
+        for (g, sub) in self.subs.iter_mut().enumerate() {
+            let Some(sub) = sub.as_mut() else { continue };
+            let Some((res, h, sigma, sats)) = rows_of(&sub.s, &sub.kf, &sub.mech.w_last) else {
+                continue;
+            };
+            let keep: Vec<usize> = (0..res.len())
+                .filter(|&i| sats[i] != g && !excluded.contains(&sats[i]))
+                .collect();
+            if keep.is_empty() {
+                continue;
+            }
+            let rk: Vec<f64> = keep.iter().map(|&i| sigma[i] * sigma[i]).collect();
+            let (p, dx, _) =
+                sub.kf
+                    .sequential(&res.select_rows(&keep), &h.select_rows(&keep), &rk)?;
+            sub.kf.p = p;
+            sub.kf.feedback(&mut sub.s, &dx);
+        }
+        Ok(())
+    }
+
+    /// The separation test and protection levels of the filter (`s`, `kf`, after its update).
+    pub(super) fn levels(&self, s: &NavState, kf: &ErrorFilter<N_CLOCK>) -> SsEpoch {
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = (earth::r_normal(s.lat) + s.h) * s.lat.cos();
+        // Position error states are north, east, down (m): east, north, up variances.
+        let enu_var = |f: &ErrorFilter<N_CLOCK>| {
+            [
+                f.p[(R + 1, R + 1)].max(0.0),
+                f.p[(R, R)].max(0.0),
+                f.p[(R + 2, R + 2)].max(0.0),
+            ]
+        };
+        let modes: Vec<SsMode> = self
+            .subs
+            .iter()
+            .enumerate()
+            .filter_map(|(g, sub)| {
+                let sub = sub.as_ref()?;
+                Some(SsMode {
+                    satellite: g,
+                    var: enu_var(&sub.kf),
+                    separation: [
+                        (sub.s.lon - s.lon) * rn,
+                        (sub.s.lat - s.lat) * rm,
+                        sub.s.h - s.h,
+                    ],
+                })
+            })
+            .collect();
+        separation_levels(enu_var(kf), &modes, self.p_sat, &self.alloc)
+    }
+}
