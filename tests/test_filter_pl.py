@@ -170,3 +170,14 @@ def test_an_ambiguous_alarm_excludes_nothing_until_the_culprit_is_clear():
     assert excluded_in_ramp == {"G19"}
     t_sum = c.integrity_summary().set_index("variant")
     assert t_sum.loc["separation", "hazardous_v"] == 0 and t_sum.loc["separation", "hazardous_h"] == 0
+
+
+def test_a_logged_campaign_counts_the_levels_and_flags_the_alarms():
+    sc = load_scenario("walk_tc").with_values({"tight.integrity": {}}, create=True)
+    c = montecarlo(sc, runs=2, seed=0)
+    t = c.integrity_summary()
+    assert (t["epochs"] == 2 * 485).all()
+    assert (t["alarm_epochs"] > 0.5 * t["epochs"]).all()
+    text = c.format_table()
+    assert "the levels do not hold on these data" in text
+    assert max(len(line) for line in text.splitlines()) <= 100

@@ -397,6 +397,11 @@ class Campaign:
             pl = f"{r['hpl_mean']:.1f}/{r['vpl_mean']:.1f}"
             ratio = f"{r['hpl_ratio_mean']:.2f}/{r['vpl_ratio_mean']:.2f}"
             lines.append(f"  {name:<20} {int(r['epochs']):>8} {mi:>13} {hmi:>9} {worst:>11} {pl:>11} {ratio:>10}")
+        busy = t[t["alarm_epochs"] > 0.5 * t["epochs"]]
+        if len(busy):
+            names = ", ".join(", ".join(str(r[c]) for c in self.sweep_columns) or "the campaign" for _, r in busy.iterrows())
+            lines.append(f"  the separation test alarms at over half the epochs of {names}:")
+            lines.append("  the levels do not hold on these data (see the note of `navfdi run`)")
         lines.append("")
         return lines
 
