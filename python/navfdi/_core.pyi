@@ -685,7 +685,12 @@ class PreparedScenario:
         (s), ``clear_delay`` (s), ``false_alarm_epochs``, ``outside_epochs``,
         ``wrong_isolations`` (count, cells); ``att_rms``, ``att_max`` (rad), ``pos_rms``,
         ``pos_max``, ``lat_rms``, ``lat_max``, ``fused_alt_rms``, ``fused_alt_max`` (m; the
-        fused-altitude ones NaN without altitude fusion) (count,); ``records`` ({run: record} for runs in ``keep``)."""
+        fused-altitude ones NaN without altitude fusion) (count,); with ``[tight.integrity]``
+        the filter levels against the true error (count,): ``pl_epochs``, ``mi_h_epochs``,
+        ``mi_v_epochs``, ``hmi_h_epochs``, ``hmi_v_epochs``, ``pl_alarm_epochs``,
+        ``pl_compared_epochs``, ``error_over_hpl_max``, ``error_over_vpl_max``, ``hpl_sum``,
+        ``vpl_sum`` (m), ``hpl_ratio_sum``, ``vpl_ratio_sum`` (filter / snapshot ARAIM);
+        ``records`` ({run: record} for runs in ``keep``)."""
 
 @final
 class SnapshotFde:
