@@ -1,5 +1,7 @@
 """Real-data speed: reading rover.obs + base.nav, single-point positioning and FDE for all 301
-epochs, beside RTKLIB's ``rnx2rtkp`` (Debian package ``rtklib``) and gnss_lib_py, in one run.
+epochs, beside RTKLIB's ``rnx2rtkp`` (Debian package ``rtklib``) and gnss_lib_py, in one run;
+the same with GPS + Galileo, C/N0 weighting and Doppler velocity beside ``rnx2rtkp -sys G,E``;
+and reading Compact RINEX 3 and 1 files beside their plain pairs (issue 23's speed targets).
 
     python benches/bench_rinex.py            # table (gnss_lib_py: pip install gnss-lib-py)
     python -m pytest benches/bench_rinex.py --benchmark-enable
@@ -90,9 +92,45 @@ def test_rnx2rtkp(benchmark, rinex_files):
     benchmark(rnx2rtkp_run, *rinex_files)
 
 
+FORMATS = DATA.parent / "rinex_formats"
+
+
+def navfdi_full(obs: Path, nav: Path) -> navfdi.GnssSolution:
+    """GPS + Galileo, C/N0 weighting, Doppler velocity (always solved), 10° mask."""
+    return navfdi.gnss_solve(obs, nav, systems="G,E", mask_deg=10, weighting="cn0")
+
+
+def rnx2rtkp_full(obs: Path, nav: Path) -> None:
+    """RTKLIB single point, GPS + Galileo (its velocity from Doppler is part of every solution)."""
+    subprocess.run(["rnx2rtkp", "-p", "0", "-m", "10", "-sys", "G,E", "-o", "/dev/null", str(obs), str(nav)], check=True, capture_output=True)
+
+
+def crinex_vs_plain(tmp: Path, compact: str, plain_gz: str) -> tuple[float, float]:
+    """Seconds to read a Compact RINEX file and its plain pair (the same epochs, decompressed
+    from gzip first), with ``navfdi.read_rinex``."""
+    crx = tmp / compact.removesuffix(".gz")
+    plain = tmp / plain_gz.removesuffix(".gz")
+    for src, dst in ((compact, crx), (plain_gz, plain)):
+        opener = gzip.open if src.endswith(".gz") else open
+        with opener(FORMATS / src, "rb") as f, open(dst, "wb") as g:
+            shutil.copyfileobj(f, g)
+    return best(lambda: navfdi.read_rinex(crx)), best(lambda: navfdi.read_rinex(plain))
+
+
 def main() -> int:
     with tempfile.TemporaryDirectory() as d:
         obs, nav = files(Path(d))
+        full = best(lambda: navfdi_full(obs, nav))
+        print(f"navfdi gnss_solve G+E, C/N0 weighting, Doppler velocity: {full * 1e3:8.1f} ms")
+        if shutil.which("rnx2rtkp"):
+            rtk_full = best(lambda: rnx2rtkp_full(obs, nav))
+            print(f"RTKLIB rnx2rtkp single G+E (with Doppler velocity):      {rtk_full * 1e3:8.1f} ms   → navfdi is {rtk_full / full:.1f}× faster")
+        for label, compact, plain_gz in (
+            ("Compact RINEX 3 (ACOR, 30 s)", "ACOR00ESP_R_20213550000_01D_30S_MO.crx", "ACOR00ESP_R_20213550000_01D_30S_MO.rnx.gz"),
+            ("Compact RINEX 1 (DELF, RINEX 2.11)", "delf0010.21d.gz", "delf0010.21o.gz"),
+        ):
+            crx, plain = crinex_vs_plain(Path(d), compact, plain_gz)
+            print(f"read_rinex {label}: {crx * 1e3:.1f} ms, its plain pair {plain * 1e3:.1f} ms → {crx / plain:.2f}× one plain read (target ≤ 2×)")
         ours = best(lambda: navfdi_run(obs, nav))
         print(f"navfdi gnss_solve (read + SPP + FDE, 301 epochs): {ours * 1e3:8.1f} ms = {ours / 301 * 1e6:6.0f} µs/epoch")
         if shutil.which("rnx2rtkp"):
