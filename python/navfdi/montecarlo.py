@@ -397,7 +397,10 @@ class Campaign:
             pl = f"{r['hpl_mean']:.1f}/{r['vpl_mean']:.1f}"
             ratio = f"{r['hpl_ratio_mean']:.2f}/{r['vpl_ratio_mean']:.2f}"
             lines.append(f"  {name:<20} {int(r['epochs']):>8} {mi:>13} {hmi:>9} {worst:>11} {pl:>11} {ratio:>10}")
-        busy = t[t["alarm_epochs"] > 0.5 * t["epochs"]]
+        # On recorded logs (the only campaigns with a reference, "hor_rms"): alarms over half
+        # the epochs are the model's, not the drawn fault's (in simulation a variant that
+        # excludes nothing alarms for as long as its fault lasts).
+        busy = t[t["alarm_epochs"] > 0.5 * t["epochs"]] if "hor_rms" in self.runs else t.iloc[0:0]
         if len(busy):
             names = ", ".join(", ".join(str(r[c]) for c in self.sweep_columns) or "the campaign" for _, r in busy.iterrows())
             lines.append(f"  the separation test alarms at over half the epochs of {names}:")
