@@ -144,3 +144,28 @@ def test_import_navfdi_leaves_pandas_out():
     code = "import sys, navfdi, navfdi.cli, navfdi.gnss, navfdi.logs; print(sorted(m for m in ('pandas', 'pyarrow', 'matplotlib') if m in sys.modules))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_freed_heap_is_handed_back():
+    """The glibc workaround of `navfdi.gnss._release_freed_memory` (malloc_trim): memory freed
+    below a live allocation stays resident without it (glibc trims only the top of the heap),
+    and is handed back with it. A dropped run's records are such memory."""
+    import platform
+    import subprocess
+    import sys
+
+    if platform.system() != "Linux" or platform.libc_ver()[0] != "glibc":
+        pytest.skip("malloc_trim is glibc's")
+    code = (
+        "from navfdi.gnss import _release_freed_memory\n"
+        "rss = lambda: int(open('/proc/self/statm').read().split()[1]) * 4096 / 2**20\n"
+        "blocks = [bytes(1000) + bytes([i % 256]) for i in range(200_000)]\n"
+        "pin = bytes(1000) + b'x'\n"
+        "del blocks\n"
+        "freed = rss()\n"
+        "_release_freed_memory()\n"
+        "print(freed, rss())\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    freed, trimmed = float(out[0]), float(out[1])
+    assert freed - trimmed > 100, (freed, trimmed)
