@@ -541,6 +541,7 @@ class Campaign:
         from navfdi.report import write_report
 
         s = self.summary()
+        integ = self.integrity_summary()
         headline: dict[str, Any] = {"runs per point": self.runs_requested, "partial": self.partial}
         for _, r in s.iterrows():
             key = " · ".join([*(str(r[c]) for c in self.sweep_columns), f"{r['subfilter']}/{r['detector']}", str(r["fault_id"])])
@@ -554,7 +555,7 @@ class Campaign:
             f"navfdi montecarlo {self.scenario.name}",
             f"{self.runs_requested} runs per point, seed {self.seed}, {self.backend}" + (" — PARTIAL (interrupted)" if self.partial else ""),
             headline,
-            [("summary.csv", s)] + ([("integrity.csv", self.integrity_summary())] if len(self.integrity_summary()) else []),
+            [("summary.csv", s)] + ([("integrity.csv", integ)] if len(integ) else []),
             figures,
             scenario_text=self.scenario.text(),
             notes="P(det): share of runs with an alarm raised inside the fault window (or 1 s after); in_alarm_at_onset: share already in alarm when the fault began; alarm_fraction: mean share of the fault's epochs in alarm.",

@@ -210,6 +210,29 @@ pub struct IntegrityRecord {
 }
 
 impl IntegrityRecord {
+    /// Append one epoch: the filter's levels and test `lv`, the snapshot HPL and VPL `snap`
+    /// (m) and whether the epoch is in alarm.
+    pub fn push(&mut self, lv: &crate::integrity::filter_ss::SsEpoch, snap: [f64; 2], alarm: bool) {
+        self.hpl.push(lv.hpl);
+        self.vpl.push(lv.vpl);
+        self.hpl_snapshot.push(snap[0]);
+        self.vpl_snapshot.push(snap[1]);
+        self.statistic.push(lv.statistic);
+        self.alarm.push(alarm);
+        self.modes.push(lv.modes as u32);
+    }
+
+    /// Append an epoch without levels (no navigation solution).
+    pub fn push_none(&mut self) {
+        self.hpl.push(f64::NAN);
+        self.vpl.push(f64::NAN);
+        self.hpl_snapshot.push(f64::NAN);
+        self.vpl_snapshot.push(f64::NAN);
+        self.statistic.push(f64::NAN);
+        self.alarm.push(false);
+        self.modes.push(0);
+    }
+
     /// Empty, with room for `epochs`.
     pub fn with_capacity(epochs: usize) -> Self {
         IntegrityRecord {

@@ -40,15 +40,15 @@ use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, update_without, SatFde};
 use crate::gnss::pv_filter::PvFilter;
-use crate::gnss::ranges::CLOCK_BIAS;
+use crate::gnss::ranges::{RangeStream, CLOCK_BIAS};
 use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
 use crate::integrity::araim::Allocation;
 
-use crate::integrity::filter_ss::{SeparationBank, SsEpoch};
+use crate::integrity::filter_ss::SeparationBank;
 use crate::kalman::{KalmanFilter, Sequential};
 use crate::record::{IntegrityRecord, RunRecord, SatRecord};
 use crate::spec::{FdePlacement, ScenarioSpec};
-use crate::stream::Streams;
+use crate::stream::{Nominal, Streams};
 use nalgebra::{DMatrix, DVector};
 
 /// Run the tight filter of scenario `spec` over one run's streams (`isolation = false`: FDE reports, never
@@ -113,7 +113,7 @@ pub fn run_tight(
                 // Coasting: the levels of the predicted filter, nothing tested.
                 let nom = &models.nominal[k];
                 let lv = b.levels(&kf, nom.lat, nom.h);
-                push_levels(ir, &lv, [f64::NAN; 2], false);
+                ir.push(&lv, [f64::NAN; 2], false);
             }
             rec.push_navigation(src, k, kf.x(), kf.p(), &mut sig);
             continue;
@@ -140,6 +140,7 @@ pub fn run_tight(
                 &mut rec,
                 &mut sat,
                 src,
+                rp,
                 k,
                 (&z, &h, &r, &r_diag),
                 isolation,
@@ -240,8 +241,8 @@ pub fn run_tight(
                 .map_err(|e| crate::run::at_epoch(k, e))?;
             let nom = &models.nominal[k];
             let lv = b.levels(&kf, nom.lat, nom.h);
-            let snap = snapshot_levels(src, k, &used, b.allocation_spec());
-            push_levels(ir, &lv, snap, lv.alarm);
+            let snap = snapshot_levels(rp, nom, k, &used, b.allocation_spec());
+            ir.push(&lv, snap, lv.alarm);
         }
         rec.subs[0].fused.push(updated > 0);
         sat.used.push(updated as u32);
@@ -302,21 +303,10 @@ fn ls_precheck(
     }
 }
 
-/// Append one epoch's levels to the record (`snap`: snapshot HPL, VPL).
-pub(super) fn push_levels(ir: &mut IntegrityRecord, lv: &SsEpoch, snap: [f64; 2], alarm: bool) {
-    ir.hpl.push(lv.hpl);
-    ir.vpl.push(lv.vpl);
-    ir.hpl_snapshot.push(snap[0]);
-    ir.vpl_snapshot.push(snap[1]);
-    ir.statistic.push(lv.statistic);
-    ir.alarm.push(alarm);
-    ir.modes.push(lv.modes as u32);
-}
-
 /// One epoch of placement `separation`: the filter updates with every satellite in view not
 /// excluded, the bank with the same less its own; on an alarm (and `isolation`) the satellite
-/// of the largest normalised separation is excluded ([`SeparationBank::exclude`]), and the
-/// levels are those after it. Excluded satellites rejoin after a consistent spell
+/// [`SeparationBank::identify`] names, if it names one, is excluded
+/// ([`SeparationBank::exclude`]), and the levels are those after it. Excluded satellites rejoin after a consistent spell
 /// ([`SeparationBank::readmit`]). Returns the satellites that updated the filter.
 #[allow(clippy::too_many_arguments)]
 fn separation_epoch(
@@ -326,15 +316,11 @@ fn separation_epoch(
     rec: &mut RunRecord,
     sat: &mut SatRecord,
     src: &Streams,
+    rp: &RangeStream,
     k: usize,
     (z, h, r, r_diag): (&DVector<f64>, &DMatrix<f64>, &DMatrix<f64>, &[f64]),
     isolation: bool,
 ) -> Result<usize> {
-    let rp = src
-        .models
-        .ranges
-        .as_ref()
-        .ok_or_else(|| Error::Invalid("no ranges".into()))?;
     let ep = &rp.epochs[k];
     let m = ep.len();
     let before: Vec<usize> = (0..m).filter(|&j| bank.is_excluded(ep.sats[j])).collect();
@@ -377,24 +363,27 @@ fn separation_epoch(
     let used_now: Vec<bool> = (0..m)
         .map(|j| !out.excluded.contains(&j) || !isolation)
         .collect();
-    let snap = snapshot_levels(src, k, &used_now, bank.allocation_spec());
-    push_levels(ir, &lv, snap, first.alarm);
+    let snap = snapshot_levels(
+        rp,
+        &src.models.nominal[k],
+        k,
+        &used_now,
+        bank.allocation_spec(),
+    );
+    ir.push(&lv, snap, first.alarm);
     Ok(updated)
 }
 
 /// Snapshot ARAIM HPL and VPL (m) of epoch `k`'s pseudoranges of the satellites `used[j]`
 /// ([`super::common::snapshot_araim`]).
 fn snapshot_levels(
-    src: &Streams,
+    rp: &RangeStream,
+    nom: &Nominal,
     k: usize,
     used: &[bool],
     (p_sat, alloc): (f64, Allocation),
 ) -> [f64; 2] {
-    let Some(rp) = src.models.ranges.as_ref() else {
-        return [f64::NAN; 2];
-    };
     let ep = &rp.epochs[k];
-    let nom = &src.models.nominal[k];
     let pick = |j: &usize| used.get(*j).copied().unwrap_or(false);
     let js: Vec<usize> = (0..ep.len()).filter(pick).collect();
     let los: Vec<_> = js.iter().map(|&j| ep.los[j]).collect();

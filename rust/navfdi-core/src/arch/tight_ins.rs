@@ -30,7 +30,6 @@
 
 use super::common::{record_sat_fde, record_untested, snapshot_araim};
 use super::inertial::{align, antenna, record_nav, shift, BodyImu, Mechaniser};
-use super::tight::push_levels;
 use super::tight_ins_pl::StrapdownBank;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
@@ -165,7 +164,7 @@ pub fn run_tight_ins(
     let mut integ = bank.as_ref().map(|_| {
         let mut ir = IntegrityRecord::with_capacity(epochs);
         for _ in 0..ka {
-            push_nan(&mut ir);
+            ir.push_none();
         }
         ir
     });
@@ -177,7 +176,7 @@ pub fn run_tight_ins(
         if tk > imu.end() {
             skip(&mut rec, &mut sat);
             if let Some(ir) = integ.as_mut() {
-                push_nan(ir);
+                ir.push_none();
             }
             continue;
         }
@@ -209,7 +208,7 @@ pub fn run_tight_ins(
             if let (Some(b), Some(ir)) = (bank.as_ref(), integ.as_mut()) {
                 // Coasting: the levels of the mechanised filter, nothing tested.
                 let lv = b.levels(&s, &kf);
-                push_levels(ir, &lv, [f64::NAN; 2], false);
+                ir.push(&lv, [f64::NAN; 2], false);
             }
             record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
             continue;
@@ -300,7 +299,7 @@ pub fn run_tight_ins(
             let sigma: Vec<f64> = js.iter().map(|&j| rows.sigma[j]).collect();
             let (p_sat, alloc) = b.allocation();
             let snap = snapshot_araim(&los, &systems, &sigma, s.lat, s.lon, p_sat, &alloc);
-            push_levels(ir, &lv, snap, lv.alarm);
+            ir.push(&lv, snap, lv.alarm);
         }
         rec.subs[0].fused.push(used > 0);
         sat.used.push(used as u32);
@@ -471,15 +470,4 @@ fn ls_precheck(
     let model = PositionModel::new(&rows.sat_rot, &rows.rho_gps, x0);
     let rate = rates.then(|| RateModel::new(&rows.los, &rows.sat_vel, &rows.rate));
     snapshot_sat_fde(model, rate, rows.sigma.clone(), cfg)
-}
-
-/// An epoch without levels (before the alignment, after the IMU log).
-fn push_nan(ir: &mut IntegrityRecord) {
-    ir.hpl.push(f64::NAN);
-    ir.vpl.push(f64::NAN);
-    ir.hpl_snapshot.push(f64::NAN);
-    ir.vpl_snapshot.push(f64::NAN);
-    ir.statistic.push(f64::NAN);
-    ir.alarm.push(false);
-    ir.modes.push(0);
 }
