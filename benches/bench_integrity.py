@@ -48,7 +48,7 @@ def main() -> None:
         r = navfdi.araim(los, sys_)
         letters = sorted(set(sys_), key=sys_.index)
         tropo, user = navfdi.integrity.elevation_variances(np.arcsin(los[:, 2]))
-        args = ((-los).tolist(), [letters.index(s) for s in sys_], (0.5625 + tropo + user).tolist(), (0.25 + tropo + user).tolist(), [0.5] * n, [1e-5] * n, [1e-4, 1e-4], (9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5))
+        args = ((-los).tolist(), [letters.index(s) for s in sys_], (0.5625 + tropo + user).tolist(), (0.25 + tropo + user).tolist(), [0.5] * n, [1e-5] * n, [1e-4, 1e-4], (9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5, 0.05))
         tc = best(lambda: _core.araim_epoch(*args), reps)
         print(f"ARAIM {n} satellites (2 constellations, {len(r.mode_table['prior'])} modes): navfdi.araim {t * 1e6:.1f} µs, _core.araim_epoch {tc * 1e6:.1f} µs")
         # Fault detection and exclusion: consistent residuals (tests only), and a 60 m bias

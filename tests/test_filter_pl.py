@@ -101,7 +101,7 @@ def test_separation_without_an_integrity_table_is_refused():
         sc.with_values({"tight.fde": "separation"}).validate()
 
 
-@pytest.mark.parametrize("key,value", [("p_sat", 0.7), ("p_hmi_vert", 0.0), ("p_fa_hor", -1e-9)])
+@pytest.mark.parametrize("key,value", [("p_sat", 0.7), ("p_hmi_vert", 0.0), ("p_fa_hor", -1e-9), ("tol_pl", -0.05), ("tol_pl", 1e3)])
 def test_impossible_integrity_probabilities_are_refused(key, value):
     sc = load_scenario("shao2018_integrity")
     with pytest.raises(ScenarioError, match=rf"tight\.integrity\.{key}"):

@@ -36,10 +36,26 @@ def test_add_appendix_d_example():
     assert r.available and r.p_unmonitored < 8e-8
 
 
-@pytest.mark.xfail(strict=True, reason="not reproduced: HPL 14.416 m (the root to 1 µm) against the ADD's 14.5 m; sidereon's 14.456 m is its bisection's lower end + TOLPL 5 cm; the vertical agrees (issue 24, docs/integrity.md)")
 def test_add_appendix_d_hpl():
+    """The ADD's levels come from its half-interval search, stopped when the bracket is TOL_PL
+    (5 cm) wide, upper end returned: HPL 14.464 m (published 14.5); the exact roots of the PL
+    equations are 14.416 m and VPL 19.217 m (tol_pl=0)."""
     r = navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC)
     assert r.hpl == pytest.approx(EXP["HPL_m"], abs=0.05)
+    assert r.vpl == pytest.approx(EXP["VPL_m"], abs=0.05)
+    exact = navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC, allocation=navfdi.Allocation(**{**navfdi.lpv200().__dict__, "tol_pl": 0.0}))
+    assert exact.hpl == pytest.approx(14.4158, abs=1e-3)
+    assert exact.vpl == pytest.approx(19.2171, abs=1e-3)
+    # The search's result is a bound: at or above the root, within TOL_PL per axis.
+    assert exact.vpl <= r.vpl <= exact.vpl + 0.05
+    assert exact.hpl <= r.hpl <= exact.hpl + 0.05 * np.sqrt(2)
+
+
+@pytest.mark.parametrize("field,value", [("p_hmi_vert", float("nan")), ("p_fa_vert", 0.0), ("p_thres", 1.5), ("tol_pl", -1.0), ("tol_pl", float("inf"))])
+def test_a_bad_allocation_is_named(field, value):
+    alloc = navfdi.Allocation(**{**navfdi.lpv200().__dict__, field: value})
+    with pytest.raises(ValueError, match=f"allocation.{field}"):
+        navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC, allocation=alloc)
 
 
 def test_the_adds_elevation_models_give_the_published_variances():

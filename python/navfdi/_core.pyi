@@ -1085,13 +1085,13 @@ def araim_epoch(
     b_nom: list[float],
     p_sat: list[float],
     p_const: list[float],
-    allocation: tuple[float, float, float, float, float, float],
+    allocation: tuple[float, float, float, float, float, float, float],
     residuals: list[float] | None = None,
 ) -> dict[str, Any]:
     """ARAIM (ADD v3.0) on one epoch; use :func:`navfdi.integrity.araim`. ``rows`` (n, 3) ENU
     geometry rows (minus the lines of sight), ``constellation`` (n) indices, variances (m²),
     ``b_nom`` (m), priors, ``allocation`` (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR,
-    P_THRES, P_EMT), ``residuals`` (n, m; optional: fault detection and exclusion). Returns
+    P_THRES, P_EMT, TOL_PL (m)), ``residuals`` (n, m; optional: fault detection and exclusion). Returns
     ``vpl, hpl, emt, sigma_acc, sigma0, bias0, k_fa, p_unmonitored, n_max, available``,
     ``modes`` (columns: ``prior`` (N,), ``sigma``, ``sigma_ss``, ``bias``, ``threshold``,
     ``separation`` (N, 3), ``satellites``/``constellations`` flat with ``*_count`` (N,)) and

@@ -121,12 +121,13 @@ def _tight(t: Any) -> dict[str, Any]:
     }
 
 
-_INTEGRITY_KEYS = ("p_sat", "p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor")
+_INTEGRITY_KEYS = ("p_sat", "p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor", "tol_pl")
 
 
 def _tight_integrity(a: Any) -> dict[str, Any]:
-    """The ``[tight.integrity]`` table: filter protection levels (probabilities per epoch;
-    absent keys take the LPV-200 defaults in Rust)."""
+    """The ``[tight.integrity]`` table: filter protection levels (probabilities per epoch, and
+    ``tol_pl`` in m, the ADD's PL search tolerance; absent keys take the LPV-200 defaults in
+    Rust)."""
     p = "tight.integrity"
     if not isinstance(a, dict):
         raise ScenarioError(f"{p}: expected a table, got {type(a).__name__}")

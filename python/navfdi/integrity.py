@@ -2,9 +2,10 @@
 
 :func:`araim` runs the EU–US ARAIM Technical Subgroup's Reference Airborne Algorithm (ADD v3.0,
 multiple-hypothesis solution separation) on one epoch, in Rust
-(``navfdi_core::integrity::araim``). On the ADD's Appendix D example it gives VPL 19.217 m,
-EMT 7.819 m and σ_acc,v 1.468 m as the reference; its HPL (14.416 m) is 0.04 m below the
-reference's 14.456–14.5 m, a gap still open.
+(``navfdi_core::integrity::araim``). On the ADD's Appendix D example it gives VPL 19.223 m,
+HPL 14.464 m, EMT 7.819 m and σ_acc,v 1.468 m against the ADD's 19.2, 14.5, 7.8 and 1.47 m
+(the levels by the ADD's half-interval search with TOL_PL 5 cm; the roots of the PL equations
+are 19.217 and 14.416 m).
 """
 
 from __future__ import annotations
@@ -41,7 +42,10 @@ class Ism:
 class Allocation:
     """Integrity and continuity allocation: ``p_hmi_vert``, ``p_hmi_hor``, ``p_fa_vert``,
     ``p_fa_hor``, ``p_thres`` (largest unmonitored probability), ``p_emt`` (smallest prior
-    counted in the EMT). Alert limits ``hal``, ``val`` (m) for the availability figures."""
+    counted in the EMT). Alert limits ``hal``, ``val`` (m) for the availability figures.
+    ``tol_pl`` (m): the ADD's TOL_PL — the levels are the upper end of the ADD's half-interval
+    search once its bracket is this narrow, so at most ``tol_pl`` above the root of the PL
+    equation (per axis); ``0`` solves the equation to 1 µm."""
 
     p_hmi_vert: float
     p_hmi_hor: float
@@ -51,11 +55,12 @@ class Allocation:
     p_emt: float
     hal: float = 40.0
     val: float = 35.0
+    tol_pl: float = 0.05
 
 
 def lpv200() -> Allocation:
     """The LPV-200 allocation of the ADD: P_HMI 1e-7 (9.8e-8 vertical, 2e-9 horizontal), P_FA
-    3.9e-6 / 9e-8, P_THRES 8e-8, P_EMT 1e-5; HAL 40 m, VAL 35 m."""
+    3.9e-6 / 9e-8, P_THRES 8e-8, P_EMT 1e-5; HAL 40 m, VAL 35 m; TOL_PL 5 cm."""
     return Allocation(9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5)
 
 
@@ -200,7 +205,7 @@ def araim(
         per_sat(ism.b_nom, "ism.b_nom").tolist(),
         per_sat(ism.p_sat, "ism.p_sat").tolist(),
         [float(ism.p_const[s]) for s in letters],
-        (allocation.p_hmi_vert, allocation.p_hmi_hor, allocation.p_fa_vert, allocation.p_fa_hor, allocation.p_thres, allocation.p_emt),
+        (allocation.p_hmi_vert, allocation.p_hmi_hor, allocation.p_fa_vert, allocation.p_fa_hor, allocation.p_thres, allocation.p_emt, allocation.tol_pl),
         None if residuals is None else _residuals(residuals, n),
     )
     common = dict(

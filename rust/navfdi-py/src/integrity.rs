@@ -11,7 +11,8 @@ use pyo3::types::PyDict;
 /// ARAIM (ADD v3.0 multiple-hypothesis solution separation) on one epoch. `rows` (n, 3): ENU
 /// geometry rows (minus the unit lines of sight); `constellation` (n): index of each
 /// satellite's constellation; `c_int`, `c_acc` (n, m²); `b_nom`, `p_sat` (n); `p_const` (one per
-/// constellation); `allocation`: (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR, P_THRES, P_EMT);
+/// constellation); `allocation`: (P_HMI,VERT, P_HMI,HOR, P_FA,VERT, P_FA,HOR, P_THRES, P_EMT,
+/// TOL_PL (m));
 /// `residuals` (n, m, optional): fault detection and exclusion on them
 /// (`navfdi_core::integrity::araim_fde::araim_fde`). Returns a dict of the all-in-view results,
 /// the fault modes as columns (`modes`: `prior` (N,), `sigma`, `sigma_ss`, `bias`,
@@ -31,11 +32,11 @@ pub fn araim_epoch<'py>(
     b_nom: Vec<f64>,
     p_sat: Vec<f64>,
     p_const: Vec<f64>,
-    allocation: (f64, f64, f64, f64, f64, f64),
+    allocation: (f64, f64, f64, f64, f64, f64, f64),
     residuals: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     finite_rows(&rows)?;
-    let (p_hmi_vert, p_hmi_hor, p_fa_vert, p_fa_hor, p_thres, p_emt) = allocation;
+    let (p_hmi_vert, p_hmi_hor, p_fa_vert, p_fa_hor, p_thres, p_emt, tol_pl) = allocation;
     let alloc = Allocation {
         p_hmi_vert,
         p_hmi_hor,
@@ -43,6 +44,7 @@ pub fn araim_epoch<'py>(
         p_fa_hor,
         p_thres,
         p_emt,
+        tol_pl,
     };
     let ism = Ism {
         c_int,

@@ -81,6 +81,11 @@ pub struct FilterIntegritySpec {
     /// Continuity budget of the horizontal separation tests (default 9e-8).
     #[serde(default = "default_p_fa_hor")]
     pub p_fa_hor: f64,
+    /// The ADD's protection-level tolerance TOL_PL (m; default 0.05): the levels are the upper
+    /// end of the ADD's half-interval search, at most this much above the root; 0 solves to
+    /// 1 µm.
+    #[serde(default = "default_tol_pl")]
+    pub tol_pl: f64,
 }
 
 impl Default for FilterIntegritySpec {
@@ -91,6 +96,7 @@ impl Default for FilterIntegritySpec {
             p_hmi_hor: default_p_hmi_hor(),
             p_fa_vert: default_p_fa_vert(),
             p_fa_hor: default_p_fa_hor(),
+            tol_pl: default_tol_pl(),
         }
     }
 }
@@ -103,6 +109,7 @@ impl FilterIntegritySpec {
             p_hmi_hor: self.p_hmi_hor,
             p_fa_vert: self.p_fa_vert,
             p_fa_hor: self.p_fa_hor,
+            tol_pl: self.tol_pl,
             ..crate::integrity::araim::Allocation::lpv200()
         }
     }
@@ -122,6 +129,9 @@ fn default_p_fa_vert() -> f64 {
 }
 fn default_p_fa_hor() -> f64 {
     9e-8
+}
+fn default_tol_pl() -> f64 {
+    0.05
 }
 
 /// A strapdown INS on a recorded IMU log, as the tight filter runs it: the IMU's noise figures
@@ -192,6 +202,12 @@ impl ScenarioSpec {
                         format!("{v}: a probability in (0, 0.5) is required"),
                     ));
                 }
+            }
+            if !(0.0..=10.0).contains(&fi.tol_pl) {
+                return Err(bad(
+                    "tight.integrity.tol_pl",
+                    format!("{} m: a tolerance in [0, 10] m is required", fi.tol_pl),
+                ));
             }
         }
         if t.fde == FdePlacement::Separation && t.integrity.is_none() {
