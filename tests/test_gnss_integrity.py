@@ -124,3 +124,74 @@ def test_outputs_and_errors(tmp_path: Path, gps_galileo) -> None:
         snapshot_pl(np.eye(3), ["G"] * 3, [1.0] * 3, 10.0, p_md=2.0)
     with pytest.raises(ValueError, match="no redundancy"):
         snapshot_pl(np.eye(3), ["G"] * 3, [1.0] * 3, 10.0)
+
+
+def test_an_allocation_file_sets_the_budget_limits_and_ism(tmp_path: Path, gps_galileo) -> None:
+    """``--integrity FILE``: absent keys keep LPV-200's (an empty file gives the lpv200 levels
+    exactly); given ones change the levels and the availability the way they should."""
+    empty = tmp_path / "same.toml"
+    empty.write_text("# nothing: LPV-200\n")
+    same = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=TRUTH, integrity=str(empty))
+    for c in ("hpl", "vpl", "emt", "hpl_fde", "vpl_fde"):
+        np.testing.assert_array_equal(same.solution[c].to_numpy(float), gps_galileo.solution[c].to_numpy(float))
+    assert same.summary()["integrity"]["allocation"] == "same"
+    strict = tmp_path / "strict.toml"
+    strict.write_text(
+        'name = "rail demo"\n'
+        "[allocation]\np_hmi_vert = 1e-9\np_hmi_hor = 1e-9\ntol_pl = 0.0\n"
+        "[limits]\nhal = 15.0\nval = 20.0\n"
+        "[ism]\nsigma_ura = 1.0\np_const = {G = 1e-4, E = 1e-4, C = 1e-4}\n"
+    )
+    s = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=TRUTH, integrity=strict)
+    base, tight = gps_galileo.solution, s.solution
+    # A smaller integrity budget and a larger σ_URA both raise every level.
+    assert (tight["vpl"] > base["vpl"]).all() and (tight["hpl"] > base["hpl"]).all()
+    ig = s.summary()["integrity"]
+    assert ig["allocation"] == "rail demo"
+    # HAL 15 m against HPLs above it: unavailable wherever the HPL exceeds the HAL.
+    avail = tight["integrity"] == "available"
+    assert not (avail & (tight["hpl"] > 15.0)).any() and ig["availability"] < 1.0
+    cfg = s.config["integrity"]
+    assert cfg["hal"] == 15.0 and cfg["val"] == 20.0 and cfg["file"] == str(strict)
+    assert cfg["probabilities"]["p_hmi_vert"] == 1e-9 and cfg["probabilities"]["p_fa_vert"] == 3.9e-6
+    assert cfg["p_const"] == {"G": 1e-4, "E": 1e-4, "C": 1e-4} and cfg["sigma_ura"] == 1.0
+    # tol_pl = 0: the roots of the PL equations, at most TOL_PL (5 cm) per axis below the
+    # ADD search's levels of lpv200, never above them.
+    root_file = tmp_path / "root.toml"
+    root_file.write_text("[allocation]\ntol_pl = 0\n")
+    root = navfdi.gnss_solve(OBS, NAV, systems="G,E", integrity=root_file).solution
+    for c, slack in (("vpl", 0.05), ("hpl", 0.05 * np.sqrt(2))):
+        d = base[c].to_numpy(float) - root[c].to_numpy(float)
+        assert (d >= -1e-6).all() and (d <= slack).all() and d.max() > 0.0, c
+
+
+@pytest.mark.parametrize(
+    "text,match",
+    [
+        ("[allocation]\np_hmi_vert = 2.0\n", r"\[allocation\] p_hmi_vert = 2.0: must be in \(0, 1\)"),
+        ("[allocation]\ntol_pl = -1\n", r"\[allocation\] tol_pl = -1: must be in \[0, 10\)"),
+        ("[allocation]\np_md = 1e-3\n", r"\[allocation\] unknown key\(s\) p_md"),
+        ("[limits]\nhal = 'forty'\n", r"\[limits\] hal = 'forty': a finite number"),
+        ("[limit]\nhal = 40\n", r"unknown key\(s\) limit"),
+        ("[ism]\np_const = {X = 1e-4}\n", r"p_const.X: not a system letter"),
+        ("[ism]\np_const = 1e-4\n", r"p_const must be a table"),
+        ("[allocation\n", r"not valid TOML"),
+        ("name = ''\n", r"name must be a non-empty string"),
+    ],
+)
+def test_a_bad_allocation_file_is_named_before_solving(tmp_path: Path, monkeypatch: pytest.MonkeyPatch, text: str, match: str) -> None:
+    import navfdi.gnss
+
+    def solving(*a: object, **k: object) -> None:
+        raise AssertionError("the file was solved before the allocation was checked")
+
+    monkeypatch.setattr(navfdi.gnss._core, "GnssRun", solving)
+    f = tmp_path / "alloc.toml"
+    f.write_text(text)
+    before = f.read_bytes()
+    with pytest.raises(ValueError, match=match) as e:
+        navfdi.gnss_solve(OBS, NAV, integrity=str(f))
+    assert "alloc.toml" in str(e.value)
+    assert f.read_bytes() == before
+    with pytest.raises(ValueError, match="no such file"):
+        navfdi.gnss_solve(OBS, NAV, integrity=str(tmp_path / "missing.toml"))

@@ -132,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' estimates the factor from the file (a first pass without exclusion), or give a number")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
     gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
-    gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200")
+    gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200, or an allocation file (TOML: [allocation] probabilities and tol_pl, [limits] hal/val/emt, [ism]; absent keys keep LPV-200's; docs/integrity.md)")
     gn.add_argument("--fault", action="append", default=[], metavar="SAT:SHAPE:SIZE:START:END", help="inject a fault, e.g. G13:step:20m:100s:200s or G29:ramp:0.5m/s:100s:300s (times from the first epoch; repeatable)")
     truth = gn.add_mutually_exclusive_group()
     truth.add_argument("--truth", default=None, metavar="LAT,LON,H", help="reference position (deg, deg, m) for the error statistics")

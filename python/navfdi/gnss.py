@@ -30,6 +30,7 @@ from navfdi import _core, _json
 from navfdi.scenario import NeverAppliedWarning
 
 if TYPE_CHECKING:
+    from navfdi.gnss_integrity import IntegritySettings
     import pandas as pd
 
 # pandas (with pyarrow, ~80 MB resident) is imported where a table is built, not with the
@@ -517,7 +518,7 @@ def gnss_solve(
     truth: np.ndarray | Sequence[float] | str | None = None,
     progress: bool = False,
     chunk: int = 500,
-    integrity: str | None = None,
+    integrity: str | os.PathLike[str] | IntegritySettings | None = None,
     doppler_noise: tuple[float, float] = (0.05, 0.05),
     noise_scale: float | str = 1.0,
 ) -> GnssSolution:
@@ -582,8 +583,10 @@ def gnss_solve(
         factor's square; the run is then solved with it (``config["noise_scale"]``).
     doppler_noise : (a, b)
         Pseudorange-rate noise (m/s) of the Doppler velocity, ``σ² = a² + b²/sin² el``.
-    integrity : str, optional
-        An allocation (``"lpv200"``): add ARAIM and snapshot-RAIM protection levels and the
+    integrity : str or path or IntegritySettings, optional
+        An allocation — a name (``"lpv200"``) or the path of an allocation file (TOML; see
+        :func:`navfdi.gnss_integrity.load_allocation_file`), checked before solving: add
+        ARAIM and snapshot-RAIM protection levels and the
         integrity state per epoch (:mod:`navfdi.gnss_integrity`); the summary then has an
         ``integrity`` block (availability, misleading and hazardously misleading epochs
         against the truth) and ``write`` adds the Stanford diagrams.
@@ -595,6 +598,10 @@ def gnss_solve(
         raise ValueError("systems: give at least one of G, E, C, J")
     for p, name in ((obs, "obs"), (nav, "nav")):
         check_input_file(p, name)
+    if integrity is not None:
+        from navfdi.gnss_integrity import resolve_integrity
+
+        integrity = resolve_integrity(integrity)
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")

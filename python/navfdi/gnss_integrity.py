@@ -31,6 +31,9 @@ epochs of ARAIM's own position against its levels.
 from __future__ import annotations
 
 import math
+import os
+import tomllib
+from dataclasses import dataclass
 from pathlib import Path
 from statistics import NormalDist
 from typing import Any
@@ -43,12 +46,123 @@ from navfdi.integrity import Allocation, Ism, araim, lpv200
 #: Alert limits (m) and EMT limit of the named allocations.
 LIMITS = {"lpv200": {"hal": 40.0, "val": 35.0, "emt": 15.0}}
 
+#: Keys of an allocation file's tables (see :func:`load_allocation_file`).
+_FILE_KEYS = {
+    "allocation": ("p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor", "p_thres", "p_emt", "tol_pl"),
+    "limits": ("hal", "val", "emt"),
+    "ism": ("sigma_ura", "sigma_ure", "b_nom", "p_sat", "p_const"),
+}
+
+
+@dataclass(frozen=True)
+class IntegritySettings:
+    """What ``--integrity`` resolves to: the allocation's ``name`` (``"lpv200"`` or the file's),
+    the :class:`~navfdi.integrity.Allocation`, the alert and EMT ``limits`` (m: ``hal``,
+    ``val``, ``emt``), the :class:`~navfdi.integrity.Ism` and the ``source`` (the file's path,
+    or ``None`` for a named allocation)."""
+
+    name: str
+    allocation: Allocation
+    limits: dict[str, float]
+    ism: Ism
+    source: str | None = None
+
 
 def allocation_by_name(name: str) -> tuple[Allocation, dict[str, float]]:
     """The allocation and limits of a name (``lpv200``)."""
     if name not in LIMITS:
-        raise ValueError(f"integrity {name!r}: unknown allocation (known: {', '.join(LIMITS)})")
+        raise ValueError(f"integrity {name!r}: unknown allocation (known: {', '.join(LIMITS)}), and no such allocation file")
     return lpv200(), LIMITS[name]
+
+
+def resolve_integrity(spec: str | os.PathLike[str] | IntegritySettings) -> IntegritySettings:
+    """``--integrity``'s argument: a named allocation (``lpv200``) or the path of an allocation
+    file (:func:`load_allocation_file`). ``ValueError`` names an unknown name or a bad file."""
+    if isinstance(spec, IntegritySettings):
+        return spec
+    text = os.fspath(spec)
+    if text in LIMITS:
+        alloc, limits = allocation_by_name(text)
+        return IntegritySettings(text, alloc, dict(limits), Ism())
+    if text.endswith(".toml") or Path(text).is_file():
+        return load_allocation_file(text)
+    allocation_by_name(text)  # raises, naming the known ones
+    raise AssertionError("unreachable")
+
+
+def load_allocation_file(path: str | os.PathLike[str]) -> IntegritySettings:
+    """An allocation file (TOML) for ``navfdi gnss --integrity FILE``: optional ``name`` (default
+    the file's stem), and three optional tables whose absent keys keep LPV-200's values —
+    ``[allocation]`` ``p_hmi_vert``, ``p_hmi_hor``, ``p_fa_vert``, ``p_fa_hor``, ``p_thres``,
+    ``p_emt`` (probabilities per epoch) and ``tol_pl`` (m); ``[limits]`` ``hal``, ``val``,
+    ``emt`` (m, the alert limits and the EMT limit of the ``available`` state); ``[ism]``
+    ``sigma_ura``, ``sigma_ure``, ``b_nom`` (m), ``p_sat`` and ``p_const`` (a table of
+    per-system priors, e.g. ``{G = 1e-4, E = 1e-4, C = 1e-4}``, replacing the default one).
+
+    Raises ``ValueError`` naming the file and the key for a missing or unreadable file, TOML
+    syntax, unknown keys, non-numbers and values out of range (probabilities in (0, 1),
+    lengths positive and finite, ``tol_pl`` in [0, 10] m)."""
+    p = Path(path)
+    where = f"integrity file {os.fspath(path)!r}"
+    if not p.is_file():
+        raise ValueError(f"{where}: no such file")
+    try:
+        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as e:
+        raise ValueError(f"{where}: cannot read it ({e})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{where}: not valid TOML ({e})") from None
+    unknown = sorted(set(doc) - {"name", *_FILE_KEYS})
+    if unknown:
+        raise ValueError(f"{where}: unknown key(s) {', '.join(unknown)} (known: name, {', '.join(_FILE_KEYS)})")
+    tables: dict[str, dict[str, Any]] = {}
+    for table, keys in _FILE_KEYS.items():
+        t = doc.get(table, {})
+        if not isinstance(t, dict):
+            raise ValueError(f"{where}: {table} must be a table ([{table}])")
+        bad = sorted(set(t) - set(keys))
+        if bad:
+            raise ValueError(f"{where}: [{table}] unknown key(s) {', '.join(bad)} (known: {', '.join(keys)})")
+        tables[table] = t
+
+    def number(table: str, key: str, low: float, high: float, closed_low: bool = False) -> float:
+        v = tables[table][key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise ValueError(f"{where}: [{table}] {key} = {v!r}: a finite number is required")
+        if not ((low <= v if closed_low else low < v) and v < high):
+            rng = f"{'[' if closed_low else '('}{low:g}, {high:g})"
+            raise ValueError(f"{where}: [{table}] {key} = {v!r}: must be in {rng}")
+        return float(v)
+
+    base = lpv200()
+    a = {f: getattr(base, f) for f in _FILE_KEYS["allocation"]}
+    for key in tables["allocation"]:
+        a[key] = number("allocation", key, 0.0, 10.0, closed_low=True) if key == "tol_pl" else number("allocation", key, 0.0, 1.0)
+    limits = dict(LIMITS["lpv200"])
+    for key in tables["limits"]:
+        limits[key] = number("limits", key, 0.0, 1e7)
+    ism_kw: dict[str, Any] = {}
+    for key in tables["ism"]:
+        if key == "p_const":
+            pc = tables["ism"][key]
+            if not isinstance(pc, dict) or not pc:
+                raise ValueError(f"{where}: [ism] p_const must be a table of system priors, e.g. {{G = 1e-4, E = 1e-4}}")
+            out = {}
+            for letter, v in pc.items():
+                if letter.upper() not in ("G", "E", "C", "J", "R", "I", "S"):
+                    raise ValueError(f"{where}: [ism] p_const.{letter}: not a system letter (G, E, C, J, R, I, S)")
+                if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+                    raise ValueError(f"{where}: [ism] p_const.{letter} = {v!r}: must be in (0, 1)")
+                out[letter.upper()] = float(v)
+            ism_kw["p_const"] = out
+        elif key == "p_sat":
+            ism_kw[key] = number("ism", key, 0.0, 1.0)
+        else:
+            ism_kw[key] = number("ism", key, 0.0, 1e4, closed_low=key == "b_nom")
+    name = doc.get("name", p.stem)
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"{where}: name must be a non-empty string")
+    return IntegritySettings(name.strip(), Allocation(**a, hal=limits["hal"], val=limits["val"]), limits, Ism(**ism_kw), os.fspath(p))
 
 
 def snapshot_pl(los_enu: Any, systems: list[str], sigma2: Any, threshold: float, p_md: float = 1e-3) -> dict[str, Any]:
@@ -65,11 +179,14 @@ def snapshot_pl(los_enu: Any, systems: list[str], sigma2: Any, threshold: float,
     return _core.snapshot_pl(los.tolist(), [letters.index(s) for s in systems], [float(v) for v in np.asarray(sigma2, dtype=float)], float(threshold), k_md)
 
 
-def add_integrity(solution: Any, name: str = "lpv200", p_md: float = 1e-3, ism: Ism | None = None) -> None:
+def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySettings = "lpv200", p_md: float = 1e-3, ism: Ism | None = None) -> None:
     """Add the integrity columns to ``solution.solution`` (see the module docs) and record the
-    settings in ``solution.config["integrity"]``."""
-    alloc, limits = allocation_by_name(name)
-    ism = ism or Ism()
+    settings in ``solution.config["integrity"]``. ``name``: a named allocation (``lpv200``), an
+    allocation file's path or resolved :class:`IntegritySettings`; ``ism`` overrides the
+    settings' integrity support message."""
+    settings = resolve_integrity(name)
+    alloc, limits = settings.allocation, settings.limits
+    ism = ism or settings.ism
     for f in ("sigma_ura", "sigma_ure", "b_nom", "p_sat"):
         if np.ndim(getattr(ism, f)) != 0:
             raise ValueError(f"ism.{f}: a file's epochs see different satellites; give one value for all")
@@ -115,7 +232,18 @@ def add_integrity(solution: Any, name: str = "lpv200", p_md: float = 1e-3, ism: 
     sol["integrity"] = state
     sol["integrity_fde"] = state_fde
     sol["fde_excluded"] = fde_excluded
-    solution.config["integrity"] = {"allocation": name, **limits, "p_md_raim": p_md, "sigma_ura": np.asarray(ism.sigma_ura, dtype=float).tolist(), "sigma_ure": np.asarray(ism.sigma_ure, dtype=float).tolist()}
+    solution.config["integrity"] = {
+        "allocation": settings.name,
+        **limits,
+        "p_md_raim": p_md,
+        "sigma_ura": np.asarray(ism.sigma_ura, dtype=float).tolist(),
+        "sigma_ure": np.asarray(ism.sigma_ure, dtype=float).tolist(),
+        "b_nom": float(np.asarray(ism.b_nom, dtype=float)),
+        "p_sat": float(np.asarray(ism.p_sat, dtype=float)),
+        "p_const": dict(ism.p_const),
+        "probabilities": {f: getattr(alloc, f) for f in _FILE_KEYS["allocation"]},
+        "file": settings.source,
+    }
 
 
 def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float]) -> tuple[str, str]:
