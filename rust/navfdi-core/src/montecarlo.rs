@@ -150,8 +150,9 @@ pub struct IntegrityMetrics {
 
 /// The protection levels of `rec` (when it has them) against its position error (m,
 /// columns pos_e, pos_n, pos_u of [`RunRecord::error`]; on recorded logs about the run's mean
-/// offset to the reference): counts of misleading and hazardously misleading epochs, the worst
-/// error-to-level ratios, and the filter levels beside the snapshot levels of the same epochs.
+/// offset to the reference outside its fault windows, as the errors' own figures): counts of
+/// misleading and hazardously misleading epochs, the worst error-to-level ratios, and the
+/// filter levels beside the snapshot levels of the same epochs.
 pub fn integrity_metrics(rec: &RunRecord) -> Option<IntegrityMetrics> {
     let ir = rec.integrity.as_ref()?;
     let mut m = IntegrityMetrics::default();
@@ -159,12 +160,24 @@ pub fn integrity_metrics(rec: &RunRecord) -> Option<IntegrityMetrics> {
         ir.hpl[k].is_finite() && ir.vpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite())
     };
     // On recorded logs the reference has a datum of its own (walk_tc's is 8 m off): the errors
-    // are taken about the run's mean east, north and up offset to it.
-    let mut offset = [0.0; 3];
-    if !rec.nav.is_empty() {
+    // are taken about it — the fault-free run's mean offset when the record carries it
+    // (`datum`), else the run's mean east, north and up offset over the epochs outside the
+    // fault windows (a fault's own error must not move the datum; all epochs if none is).
+    let mut offset = rec.datum.unwrap_or([0.0; 3]);
+    if !rec.nav.is_empty() && rec.datum.is_none() {
+        let in_fault = |k: usize| {
+            rec.fault_windows
+                .iter()
+                .any(|w| rec.t[k] >= w[0] && rec.t[k] < w[1])
+        };
+        let outside = rec
+            .error
+            .chunks(9)
+            .enumerate()
+            .any(|(k, row)| scored(k, row) && !in_fault(k));
         let mut n = 0usize;
         for (k, row) in rec.error.chunks(9).enumerate() {
-            if scored(k, row) {
+            if scored(k, row) && !(outside && in_fault(k)) {
                 n += 1;
                 for q in 0..3 {
                     offset[q] += row[6 + q];
@@ -469,6 +482,8 @@ pub fn run_logged_chunk(
 ) -> Result<Vec<RunMetrics>> {
     check_range(start, count)?;
     let cells = spec_cells(spec);
+    // One fault-free pass per chunk gives the datum every run of the point is scored against.
+    let datum = logged_datum(src, spec, cancel)?;
     let one = |i: u64| -> Result<RunMetrics> {
         cancel.check()?;
         let run_spec = spec.drawn(seed, i);
@@ -486,6 +501,7 @@ pub fn run_logged_chunk(
                 e => Error::Invalid(format!("run {i}: {e}")),
             },
         )?;
+        let rec = RunRecord { datum, ..rec };
         let mut m = metrics_of(&run_spec, i, &rec, &cells);
         if keep.contains(&i) {
             m.record = Some(rec);
@@ -493,6 +509,47 @@ pub fn run_logged_chunk(
         Ok(m)
     };
     in_pool(threads, start, count, one)
+}
+
+/// The reference datum of a logged run with filter protection levels: the mean position error
+/// (east, north, up, m) over the epochs with levels of `spec` run on `src` **without its
+/// faults** — what the errors of the faulted runs are scored against
+/// ([`integrity_metrics`]), so that a fault's own error, or what is left of it after the
+/// fault window when nothing excludes it, does not move the datum. `None` when the scenario
+/// has no faults or no `[tight.integrity]`, or no epoch has levels.
+pub fn logged_datum(
+    src: &crate::logs::LoggedSource,
+    spec: &ScenarioSpec,
+    cancel: &Cancel,
+) -> Result<Option<[f64; 3]>> {
+    let integrity = spec.tight.as_ref().is_some_and(|t| t.integrity.is_some());
+    if !integrity || spec.faults.is_empty() {
+        return Ok(None);
+    }
+    let mut clean = spec.clone();
+    clean.faults.clear();
+    let meas = src.measurements(&clean);
+    let streams = crate::stream::Streams {
+        models: &src.models,
+        meas: &meas,
+        reference: Some(&src.reference),
+        seed: 0,
+        stream: 0,
+    };
+    let rec = run_architecture(&clean, &streams, true, false, cancel)?;
+    let Some(ir) = rec.integrity.as_ref() else {
+        return Ok(None);
+    };
+    let (mut sum, mut n) = ([0.0; 3], 0usize);
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        if ir.hpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite()) {
+            for q in 0..3 {
+                sum[q] += row[6 + q];
+            }
+            n += 1;
+        }
+    }
+    Ok((n > 0).then(|| sum.map(|v| v / n as f64)))
 }
 
 /// One run: simulate, filter with isolation, reduce.
@@ -615,4 +672,71 @@ where
             ))
         })?
         .install(work)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::{IntegrityRecord, RunRecord};
+
+    /// A logged run's record: 100 epochs at 1 s, a constant reference datum offset of
+    /// (6, −4, 2) m, plus `fault` m east inside [40, 80) s; levels HPL 3 m, VPL 4 m.
+    fn logged(fault: f64, windows: Vec<[f64; 2]>) -> RunRecord {
+        let t: Vec<f64> = (0..100).map(f64::from).collect();
+        let mut error = Vec::new();
+        for &tk in &t {
+            let f = if (40.0..80.0).contains(&tk) {
+                fault
+            } else {
+                0.0
+            };
+            error.extend([0.0; 6]);
+            error.extend([6.0 + f, -4.0, 2.0]);
+        }
+        RunRecord {
+            t,
+            error,
+            nav: vec![0.0; 100],
+            fault_windows: windows,
+            integrity: Some(IntegrityRecord {
+                hpl: vec![3.0; 100],
+                vpl: vec![4.0; 100],
+                hpl_snapshot: vec![30.0; 100],
+                vpl_snapshot: vec![40.0; 100],
+                statistic: vec![0.5; 100],
+                alarm: vec![false; 100],
+                modes: vec![10; 100],
+            }),
+            ..RunRecord::default()
+        }
+    }
+
+    #[test]
+    fn the_datum_of_a_logged_run_is_taken_outside_its_fault_windows() {
+        // The fault's 10 m east error is misleading at its 40 epochs and nowhere else: the
+        // datum comes from the 60 epochs outside it.
+        let m = integrity_metrics(&logged(10.0, vec![[40.0, 80.0]])).unwrap();
+        assert_eq!((m.epochs, m.mi_h, m.mi_v, m.hmi_h), (100, 40, 0, 40));
+        assert!(
+            (m.max_ratio_h - 10.0 / 3.0).abs() < 1e-12,
+            "{}",
+            m.max_ratio_h
+        );
+        // Taken over every epoch (as before), the fault would move the datum 4 m east and
+        // make the 60 clean epochs misleading too.
+        let all = integrity_metrics(&logged(10.0, vec![])).unwrap();
+        assert_eq!(all.mi_h, 100);
+        // A fault-free pass's datum, when the record carries one, is used as it is (here the
+        // true one, with no windows to go by).
+        let given = integrity_metrics(&RunRecord {
+            datum: Some([6.0, -4.0, 2.0]),
+            ..logged(10.0, vec![])
+        })
+        .unwrap();
+        assert_eq!((given.mi_h, given.hmi_h), (40, 40));
+        // No fault: the datum removed, nothing misleading.
+        let clean = integrity_metrics(&logged(0.0, vec![[40.0, 80.0]])).unwrap();
+        assert_eq!((clean.mi_h, clean.mi_v), (0, 0));
+        assert!(clean.max_ratio_h < 1e-12 && clean.max_ratio_v < 1e-12);
+    }
 }

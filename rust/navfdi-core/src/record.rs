@@ -151,7 +151,7 @@ pub const ERROR_COLUMNS: [&str; 9] = [
 ];
 
 /// Outputs of one run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct RunRecord {
     /// Epoch times (s).
     pub t: Vec<f64>,
@@ -180,6 +180,12 @@ pub struct RunRecord {
     /// Per fault of the scenario: whether it ever reached a measurement
     /// ([`crate::stream::faults_applied`]).
     pub faults_applied: Vec<bool>,
+    /// Per fault of the scenario run (drawn faults resolved): its window `[start, end)` (s).
+    pub fault_windows: Vec<[f64; 2]>,
+    /// On recorded logs with faults: the mean position error (east, north, up, m) of the same
+    /// filter on the same log without them ([`crate::montecarlo::logged_datum`]) — the
+    /// reference's own datum, against which the integrity metrics score the errors.
+    pub datum: Option<[f64; 3]>,
     /// The navigation solution of a strapdown INS (architecture `loosely_coupled`), T ×
     /// [`NAV_COLUMNS`] row-major; empty otherwise.
     pub nav: Vec<f64>,
@@ -359,6 +365,8 @@ impl RunRecord {
             fused_alt: Vec::new(),
             fusion: None,
             faults_applied: crate::stream::faults_applied(spec, models),
+            fault_windows: spec.faults.iter().map(|f| [f.start, f.end]).collect(),
+            datum: None,
             nav: Vec::new(),
             integrity: None,
             // Parameters validated by the scenario, so the detector can always be built.

@@ -228,7 +228,9 @@ impl PyLoggedSource {
                     .iter()
                     .map(|s| {
                         base.check_variant(s)?;
-                        run_architecture(s, &streams, isolation, true, cancel)
+                        let rec = run_architecture(s, &streams, isolation, true, cancel)?;
+                        let datum = navfdi_core::montecarlo::logged_datum(src, s, cancel)?;
+                        Ok(RunRecord { datum, ..rec })
                     })
                     .collect()
             })?;
