@@ -184,7 +184,7 @@ pub fn run_tight_ins(
         let ep = &rp.epochs[k];
         if let Some(b) = bank.as_mut() {
             b.advance(&imu, tk);
-            b.sync_view(&s, &kf, &mech, &ep.sats);
+            b.sync_view(&s, &kf, &mech, &ep.sats, tk);
         }
         for &j in &ep.sats {
             sat.in_view[k * s_count + j] = true;

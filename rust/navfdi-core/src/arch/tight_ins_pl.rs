@@ -3,7 +3,8 @@
 //!
 //! Each sub-filter is a whole strapdown navigator — its own mechanised state, error filter and
 //! mechanisation — born as a copy of the filter's (after the mechanisation to the epoch, before
-//! the update) at the first epoch its satellite is in view, mechanised from the same IMU
+//! the update) at the first epoch its satellite is in view, kept through the satellite's
+//! absences of up to [`HOLD_ABSENT`] s, mechanised from the same IMU
 //! samples, and updated at every epoch with the rows the filter uses (predicted from its own
 //! state, through the closure the filter builds its own rows with) but those of its satellite,
 //! the estimate fed back into its own state. The separation
@@ -28,12 +29,22 @@ use nalgebra::{DMatrix, DVector, Vector3};
 /// satellite (stream index) of each row.
 pub(super) type EpochRows = (DVector<f64>, DMatrix<f64>, Vec<f64>, Vec<usize>);
 
+/// How long (s) a sub-filter outlives its satellite's absence: a handheld receiver loses and
+/// regains satellites every few seconds, and a sub-filter reborn from the filter at each return
+/// would inherit whatever the satellite's fault had put into the filter — the one clean
+/// reference against it lost (a fault left unexcluded then went unflagged). A sub-filter
+/// without satellite g stays exact while g is away (it never used g); after this long away it
+/// is dropped, so the bank does not grow with every satellite ever seen.
+pub(super) const HOLD_ABSENT: f64 = 60.0;
+
 /// One sub-filter: a strapdown navigator without one satellite.
 #[derive(Clone)]
 struct Sub {
     s: NavState,
     kf: ErrorFilter<N_CLOCK>,
     mech: Mechaniser,
+    /// Last epoch time its satellite was in view (s).
+    seen: f64,
 }
 
 /// The sub-filters of one logged tight run, one per satellite in view (index into the
@@ -66,24 +77,33 @@ impl StrapdownBank {
         }
     }
 
-    /// A sub-filter (a copy of the filter's navigator, mechanised to the epoch and not yet
-    /// updated) for each satellite of `sats` without one; none for the others.
+    /// At epoch time `tk` (s): a sub-filter (a copy of the filter's navigator, mechanised to
+    /// the epoch and not yet updated) for each satellite of `sats` without one; a satellite
+    /// out of view keeps its sub-filter (still a monitored mode: the filter may hold what the
+    /// satellite gave it) until it has been away longer than [`HOLD_ABSENT`].
     pub(super) fn sync_view(
         &mut self,
         s: &NavState,
         kf: &ErrorFilter<N_CLOCK>,
         mech: &Mechaniser,
         sats: &[usize],
+        tk: f64,
     ) {
         for (g, sub) in self.subs.iter_mut().enumerate() {
-            if !sats.contains(&g) {
+            if sats.contains(&g) {
+                match sub {
+                    Some(sub) => sub.seen = tk,
+                    None => {
+                        *sub = Some(Sub {
+                            s: *s,
+                            kf: kf.clone(),
+                            mech: mech.clone(),
+                            seen: tk,
+                        })
+                    }
+                }
+            } else if sub.as_ref().is_some_and(|x| tk - x.seen > HOLD_ABSENT) {
                 *sub = None;
-            } else if sub.is_none() {
-                *sub = Some(Sub {
-                    s: *s,
-                    kf: kf.clone(),
-                    mech: mech.clone(),
-                });
             }
         }
     }
