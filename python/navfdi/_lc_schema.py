@@ -5,6 +5,8 @@ units → the SI form of the Rust core's ``LooselyCoupledSpec``, ``TightSpec`` a
 
 from __future__ import annotations
 
+import math
+
 from typing import Any
 
 from navfdi._errors import ScenarioError
@@ -131,8 +133,48 @@ def _tight_integrity(a: Any) -> dict[str, Any]:
     p = "tight.integrity"
     if not isinstance(a, dict):
         raise ScenarioError(f"{p}: expected a table, got {type(a).__name__}")
-    _check_keys(a, set(_INTEGRITY_KEYS), p)
+    _check_keys(a, {*_INTEGRITY_KEYS, "range_errors"}, p)
     return {key: _number(a[key], f"{p}.{key}") for key in _INTEGRITY_KEYS if key in a}
+
+
+def range_error_factor(raw: Any) -> float | str | None:
+    """``[tight.integrity] range_errors`` of a raw scenario: ``None`` (absent or ``"white"``:
+    the pseudorange noise as given), ``"overbound"`` (a variance factor still to be estimated
+    from a recorded log, :func:`navfdi.logs.range_error_overbound`) or the variance factor
+    (a number in [1, 10⁴]) by which the tight filter's pseudorange noise variance is
+    multiplied — a white-noise overbound of time-correlated range errors."""
+    t = raw.get("tight") if isinstance(raw, dict) else None
+    ig = t.get("integrity") if isinstance(t, dict) else None
+    if not isinstance(ig, dict) or "range_errors" not in ig:
+        return None
+    v = ig["range_errors"]
+    p = "tight.integrity.range_errors"
+    if v == "white":
+        return None
+    if v == "overbound":
+        return "overbound"
+    if isinstance(v, str) or isinstance(v, bool) or not isinstance(v, (int, float)) or not (1.0 <= v <= 1e4):
+        raise ScenarioError(f"{p} = {v!r}: use 'white', 'overbound' (estimated from a recorded log) or a variance factor in [1, 10000]")
+    return float(v)
+
+
+def apply_range_errors(raw: Any, core: dict[str, Any], logged: bool) -> None:
+    """Scale the tight filter's pseudorange noise (its sensor's first ``noise`` component, in
+    ``core``) by the square root of ``range_errors``'s variance factor; refuse
+    ``"overbound"`` on a simulated scenario (its range errors are white)."""
+    f = range_error_factor(raw)
+    if f is None:
+        return
+    if f == "overbound":
+        if not logged:
+            raise ScenarioError(
+                "tight.integrity.range_errors = 'overbound': the factor is estimated from a recorded RINEX log's residuals; "
+                "a simulated scenario's range errors are white (give a variance factor, e.g. 4, to study one)")
+        return
+    name = core.get("tight", {}).get("sensor")
+    for s in core.get("sensors", []):
+        if s.get("name") == name and s.get("noise"):
+            s["noise"] = [s["noise"][0] * math.sqrt(float(f)), *s["noise"][1:]]
 
 def _ultra_tight(u: Any) -> dict[str, Any]:
     """The ``[ultra_tight]`` table (paper 004)."""

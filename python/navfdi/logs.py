@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import datetime as _dt
 import gzip
+import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
@@ -22,7 +23,7 @@ if TYPE_CHECKING:
 
 from ._errors import ScenarioError
 
-__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH"]
+__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors"]
 
 #: Start of GPS time, 1980-01-06 00:00:00 GPST.
 GPS_EPOCH = _dt.datetime(1980, 1, 6)
@@ -345,3 +346,107 @@ def logged_source(sc: Any) -> Any:
         return _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"])
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+
+
+def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], max_lag: int = 2000) -> tuple[float, np.ndarray]:
+    """The integrated autocorrelation time ``τ = 1 + 2 Σ_{L≥1} ρ(L)`` (in epochs) of a set of
+    arcs of one stationary series: ``arcs`` are ``(epochs, values)`` pairs (integer epoch
+    indices, increasing; values with NaN where missing). ``ρ(L)`` is pooled over every pair of
+    samples ``L`` epochs apart within an arc (each arc's mean removed); the sum is truncated
+    by Geyer's initial positive sequence (pairs ``ρ(2m) + ρ(2m+1)`` summed while positive and
+    made non-increasing), which keeps the estimate from summing noise at long lags.
+
+    ``τ`` is the factor by which a white-noise model's variance must grow for the mean of a
+    long stretch of the series to have the variance the model gives it (for AR(1) with lag-1
+    correlation ρ, ``(1 + ρ)/(1 − ρ)``). Returns ``(τ, ρ)`` with ``ρ`` (K,) the correlations
+    used, ``ρ[0] = 1``. ``ValueError`` when the arcs hold fewer than 20 pairs at lag 1."""
+    clean = []
+    for e, v in arcs:
+        e, v = np.asarray(e, dtype=np.int64), np.asarray(v, dtype=float)
+        ok = np.isfinite(v)
+        e, v = e[ok], v[ok]
+        if len(v) >= 2:
+            dense = np.full(int(e[-1] - e[0]) + 1, np.nan)
+            dense[e - e[0]] = v - v.mean()
+            clean.append(dense)
+    if not clean:
+        raise ValueError("integrated_autocorrelation: no arc with two samples")
+    var_pairs = np.nansum([np.nansum(d * d) for d in clean])
+
+    def rho(lag: int) -> tuple[float, int]:
+        num, a2, b2, n = 0.0, 0.0, 0.0, 0
+        for d in clean:
+            if len(d) <= lag:
+                continue
+            a, b = d[:-lag], d[lag:]
+            ok = np.isfinite(a) & np.isfinite(b)
+            if ok.any():
+                num += float(a[ok] @ b[ok])
+                a2 += float(a[ok] @ a[ok])
+                b2 += float(b[ok] @ b[ok])
+                n += int(ok.sum())
+        return (num / math.sqrt(a2 * b2) if a2 > 0 and b2 > 0 else math.nan), n
+
+    r1, n1 = rho(1)
+    if n1 < 20 or not var_pairs > 0:
+        raise ValueError(f"integrated_autocorrelation: {n1} pairs one epoch apart; at least 20 are needed")
+    rhos = [1.0, r1]
+    total, prev = 0.0, math.inf
+    m = 0
+    while 2 * m + 1 <= max_lag:
+        while len(rhos) <= 2 * m + 1:
+            r, n = rho(len(rhos))
+            rhos.append(r if n >= 10 else math.nan)
+        g = rhos[2 * m] + rhos[2 * m + 1]
+        if not (g > 0):
+            break
+        g = min(g, prev)
+        total += g
+        prev = g
+        m += 1
+    return max(1.0, -1.0 + 2.0 * total), np.asarray(rhos[: max(2, 2 * m)])
+
+
+def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
+    """The variance factor of ``[tight.integrity] range_errors = "overbound"`` for a tight
+    scenario on a recorded RINEX log: the log is solved epoch by epoch
+    (:func:`navfdi.gnss_solve`, the scenario's systems and elevation mask, with FDE) and the
+    integrated autocorrelation time (:func:`integrated_autocorrelation`, in the log's epochs)
+    of the used satellites' normalised residuals ``r/σ``, one arc per satellite, is the
+    factor. Returns it (≥ 1) and the details (``rho1``, ``lags`` summed, ``arcs``,
+    ``samples``). The reference positions are not used."""
+    from navfdi.gnss import gnss_solve
+
+    data = sc.raw["source"]
+    base = scenario_folder(sc)
+    obs = file_in(data, base, "source.rinex_obs", "rinex_obs")
+    nav = file_in(data, base, "source.rinex_nav", "rinex_nav")
+    name = sc.core["tight"]["sensor"]
+    sensor = next(s for s in sc.core["sensors"] if s["name"] == name)
+    letters = {"gps": "G", "galileo": "E", "beidou": "C", "qzss": "J"}
+    rs = sensor.get("ranges", {})
+    systems = [letters[s] for s in rs.get("systems", ["gps"]) if s in letters]
+    sol = gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True)
+    st = sol.satellites
+    used = st[st["status"] == "used"]
+    arcs = []
+    for _, g in used.groupby("satellite", observed=True):
+        z = g["residual"].to_numpy(float) / g["sigma"].to_numpy(float)
+        arcs.append((g["epoch"].to_numpy(np.int64), z))
+    try:
+        tau, rho = integrated_autocorrelation(arcs)
+    except ValueError as e:
+        raise ScenarioError(f"tight.integrity.range_errors = 'overbound': {obs.name}: {e}") from None
+    return float(min(tau, 1e4)), {"rho1": float(rho[1]), "lags": int(len(rho) - 1), "arcs": len(arcs), "samples": int(sum(len(a[1]) for a in arcs))}
+
+
+def resolve_range_errors(sc: Any) -> Any:
+    """``sc`` with ``[tight.integrity] range_errors = "overbound"`` replaced by its estimated
+    variance factor (:func:`range_error_overbound`; the scenario's pseudorange noise is then
+    scaled by its square root), or ``sc`` itself."""
+    from navfdi._lc_schema import range_error_factor
+
+    if range_error_factor(sc.raw) != "overbound":
+        return sc
+    f, _ = range_error_overbound(sc)
+    return sc.with_values({"tight.integrity.range_errors": round(f, 3)})

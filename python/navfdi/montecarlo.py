@@ -701,6 +701,10 @@ def montecarlo(
         if not v:
             raise ScenarioError(f"sweep {k}: no values")
     combos = [dict(zip(sweep_lists, combo)) for combo in itertools.product(*sweep_lists.values())] if sweep_lists else [{}]
+    if "source" in base.raw:
+        from navfdi import logs
+
+        base = logs.resolve_range_errors(base)
     variant_names = base.variant_names()
     variant_scenarios = base.variants()  # [("base", base)] without variants
     points = [({"variant": name} if variant_names else {}) | combo for name, _ in variant_scenarios for combo in combos]

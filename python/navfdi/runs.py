@@ -15,6 +15,7 @@ false alarm was already raised when the fault began.
 
 from __future__ import annotations
 
+import math
 import platform
 import warnings
 from dataclasses import dataclass
@@ -183,11 +184,20 @@ class ScenarioRun(RunRecord):
             f"{i['hpl_ratio_mean']:.2f}/{i['vpl_ratio_mean']:.2f} of snapshot ARAIM's",
             f"  error > PL h/v: {i['misleading_h']}/{i['misleading_v']} epochs; with no alarm (hazardous) "
             f"{i['hazardous_h']}/{i['hazardous_v']}; largest error/PL {i['error_over_hpl_max']:.2f}/{i['error_over_vpl_max']:.2f}",
-        ] + ([
+        ] + self._range_error_lines() + ([
             f"  the separation test alarms at {i['alarm_rate_before_faults']:.0%} of the epochs before any fault (allocated "
             f"{(self.scenario.core['tight'].get('integrity') or {}).get('p_fa_vert', 3.9e-6):g}): the filter's white-noise "
             "model does not describe these errors (time-correlated on real receivers), so the levels are not usable here",
         ] if i["alarm_rate_before_faults"] > 0.01 else [])
+
+    def _range_error_lines(self) -> list[str]:
+        """The range-error overbound in force ([tight.integrity] range_errors), if any."""
+        from navfdi._lc_schema import range_error_factor
+
+        f = range_error_factor(self.scenario.raw)
+        if not isinstance(f, float):
+            return []
+        return [f"  range errors: white-noise overbound of their time correlation, pseudorange variance x {f:.3g} (sigma x {math.sqrt(f):.2f})"]
 
     def _satellite_lines(self) -> list[str]:
         tab = self.satellite_table()
@@ -825,6 +835,7 @@ def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun
     variant on the same ones (see :mod:`navfdi.logs`)."""
     from . import logs
 
+    sc = logs.resolve_range_errors(sc)
     src = logs.logged_source(sc)
     if sc.variant_names():
         variants = sc.variants()

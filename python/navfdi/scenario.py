@@ -32,7 +32,7 @@ from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, split
 from navfdi._fields import _bool, _check_keys, _count, _detectors, _list, _name, _need, _number, _str, _unit
-from navfdi._lc_schema import _loosely_coupled, _tight, _ultra_tight
+from navfdi._lc_schema import _loosely_coupled, _tight, _ultra_tight, apply_range_errors
 
 
 #: Component names and dimensions per sensor kind (order = measurement order).
@@ -541,6 +541,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
             raise ScenarioError(f"{other}: given, but architecture is {arch!r} (remove it, or set architecture = {other!r})")
     if arch == "tight":
         core["tight"] = _tight(_need(raw, "tight", ""))
+        apply_range_errors(raw, core, logged=False)
         return core
     if arch == "ultra_tight":
         core["ultra_tight"] = _ultra_tight(_need(raw, "ultra_tight", ""))
@@ -767,6 +768,7 @@ def _convert_logged(raw: Mapping[str, Any], core: dict[str, Any]) -> dict[str, A
             raise ScenarioError(f"{other}: given, but architecture is {arch!r} (remove it)")
     if arch == "tight":
         core["tight"] = _tight(_need(raw, "tight", ""))
+        apply_range_errors(raw, core, logged=True)
     else:
         core["loosely_coupled"] = _loosely_coupled(_need(raw, "loosely_coupled", ""))
     return core
