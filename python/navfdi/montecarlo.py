@@ -98,7 +98,9 @@ SUMMARY_FIGURES = [
 
 
 def wilson(successes: np.ndarray, trials: np.ndarray, z: float = Z95) -> tuple[np.ndarray, np.ndarray]:
-    """Wilson score interval for binomial proportions (vectorised); NaN where trials == 0."""
+    """Wilson score interval for binomial proportions (vectorised); NaN where trials == 0.
+    The bounds are clipped to [0, 1], and are exactly 0 at no success and 1 at n (the formula
+    gives them only up to rounding, which printed as ``-0.00000``)."""
     k = np.asarray(successes, dtype=float)
     n = np.asarray(trials, dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -106,7 +108,9 @@ def wilson(successes: np.ndarray, trials: np.ndarray, z: float = Z95) -> tuple[n
         denom = 1 + z**2 / n
         centre = (p + z**2 / (2 * n)) / denom
         half = z * np.sqrt(p * (1 - p) / n + z**2 / (4 * n**2)) / denom
-    return centre - half, centre + half
+    lo = np.where((k == 0) & (n > 0), 0.0, np.clip(centre - half, 0.0, 1.0))
+    hi = np.where((k == n) & (n > 0), 1.0, np.clip(centre + half, 0.0, 1.0))
+    return lo, hi
 
 
 def parse_sweep(items: Iterable[str]) -> dict[str, list[Any]]:
