@@ -148,49 +148,47 @@ pub struct IntegrityMetrics {
     pub sum_vpl: f64,
 }
 
+/// Whether epoch `k` of `rec` (error row `row`) is scored against the protection levels: both
+/// levels and the position error are finite.
+fn is_scored(ir: &crate::record::IntegrityRecord, k: usize, row: &[f64]) -> bool {
+    ir.hpl[k].is_finite() && ir.vpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite())
+}
+
+/// The mean position error (east, north, up, m) of `rec` over its scored epochs; `None`
+/// without protection levels or scored epochs.
+fn mean_position_error(rec: &RunRecord) -> Option<[f64; 3]> {
+    let ir = rec.integrity.as_ref()?;
+    let (mut sum, mut n) = ([0.0; 3], 0usize);
+    for (k, row) in rec.error.chunks(9).enumerate() {
+        if is_scored(ir, k, row) {
+            for q in 0..3 {
+                sum[q] += row[6 + q];
+            }
+            n += 1;
+        }
+    }
+    (n > 0).then(|| sum.map(|v| v / n as f64))
+}
+
 /// The protection levels of `rec` (when it has them) against its position error (m,
-/// columns pos_e, pos_n, pos_u of [`RunRecord::error`]; on recorded logs about the run's mean
-/// offset to the reference outside its fault windows, as the errors' own figures): counts of
+/// columns pos_e, pos_n, pos_u of [`RunRecord::error`]; on recorded logs about the
+/// reference's datum: [`RunRecord::datum`], else the run's own mean offset): counts of
 /// misleading and hazardously misleading epochs, the worst error-to-level ratios, and the
 /// filter levels beside the snapshot levels of the same epochs.
 pub fn integrity_metrics(rec: &RunRecord) -> Option<IntegrityMetrics> {
     let ir = rec.integrity.as_ref()?;
     let mut m = IntegrityMetrics::default();
-    let scored = |k: usize, row: &[f64]| {
-        ir.hpl[k].is_finite() && ir.vpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite())
-    };
     // On recorded logs the reference has a datum of its own (walk_tc's is 8 m off): the errors
-    // are taken about it — the fault-free run's mean offset when the record carries it
-    // (`datum`), else the run's mean east, north and up offset over the epochs outside the
-    // fault windows (a fault's own error must not move the datum; all epochs if none is).
-    let mut offset = rec.datum.unwrap_or([0.0; 3]);
-    if !rec.nav.is_empty() && rec.datum.is_none() {
-        let in_fault = |k: usize| {
-            rec.fault_windows
-                .iter()
-                .any(|w| rec.t[k] >= w[0] && rec.t[k] < w[1])
-        };
-        let outside = rec
-            .error
-            .chunks(9)
-            .enumerate()
-            .any(|(k, row)| scored(k, row) && !in_fault(k));
-        let mut n = 0usize;
-        for (k, row) in rec.error.chunks(9).enumerate() {
-            if scored(k, row) && !(outside && in_fault(k)) {
-                n += 1;
-                for q in 0..3 {
-                    offset[q] += row[6 + q];
-                }
-            }
-        }
-        if n > 0 {
-            offset = offset.map(|v| v / n as f64);
-        }
-    }
+    // are taken about it — the fault-free pass's mean offset a logged run with faults carries
+    // ([`logged_datum`]), else (no fault to move it) the run's own.
+    let offset = match rec.datum {
+        Some(d) => d,
+        None if !rec.nav.is_empty() => mean_position_error(rec).unwrap_or([0.0; 3]),
+        None => [0.0; 3],
+    };
     for (k, row) in rec.error.chunks(9).enumerate() {
         let (hpl, vpl) = (ir.hpl[k], ir.vpl[k]);
-        if !scored(k, row) {
+        if !is_scored(ir, k, row) {
             continue;
         }
         let hor = (row[6] - offset[0]).hypot(row[7] - offset[1]);
@@ -487,20 +485,13 @@ pub fn run_logged_chunk(
     let one = |i: u64| -> Result<RunMetrics> {
         cancel.check()?;
         let run_spec = spec.drawn(seed, i);
-        let meas = src.measurements(&run_spec);
-        let streams = crate::stream::Streams {
-            models: &src.models,
-            meas: &meas,
-            reference: Some(&src.reference),
-            seed,
-            stream: i,
-        };
-        let rec = run_architecture(&run_spec, &streams, true, keep.contains(&i), cancel).map_err(
-            |e| match e {
-                Error::Cancelled => Error::Cancelled,
-                e => Error::Invalid(format!("run {i}: {e}")),
-            },
-        )?;
+        let rec =
+            run_logged(src, &run_spec, seed, i, keep.contains(&i), cancel).map_err(
+                |e| match e {
+                    Error::Cancelled => Error::Cancelled,
+                    e => Error::Invalid(format!("run {i}: {e}")),
+                },
+            )?;
         let rec = RunRecord { datum, ..rec };
         let mut m = metrics_of(&run_spec, i, &rec, &cells);
         if keep.contains(&i) {
@@ -528,28 +519,29 @@ pub fn logged_datum(
     }
     let mut clean = spec.clone();
     clean.faults.clear();
-    let meas = src.measurements(&clean);
+    let rec = run_logged(src, &clean, 0, 0, false, cancel)?;
+    Ok(mean_position_error(&rec))
+}
+
+/// `spec` (its faults injected) on the recorded measurements of `src`, with isolation; the
+/// noise stream `(seed, stream)`; `keep`: record every series.
+fn run_logged(
+    src: &crate::logs::LoggedSource,
+    spec: &ScenarioSpec,
+    seed: u64,
+    stream: u64,
+    keep: bool,
+    cancel: &Cancel,
+) -> Result<RunRecord> {
+    let meas = src.measurements(spec);
     let streams = crate::stream::Streams {
         models: &src.models,
         meas: &meas,
         reference: Some(&src.reference),
-        seed: 0,
-        stream: 0,
+        seed,
+        stream,
     };
-    let rec = run_architecture(&clean, &streams, true, false, cancel)?;
-    let Some(ir) = rec.integrity.as_ref() else {
-        return Ok(None);
-    };
-    let (mut sum, mut n) = ([0.0; 3], 0usize);
-    for (k, row) in rec.error.chunks(9).enumerate() {
-        if ir.hpl[k].is_finite() && row[6..9].iter().all(|v| v.is_finite()) {
-            for q in 0..3 {
-                sum[q] += row[6 + q];
-            }
-            n += 1;
-        }
-    }
-    Ok((n > 0).then(|| sum.map(|v| v / n as f64)))
+    run_architecture(spec, &streams, true, keep, cancel)
 }
 
 /// One run: simulate, filter with isolation, reduce.
@@ -680,8 +672,9 @@ mod tests {
     use crate::record::{IntegrityRecord, RunRecord};
 
     /// A logged run's record: 100 epochs at 1 s, a constant reference datum offset of
-    /// (6, −4, 2) m, plus `fault` m east inside [40, 80) s; levels HPL 3 m, VPL 4 m.
-    fn logged(fault: f64, windows: Vec<[f64; 2]>) -> RunRecord {
+    /// (6, −4, 2) m, plus `fault` m east inside [40, 80) s; levels HPL 3 m, VPL 4 m; `datum`
+    /// as a fault-free pass would give it.
+    fn logged(fault: f64, datum: Option<[f64; 3]>) -> RunRecord {
         let t: Vec<f64> = (0..100).map(f64::from).collect();
         let mut error = Vec::new();
         for &tk in &t {
@@ -697,7 +690,7 @@ mod tests {
             t,
             error,
             nav: vec![0.0; 100],
-            fault_windows: windows,
+            datum,
             integrity: Some(IntegrityRecord {
                 hpl: vec![3.0; 100],
                 vpl: vec![4.0; 100],
@@ -712,30 +705,22 @@ mod tests {
     }
 
     #[test]
-    fn the_datum_of_a_logged_run_is_taken_outside_its_fault_windows() {
+    fn a_logged_run_is_scored_about_the_fault_free_datum() {
         // The fault's 10 m east error is misleading at its 40 epochs and nowhere else: the
-        // datum comes from the 60 epochs outside it.
-        let m = integrity_metrics(&logged(10.0, vec![[40.0, 80.0]])).unwrap();
+        // datum is the fault-free pass's.
+        let m = integrity_metrics(&logged(10.0, Some([6.0, -4.0, 2.0]))).unwrap();
         assert_eq!((m.epochs, m.mi_h, m.mi_v, m.hmi_h), (100, 40, 0, 40));
         assert!(
             (m.max_ratio_h - 10.0 / 3.0).abs() < 1e-12,
             "{}",
             m.max_ratio_h
         );
-        // Taken over every epoch (as before), the fault would move the datum 4 m east and
-        // make the 60 clean epochs misleading too.
-        let all = integrity_metrics(&logged(10.0, vec![])).unwrap();
+        // Taken from the faulted run itself (as before), the fault would move the datum 4 m
+        // east and make the 60 clean epochs misleading too.
+        let all = integrity_metrics(&logged(10.0, None)).unwrap();
         assert_eq!(all.mi_h, 100);
-        // A fault-free pass's datum, when the record carries one, is used as it is (here the
-        // true one, with no windows to go by).
-        let given = integrity_metrics(&RunRecord {
-            datum: Some([6.0, -4.0, 2.0]),
-            ..logged(10.0, vec![])
-        })
-        .unwrap();
-        assert_eq!((given.mi_h, given.hmi_h), (40, 40));
-        // No fault: the datum removed, nothing misleading.
-        let clean = integrity_metrics(&logged(0.0, vec![[40.0, 80.0]])).unwrap();
+        // No fault (and so no datum carried): the run's own mean removed, nothing misleading.
+        let clean = integrity_metrics(&logged(0.0, None)).unwrap();
         assert_eq!((clean.mi_h, clean.mi_v), (0, 0));
         assert!(clean.max_ratio_h < 1e-12 && clean.max_ratio_v < 1e-12);
     }

@@ -180,8 +180,6 @@ pub struct RunRecord {
     /// Per fault of the scenario: whether it ever reached a measurement
     /// ([`crate::stream::faults_applied`]).
     pub faults_applied: Vec<bool>,
-    /// Per fault of the scenario run (drawn faults resolved): its window `[start, end)` (s).
-    pub fault_windows: Vec<[f64; 2]>,
     /// On recorded logs with faults: the mean position error (east, north, up, m) of the same
     /// filter on the same log without them ([`crate::montecarlo::logged_datum`]) — the
     /// reference's own datum, against which the integrity metrics score the errors.
@@ -365,7 +363,6 @@ impl RunRecord {
             fused_alt: Vec::new(),
             fusion: None,
             faults_applied: crate::stream::faults_applied(spec, models),
-            fault_windows: spec.faults.iter().map(|f| [f.start, f.end]).collect(),
             datum: None,
             nav: Vec::new(),
             integrity: None,
