@@ -81,13 +81,10 @@ def resolve_integrity(spec: str | os.PathLike[str] | IntegritySettings) -> Integ
     if isinstance(spec, IntegritySettings):
         return spec
     text = os.fspath(spec)
-    if text in LIMITS:
-        alloc, limits = allocation_by_name(text)
-        return IntegritySettings(text, alloc, dict(limits), Ism())
-    if text.endswith(".toml") or Path(text).is_file():
+    if text not in LIMITS and (text.endswith(".toml") or Path(text).is_file()):
         return load_allocation_file(text)
-    allocation_by_name(text)  # raises, naming the known ones
-    raise AssertionError("unreachable")
+    alloc, limits = allocation_by_name(text)  # an unknown name raises, naming the known ones
+    return IntegritySettings(text, alloc, dict(limits), Ism())
 
 
 def load_allocation_file(path: str | os.PathLike[str]) -> IntegritySettings:

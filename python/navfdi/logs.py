@@ -371,7 +371,6 @@ def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], ma
             clean.append(dense)
     if not clean:
         raise ValueError("integrated_autocorrelation: no arc with two samples")
-    var_pairs = np.nansum([np.nansum(d * d) for d in clean])
 
     def rho(lag: int) -> tuple[float, int]:
         num, a2, b2, n = 0.0, 0.0, 0.0, 0
@@ -388,8 +387,10 @@ def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], ma
         return (num / math.sqrt(a2 * b2) if a2 > 0 and b2 > 0 else math.nan), n
 
     r1, n1 = rho(1)
-    if n1 < 20 or not var_pairs > 0:
+    if n1 < 20:
         raise ValueError(f"integrated_autocorrelation: {n1} pairs one epoch apart; at least 20 are needed")
+    if not math.isfinite(r1):
+        raise ValueError("integrated_autocorrelation: the series does not vary")
     rhos = [1.0, r1]
     total, prev = 0.0, math.inf
     m = 0
