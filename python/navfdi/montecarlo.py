@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core, _json
+from navfdi.record import integrity_figures
 from navfdi.scenario import NeverAppliedWarning, Scenario, ScenarioError, ScenarioTooLarge, load_scenario
 
 Z95 = statistics.NormalDist().inv_cdf(0.975)
@@ -361,27 +362,23 @@ class Campaign:
             return pd.DataFrame(columns=cols)
         per_run = df.drop_duplicates(["point", "run"])
         rows = []
+        sums = ["mi_h_epochs", "mi_v_epochs", "hmi_h_epochs", "hmi_v_epochs", "hpl_sum", "vpl_sum", "hpl_ratio_sum", "vpl_ratio_sum"]
         for point, g in per_run.groupby("point", sort=True):
-            ep = int(g["pl_epochs"].sum())
-            cmp_ = int(g["pl_compared_epochs"].sum())
-            div = lambda a, b: a / b if b else math.nan  # noqa: E731
+            f = integrity_figures({
+                **{k: g[k].sum() for k in sums},
+                "epochs": g["pl_epochs"].sum(),
+                "alarm_epochs": g["pl_alarm_epochs"].sum(),
+                "compared_epochs": g["pl_compared_epochs"].sum(),
+                "error_over_hpl_max": g["error_over_hpl_max"].max(),
+                "error_over_vpl_max": g["error_over_vpl_max"].max(),
+            })
+            ep = f["epochs"]
             rows.append({
                 **{c: self.points[int(point)][c] for c in self.sweep_columns},
                 "runs": len(g),
-                "epochs": ep,
-                "misleading_h": int(g["mi_h_epochs"].sum()),
-                "misleading_v": int(g["mi_v_epochs"].sum()),
-                "hazardous_h": int(g["hmi_h_epochs"].sum()),
-                "hazardous_v": int(g["hmi_v_epochs"].sum()),
-                "hmi_rate_h": div(int(g["hmi_h_epochs"].sum()), ep),
-                "hmi_rate_v": div(int(g["hmi_v_epochs"].sum()), ep),
-                "alarm_epochs": int(g["pl_alarm_epochs"].sum()),
-                "error_over_hpl_max": float(g["error_over_hpl_max"].max()),
-                "error_over_vpl_max": float(g["error_over_vpl_max"].max()),
-                "hpl_mean": div(float(g["hpl_sum"].sum()), ep),
-                "vpl_mean": div(float(g["vpl_sum"].sum()), ep),
-                "hpl_ratio_mean": div(float(g["hpl_ratio_sum"].sum()), cmp_),
-                "vpl_ratio_mean": div(float(g["vpl_ratio_sum"].sum()), cmp_),
+                **f,
+                "hmi_rate_h": f["hazardous_h"] / ep if ep else math.nan,
+                "hmi_rate_v": f["hazardous_v"] / ep if ep else math.nan,
             })
         return pd.DataFrame(rows, columns=cols)
 

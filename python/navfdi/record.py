@@ -16,6 +16,32 @@ from navfdi.scenario import Scenario
 ERROR_COLUMNS = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "pos_e", "pos_n", "pos_u"]
 
 
+def integrity_figures(m: Any) -> dict[str, float]:
+    """The filter-integrity figures of ``run`` and ``montecarlo`` from the Rust metrics
+    engine's sums over one run or many (``m[name]``: ``epochs``, ``mi_h_epochs``,
+    ``mi_v_epochs``, ``hmi_h_epochs``, ``hmi_v_epochs``, ``alarm_epochs``,
+    ``compared_epochs``, ``hpl_sum``, ``vpl_sum``, ``hpl_ratio_sum``, ``vpl_ratio_sum`` and the
+    maxima ``error_over_hpl_max``, ``error_over_vpl_max``): ``epochs``, ``misleading_h/v``,
+    ``hazardous_h/v``, ``alarm_epochs``, ``error_over_hpl/vpl_max``, ``hpl_mean``,
+    ``vpl_mean`` (m) and ``hpl_ratio_mean``, ``vpl_ratio_mean`` (filter / snapshot level)."""
+    div = lambda a, b: float(a) / b if b else float("nan")  # noqa: E731
+    ep, cmp_ = int(m["epochs"]), int(m["compared_epochs"])
+    return {
+        "epochs": ep,
+        "misleading_h": int(m["mi_h_epochs"]),
+        "misleading_v": int(m["mi_v_epochs"]),
+        "hazardous_h": int(m["hmi_h_epochs"]),
+        "hazardous_v": int(m["hmi_v_epochs"]),
+        "alarm_epochs": int(m["alarm_epochs"]),
+        "error_over_hpl_max": float(m["error_over_hpl_max"]),
+        "error_over_vpl_max": float(m["error_over_vpl_max"]),
+        "hpl_mean": div(m["hpl_sum"], ep),
+        "vpl_mean": div(m["vpl_sum"], ep),
+        "hpl_ratio_mean": div(m["hpl_ratio_sum"], cmp_),
+        "vpl_ratio_mean": div(m["vpl_ratio_sum"], cmp_),
+    }
+
+
 class RunRecord:
     """One run of a scenario: its records (with and without isolation) and accessors.
 

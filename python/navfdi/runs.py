@@ -27,7 +27,7 @@ import numpy as np
 from navfdi import _core, _json
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, window_alarm
 from navfdi._text import fit
-from navfdi.record import ERROR_COLUMNS, RunRecord
+from navfdi.record import ERROR_COLUMNS, RunRecord, integrity_figures
 from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
 
 #: What the columns of the per-fault tables mean (printed once after them).
@@ -146,33 +146,21 @@ class ScenarioRun(RunRecord):
         snapshot, mean over the epochs with both), ``alarm_rate_before_faults`` (share of the
         epochs before the first fault — all of them without faults — in which the separation
         test alarms; its allocation is ``P_FA``, 3.9e-6 by default). On recorded logs the errors are
-        taken about the run's mean offset to the reference (its own datum)."""
+        taken about the reference's own datum: the mean offset of a fault-free pass of the same
+        filter on the same log (the run's own without faults)."""
         it = self.record.get("integrity")
         if it is None or "metrics" not in it:
             return None
-        m = it["metrics"]
-        div = lambda a, b: float(a) / b if b else float("nan")  # noqa: E731
         mean = lambda v: float(np.nanmean(v)) if np.isfinite(v).any() else float("nan")  # noqa: E731
         t = np.asarray(self.t)
         first = min((f["start"] for f in self.scenario.faults()), default=np.inf)
         before = np.isfinite(np.asarray(it["hpl"], float)) & (t < first)
         alarm = np.asarray(it["alarm"], bool)
         return {
-            "epochs": int(m["epochs"]),
-            "misleading_h": int(m["mi_h_epochs"]),
-            "misleading_v": int(m["mi_v_epochs"]),
-            "hazardous_h": int(m["hmi_h_epochs"]),
-            "hazardous_v": int(m["hmi_v_epochs"]),
-            "alarm_epochs": int(m["alarm_epochs"]),
-            "error_over_hpl_max": float(m["error_over_hpl_max"]),
-            "error_over_vpl_max": float(m["error_over_vpl_max"]),
-            "hpl_mean": div(m["hpl_sum"], m["epochs"]),
-            "vpl_mean": div(m["vpl_sum"], m["epochs"]),
+            **integrity_figures(it["metrics"]),
             "hpl_snapshot_mean": mean(it["hpl_snapshot"]),
             "vpl_snapshot_mean": mean(it["vpl_snapshot"]),
-            "hpl_ratio_mean": div(m["hpl_ratio_sum"], m["compared_epochs"]),
-            "vpl_ratio_mean": div(m["vpl_ratio_sum"], m["compared_epochs"]),
-            "alarm_rate_before_faults": div(int((alarm & before).sum()), int(before.sum())),
+            "alarm_rate_before_faults": float((alarm & before).sum()) / before.sum() if before.any() else float("nan"),
         }
 
     def _integrity_lines(self) -> list[str]:
