@@ -126,7 +126,7 @@ def test_cli_run_writes_outputs(tmp_path):
     assert "fault cns-ramp on cns" in proc.stdout and "fault cns-step on cns" in proc.stdout
     assert "master attitude error RMS over 300–999 s (first fault to end of run), arcsec: isolation" in proc.stdout
     ev = pd.read_csv(out / "events.csv")
-    assert list(ev.columns) == ["variant", "subfilter", "detector", "alarm_start_s", "alarm_end_s", "fault_id", "fault_start_s", "fault_end_s", "delay_s"]
+    assert list(ev.columns) == ["variant", "subfilter", "detector", "alarm_start_s", "alarm_end_s", "tests", "fault_id", "fault_start_s", "fault_end_s", "delay_s"]
     assert set(ev.variant) == {"isolation", "no_isolation"}
     step = ev[(ev.variant == "isolation") & (ev.detector == "joint") & (ev.fault_id == "cns-step")]
     assert len(step) >= 1 and step.delay_s.min() <= 1

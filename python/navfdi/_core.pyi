@@ -526,22 +526,26 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
     ``federated`` and ``centralized`` may differ), isolation active. One record per variant
     (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
 
-def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]]) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]], tested: list[bool] | None = None) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """The one event-matching rule (used by ``run``, ``montecarlo`` and ``demo``): alarm
-    intervals of ``alarm`` (times ``t`` (T,), s) and the fault each detects. ``windows``: fault
-    windows ``(start, end)`` (s) sorted by start. An interval detects a fault when its onset
-    lies in ``[start, end + 1 s]`` (the latest-starting such fault); an alarm raised before a
-    fault began detects nothing. Returns ``(start_index, end_index, fault_index)``, each (K,),
-    with -1 for "never ended" and "no fault"."""
+    intervals of ``alarm`` (times ``t`` (T,), s) over the epochs ``tested`` (T,) (None: every
+    epoch; alarm flags at untested epochs are ignored and do not end an interval) and the
+    fault each detects. ``windows``: fault windows ``(start, end)`` (s) sorted by start. An
+    interval detects a fault when its onset lies in ``[start, end + 1 s]`` (the
+    latest-starting such fault); an alarm raised before a fault began detects nothing. Returns
+    ``(start_index, end_index, tests, fault_index)``, each (K,): the first alarmed test, the
+    first passing test after it (-1: never ended), the tests the interval spans, and the fault
+    (-1: none)."""
 
 #: Seconds after a fault's end within which an alarm onset still detects it
 #: (``navfdi_core::metrics::GRACE``).
 DETECTION_GRACE: float
 
-def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float) -> tuple[bool, float]:
-    """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,):
-    whether the alarm was already raised when the window began (before the fault: reported,
-    not a detection), and the fraction of the window's epochs in alarm (NaN when none)."""
+def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float, tested: list[bool] | None = None) -> tuple[bool, float]:
+    """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,) and
+    the epochs ``tested`` (T,) (None: every epoch): whether the alarm was already raised at
+    the window's first test (raised at the test before: reported, not a detection), and the
+    share of the window's tests in alarm (NaN when none)."""
 
 def validate_scenario(spec_json: str) -> None:
     """Validate a scenario in its SI JSON form (see :mod:`navfdi.scenario`); raises

@@ -80,7 +80,7 @@ def _tight_strapdown(t: Any) -> dict[str, Any]:
 
 def _loosely_coupled(lc: Any) -> dict[str, Any]:
     p = "loosely_coupled"
-    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate"}, p)
+    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate", "convergence"}, p)
     out: dict[str, Any] = {
         **_strapdown(lc, p),
         "sensors": [],
@@ -88,6 +88,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
         "isolate_components": _bool(lc.get("isolate_components", True), f"{p}.isolate_components"),
         "accommodate": _bool(lc.get("accommodate", True), f"{p}.accommodate"),
         "isolate": _bool(lc.get("isolate", True), f"{p}.isolate"),
+        "convergence": _number(lc.get("convergence", 3.0), f"{p}.convergence"),
     }
     for i, a in enumerate(_list(_need(lc, "sensors", p), f"{p}.sensors")):
         q = f"{p}.sensors[{i}]"

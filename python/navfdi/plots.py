@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from navfdi._intervals import alarm_intervals, tested_epochs
 from navfdi.scenario import fault_on
 
 if TYPE_CHECKING:
@@ -44,32 +45,11 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     paths = []
     t = run.t
     faults = run.scenario.faults()
-    for s in run.record["subfilters"]:
-        sub = s["sensor"]
-        mine = [f for f in faults if fault_on(f, sub)]
-        if not mine and ("nav" not in run.record or sub in ("zupt", "nhc")):
-            continue
-        for d in s["detectors"]:
-            fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
-            stat = _statistic_axes(ax, t, d, mine)
-            iso = run.isolated(sub)
-            if np.any(iso):
-                by = _isolating_detector(run, sub)
-                label = f"{sub} isolated (by {by})" if by else f"{sub} isolated"
-                if run.scenario.core.get("architecture") == "tight":
-                    label = f"a satellite excluded (by {by})" if by else "a satellite excluded"
-                ax.fill_between(t, 0, 0.04, where=iso, color="tab:orange", step="mid", label=label, transform=ax.get_xaxis_transform())
-            ax.set_ylim(1e-3, max(1e2, np.nanmax(stat) * 2))
-            ax.set_xlabel("time [s]")
-            ax.set_ylabel("statistic")
-            what = {"federated": "sub-filter", "tight": "satellites"}.get(run.scenario.core.get("architecture", "federated"), "sensor")
-            var = f", variant {run.variant}" if prefix else ""
-            ax.set_title(f"{run.scenario.name}{var}: {sub} {what}, detector {d['name']} (seed {run.seed}); faults shaded")
-            ax.legend(loc="upper left", fontsize=8, ncol=4)
-            p = out / f"{prefix}detector_{sub}_{d['name']}.png"
-            fig.savefig(p, dpi=110)
-            plt.close(fig)
-            paths.append(p)
+    for name, fig in detector_figures(run, prefix):
+        p = out / name
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
     if "mode" in run.record:
         fig, ax = plt.subplots(figsize=(9, 2.4), constrained_layout=True)
         ax.step(t, run.record["mode"], where="post", color="k", lw=1.0)
@@ -80,19 +60,6 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
         var = f", variant {run.variant}" if prefix else ""
         ax.set_title(f"{run.scenario.name}{var}: navigation mode (seed {run.seed})")
         p = out / f"{prefix}modes.png"
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
-        paths.append(p)
-    st = run.record.get("state_chi2")
-    if st is not None:
-        fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
-        _statistic_axes(ax, t, st, faults)
-        ax.set_xlabel("time [s]")
-        ax.set_ylabel("λ = βᵀV⁻¹β")
-        var = f", variant {run.variant}" if prefix else ""
-        ax.set_title(f"{run.scenario.name}{var}: state chi-square of the navigation solution (seed {run.seed}); faults shaded")
-        ax.legend(loc="upper left", fontsize=8, ncol=3)
-        p = out / f"{prefix}detector_navigation_state_chi2.png"
         fig.savefig(p, dpi=110)
         plt.close(fig)
         paths.append(p)
@@ -159,6 +126,61 @@ def plot_run(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     if run.record.get("integrity") is not None:
         paths.append(_plot_protection_levels(run, out, prefix, plt))
     return paths
+
+
+def detector_figures(run: RunRecord, prefix: str = ""):
+    """The detector figures of :func:`plot_run`, as ``(file name, matplotlib Figure)`` pairs
+    (the caller saves and closes them): ``{prefix}detector_{sub}_{det}.png`` for every
+    detector of every channel with faults (every GNSS channel on recorded logs) and
+    ``{prefix}detector_navigation_state_chi2.png`` with ``[state_chi2]``. Each draws the
+    statistic and threshold at the epochs the detector tested (line label ``statistic`` and
+    ``threshold``; a sensor slower than the record is tested only at its own epochs), alarms
+    as red dots, exclusions or isolations as orange spans over the channel's tests, fault
+    windows shaded; a detector that never tested says so in the frame."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = run.t
+    faults = run.scenario.faults()
+    var = f", variant {run.variant}" if prefix else ""
+    for s in run.record["subfilters"]:
+        sub = s["sensor"]
+        mine = [f for f in faults if fault_on(f, sub)]
+        if not mine and ("nav" not in run.record or sub in ("zupt", "nhc")):
+            continue
+        for d in s["detectors"]:
+            fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
+            stat = _statistic_axes(ax, t, d, mine)
+            iso = np.asarray(run.isolated(sub), bool)
+            if iso.any():
+                by = _isolating_detector(run, sub)
+                label = f"{sub} isolated (by {by})" if by else f"{sub} isolated"
+                if run.scenario.core.get("architecture") == "tight":
+                    label = f"a satellite excluded (by {by})" if by else "a satellite excluded"
+                tested = np.asarray(s["dof"]) > 0 if "dof" in s else None
+                for j, iv in enumerate(alarm_intervals(iso, t, tested)):
+                    end = iv.end if iv.end is not None else float(t[-1])
+                    ax.axvspan(iv.start, max(end, iv.start + 1e-9), ymin=0, ymax=0.04, color="tab:orange", lw=0, label=label if j == 0 else None)
+            finite = stat[np.isfinite(stat)]
+            ax.set_ylim(1e-3, max(1e2, float(finite.max()) * 2 if finite.size else 1e2))
+            ax.set_xlim(float(t[0]), float(t[-1]))
+            ax.set_xlabel("time [s]")
+            ax.set_ylabel("statistic")
+            what = {"federated": "sub-filter", "tight": "satellites"}.get(run.scenario.core.get("architecture", "federated"), "sensor")
+            ax.set_title(f"{run.scenario.name}{var}: {sub} {what}, detector {d['name']} (seed {run.seed}); faults shaded")
+            ax.legend(loc="upper left", fontsize=8, ncol=4)
+            yield f"{prefix}detector_{sub}_{d['name']}.png", fig
+    st = run.record.get("state_chi2")
+    if st is not None:
+        fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
+        _statistic_axes(ax, t, st, faults)
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("λ = βᵀV⁻¹β")
+        ax.set_title(f"{run.scenario.name}{var}: state chi-square of the navigation solution (seed {run.seed}); faults shaded")
+        ax.legend(loc="upper left", fontsize=8, ncol=3)
+        yield f"{prefix}detector_navigation_state_chi2.png", fig
 
 
 def _plot_protection_levels(run: RunRecord, out: Path, prefix: str, plt: Any) -> Path:
@@ -288,15 +310,26 @@ def _plot_altitude(run: RunRecord, out: Path, prefix: str, plt: Any) -> list[Pat
 
 
 def _statistic_axes(ax: Any, t: np.ndarray, d: dict[str, Any], faults: list[dict[str, Any]]) -> np.ndarray:
-    """Shade the fault windows and draw a detector's statistic (log scale, floored at 1e-6),
-    threshold and alarm epochs; returns the plotted statistic."""
+    """Shade the fault windows and draw a detector's statistic (log scale, floored at 1e-6)
+    and threshold at the epochs it tested (joined across the untested epochs between them;
+    markers when the tests are sparse), and its alarmed tests; returns the statistic at every
+    epoch (NaN where untested). Writes "no test in this run" in the frame when there is
+    none."""
     for f in faults:
         ax.axvspan(f["start"], f["end"], color="tab:red", alpha=0.12, lw=0)
-    stat = np.where(np.isfinite(d["statistic"]), np.maximum(d["statistic"], 1e-6), np.nan)
-    ax.semilogy(t, stat, lw=0.8, color="tab:blue", label="statistic")
-    ax.semilogy(t, d["threshold"], lw=1.0, color="k", ls="--", label="threshold")
-    al = d["alarm"].astype(bool)
-    ax.scatter(t[al], stat[al], s=4, color="tab:red", label="alarm", zorder=3)
+    raw = np.asarray(d["statistic"], float)
+    tested = tested_epochs(raw)
+    stat = np.where(tested, np.maximum(np.nan_to_num(raw, posinf=1e300), 1e-6), np.nan)
+    if not tested.any():
+        ax.text(0.5, 0.5, "no test in this run (the sensor never measured)", ha="center", va="center", transform=ax.transAxes)
+        ax.set_yscale("log")
+        return stat
+    tt = t[tested]
+    marker = "." if tt.size <= 600 else None
+    ax.semilogy(tt, stat[tested], lw=0.8, color="tab:blue", marker=marker, ms=3, label="statistic")
+    ax.semilogy(tt, np.asarray(d["threshold"], float)[tested], lw=1.0, color="k", ls="--", label="threshold")
+    al = np.asarray(d["alarm"], bool) & tested
+    ax.scatter(t[al], stat[al], s=6, color="tab:red", label="alarm", zorder=3)
     return stat
 
 

@@ -46,9 +46,10 @@ def plot_logged(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     the reference's scored epochs grey, shifted by the run's mean offset when the error is
     mostly that offset; outages and fault windows highlighted),
     ``{prefix}errors.png`` (east, north, up error against the reference at the epochs it
-    scores, m, with the filter's ±3σ; outages grey, faults red) and ``{prefix}biases.png``
-    (estimated gyro biases in deg/h and accelerometer biases in mg with ±1σ). Returns the
-    paths written."""
+    scores, m, with the filter's ±3σ; outages grey, faults red), ``{prefix}biases.png``
+    (estimated gyro biases in deg/h and accelerometer biases in mg with ±1σ) and
+    ``{prefix}attitude.png`` (roll, pitch, heading in degrees; the course of the velocity
+    beside the heading above 2 m/s). Returns the paths written."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -122,6 +123,30 @@ def plot_logged(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
     axes[0].set_title(f"{run.scenario.name}{var}: estimated IMU biases (body axes) with ±1σ", fontsize=10)
     axes[-1].set_xlabel("time [s]")
     paths.append(out / f"{prefix}biases.png")
+    fig.savefig(paths[-1], dpi=110)
+    plt.close(fig)
+
+    # Attitude: roll, pitch, heading, and the course of the velocity (which follows the GNSS
+    # velocity) where the speed is above 2 m/s: a car's heading follows its course.
+    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
+    deg = np.degrees
+    for ax, c in zip(axes[:2], ("roll", "pitch")):
+        _shade(ax, run)
+        ax.plot(t, deg(nav[:, cols.index(c)]), lw=0.9, color="tab:blue", label=c)
+        ax.set_ylabel(f"{c} [deg]")
+        ax.grid(alpha=0.3)
+    _shade(axes[2], run)
+    ve, vn = nav[:, cols.index("vel_e")], nav[:, cols.index("vel_n")]
+    fast = np.hypot(ve, vn) > 2.0
+    axes[2].plot(t, deg(nav[:, cols.index("yaw")]) % 360, ".", ms=1.5, color="tab:blue", label="heading")
+    axes[2].plot(t[fast], deg(np.arctan2(ve[fast], vn[fast])) % 360, ".", ms=1.5, color="tab:orange", label="course of the velocity (> 2 m/s)")
+    axes[2].set_ylabel("heading [deg]")
+    axes[2].set_ylim(0, 360)
+    axes[2].grid(alpha=0.3)
+    axes[2].legend(fontsize=8, loc="upper left", markerscale=6)
+    axes[0].set_title(f"{run.scenario.name}{var}: attitude of the body frame (forward-right-down)", fontsize=10)
+    axes[-1].set_xlabel("time [s]")
+    paths.append(out / f"{prefix}attitude.png")
     fig.savefig(paths[-1], dpi=110)
     plt.close(fig)
     return paths

@@ -25,8 +25,9 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core, _json
-from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, window_alarm
+from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, tested_epochs, window_alarm
 from navfdi._text import fit
+from navfdi.consistency import consistency, format_consistency, no_reference_line
 from navfdi.record import ERROR_COLUMNS, RunRecord, integrity_figures
 from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
 
@@ -224,15 +225,19 @@ class ScenarioRun(RunRecord):
         return sorted((f for f in self.scenario.faults() if fault_on(f, sensor)), key=lambda f: f["start"])
 
     def events(self):
-        """One row per alarm interval: ``subfilter, detector, alarm_start, alarm_end, fault_id,
-        fault_start, fault_end, delay`` (times in s; empty where no fault matches or the alarm
-        never ends); the state chi-square test (``[state_chi2]``) as subfilter ``navigation``,
-        detector ``state_chi2``, matched to every fault. Returns a pandas DataFrame."""
+        """One row per alarm interval: ``subfilter, detector, alarm_start, alarm_end, tests,
+        fault_id, fault_start, fault_end, delay`` (times in s; ``alarm_start`` is the first
+        alarmed test, ``alarm_end`` the first passing test after it, empty when the alarm never
+        ends; ``tests`` the detector's tests the interval spans — a sensor slower than the
+        record is tested only at its own epochs, and the epochs between its tests neither end
+        an interval nor count; fault columns empty where no fault matches); the state
+        chi-square test (``[state_chi2]``) as subfilter ``navigation``, detector
+        ``state_chi2``, matched to every fault. Returns a pandas DataFrame."""
         import pandas as pd
 
         rows = []
-        def add(channel: str, detector: str, alarm: np.ndarray, faults: list[dict[str, Any]]) -> None:
-            for iv, fi in self._events(alarm, faults):
+        def add(channel: str, detector: str, d: dict[str, Any], faults: list[dict[str, Any]]) -> None:
+            for iv, fi in self._events(d, faults):
                 f = None if fi is None else faults[fi]
                 rows.append(
                     {
@@ -240,6 +245,7 @@ class ScenarioRun(RunRecord):
                         "detector": detector,
                         "alarm_start": iv.start,
                         "alarm_end": iv.end,
+                        "tests": iv.tests,
                         "fault_id": f["id"] if f else None,
                         "fault_start": f["start"] if f else None,
                         "fault_end": f["end"] if f else None,
@@ -250,27 +256,28 @@ class ScenarioRun(RunRecord):
         for s in self.record["subfilters"]:
             faults = self._faults_on(s["sensor"])
             for d in s["detectors"]:
-                add(s["sensor"], d["name"], d["alarm"], faults)
+                add(s["sensor"], d["name"], d, faults)
         st = self.record.get("state_chi2")
         if st is not None:
             # The state test watches the whole navigation solution: matched to every fault.
-            add("navigation", "state_chi2", st["alarm"], sorted(self.scenario.faults(), key=lambda f: f["start"]))
-        cols = ["subfilter", "detector", "alarm_start", "alarm_end", "fault_id", "fault_start", "fault_end", "delay"]
+            add("navigation", "state_chi2", st, sorted(self.scenario.faults(), key=lambda f: f["start"]))
+        cols = ["subfilter", "detector", "alarm_start", "alarm_end", "tests", "fault_id", "fault_start", "fault_end", "delay"]
         df = pd.DataFrame(rows, columns=cols)
         for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
             df[c] = df[c].astype(float)
         return df
 
-    def _events(self, alarm: np.ndarray, faults: list[dict[str, Any]]) -> list[tuple[AlarmInterval, int | None]]:
-        """Alarm intervals with the index of the fault each detects (the Rust engine)."""
-        return match_events(alarm, self.t, [(f["start"], f["end"]) for f in faults])
+    def _events(self, d: dict[str, Any], faults: list[dict[str, Any]]) -> list[tuple[AlarmInterval, int | None]]:
+        """Alarm intervals of detector record ``d`` over its tests with the index of the fault
+        each detects (the Rust engine)."""
+        return match_events(d["alarm"], self.t, [(f["start"], f["end"]) for f in faults], tested_epochs(d["statistic"]))
 
     def fault_table(self) -> list[FaultMatch]:
         """Per fault and detector: detected at, cleared at, delay (the paper's Tables 2–4)."""
         out = []
         for s in self.record["subfilters"]:
             faults = self._faults_on(s["sensor"])
-            matched = {d["name"]: self._events(d["alarm"], faults) for d in s["detectors"]} if faults else {}
+            matched = {d["name"]: self._events(d, faults) for d in s["detectors"]} if faults else {}
             for fi, f in enumerate(faults):
                 for d in s["detectors"]:
                     ivs = [iv for iv, m in matched[d["name"]] if m == fi]
@@ -289,15 +296,16 @@ class ScenarioRun(RunRecord):
                     else:
                         det = clr = delay = None
                         note = "missed"
-                    at_onset, fraction = window_alarm(d["alarm"], self.t, f["start"], f["end"])
+                    tested = tested_epochs(d["statistic"])
+                    at_onset, fraction = window_alarm(d["alarm"], self.t, f["start"], f["end"], tested)
                     if at_onset and not ivs:
-                        since = [iv.start for iv in alarm_intervals(d["alarm"], self.t) if iv.start < f["start"] and (iv.end is None or iv.end > f["start"])]
+                        since = [iv.start for iv in alarm_intervals(d["alarm"], self.t, tested) if iv.start < f["start"] and (iv.end is None or iv.end > f["start"])]
                         note = f"missed: in alarm since {since[0]:g} s (before the fault)" if since else "missed: in alarm before the fault"
                     lasting = None
-                    last = self.t[self.t < f["end"]]
+                    last = self.t[(self.t < f["end"]) & tested]
                     if last.size:
                         tl = float(last[-1])
-                        for iv in alarm_intervals(d["alarm"], self.t):
+                        for iv in alarm_intervals(d["alarm"], self.t, tested):
                             if iv.start <= tl and (iv.end is None or iv.end > tl):
                                 lasting = iv.start
                     out.append(FaultMatch(f["id"], s["sensor"], d["name"], f["start"], f["end"], det, clr, delay, lasting, note, at_onset, fraction))
@@ -340,7 +348,11 @@ class ScenarioRun(RunRecord):
         if pl_lines:
             lines += pl_lines + [""]
         if "nav" in self.record:
+            lines += format_consistency(consistency(self)) + [""]
             e = self.errors()
+        if "nav" in self.record and not e["scored"]:
+            lines.append(no_reference_line(self.scenario))
+        elif "nav" in self.record:
             lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
             steady = self.steady_offset()
             if steady:
@@ -543,6 +555,7 @@ class ScenarioRun(RunRecord):
             "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": numpy.__version__},
             "faults": [m.__dict__ for m in self.fault_table()],
             "integrity": self.integrity(),
+            **({"consistency": consistency(self)} if "nav" in self.record else {}),
         }
 
     def write(self, out: str | Path, figures: bool = True) -> list[Path]:
@@ -674,6 +687,9 @@ class VariantRuns:
         if any(r.fault_table() for r in self.runs.values()):
             parts.append("\n".join(FAULT_TABLE_LEGEND) + "\n")
         err = self.errors()
+        if "hor_rms" in err.columns and not (err["scored"] > 0).any():
+            parts.append(no_reference_line(self.scenario) + "\n")
+            return fit("\n".join(parts))
         if "hor_rms" in err.columns:
             lines = ["navigation error per variant against the reference epochs not used as input: RMS / max"]
             lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")

@@ -2,34 +2,61 @@
 //! (events and per-fault tables), `navfdi montecarlo` (per-run metrics, [`crate::montecarlo`])
 //! and `navfdi demo` all use it.
 //!
+//! **Tested epochs are the unit.** A detector tests only at the epochs its sensor measures (a
+//! 1 Hz GNSS on a 4 Hz record is tested at one epoch in four); at the others its statistic is
+//! NaN ([`tested`]) and whatever alarm flag it carries there is ignored. Every per-epoch
+//! figure counts tests: the share of a fault's epochs in alarm, false alarms per epoch, the
+//! share of epochs excluded. An alarm interval runs from the first alarmed test to the first
+//! passing test after it; untested epochs between them do not end it.
+//!
 //! Rule: a fault with window `[f_start, f_end)` is **detected** by an alarm interval whose
-//! **onset** (its first epoch) lies in `[f_start, f_end + GRACE]` ([`GRACE`] seconds after the
+//! **onset** (its first test) lies in `[f_start, f_end + GRACE]` ([`GRACE`] seconds after the
 //! fault's end still count: a detector's latency). When several faults' windows hold the
 //! onset, it belongs to the one that started last (the most recent change). An alarm raised
 //! before the fault began and still running at its start is *not* a detection: it is
-//! reported separately ("in alarm at onset"), and the fraction of the fault's epochs spent
-//! in alarm is reported beside the detection. Delay = onset − `f_start` (never negative).
+//! reported separately ("in alarm at onset"), and the share of the fault's tests in alarm is
+//! reported beside the detection. Delay = onset − `f_start` (never negative).
 
 /// One alarm interval: epoch indices `[start, end)`; `end = None` if still in alarm at the
-/// last epoch.
+/// last test. `start` is the first alarmed test, `end` the first passing test after it.
 pub type Interval = (usize, Option<usize>);
 
-/// Alarm intervals of a per-epoch alarm sequence.
+/// The epochs at which a detector tested: its statistic is not NaN there (an untested epoch
+/// records NaN; a gross fault's statistic is `inf`, which is a test).
+pub fn tested(statistic: &[f64]) -> Vec<bool> {
+    statistic.iter().map(|s| !s.is_nan()).collect()
+}
+
+/// Alarm intervals of a per-epoch alarm sequence in which every epoch is a test.
 pub fn intervals(alarm: &[bool]) -> Vec<Interval> {
+    test_intervals(alarm, None)
+        .into_iter()
+        .map(|(iv, _)| iv)
+        .collect()
+}
+
+/// Alarm intervals of `alarm` over the epochs `tested` (None: every epoch), each with the
+/// number of tests it spans (alarmed tests: every test inside an interval alarmed). Alarm
+/// flags at untested epochs are ignored.
+pub fn test_intervals(alarm: &[bool], tested: Option<&[bool]>) -> Vec<(Interval, u32)> {
     let mut out = Vec::new();
-    let mut start = None;
+    let mut open: Option<(usize, u32)> = None;
     for (k, &a) in alarm.iter().enumerate() {
-        match (a, start) {
-            (true, None) => start = Some(k),
-            (false, Some(s)) => {
-                out.push((s, Some(k)));
-                start = None;
+        if !tested.is_none_or(|t| t.get(k).copied().unwrap_or(false)) {
+            continue;
+        }
+        match (a, open.as_mut()) {
+            (true, None) => open = Some((k, 1)),
+            (true, Some((_, n))) => *n += 1,
+            (false, Some(&mut (s, n))) => {
+                out.push(((s, Some(k)), n));
+                open = None;
             }
-            _ => {}
+            (false, None) => {}
         }
     }
-    if let Some(s) = start {
-        out.push((s, None));
+    if let Some((s, n)) = open {
+        out.push(((s, None), n));
     }
     out
 }
@@ -53,17 +80,26 @@ pub fn match_interval(onset: f64, windows: &[(f64, f64)]) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
-/// Per fault window and alarm sequence: whether the detector was already in alarm at the
-/// fault's first epoch (an alarm raised before the fault began), and the fraction of the
-/// window's epochs in alarm (NaN when no epoch lies in the window).
-pub fn window_alarm(t: &[f64], alarm: &[bool], window: (f64, f64)) -> (bool, f64) {
+/// Per fault window and alarm sequence over the epochs `tested` (None: every epoch): whether
+/// the detector was already in alarm at the window's first test (an alarm raised at an earlier
+/// test, before the fault), and the share of the window's tests in alarm (NaN when no test
+/// lies in the window).
+pub fn window_alarm(
+    t: &[f64],
+    alarm: &[bool],
+    tested: Option<&[bool]>,
+    window: (f64, f64),
+) -> (bool, f64) {
     let (ws, we) = window;
-    let first = t.iter().position(|&tk| tk >= ws && tk < we);
-    // In alarm at its first epoch with the alarm raised at an earlier epoch (before the fault).
-    let at_onset = first.is_some_and(|k| alarm[k] && k > 0 && alarm[k - 1]);
+    let is_test = |k: usize| tested.is_none_or(|m| m.get(k).copied().unwrap_or(false));
+    let first = (0..t.len()).find(|&k| is_test(k) && t[k] >= ws && t[k] < we);
+    // In alarm at its first test with the alarm raised at the test before (before the fault).
+    let at_onset = first.is_some_and(|k| {
+        alarm[k] && (0..k).rev().find(|&j| is_test(j)).is_some_and(|j| alarm[j])
+    });
     let (mut n, mut a) = (0u32, 0u32);
     for (k, &tk) in t.iter().enumerate() {
-        if tk >= ws && tk < we {
+        if is_test(k) && tk >= ws && tk < we {
             n += 1;
             a += u32::from(alarm[k]);
         }
@@ -71,13 +107,19 @@ pub fn window_alarm(t: &[f64], alarm: &[bool], window: (f64, f64)) -> (bool, f64
     (at_onset, if n > 0 { a as f64 / n as f64 } else { f64::NAN })
 }
 
-/// Every alarm interval of `alarm` (times `t`) with the fault it detects.
-pub fn events(t: &[f64], alarm: &[bool], windows: &[(f64, f64)]) -> Vec<(Interval, Option<usize>)> {
-    intervals(alarm)
+/// Every alarm interval of `alarm` (times `t`, tests `tested`) with the tests it spans and
+/// the fault it detects.
+pub fn events(
+    t: &[f64],
+    alarm: &[bool],
+    tested: Option<&[bool]>,
+    windows: &[(f64, f64)],
+) -> Vec<(Interval, u32, Option<usize>)> {
+    test_intervals(alarm, tested)
         .into_iter()
-        .map(|iv| {
+        .map(|(iv, n)| {
             let m = match_interval(t[iv.0], windows);
-            (iv, m)
+            (iv, n, m)
         })
         .collect()
 }
@@ -260,11 +302,41 @@ mod tests {
             false, false, true, true, true, false, false, true, false, false,
         ];
         // Window [3, 7): in alarm at 3 since 2 (before the fault); 2 of 4 epochs in alarm.
-        assert_eq!(window_alarm(&t, &a, (3.0, 7.0)), (true, 0.5));
+        assert_eq!(window_alarm(&t, &a, None, (3.0, 7.0)), (true, 0.5));
         // Window [2, 4): the alarm begins with it: a detection, not "at onset".
-        assert_eq!(window_alarm(&t, &a, (2.0, 4.0)), (false, 1.0));
-        assert_eq!(window_alarm(&t, &a, (5.0, 7.0)), (false, 0.0));
-        let (at, f) = window_alarm(&t, &a, (20.0, 30.0));
+        assert_eq!(window_alarm(&t, &a, None, (2.0, 4.0)), (false, 1.0));
+        assert_eq!(window_alarm(&t, &a, None, (5.0, 7.0)), (false, 0.0));
+        let (at, f) = window_alarm(&t, &a, None, (20.0, 30.0));
         assert!(!at && f.is_nan());
+    }
+
+    #[test]
+    fn untested_epochs_neither_end_nor_count() {
+        // A 1 Hz test on a 4 Hz record: tests at 0, 4, 8, ...; the untested epochs carry
+        // `false` (loosely coupled) - they must not split the alarm or dilute its share.
+        let t: Vec<f64> = (0..24).map(|k| k as f64 * 0.25).collect();
+        let tested: Vec<bool> = (0..24).map(|k| k % 4 == 0).collect();
+        let alarm: Vec<bool> = (0..24).map(|k| k % 4 == 0 && (8..20).contains(&k)).collect();
+        let ivs = test_intervals(&alarm, Some(&tested));
+        assert_eq!(ivs, vec![((8, Some(20)), 3)]);
+        // Held alarm flags at untested epochs (federated) give the same interval.
+        let held: Vec<bool> = (0..24).map(|k| (8..20).contains(&k)).collect();
+        assert_eq!(test_intervals(&held, Some(&tested)), ivs);
+        // Every test of [2, 5) s (epochs 8, 12, 16) alarmed: share 1, not 1/4.
+        assert_eq!(window_alarm(&t, &alarm, Some(&tested), (2.0, 5.0)), (false, 1.0));
+        assert_eq!(window_alarm(&t, &alarm, None, (2.0, 5.0)), (false, 0.25));
+        // In alarm at onset: the test before the window alarmed (untested epochs skipped).
+        assert_eq!(window_alarm(&t, &alarm, Some(&tested), (3.0, 5.0)), (true, 1.0));
+        // Still open at the end.
+        let open: Vec<bool> = (0..24).map(|k| k >= 16).collect();
+        assert_eq!(test_intervals(&open, Some(&tested)), vec![((16, None), 2)]);
+        assert_eq!(
+            tested_of_nan(),
+            vec![true, false, true]
+        );
+    }
+
+    fn tested_of_nan() -> Vec<bool> {
+        tested(&[1.0, f64::NAN, f64::INFINITY])
     }
 }

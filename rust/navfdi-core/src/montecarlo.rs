@@ -8,13 +8,17 @@
 //! Metrics per run and *cell* (sub-filter × detector × fault, plus one cell per sub-filter ×
 //! detector for the epochs outside every fault, fault id `none`):
 //!
+//! Every per-epoch count is over the epochs at which the detector tested
+//! ([`crate::metrics::tested`]): on a multi-rate record a 1 Hz sensor's detectors count one
+//! epoch per second, whatever the record's interval.
+//!
 //! * fault cells: `detected` (an alarm onset inside the window or up to
 //!   [`crate::metrics::GRACE`] s after it, [`crate::metrics`]'s rule), `delay` = onset − fault
-//!   start, `clear_delay` = end of the last such interval − fault end (NaN if never cleared),
-//!   `at_onset` (already in alarm when the fault began: reported, not a detection) and
-//!   `alarm_fraction` (share of the fault's epochs in alarm);
-//! * `none` cells: `false_alarm_epochs` and `outside_epochs`: epochs with an alarm, and all
-//!   epochs, outside every fault window of the sub-filter's sensor and outside the
+//!   start, `clear_delay` = end of the last such interval (its first passing test) − fault end
+//!   (NaN if never cleared), `at_onset` (already in alarm when the fault began: reported, not
+//!   a detection) and `alarm_fraction` (share of the fault's tests in alarm);
+//! * `none` cells: `false_alarm_epochs` and `outside_epochs`: tests with an alarm, and all
+//!   tests, outside every fault window of the sub-filter's sensor and outside the
 //!   [`SETTLE`] seconds after each fault ends (the clearing transient);
 //! * the isolating detector's cells: `wrong_isolations`, isolation intervals of the sub-filter
 //!   that overlap no fault window of its sensor (counted on the `none` cell);
@@ -24,7 +28,7 @@
 use crate::arch::run_architecture;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
-use crate::metrics::{intervals, match_interval, window_alarm, Interval};
+use crate::metrics::{match_interval, test_intervals, tested, window_alarm, Interval};
 use crate::record::RunRecord;
 use crate::sim::noise::simulate;
 use crate::sim::prepare::Prepared;
@@ -256,9 +260,10 @@ pub fn metrics(prep: &Prepared, run: u64, rec: &RunRecord, cells: &[Cell]) -> Ru
     metrics_of(&prep.spec, run, rec, cells)
 }
 
-/// Reduce one run's record of scenario `spec` to metrics (any source). On recorded logs
-/// (a record with a navigation solution) the `none` cells count only the epochs the detector
-/// tested, and the errors are taken over the epochs the reference scores.
+/// Reduce one run's record of scenario `spec` to metrics (any source). Every per-epoch
+/// figure counts the epochs the detector tested ([`crate::metrics`]); on recorded logs (a
+/// record with a navigation solution) the errors are taken over the epochs the reference
+/// scores.
 pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]) -> RunMetrics {
     let logged = !rec.nav.is_empty();
     let t = &rec.t;
@@ -271,7 +276,11 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
         let mut faults: Vec<&crate::spec::FaultSpec> =
             spec.faults.iter().filter(|f| channel.sees(f)).collect();
         faults.sort_by(|a, b| a.start.total_cmp(&b.start));
-        let ivs = intervals(&det.alarm);
+        let det_tested = tested(&det.statistic);
+        let ivs: Vec<Interval> = test_intervals(&det.alarm, Some(&det_tested))
+            .into_iter()
+            .map(|(iv, _)| iv)
+            .collect();
         let mut m = CellMetrics {
             detected: false,
             delay: f64::NAN,
@@ -302,13 +311,13 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
                     m.delay = (t[first.0] - f.start).max(0.0);
                     m.clear_delay = last.1.map_or(f64::NAN, |e| t[e] - f.end);
                 }
-                (m.at_onset, m.alarm_fraction) = window_alarm(t, &det.alarm, (f.start, f.end));
+                (m.at_onset, m.alarm_fraction) =
+                    window_alarm(t, &det.alarm, Some(&det_tested), (f.start, f.end));
             }
             None => {
                 for (k, &tk) in t.iter().enumerate() {
                     let inside = faults.iter().any(|f| tk >= f.start && tk < f.end + SETTLE);
-                    let untested = logged && det.statistic[k].is_nan();
-                    if !inside && !untested {
+                    if !inside && det_tested[k] {
                         m.outside_epochs += 1;
                         if det.alarm[k] {
                             m.false_alarm_epochs += 1;
@@ -317,7 +326,8 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
                 }
                 let isolating = channels[c.subfilter].decision == Some(det.name.as_str());
                 if isolating {
-                    for (s, e) in intervals(&sub.isolated) {
+                    let sub_tested: Vec<bool> = sub.dof.iter().map(|&d| d > 0).collect();
+                    for ((s, e), _) in test_intervals(&sub.isolated, Some(&sub_tested)) {
                         let ts = t[s];
                         let te = e.map_or(f64::INFINITY, |e| t[e]);
                         if !faults.iter().any(|f| ts <= f.end && te > f.start) {

@@ -42,6 +42,11 @@ pub struct SubRecord {
     /// component was missing), from the innovation covariance and the deciding detector's
     /// `pf`, `pm` (METHODS §6); empty where the architecture does not compute it (federated).
     pub mdb: Vec<f64>,
+    /// Whitened innovation `L⁻¹ r` (`S = L Lᵀ`) per component and epoch (T × m row-major, NaN
+    /// where untested): for a consistent filter white, unit-variance noise; its lag-1
+    /// autocorrelation over consecutive tests measures the filter's consistency without a
+    /// reference. Empty where the architecture does not record it (loosely coupled does).
+    pub whitened: Vec<f64>,
 }
 
 impl SubRecord {
@@ -189,6 +194,9 @@ pub struct RunRecord {
     pub nav: Vec<f64>,
     /// Filter protection levels (tight filter with `[tight.integrity]`).
     pub integrity: Option<IntegrityRecord>,
+    /// Loosely coupled: time (s) of the epoch from which the filter counted as converged
+    /// (`loosely_coupled.convergence`); None when it never did (or another architecture).
+    pub converged_at: Option<f64>,
 }
 
 /// Per-epoch filter integrity of a tight run ([`crate::integrity::filter_ss`]), each T long.
@@ -356,6 +364,7 @@ impl RunRecord {
                         })
                         .collect(),
                     mdb: Vec::new(),
+                    whitened: Vec::new(),
                 })
                 .collect(),
             sats: None,
@@ -366,6 +375,7 @@ impl RunRecord {
             datum: None,
             nav: Vec::new(),
             integrity: None,
+            converged_at: None,
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

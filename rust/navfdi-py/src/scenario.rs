@@ -63,6 +63,9 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, rec.t, &[t])?)?;
     d.set_item("faults_applied", rec.faults_applied)?;
+    if let Some(c) = rec.converged_at {
+        d.set_item("converged_at", c)?;
+    }
     d.set_item("error", to_numpy(py, rec.error, &[t, 9])?)?;
     d.set_item("sigma", to_numpy(py, rec.sigma, &[t, 9])?)?;
     d.set_item("error_columns", ERROR_COLUMNS.to_vec())?;
@@ -79,6 +82,10 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
         if !s.mdb.is_empty() && t > 0 {
             let m = s.mdb.len() / t;
             sd.set_item("mdb", to_numpy(py, s.mdb, &[t, m])?)?;
+        }
+        if !s.whitened.is_empty() && t > 0 {
+            let m = s.whitened.len() / t;
+            sd.set_item("whitened", to_numpy(py, s.whitened, &[t, m])?)?;
         }
         let dets = PyList::empty(py);
         for dr in s.detectors {
@@ -264,53 +271,79 @@ type Matched<'py> = (
     Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<i64, numpy::IxDyn>>,
 );
 
-/// Alarm intervals of `alarm` (times `t`) and the fault each detects, by the one matching rule
-/// (`navfdi_core::metrics`). `windows`: fault windows `(start, end)` in s, sorted by start.
-/// Returns `(start_index, end_index, fault_index)` arrays; `-1` for "never ended" / "no fault".
+/// `tested` checked against the length of `alarm`.
+fn tested_mask(tested: Option<Vec<bool>>, n: usize) -> PyResult<Option<Vec<bool>>> {
+    match tested {
+        Some(m) if m.len() != n => Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "tested: expected length {n} to match alarm, got {}",
+            m.len()
+        ))),
+        other => Ok(other),
+    }
+}
+
+/// Alarm intervals of `alarm` (times `t`, tests `tested`: None = every epoch) and the fault
+/// each detects, by the one matching rule (`navfdi_core::metrics`). `windows`: fault windows
+/// `(start, end)` in s, sorted by start. Returns `(start_index, end_index, tests,
+/// fault_index)` arrays; `-1` for "never ended" / "no fault".
 #[pyfunction]
+#[pyo3(signature = (t, alarm, windows, tested=None))]
 pub fn match_alarms<'py>(
     py: Python<'py>,
     t: &Bound<'py, PyAny>,
     alarm: Vec<bool>,
     windows: Vec<(f64, f64)>,
+    tested: Option<Vec<bool>>,
 ) -> PyResult<Matched<'py>> {
     let t = crate::convert::vector("t", t, Some(alarm.len()))?;
+    let tested = tested_mask(tested, alarm.len())?;
     if windows.windows(2).any(|w| w[1].0 < w[0].0) {
         return Err(pyo3::exceptions::PyValueError::new_err(
             "windows: must be sorted by start",
         ));
     }
-    let ev = navfdi_core::metrics::events(t.as_slice(), &alarm, &windows);
+    let ev = navfdi_core::metrics::events(t.as_slice(), &alarm, tested.as_deref(), &windows);
     let n = ev.len();
-    let starts = ev.iter().map(|((s, _), _)| *s as i64).collect();
+    let starts = ev.iter().map(|((s, _), _, _)| *s as i64).collect();
     let ends = ev
         .iter()
-        .map(|((_, e), _)| e.map_or(-1, |e| e as i64))
+        .map(|((_, e), _, _)| e.map_or(-1, |e| e as i64))
         .collect();
-    let faults = ev.iter().map(|(_, f)| f.map_or(-1, |f| f as i64)).collect();
+    let tests = ev.iter().map(|(_, c, _)| *c as i64).collect();
+    let faults = ev
+        .iter()
+        .map(|(_, _, f)| f.map_or(-1, |f| f as i64))
+        .collect();
     Ok((
         to_numpy(py, starts, &[n])?,
         to_numpy(py, ends, &[n])?,
+        to_numpy(py, tests, &[n])?,
         to_numpy(py, faults, &[n])?,
     ))
 }
 
-/// Whether `alarm` (over times `t`) was already raised when the window `[start, end)` began
-/// (an alarm from before the fault: not a detection), and the fraction of the window's epochs
-/// in alarm (NaN when none lies in it); the rule of `navfdi_core::metrics::window_alarm`.
+/// Whether `alarm` (over times `t`, tests `tested`: None = every epoch) was already raised at
+/// the first test of the window `[start, end)` (an alarm from before the fault: not a
+/// detection), and the share of the window's tests in alarm (NaN when none lies in it); the
+/// rule of `navfdi_core::metrics::window_alarm`.
 #[pyfunction]
+#[pyo3(signature = (t, alarm, start, end, tested=None))]
 pub fn window_alarm(
     t: &Bound<'_, PyAny>,
     alarm: Vec<bool>,
     start: f64,
     end: f64,
+    tested: Option<Vec<bool>>,
 ) -> PyResult<(bool, f64)> {
     let t = crate::convert::vector("t", t, Some(alarm.len()))?;
+    let tested = tested_mask(tested, alarm.len())?;
     Ok(navfdi_core::metrics::window_alarm(
         t.as_slice(),
         &alarm,
+        tested.as_deref(),
         (start, end),
     ))
 }

@@ -59,6 +59,8 @@ struct Outcome {
     partial: bool,
     /// Innovation and its covariance (tested measurements).
     inn: Option<(DVector<f64>, DMatrix<f64>)>,
+    /// Whitened innovation `L⁻¹ r` (tested measurements).
+    white: Option<DVector<f64>>,
 }
 
 const NOT_MEASURED: Outcome = Outcome {
@@ -69,6 +71,7 @@ const NOT_MEASURED: Outcome = Outcome {
     tests: Vec::new(),
     partial: false,
     inn: None,
+    white: None,
 };
 
 /// Run the loosely coupled filter over one run's streams (`isolation = false`: detectors
@@ -168,8 +171,9 @@ fn run<const NS: usize>(
     .with_mounting(&m);
 
     let mut outcomes = vec![NOT_MEASURED.clone(); aids.len()];
+    let dims: Vec<usize> = aids.iter().map(|a| a.floor.len()).collect();
     for _ in 0..ka {
-        push_empty(&mut rec, &mut outcomes);
+        push_empty(&mut rec, &mut outcomes, &dims);
     }
     let mut mech = Mechaniser::new(&imu, models.t[ka], &kf.bg);
     let mut excluded_before = vec![false; aids.len()];
@@ -186,7 +190,7 @@ fn run<const NS: usize>(
         let tk = models.t[k];
         if tk > imu.end() {
             // The IMU log has ended: no navigation.
-            push_empty(&mut rec, &mut outcomes);
+            push_empty(&mut rec, &mut outcomes, &dims);
             continue;
         }
         mech.advance(&imu, &mut s, &mut kf, tk);
@@ -265,6 +269,31 @@ fn run<const NS: usize>(
             }
             let o = test(&kf, aid, &meas, isolation)?;
             tested.push((a, meas, o));
+        }
+        // Convergence: every tested GNSS channel's predicted σ within `convergence` times its
+        // measurement σ. Before it, only gross innovations exclude.
+        if rec.converged_at.is_none() && !tested.is_empty() {
+            let settled = tested.iter().all(|(_, meas, o)| {
+                o.inn.as_ref().is_some_and(|(_, sv)| {
+                    let m = meas.r.nrows() as f64;
+                    let r = meas.r.diagonal().sum() / m;
+                    let hph = (sv.diagonal().sum() - meas.r.diagonal().sum()) / m;
+                    hph.max(0.0) <= l.convergence * l.convergence * r
+                })
+            });
+            if settled {
+                rec.converged_at = Some(tk);
+            }
+        }
+        if rec.converged_at.is_none() {
+            for (a, _, o) in tested.iter_mut() {
+                let gross = aids[*a]
+                    .decision
+                    .and_then(|j| o.tests.get(j))
+                    .is_some_and(|&(st, th, _)| st >= 16.0 * th);
+                o.excluded &= gross;
+                o.fused = !o.excluded;
+            }
         }
         let witnessed = !l.witness || tested.iter().any(|(_, _, o)| !o.excluded);
         let ant = antenna(&s, &lever);
@@ -402,6 +431,10 @@ fn run<const NS: usize>(
             sub.reinstated
                 .push(excluded_before[c] && o.fused && !o.excluded);
             sub.fused.push(o.fused);
+            match &o.white {
+                Some(w) if w.len() == dims[c] => sub.whitened.extend(w.iter()),
+                _ => sub.whitened.extend(std::iter::repeat_n(f64::NAN, dims[c])),
+            }
             for (j, d) in sub.detectors.iter_mut().enumerate() {
                 let (st, th, al) = o
                     .tests
@@ -543,6 +576,7 @@ fn test<const NS: usize>(
         fused: !excluded,
         tests: stats,
         partial: false,
+        white: Some(inn.whitened()),
         inn: Some((inn.r, inn.s)),
     })
 }
@@ -570,10 +604,13 @@ fn apply<const NS: usize>(
     Ok(o)
 }
 
-fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome]) {
+fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome], dims: &[usize]) {
     for (c, o) in outcomes.iter_mut().enumerate() {
         *o = NOT_MEASURED.clone();
         rec.subs[c].push_untested();
+        rec.subs[c]
+            .whitened
+            .extend(std::iter::repeat_n(f64::NAN, dims[c]));
     }
     rec.sources.push(0);
     rec.error.extend([f64::NAN; 9]);

@@ -106,6 +106,17 @@ pub struct Innovation {
     chol: Cholesky<f64, nalgebra::Dyn>,
 }
 
+impl Innovation {
+    /// The whitened innovation `L⁻¹ r` (`S = L Lᵀ`): white, unit-variance noise for a
+    /// consistent filter.
+    pub fn whitened(&self) -> DVector<f64> {
+        self.chol
+            .l_dirty()
+            .solve_lower_triangular(&self.r)
+            .unwrap_or_else(|| DVector::from_element(self.r.len(), f64::NAN))
+    }
+}
+
 impl<const NS: usize> ErrorFilter<NS> {
     /// A filter with initial σ per state group: position (m), velocity (m/s), attitude
     /// (rad; roll, pitch, yaw — applied to north, east, down), gyro bias (rad/s), accelerometer

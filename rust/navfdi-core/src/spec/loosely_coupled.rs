@@ -121,6 +121,18 @@ pub struct LooselyCoupledSpec {
     /// Deciding detectors act (default). `false`: they report but every measurement is used.
     #[serde(default = "default_true")]
     pub isolate: bool,
+    /// Convergence rule: the filter counts as converged from the first epoch at which every
+    /// tested GNSS channel's predicted σ (`√(mean diag H P Hᵀ)`, before the update) is at most
+    /// this multiple of the measurement's own σ (`√(mean diag R)`). Until then the tests
+    /// report, but a measurement is excluded only when its innovation is gross (`λ` over 16
+    /// times the deciding threshold: |w| above 4 times its critical value): an unsettled
+    /// filter's innovations are not yet a fault's evidence. 0: converged from the start.
+    #[serde(default = "default_convergence")]
+    pub convergence: f64,
+}
+
+fn default_convergence() -> f64 {
+    3.0
 }
 
 impl LooselyCoupledSpec {
@@ -200,6 +212,15 @@ impl ScenarioSpec {
             non_negative(&format!("{q}.rate_threshold"), c.rate_threshold)?;
             self.validate_detectors(&q, &c.detectors, false)?;
             check_decision(&q, &c.decision, &c.detectors)?;
+        }
+        if !(l.convergence >= 0.0 && l.convergence <= 1e6) {
+            return Err(bad(
+                format!("{p}.convergence"),
+                format!(
+                    "{}: a multiple of the GNSS σ in [0, 1e6] (0: converged from the start)",
+                    l.convergence
+                ),
+            ));
         }
         if self.state_chi2.is_some() {
             return Err(bad("state_chi2", "the state chi-square test needs the error model's Φ and Q of a simulated scenario; it is not available with loosely_coupled"));
