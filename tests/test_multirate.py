@@ -153,3 +153,31 @@ def test_a_logged_run_without_a_reference_speaks_for_itself():
     assert pos["tests"] > 400 and 0 < pos["mean_nis"] < 10 and abs(pos["lag1"]) < 1
     assert 0 < c["biases"]["gyro_bias_z"]["reduction"] < 1
     assert c["heading"]["median_deg"] < 2 and c["converged_at"] >= c["navigating_from"]
+
+
+@pytest.mark.parametrize("size, gross", [("1 m", False), ("20 m", True)])
+def test_before_convergence_only_gross_innovations_exclude(size, gross):
+    """[loosely_coupled] convergence: until the filter has settled, an alarm excludes only a
+    gross innovation (λ over 16 times the deciding threshold). A filter that never counts as
+    converged (convergence = 1e-6) lets a 1 m step on drive_lc's 2 cm RTK positions in
+    (λ up to 209 on 3 dof: over the 58 threshold, under 16 × 58) and still excludes a 20 m one;
+    converged from the start (0), both are excluded."""
+    base = navfdi.load_scenario("drive_lc").with_value("faults[0].magnitude", size)
+
+    def excluded(conv):
+        r = navfdi.run_scenario(base.with_value("loosely_coupled.convergence", conv, create=True)).runs["fde"]
+        iso = np.asarray(r.isolated("gnss_pos"), bool)
+        win = (r.t >= 440) & (r.t < 500)
+        return iso[win].any(), r.record.get("converged_at")
+
+    never, at_never = excluded(1e-6)
+    always, at_always = excluded(0.0)
+    assert at_never is None and at_always is not None
+    assert always
+    assert never == gross
+
+
+@pytest.mark.parametrize("bad", [-1.0, float("nan"), 1e9, "abc"])
+def test_convergence_is_validated(bad):
+    with pytest.raises(ValueError, match="convergence"):
+        navfdi.run_scenario(navfdi.load_scenario("drive_lc").with_value("loosely_coupled.convergence", bad, create=True))

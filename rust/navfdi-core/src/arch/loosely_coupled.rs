@@ -273,7 +273,8 @@ fn run<const NS: usize>(
         // Convergence: every tested GNSS channel's predicted σ within `convergence` times its
         // measurement σ. Before it, only gross innovations exclude.
         if rec.converged_at.is_none() && !tested.is_empty() {
-            let settled = tested.iter().all(|(_, meas, o)| {
+            let settled = l.convergence == 0.0
+                || tested.iter().all(|(_, meas, o)| {
                 o.inn.as_ref().is_some_and(|(_, sv)| {
                     let m = meas.r.nrows() as f64;
                     let r = meas.r.diagonal().sum() / m;
