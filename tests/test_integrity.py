@@ -53,9 +53,15 @@ def test_add_appendix_d_hpl():
 
 @pytest.mark.parametrize("field,value", [("p_hmi_vert", float("nan")), ("p_fa_vert", 0.0), ("p_thres", 1.5), ("tol_pl", -1.0), ("tol_pl", float("inf"))])
 def test_a_bad_allocation_is_named(field, value):
-    alloc = navfdi.Allocation(**{**navfdi.lpv200().__dict__, field: value})
+    # Refused where it is made (the dataclass checks its fields) ...
+    with pytest.raises(ValueError, match=f"Allocation.{field}"):
+        navfdi.Allocation(**{**navfdi.lpv200().__dict__, field: value})
+    # ... and by the core past it (the binding called directly).
+    a = {**navfdi.lpv200().__dict__, field: value}
+    order = ("p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor", "p_thres", "p_emt", "tol_pl")
+    los = -ROWS
     with pytest.raises(ValueError, match=f"allocation.{field}"):
-        navfdi.araim(-ROWS, SYSTEMS, c_int=C_INT, c_acc=C_ACC, allocation=alloc)
+        navfdi._core.araim_epoch((-los).tolist(), [0 if s == "G" else 1 for s in SYSTEMS], list(C_INT), list(C_ACC), [0.5] * len(SYSTEMS), [1e-5] * len(SYSTEMS), [1e-4, 1e-4], tuple(a[k] for k in order))
 
 
 def test_the_adds_elevation_models_give_the_published_variances():

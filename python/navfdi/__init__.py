@@ -74,7 +74,7 @@ from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
-from navfdi.scenario import NeverAppliedWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
+from navfdi.scenario import NeverAppliedWarning, PartialLogWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 from navfdi.integrity import Allocation, AraimResult, Ism, araim, lpv200
 
@@ -97,6 +97,7 @@ __all__ = [
     "araim",
     "lpv200",
     "NeverAppliedWarning",
+    "PartialLogWarning",
     "GnssSolution",
     "ImprovedSprt",
     "Innovation",

@@ -31,6 +31,7 @@ __all__ = [
     "LinAlgError",
     "FileFormatError",
     "read_rinex_obs",
+    "read_imu_csv",
     "read_rinex_nav",
     "GnssRun",
     "LoggedSource",
@@ -525,6 +526,28 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
     same measurements with every scenario of ``spec_jsons`` (variants; only ``architecture``,
     ``federated`` and ``centralized`` may differ), isolation active. One record per variant
     (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
+
+def read_imu_csv(
+    path: str,
+    time: list[str],
+    gyro: list[str],
+    accel: list[str],
+    gyro_scale: float,
+    accel_scale: float,
+    increments: bool,
+    max_gap: float,
+    unit_fields: list[str],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Read an IMU CSV log (plain or gzip) in one streaming pass, GIL released: ``time`` one
+    column name (GPS seconds) or ``[week, seconds_of_week]``; ``gyro``, ``accel`` three column
+    names each; ``gyro_scale`` to rad/s and ``accel_scale`` to m/s² (rad and m/s for
+    ``increments``, which are divided by the sample interval); ``max_gap`` the largest sample
+    interval accepted (s); ``unit_fields`` the two unit fields' names for messages. Returns
+    ``t`` (N,) GPS seconds, ``gyro`` (N, 3) rad/s, ``accel`` (N, 3) m/s². ``FileFormatError``
+    names the file, line and column of bad input (missing column, field count, non-finite
+    value, time not increasing, a gap, a sample beyond any IMU's range, implausible units,
+    no samples, a gzip that inflates over 200 times its size); ``OSError`` a path that is not a
+    readable regular file; ``MemoryError`` a file beyond the memory limit."""
 
 def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]], tested: list[bool] | None = None) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """The one event-matching rule (used by ``run``, ``montecarlo`` and ``demo``): alarm

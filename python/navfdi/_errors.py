@@ -24,3 +24,9 @@ class NeverAppliedWarning(UserWarning):
     the window, its satellite is never in view or never observed, its system is not
     selected, its window is outside the file): it says nothing about the detectors and is
     left out of the detection statistics."""
+
+
+class PartialLogWarning(ScenarioWarning):
+    """A recorded log that covers only part of another (an IMU log that starts after or ends
+    before the GNSS log): the run processes their overlap only, the message gives both spans,
+    and a fault outside the processed span is never applied (not missed)."""

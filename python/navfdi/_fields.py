@@ -4,6 +4,7 @@ and raises :class:`~navfdi.ScenarioError` naming its path."""
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from typing import Any
 
@@ -40,13 +41,23 @@ def _str(v: Any, path: str) -> str:
     return v
 
 
+#: What a name (sensor, detector, fault id, variant) may hold: names become parts of file
+#: names (``{variant}_detector_{sensor}_{detector}.png``), so no path separator, no leading dot.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.+-]{0,63}")
+
+
 def _name(v: Any, path: str) -> str:
-    """A non-empty name without surrounding white space."""
+    """A name: 1–64 letters, digits, ``_ . + -``, starting with a letter or digit (names are
+    parts of output file names: ``../x`` or ``a/b`` would write outside ``--out``)."""
     s = _str(v, path)
     if not s.strip():
         raise ScenarioError(f"{path} = {v!r}: must not be empty")
     if s != s.strip():
         raise ScenarioError(f"{path} = {v!r}: must not start or end with white space")
+    if not NAME_PATTERN.fullmatch(s):
+        raise ScenarioError(
+            f"{path} = {v!r}: a name may hold only letters, digits and _ . + - (up to 64, starting with a "
+            "letter or digit): it becomes part of output file names")
     return s
 
 

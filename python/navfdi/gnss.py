@@ -404,6 +404,8 @@ class GnssSolution:
                 mi = {k: ig[f"{k}_horizontal_misleading"] + ig[f"{k}_vertical_misleading"] for k in ("araim", "raim")}
                 line += f"; error > PL while available: ARAIM {mi['araim']}, snapshot RAIM {mi['raim']} epochs; hazardously misleading {hmi}"
             lines.append(line)
+            for reason, count in sorted(ig.get("failed_epochs", {}).items(), key=lambda kv: -kv[1]):
+                lines.append(f"  integrity not computed at {count} epoch(s): {reason}")
         skipped = ", ".join(f"{k} {v}" for k, v in sorted(s["skipped"].items())) or "none"
         lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"
@@ -599,9 +601,10 @@ def gnss_solve(
     for p, name in ((obs, "obs"), (nav, "nav")):
         check_input_file(p, name)
     if integrity is not None:
-        from navfdi.gnss_integrity import resolve_integrity
+        from navfdi.gnss_integrity import check_systems, resolve_integrity
 
         integrity = resolve_integrity(integrity)
+        check_systems(integrity, systems)
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")

@@ -36,6 +36,7 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from statistics import NormalDist
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -66,6 +67,19 @@ class IntegritySettings:
     limits: dict[str, float]
     ism: Ism
     source: str | None = None
+
+
+def check_systems(settings: IntegritySettings, systems: Sequence[str], ism: Ism | None = None) -> None:
+    """``ValueError`` (once, before any epoch is solved) when the integrity support message has
+    no constellation fault prior for one of ``systems`` (letters), saying which key to add."""
+    ism = ism or settings.ism
+    missing = [x for x in systems if x not in ism.p_const]
+    if missing:
+        where = f"the allocation file {settings.source}" if settings.source else "an allocation file (navfdi gnss --integrity FILE)"
+        raise ValueError(
+            f"integrity: the integrity support message has no constellation fault prior for system(s) {', '.join(missing)} "
+            f"(it has {', '.join(sorted(ism.p_const))}); add it to [ism] p_const of {where}, e.g. p_const = {{"
+            + ", ".join(f"{x} = 1e-4" for x in sorted(set(systems) | set(ism.p_const))) + "}, or leave the system out of --systems")
 
 
 def allocation_by_name(name: str) -> tuple[Allocation, dict[str, float]]:
@@ -188,6 +202,14 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
         if np.ndim(getattr(ism, f)) != 0:
             raise ValueError(f"ism.{f}: a file's epochs see different satellites; give one value for all")
     sol, sats = solution.solution, solution.satellites
+    # Configuration errors once, before the epochs: every system solved needs a prior.
+    check_systems(settings, sorted({str(x)[0] for x in sats["satellite"].astype(str).unique()} | set(solution.config.get("systems", []))), ism)
+    failures: dict[str, int] = {}
+
+    def record_failure(kind: str, e: Exception) -> None:
+        key = f"{kind}: {e}"
+        failures[key] = failures.get(key, 0) + 1
+
     used = sats[sats["status"] == "used"]
     by_epoch = {int(e): g for e, g in used.groupby("epoch", observed=True)}
     tested = sats[sats["status"].isin(["used", "excluded"]) & np.isfinite(sats["residual"].to_numpy(float))]
@@ -199,7 +221,7 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
     fde_excluded = np.full(n, "", dtype=object)
     for i in range(n):
         if sol["status"].iat[i] != "no_solution" and i in all_by_epoch:
-            state_fde[i], fde_excluded[i] = _araim_fde_epoch(all_by_epoch[i], cols, i, ism, alloc, limits)
+            state_fde[i], fde_excluded[i] = _araim_fde_epoch(all_by_epoch[i], cols, i, ism, alloc, limits, record_failure)
         if sol["status"].iat[i] == "no_solution" or i not in by_epoch:
             continue
         g = by_epoch[i]
@@ -213,15 +235,16 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
             r = araim(los, systems, c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc)
             cols["hpl"][i], cols["vpl"][i], cols["emt"][i] = r.hpl, r.vpl, r.emt
             ok = r.available and r.hpl <= limits["hal"] and r.vpl <= limits["val"] and r.emt <= limits["emt"]
-        except ValueError:
+        except ValueError as e:
+            record_failure("ARAIM", e)
             ok = False
         thr = float(sol["threshold"].iat[i])
         if math.isfinite(thr) and thr > 0:
             try:
                 p = snapshot_pl(los, systems, s2, thr, p_md)
                 cols["hpl_raim"][i], cols["vpl_raim"][i] = p["hpl"], p["vpl"]
-            except ValueError:
-                pass
+            except ValueError as e:
+                record_failure("snapshot RAIM", e)
         failed = sol["status"].iat[i] == "unidentified" or (sol["statistic"].iat[i] >= thr if math.isfinite(thr) else False)
         state[i] = "alarm" if failed else ("available" if ok else "unavailable")
     for k, v in cols.items():
@@ -240,14 +263,16 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
         "p_const": dict(ism.p_const),
         "probabilities": {f: getattr(alloc, f) for f in _FILE_KEYS["allocation"]},
         "file": settings.source,
+        "failed_epochs": failures,
     }
 
 
-def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float]) -> tuple[str, str]:
+def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float], record_failure: Any) -> tuple[str, str]:
     """ARAIM's own fault detection and exclusion on one epoch's tested satellites (used and
     excluded by the snapshot test), from their residuals about the solution: fills
     ``hpl_fde``, ``vpl_fde``, ``fde_ratio`` and the correction ``fde_de/dn/du`` (m) of row
-    ``i``; returns the state and the excluded satellites' names."""
+    ``i``; returns the state and the excluded satellites' names. An epoch it cannot compute
+    is passed to ``record_failure(kind, error)`` (counted per reason) and is ``unavailable``."""
     el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
     los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
     names = [str(s) for s in g["satellite"]]
@@ -256,7 +281,8 @@ def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, allo
     ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
     try:
         r = araim(los, [s[0] for s in names], c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc, residuals=g["residual"].to_numpy(float))
-    except ValueError:
+    except ValueError as e:
+        record_failure("ARAIM FDE", e)
         return "unavailable", ""
     cols["hpl_fde"][i], cols["vpl_fde"][i], cols["fde_ratio"][i] = r.hpl, r.vpl, r.test_ratio
     cols["fde_de"][i], cols["fde_dn"][i], cols["fde_du"][i] = r.correction
@@ -279,6 +305,7 @@ def integrity_summary(solution: Any) -> dict[str, Any]:
         "allocation": cfg["allocation"],
         "availability": float((st == "available").sum() / solved.sum()) if solved.any() else math.nan,
         "alarm_epochs": int((st == "alarm").sum()),
+        "failed_epochs": dict(cfg.get("failed_epochs", {})),
     }
     if "integrity_fde" in sol:
         sf = sol["integrity_fde"]

@@ -37,6 +37,19 @@ class Ism:
     p_sat: float | Sequence[float] = 1e-5
     p_const: Mapping[str, float] = field(default_factory=lambda: {"G": 1e-4, "E": 1e-4})
 
+    def __post_init__(self) -> None:
+        # Every value checked here, naming the field: a NaN bias or prior would make the
+        # levels vanish, a negative prior would reach a quantile function.
+        for name, low_open in (("sigma_ura", True), ("sigma_ure", True), ("b_nom", False)):
+            _check_values(f"Ism.{name}", getattr(self, name), low=0.0, low_open=low_open, high=1e4, what="m")
+        _check_values("Ism.p_sat", self.p_sat, low=0.0, low_open=True, high=1.0, high_open=True, what="a probability")
+        if not isinstance(self.p_const, Mapping) or not self.p_const:
+            raise ValueError(f"Ism.p_const: a mapping of system letter to prior, e.g. {{'G': 1e-4}}, got {self.p_const!r}")
+        for k, v in self.p_const.items():
+            if not isinstance(k, str) or len(k) != 1:
+                raise ValueError(f"Ism.p_const: key {k!r} is not a system letter (G, E, C, J, R, I, S)")
+            _check_values(f"Ism.p_const[{k!r}]", v, low=0.0, low_open=False, high=1.0, high_open=True, what="a probability")
+
 
 @dataclass(frozen=True)
 class Allocation:
@@ -56,6 +69,34 @@ class Allocation:
     hal: float = 40.0
     val: float = 35.0
     tol_pl: float = 0.05
+
+    def __post_init__(self) -> None:
+        for name in ("p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor", "p_thres", "p_emt"):
+            _check_values(f"Allocation.{name}", getattr(self, name), low=0.0, low_open=True, high=1.0, high_open=True, what="a probability", scalar=True)
+        if self.p_hmi_vert + self.p_hmi_hor >= 1.0:
+            raise ValueError(f"Allocation: p_hmi_vert + p_hmi_hor = {self.p_hmi_vert + self.p_hmi_hor!r} must be below 1")
+        for name in ("hal", "val"):
+            _check_values(f"Allocation.{name}", getattr(self, name), low=0.0, low_open=True, high=1e7, what="m", scalar=True)
+        _check_values("Allocation.tol_pl", self.tol_pl, low=0.0, low_open=False, high=10.0, what="m", scalar=True)
+
+
+def _check_values(name: str, v: Any, *, low: float, low_open: bool, high: float, high_open: bool = False, what: str, scalar: bool = False) -> None:
+    """``ValueError`` naming ``name`` unless ``v`` (a number, or a sequence of numbers unless
+    ``scalar``) lies in the interval (NaN and booleans never do)."""
+    if isinstance(v, (bool, np.bool_)) or (scalar and np.ndim(v) != 0):
+        raise ValueError(f"{name}: expected a number ({what}), got {v!r}")
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: expected {'a number' if scalar else 'a number or numbers'} ({what}), got {v!r}") from None
+    if a.ndim > 1 or a.size == 0:
+        raise ValueError(f"{name}: expected a number or a 1-D sequence, got shape {a.shape}")
+    ok = np.isfinite(a) & ((a > low) if low_open else (a >= low)) & ((a < high) if high_open else (a <= high))
+    if not ok.all():
+        bad = float(a.reshape(-1)[int(np.argmin(ok.reshape(-1)))])
+        rng = f"{'(' if low_open else '['}{low:g}, {high:g}{')' if high_open else ']'}"
+        unit = "a probability" if what == "a probability" else f"a length ({what})"
+        raise ValueError(f"{name} = {bad!r}: must be {unit} in {rng}")
 
 
 def lpv200() -> Allocation:

@@ -106,68 +106,84 @@ def _numeric(df: pd.DataFrame, path: Path, first_line: int) -> pd.DataFrame:
     return out
 
 
-def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float = 0.1) -> ImuLog:
-    """Read an IMU CSV log (``.gz`` accepted) with a header line.
+#: Keys of a scenario's ``[source.imu]`` table.
+IMU_KEYS = ("file", "week", "seconds", "time", "gyro", "accel", "gyro_unit", "accel_unit", "kind", "max_gap")
+
+
+def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> float:
+    """Check a ``[source.imu]`` table before any file is read: unknown keys (a typo such as
+    ``gyro_units`` would otherwise be ignored), the column lists, the units and ``kind``, and
+    ``max_gap`` (a positive number of seconds, NaN refused). Returns ``max_gap`` (s).
+    Raises :class:`~navfdi.ScenarioError` naming the field."""
+    unknown = sorted(set(columns) - set(IMU_KEYS))
+    if unknown:
+        import difflib
+
+        hints = [f"{u!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(u, IMU_KEYS, 1)) else repr(u) for u in unknown]
+        raise ScenarioError(f"{where}: unknown key(s) {', '.join(hints)}; the keys are {', '.join(IMU_KEYS)}")
+    for k in ("gyro", "accel"):
+        v = columns.get(k)
+        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(isinstance(c, str) for c in v)):
+            raise ScenarioError(f"{where}.{k}: three column names (x, y, z) are required, got {v!r}")
+    for k in ("week", "seconds", "time"):
+        if k in columns and not isinstance(columns[k], str):
+            raise ScenarioError(f"{where}.{k}: a column name is required, got {columns[k]!r}")
+    gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
+    if gu not in _GYRO_UNITS:
+        raise ScenarioError(f"{where}.gyro_unit: {gu!r} is not one of {', '.join(_GYRO_UNITS)}")
+    if au not in _ACCEL_UNITS:
+        raise ScenarioError(f"{where}.accel_unit: {au!r} is not one of {', '.join(_ACCEL_UNITS)}")
+    kind = columns.get("kind", "rates")
+    if kind not in ("rates", "increments"):
+        raise ScenarioError(f"{where}.kind: {kind!r} is not 'rates' or 'increments'")
+    gap = columns.get("max_gap", 0.1)
+    if isinstance(gap, str):
+        from .units import parse
+
+        try:
+            gap = parse(gap, "time", f"{where}.max_gap")
+        except ValueError as e:
+            raise ScenarioError(f"{e} (a number of seconds, e.g. 0.1, or \"0.1 s\")") from None
+    if isinstance(gap, bool) or not isinstance(gap, (int, float)) or not (math.isfinite(gap) and gap > 0):
+        raise ScenarioError(f"{where}.max_gap: {gap!r}: a positive number of seconds is required")
+    return float(gap)
+
+
+def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None = None) -> ImuLog:
+    """Read an IMU CSV log (``.gz`` accepted) with a header line, in one streaming pass in Rust
+    (``navfdi_core::logs::imu_csv``).
 
     ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
     seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
     ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
     ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
-    increments, in rad and m/s or deg and g·s, divided by the sample interval).
-    ``max_gap``: the largest interval between samples (s) accepted. Raises
-    :class:`~navfdi.ScenarioError` naming the file, line and column of bad input.
+    increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
+    the largest interval between samples (s) accepted (default 0.1; the argument overrides
+    the table's). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
+    file's). Raises :class:`~navfdi.ScenarioError` naming the file, line and column of bad
+    input: a missing column, a row with another number of fields, a value that is not a
+    finite number, time not increasing, a gap, a sample beyond any IMU's range (100 rad/s,
+    1000 m/s²), a median specific force far from gravity or a median rate over 1 rad/s
+    (units), a header with no rows, a compressed file that inflates implausibly, a path that
+    is not a regular file.
     """
-    import pandas as pd
+    from . import _core
 
+    gap = check_imu_columns(columns)
+    if max_gap is not None:
+        gap = float(max_gap)
     path = Path(path)
-    lines = _open_text(path)
-    if not lines:
-        raise ScenarioError(f"{path}: empty file")
-    header = [h.strip() for h in lines[0].split(",")]
-    need = list(columns.get("gyro", [])) + list(columns.get("accel", []))
-    if len(columns.get("gyro", [])) != 3 or len(columns.get("accel", [])) != 3:
-        raise ScenarioError(f"{path}: source.imu.gyro and source.imu.accel must name three columns each (x, y, z)")
-    timecols = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
-    for c in timecols + need:
-        if c not in header:
-            raise ScenarioError(f"{path}, line 1: no column {c!r} (the header has {', '.join(header)})")
+    time = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
-    if gu not in _GYRO_UNITS:
-        raise ScenarioError(f"source.imu.gyro_unit: {gu!r} is not one of {', '.join(_GYRO_UNITS)}")
-    if au not in _ACCEL_UNITS:
-        raise ScenarioError(f"source.imu.accel_unit: {au!r} is not one of {', '.join(_ACCEL_UNITS)}")
-    kind = columns.get("kind", "rates")
-    if kind not in ("rates", "increments"):
-        raise ScenarioError(f"source.imu.kind: {kind!r} is not 'rates' or 'increments'")
-    rows = [ln.split(",") for ln in lines[1:] if ln.strip()]
-    widths = {len(r) for r in rows}
-    if len(widths) > 1:
-        i = next(i for i, r in enumerate(rows) if len(r) != len(header))
-        raise ScenarioError(f"{path}, line {i + 2}: {len(rows[i])} fields, the header has {len(header)}")
-    df = pd.DataFrame(rows, columns=header)[timecols + need].apply(lambda s: s.str.strip())
-    df = _numeric(df, path, 2)
-    if "time" in columns:
-        t = df[columns["time"]].to_numpy(float)
-    else:
-        t = df[timecols[0]].to_numpy(float) * _WEEK + df[timecols[1]].to_numpy(float)
-    gyro = df[list(columns["gyro"])].to_numpy(float) * _GYRO_UNITS[gu]
-    accel = df[list(columns["accel"])].to_numpy(float) * _ACCEL_UNITS[au]
-    dt = np.diff(t)
-    if (dt <= 0).any():
-        i = int(np.argmax(dt <= 0))
-        raise ScenarioError(f"{path}, line {i + 3}, column {timecols[-1]!r}: time does not increase ({t[i + 1]:.6f} s after {t[i]:.6f} s)")
-    if (dt > max_gap).any():
-        i = int(np.argmax(dt > max_gap))
-        raise ScenarioError(
-            f"{path}, line {i + 3}, column {timecols[-1]!r}: a gap of {dt[i]:.3f} s in the IMU log exceeds source.imu.max_gap = {max_gap} s")
-    if kind == "increments":
-        step = np.r_[dt[:1], dt]
-        gyro = gyro / step[:, None]
-        accel = accel / step[:, None]
-    mags = np.linalg.norm(accel, axis=1)
-    if np.median(mags) > 50 or np.median(mags) < 2:
-        raise ScenarioError(
-            f"{path}: median specific force {np.median(mags):.3g} m/s² after converting from {au!r}; at rest it is about 9.8: check source.imu.accel_unit")
+    try:
+        t, gyro, accel = _core.read_imu_csv(
+            str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
+            _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
+            ["source.imu.gyro_unit", "source.imu.accel_unit"])
+    except OSError as e:
+        raise ScenarioError(str(e)) from None
+    except ValueError as e:
+        raise ScenarioError(str(e)) from None
     return ImuLog(t, gyro, accel, str(path))
 
 
@@ -260,7 +276,7 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     imu_cfg = source.get("imu")
     if not isinstance(imu_cfg, Mapping):
         raise ScenarioError("source.imu: a table with file and columns is required")
-    imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg, float(imu_cfg.get("max_gap", 0.1)))
+    imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg)
     ref = None
     if "reference" in source:
         ref = read_pos(file_in(source, base, "source.reference", "reference"))
@@ -336,6 +352,7 @@ def logged_source(sc: Any) -> Any:
         raise ScenarioError(str(e)) from None
     span = float(t[-1] - t[0])
     dt = float(np.median(np.diff(t))) if len(t) > 1 else float("nan")
+    _warn_partial(data["imu_log"], t, float(src.time0) if src is not None else float(data["t0"]), what)
     if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
         raise ScenarioError(
             f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: {what} spans {span:g} s "
@@ -346,6 +363,31 @@ def logged_source(sc: Any) -> Any:
         return _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"])
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+
+
+#: Seconds by which an IMU log may start after, or end before, the GNSS log without a warning.
+PARTIAL_SLACK = 10.0
+
+
+def _warn_partial(imu: ImuLog, t: np.ndarray, t0: float, what: str) -> None:
+    """A :class:`PartialLogWarning` with both spans when the IMU log starts more than
+    :data:`PARTIAL_SLACK` s after the GNSS epochs or ends more than that before them (the run
+    processes the overlap; faults outside it are never applied). Shorter offsets are the usual
+    stagger of two loggers started by hand (the bundled drive's IMU starts 3.4 s after its
+    GNSS), and the INS navigates only after its alignment anyway."""
+    import warnings
+
+    from ._errors import PartialLogWarning
+
+    g0, g1 = t0 + float(t[0]), t0 + float(t[-1])
+    late, early = float(imu.t[0]) - g0, g1 - float(imu.t[-1])
+    if late > PARTIAL_SLACK or early > PARTIAL_SLACK:
+        parts = ([f"starts {late:.1f} s after"] if late > PARTIAL_SLACK else []) + ([f"ends {early:.1f} s before"] if early > PARTIAL_SLACK else [])
+        warnings.warn(
+            f"the IMU log {imu.path} ({_gpst(imu.t[0])}–{_gpst(imu.t[-1])} GPST) {' and '.join(parts)} {what} "
+            f"({_gpst(g0)}–{_gpst(g1)} GPST): only their overlap is navigated, {float(t[0]) + max(late, 0.0):g}–"
+            f"{float(t[-1]) - max(early, 0.0):g} s of the run; faults outside it are never applied",
+            PartialLogWarning, stacklevel=3)
 
 
 def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], max_lag: int = 2000) -> tuple[float, np.ndarray]:

@@ -46,6 +46,7 @@ RUN_COLUMNS = [
     "clear_delay",
     "at_onset",
     "alarm_fraction",
+    "applied",
     "false_alarm_epochs",
     "outside_epochs",
     "wrong_isolations",
@@ -95,6 +96,7 @@ SUMMARY_FIGURES = [
     "position_error_rms",
     "latitude_error_rms",
     "fused_alt_rms",
+    "not_applied_runs",
 ]
 
 
@@ -264,11 +266,16 @@ class Campaign:
                 # have nothing to do with the fault).
                 rec.update({k: math.nan for k in ("detection_probability", "detection_ci_low", "detection_ci_high", "in_alarm_at_onset", "alarm_fraction", "delay_mean", "delay_median", "delay_p95", "clear_delay_mean", "false_alarm_rate", "false_alarm_ci_low", "false_alarm_ci_high", "wrong_isolations")})
             elif is_fault:
+                # Runs whose fault never reached a processed measurement (drawn past the end
+                # of a partial log) are not missed detections: left out, counted apart.
+                rec["not_applied_runs"] = int((~g["applied"].astype(bool)).sum())
+                g = g[g["applied"].astype(bool)]
+                n = len(g)
                 det = int(g["detected"].sum())
                 lo, hi = wilson(np.array([det]), np.array([n]))
                 d = g.loc[g["detected"], "delay"].to_numpy()
                 rec.update(
-                    detection_probability=det / n,
+                    detection_probability=det / n if n else math.nan,
                     detection_ci_low=float(lo[0]),
                     detection_ci_high=float(hi[0]),
                     in_alarm_at_onset=float(g["at_onset"].mean()),
@@ -587,7 +594,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
             "fault_id": np.tile(fid, n),
             "pf": np.tile(pf.astype(float), n),
         }
-        for k in ("detected", "delay", "clear_delay", "at_onset", "alarm_fraction", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
+        for k in ("detected", "delay", "clear_delay", "at_onset", "alarm_fraction", "applied", "false_alarm_epochs", "outside_epochs", "wrong_isolations", *FDE_COUNTS):
             cols[k] = ch[k].reshape(-1)
         for k in ("att_rms", "att_max", "pos_rms", "pos_max", "lat_rms", "lat_max", "fused_alt_rms", "fused_alt_max"):
             cols[k] = np.repeat(ch[k], c)

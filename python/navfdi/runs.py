@@ -885,7 +885,8 @@ def _warn_never_applied(sc: Scenario, record: dict[str, Any]) -> None:
             where = f" (satellite {f['satellite']})" if f.get("satellite") else ""
             warnings.warn(
                 f"fault {f['id']} on {f['sensor']}{where}: never applied: the sensor takes no measurement"
-                f"{' with the satellite in view' if where else ''} inside [{f['start']:g}, {f['end']:g}) s; it is left out of the detection tables",
+                f"{' with the satellite in view' if where else ''} inside [{f['start']:g}, {f['end']:g}) s"
+                f"{' that the INS navigated (before its alignment or after the IMU log ends)' if 'nav' in record else ''}; it is left out of the detection tables",
                 NeverAppliedWarning,
                 stacklevel=3,
             )

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from navfdi import _core
-from navfdi._errors import NeverAppliedWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
+from navfdi._errors import NeverAppliedWarning, PartialLogWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
 from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, split

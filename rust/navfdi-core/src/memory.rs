@@ -130,3 +130,88 @@ mod tests {
         assert!(check("x", 1e30, "d", "a").is_err());
     }
 }
+
+/// Largest ratio of decompressed to compressed size [`open_bounded`] accepts (numeric CSV and
+/// RINEX compress 3–20×; 300 million blank lines fit in under a megabyte of gzip).
+pub const MAX_INFLATION: u64 = 200;
+
+/// A reader that fails once more than `cap` bytes have come through, with an error of `kind`
+/// (`InvalidData` for an implausible inflation, `FileTooLarge` for the memory limit) saying
+/// `what`.
+struct Capped<R> {
+    inner: R,
+    left: u64,
+    what: String,
+    kind: std::io::ErrorKind,
+}
+
+impl<R: std::io::Read> std::io::Read for Capped<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if n as u64 > self.left {
+            return Err(std::io::Error::new(self.kind, self.what.clone()));
+        }
+        self.left -= n as u64;
+        Ok(n)
+    }
+}
+
+/// Open `path` as a byte stream, decompressing gzip (by its magic bytes), bounded: a `.gz` may
+/// inflate to [`MAX_INFLATION`] times its size, and nothing beyond the memory limit
+/// ([`available`]) is read. `path` must be a regular file (not a device or a pipe, which
+/// could stream forever or block).
+pub fn open_bounded(path: &str) -> Result<Box<dyn std::io::Read>> {
+    use std::io::{BufReader, Read};
+    let meta = std::fs::metadata(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    if !meta.is_file() {
+        return Err(Error::Io(format!(
+            "{path}: not a regular file (a directory, device or pipe); give the path of a file"
+        )));
+    }
+    let mut f = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    let mut magic = [0u8; 2];
+    let got = f
+        .read(&mut magic)
+        .map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    drop(f);
+    let f = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
+    let limit = (FRACTION * available()) as u64;
+    if got == 2 && magic == [0x1f, 0x8b] {
+        let cap = meta.len().saturating_mul(MAX_INFLATION).min(limit);
+        Ok(Box::new(Capped {
+            inner: flate2::read::MultiGzDecoder::new(BufReader::new(f)),
+            left: cap,
+            what: format!(
+                "{path}: decompresses to more than {} MB ({MAX_INFLATION} times its {} kB): not a plausible log (a compression bomb or a corrupted file)",
+                cap / 1_000_000,
+                meta.len() / 1000
+            ),
+            kind: std::io::ErrorKind::InvalidData,
+        }))
+    } else {
+        Ok(Box::new(Capped {
+            inner: BufReader::new(f),
+            left: limit,
+            what: format!(
+                "{path}: larger than the {} of memory that may be used",
+                human(limit as f64)
+            ),
+            kind: std::io::ErrorKind::FileTooLarge,
+        }))
+    }
+}
+
+/// The navfdi error of an I/O error `e` while reading `path` through [`open_bounded`]: its
+/// caps as [`Error::Format`] (implausible inflation) or [`Error::TooLarge`] (memory), anything
+/// else as `other(e)`.
+pub fn read_error(e: &std::io::Error, other: impl FnOnce(&std::io::Error) -> Error) -> Error {
+    match (e.kind(), e.get_ref()) {
+        (std::io::ErrorKind::InvalidData, Some(inner))
+            if inner.to_string().contains("decompresses to more than") =>
+        {
+            Error::Format(inner.to_string())
+        }
+        (std::io::ErrorKind::FileTooLarge, Some(inner)) => Error::TooLarge(inner.to_string()),
+        _ => other(e),
+    }
+}

@@ -94,9 +94,8 @@ pub fn window_alarm(
     let is_test = |k: usize| tested.is_none_or(|m| m.get(k).copied().unwrap_or(false));
     let first = (0..t.len()).find(|&k| is_test(k) && t[k] >= ws && t[k] < we);
     // In alarm at its first test with the alarm raised at the test before (before the fault).
-    let at_onset = first.is_some_and(|k| {
-        alarm[k] && (0..k).rev().find(|&j| is_test(j)).is_some_and(|j| alarm[j])
-    });
+    let at_onset = first
+        .is_some_and(|k| alarm[k] && (0..k).rev().find(|&j| is_test(j)).is_some_and(|j| alarm[j]));
     let (mut n, mut a) = (0u32, 0u32);
     for (k, &tk) in t.iter().enumerate() {
         if is_test(k) && tk >= ws && tk < we {
@@ -316,24 +315,29 @@ mod tests {
         // `false` (loosely coupled) - they must not split the alarm or dilute its share.
         let t: Vec<f64> = (0..24).map(|k| k as f64 * 0.25).collect();
         let tested: Vec<bool> = (0..24).map(|k| k % 4 == 0).collect();
-        let alarm: Vec<bool> = (0..24).map(|k| k % 4 == 0 && (8..20).contains(&k)).collect();
+        let alarm: Vec<bool> = (0..24)
+            .map(|k| k % 4 == 0 && (8..20).contains(&k))
+            .collect();
         let ivs = test_intervals(&alarm, Some(&tested));
         assert_eq!(ivs, vec![((8, Some(20)), 3)]);
         // Held alarm flags at untested epochs (federated) give the same interval.
         let held: Vec<bool> = (0..24).map(|k| (8..20).contains(&k)).collect();
         assert_eq!(test_intervals(&held, Some(&tested)), ivs);
         // Every test of [2, 5) s (epochs 8, 12, 16) alarmed: share 1, not 1/4.
-        assert_eq!(window_alarm(&t, &alarm, Some(&tested), (2.0, 5.0)), (false, 1.0));
+        assert_eq!(
+            window_alarm(&t, &alarm, Some(&tested), (2.0, 5.0)),
+            (false, 1.0)
+        );
         assert_eq!(window_alarm(&t, &alarm, None, (2.0, 5.0)), (false, 0.25));
         // In alarm at onset: the test before the window alarmed (untested epochs skipped).
-        assert_eq!(window_alarm(&t, &alarm, Some(&tested), (3.0, 5.0)), (true, 1.0));
+        assert_eq!(
+            window_alarm(&t, &alarm, Some(&tested), (3.0, 5.0)),
+            (true, 1.0)
+        );
         // Still open at the end.
         let open: Vec<bool> = (0..24).map(|k| k >= 16).collect();
         assert_eq!(test_intervals(&open, Some(&tested)), vec![((16, None), 2)]);
-        assert_eq!(
-            tested_of_nan(),
-            vec![true, false, true]
-        );
+        assert_eq!(tested_of_nan(), vec![true, false, true]);
     }
 
     fn tested_of_nan() -> Vec<bool> {

@@ -69,6 +69,11 @@ pub struct CellMetrics {
     pub at_onset: bool,
     /// Fault cells: fraction of the fault's epochs in alarm (NaN for `none` cells).
     pub alarm_fraction: f64,
+    /// Fault cells: the fault reached a measurement the filter processed
+    /// ([`RunRecord::faults_applied`]); a fault that did not (outside the navigated span of a
+    /// partial log, or its sensor not measuring) is left out of the detection figures.
+    /// Always true for `none` cells.
+    pub applied: bool,
     /// Satellite-FDE counts (tight architecture; all zero otherwise): for a fault cell the
     /// fault's, for the `none` cell the outside epochs' ([`crate::metrics::SatFaultMetrics`]).
     pub sat: crate::metrics::SatFaultMetrics,
@@ -290,6 +295,9 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
             wrong_isolations: 0,
             at_onset: false,
             alarm_fraction: f64::NAN,
+            applied: c
+                .fault
+                .is_none_or(|fi| rec.faults_applied.get(fi).copied().unwrap_or(true)),
             sat: Default::default(),
         };
         if let Some(sr) = &rec.sats {

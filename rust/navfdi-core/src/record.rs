@@ -393,6 +393,28 @@ impl RunRecord {
         }
     }
 
+    /// Runs on recorded logs: a fault counts as applied only if its sensor measured at an epoch
+    /// in its window that the INS navigated (after the alignment, before the IMU log ends):
+    /// a fault outside the processed span is never applied, not missed.
+    pub fn restrict_faults_to_navigated(&mut self, spec: &ScenarioSpec, models: &Models) {
+        if self.nav.is_empty() {
+            return;
+        }
+        let cols = NAV_COLUMNS.len();
+        for (i, f) in spec.faults.iter().enumerate() {
+            let Some(applied) = self.faults_applied.get_mut(i) else {
+                continue;
+            };
+            let si = spec.sensor_index(&f.sensor);
+            *applied &= models.t.iter().enumerate().any(|(k, &t)| {
+                t >= f.start
+                    && t < f.end
+                    && self.nav.get(k * cols).is_some_and(|v| v.is_finite())
+                    && si.is_some_and(|si| models.available.get(si).is_some_and(|a| a[k]))
+            });
+        }
+    }
+
     /// Append epoch `k`'s navigation error `x_true − x` (NaN without a reference) and 1σ from
     /// `p`, and step the state chi-square test (if configured) on `x`, `p` with the epoch's Φ
     /// and Q.

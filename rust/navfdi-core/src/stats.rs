@@ -13,7 +13,7 @@ use crate::error::{Error, Result};
 use crate::validate::{check_probability, check_symmetric};
 use nalgebra::DMatrix;
 use statrs::distribution::{ChiSquared, Continuous, ContinuousCDF};
-use statrs::function::gamma::{gamma_lr, ln_gamma};
+use statrs::function::gamma::{checked_gamma_lr, ln_gamma};
 
 fn check_dof(dof: usize) -> Result<()> {
     if dof == 0 {
@@ -103,6 +103,41 @@ fn chi2_threshold_uncached(pf: f64, dof: usize) -> Result<f64> {
     Ok(x)
 }
 
+/// The regularised lower incomplete gamma function `P(a, x)` for `a > 0`, total on `x`: 0 at
+/// `x ≤ 0` (and where `x` is so small that statrs's scaling makes it 0), 1 at `+∞`, NaN at
+/// NaN. statrs 0.19's `gamma_lr` panics for `x = 0` (`XInvalid`), which its own
+/// `Gamma::cdf` reaches for any positive `x` below about 1e-308 (the rate scaling
+/// underflows): every chi-square probability of navfdi goes through here or
+/// [`chi2_sf`] instead.
+pub fn lower_gamma(a: f64, x: f64) -> f64 {
+    if x.is_nan() || a.is_nan() {
+        return f64::NAN;
+    }
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x.is_infinite() {
+        return 1.0;
+    }
+    checked_gamma_lr(a, x).unwrap_or(f64::NAN)
+}
+
+/// Upper tail `P(χ²(dof) ≥ x)` of the central chi-square, total on `x` (1 at `x ≤ 0` or
+/// below the smallest normal float, 0 at `+∞`, NaN at NaN; see [`lower_gamma`] for the
+/// statrs bug it avoids). `dof ≥ 1`.
+pub fn chi2_sf(dof: usize, x: f64) -> f64 {
+    if x.is_nan() || dof == 0 {
+        return f64::NAN;
+    }
+    if !(0.5 * x > 0.0) {
+        return 1.0;
+    }
+    if x.is_infinite() {
+        return 0.0;
+    }
+    statrs::function::gamma::checked_gamma_ur(0.5 * dof as f64, 0.5 * x).unwrap_or(f64::NAN)
+}
+
 /// Improved-SPRT threshold `T(H1) = ln((1 − pm)/pf)`.
 ///
 /// Requires `pf + pm < 1` so that the threshold is positive. Reference values:
@@ -149,10 +184,10 @@ pub fn ncx2_cdf(x: f64, dof: usize, lambda: f64) -> Result<f64> {
     let k = dof as f64;
     let half = 0.5 * lambda;
     if half == 0.0 {
-        return Ok(gamma_lr(0.5 * k, 0.5 * x));
+        return Ok(lower_gamma(0.5 * k, 0.5 * x));
     }
     let log_w = |j: f64| -half + j * half.ln() - ln_gamma(j + 1.0);
-    let term = |j: f64| gamma_lr(0.5 * k + j, 0.5 * x);
+    let term = |j: f64| lower_gamma(0.5 * k + j, 0.5 * x);
     let mode = half.floor();
     let mut sum = 0.0;
     let mut mass = 0.0;
@@ -272,6 +307,25 @@ pub fn mdb_with(a: &DMatrix<f64>, lambda0: f64) -> Result<Vec<f64>> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn chi_square_probabilities_are_total_where_statrs_panics() {
+        use statrs::distribution::{ChiSquared, ContinuousCDF};
+        // statrs 0.19: Gamma::cdf of a positive x below ~1e-308 scales it to 0 and panics in
+        // gamma_lr; navfdi's own functions answer.
+        let tiny = 5e-324;
+        assert!(std::panic::catch_unwind(|| ChiSquared::new(3.0).unwrap().cdf(tiny)).is_err());
+        assert_eq!(lower_gamma(1.5, 0.5 * tiny), 0.0);
+        assert_eq!(chi2_sf(3, tiny), 1.0);
+        assert_eq!(ncx2_cdf(tiny, 3, 0.0).unwrap(), 0.0);
+        assert!(ncx2_cdf(tiny, 3, 2.0).unwrap() < 1e-300);
+        assert_eq!(chi2_sf(3, f64::INFINITY), 0.0);
+        assert!(chi2_sf(3, f64::NAN).is_nan() && lower_gamma(1.0, f64::NAN).is_nan());
+        assert_eq!(lower_gamma(2.0, f64::INFINITY), 1.0);
+        assert_eq!(chi2_sf(3, -1.0), 1.0);
+        let exact = ChiSquared::new(3.0).unwrap().sf(7.8);
+        assert!((chi2_sf(3, 7.8) - exact).abs() < 1e-15);
+    }
+
     use super::*;
     use approx::assert_relative_eq;
 

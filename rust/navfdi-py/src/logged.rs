@@ -241,3 +241,60 @@ impl PyLoggedSource {
         Ok(out)
     }
 }
+
+type ImuArrays<'py> = (
+    Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
+);
+
+/// Read an IMU CSV log (`navfdi_core::logs::imu_csv::read_imu_csv`, GIL released): `time` is
+/// one column name (GPS seconds) or `(week, seconds)`; `gyro`, `accel` three column names
+/// each; `gyro_scale` to rad/s and `accel_scale` to m/s²; `increments`: per-sample increments;
+/// `max_gap` (s); `unit_fields`: the unit fields' names for messages. Returns `t` (N,) GPS s,
+/// `gyro` (N, 3) rad/s and `accel` (N, 3) m/s². FileFormatError names the file, line and
+/// column of bad input; OSError an unreadable path.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields))]
+pub fn read_imu_csv<'py>(
+    py: Python<'py>,
+    path: String,
+    time: Vec<String>,
+    gyro: [String; 3],
+    accel: [String; 3],
+    gyro_scale: f64,
+    accel_scale: f64,
+    increments: bool,
+    max_gap: f64,
+    unit_fields: [String; 2],
+) -> PyResult<ImuArrays<'py>> {
+    use navfdi_core::logs::imu_csv::{read_imu_csv as read, ImuCsvSpec, TimeColumns};
+    let time = match time.as_slice() {
+        [s] => TimeColumns::Seconds(s.clone()),
+        [w, s] => TimeColumns::WeekSeconds(w.clone(), s.clone()),
+        _ => {
+            return Err(PyValueError::new_err(
+                "time: one column (GPS seconds) or two (GPS week, seconds of week)",
+            ))
+        }
+    };
+    let spec = ImuCsvSpec {
+        time,
+        gyro,
+        accel,
+        gyro_scale,
+        accel_scale,
+        increments,
+        max_gap,
+        unit_fields,
+    };
+    let table = crate::interrupt::run(py, move |_| read(&path, &spec))?;
+    let n = table.t.len();
+    let flat = |v: Vec<[f64; 3]>| -> Vec<f64> { v.into_iter().flatten().collect() };
+    Ok((
+        crate::convert::to_numpy(py, table.t, &[n])?,
+        crate::convert::to_numpy(py, flat(table.gyro), &[n, 3])?,
+        crate::convert::to_numpy(py, flat(table.accel), &[n, 3])?,
+    ))
+}

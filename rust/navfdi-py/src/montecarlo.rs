@@ -122,6 +122,16 @@ pub fn rows_to_py<'py>(
     )?;
     d.set_item("delay", to_numpy(py, grid(&|m| m.delay), &[n, c])?)?;
     d.set_item(
+        "applied",
+        to_numpy(
+            py,
+            rows.iter()
+                .flat_map(|r| r.cells.iter().map(|m| m.applied))
+                .collect::<Vec<bool>>(),
+            &[n, c],
+        )?,
+    )?;
+    d.set_item(
         "at_onset",
         to_numpy(
             py,

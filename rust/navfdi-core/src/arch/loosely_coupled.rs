@@ -275,13 +275,13 @@ fn run<const NS: usize>(
         if rec.converged_at.is_none() && !tested.is_empty() {
             let settled = l.convergence == 0.0
                 || tested.iter().all(|(_, meas, o)| {
-                o.inn.as_ref().is_some_and(|(_, sv)| {
-                    let m = meas.r.nrows() as f64;
-                    let r = meas.r.diagonal().sum() / m;
-                    let hph = (sv.diagonal().sum() - meas.r.diagonal().sum()) / m;
-                    hph.max(0.0) <= l.convergence * l.convergence * r
-                })
-            });
+                    o.inn.as_ref().is_some_and(|(_, sv)| {
+                        let m = meas.r.nrows() as f64;
+                        let r = meas.r.diagonal().sum() / m;
+                        let hph = (sv.diagonal().sum() - meas.r.diagonal().sum()) / m;
+                        hph.max(0.0) <= l.convergence * l.convergence * r
+                    })
+                });
             if settled {
                 rec.converged_at = Some(tk);
             }
@@ -453,6 +453,7 @@ fn run<const NS: usize>(
         rec.sources.push(fused);
         record_nav(&mut rec, &s, &kf, &lever, &logged.origin, src, k);
     }
+    rec.restrict_faults_to_navigated(spec, models);
     Ok(rec)
 }
 

@@ -309,6 +309,7 @@ pub fn run_tight_ins(
     rec.integrity = integ;
     sat.score(&rec.t, &spec.faults, &sensor.name);
     rec.sats = Some(sat);
+    rec.restrict_faults_to_navigated(spec, models);
     Ok(rec)
 }
 

@@ -138,7 +138,19 @@ fn normalise_obs_header(path: &str, lines: &[&str], end: usize) -> Result<Normal
     let mut counts = HashMap::new();
     let mut current = ' ';
     let mut k = 0usize;
+    // The file's system (RINEX VERSION / TYPE, column 41: G, R, E, C, J, I, S or M).
+    let file_sys = lines
+        .iter()
+        .find(|l| label(l) == "RINEX VERSION / TYPE")
+        .and_then(|l| l.get(40..41))
+        .and_then(|c| c.chars().next())
+        .unwrap_or('M');
     for (i, line) in lines.iter().enumerate() {
+        if label(line) == "TIME OF FIRST OBS" {
+            out.push_str(&first_obs_time_system(path, i + 1, line, file_sys)?);
+            out.push('\n');
+            continue;
+        }
         if i < end && label(line) == "SYS / # / OBS TYPES" {
             let mut l: Vec<u8> = line.as_bytes().to_vec();
             let sys = line.chars().next().unwrap_or(' ');
@@ -175,6 +187,42 @@ fn normalise_obs_header(path: &str, lines: &[&str], end: usize) -> Result<Normal
         out.push('\n');
     }
     Ok((out, renamed, counts))
+}
+
+/// The `TIME OF FIRST OBS` line with its time system (columns 49–51) made explicit for the
+/// rinex crate, which reads a blank field as TAI (19 s off GPS time) and fails on `GLO`
+/// without naming the line. The format: blank means the file's single system's time (GPS
+/// for GPS and for mixed files); `GLO` is UTC (the crate's `UTC`, converted to GPS time with
+/// the leap seconds). An unknown system is an error naming the line.
+fn first_obs_time_system(path: &str, line_no: usize, line: &str, file_sys: char) -> Result<String> {
+    let field = line.get(48..51).unwrap_or("").trim();
+    let scale = match field {
+        "" => match file_sys {
+            'E' => "GAL",
+            'C' => "BDT",
+            'J' => "QZS",
+            'R' => "UTC",
+            _ => "GPS",
+        },
+        "GPS" | "GAL" | "BDT" | "QZS" => field,
+        "GLO" | "UTC" => "UTC",
+        other => {
+            return Err(format_err(
+                path,
+                Some(line_no),
+                format!("TIME OF FIRST OBS: time system {other:?} (columns 49–51) is not one of GPS, GLO, GAL, BDT, QZS"),
+            ))
+        }
+    };
+    let mut l: Vec<char> = line.chars().collect();
+    while l.len() < 60 {
+        l.push(' ');
+    }
+    let padded: String = format!("{scale:<3}");
+    for (j, c) in padded.chars().enumerate() {
+        l[48 + j] = c;
+    }
+    Ok(l.into_iter().collect())
 }
 
 fn to_sat(sv: &rinex::prelude::SV) -> Option<Sat> {

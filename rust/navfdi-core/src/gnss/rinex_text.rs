@@ -54,22 +54,17 @@ pub fn read_text(path: &str) -> Result<String> {
         &format!("a {} file", crate::memory::human(size)),
         "split the file (e.g. with gfzrnx or teqc) and process the parts",
     )?;
-    let file = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
     let mut head = [0u8; 2];
     let gz = {
         use std::io::Read;
-        let mut f = &file;
+        let mut f = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
         let got = f
             .read(&mut head)
             .map_err(|e| Error::Io(format!("{path}: {e}")))?;
         got == 2 && head == [0x1f, 0x8b]
     };
-    let file = std::fs::File::open(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
-    let bytes = if gz {
-        read_until_nul(path, flate2::read::MultiGzDecoder::new(file), true)?
-    } else {
-        read_until_nul(path, file, false)?
-    };
+    // Bounded: a .gz may not inflate beyond crate::memory::MAX_INFLATION times its size.
+    let bytes = read_until_nul(path, crate::memory::open_bounded(path)?, gz)?;
     if bytes.is_empty() {
         return Err(format_err(path, None, "the file is empty"));
     }
@@ -349,11 +344,13 @@ pub(crate) fn read_until_nul(path: &str, mut src: impl std::io::Read, gz: bool) 
     let mut buf = vec![0u8; 1 << 16];
     loop {
         let got = src.read(&mut buf).map_err(|e| {
-            if gz {
-                format_err(path, None, format!("corrupt or truncated gzip data: {e}"))
-            } else {
-                Error::Io(format!("{path}: {e}"))
-            }
+            crate::memory::read_error(&e, |e| {
+                if gz {
+                    format_err(path, None, format!("corrupt or truncated gzip data: {e}"))
+                } else {
+                    Error::Io(format!("{path}: {e}"))
+                }
+            })
         })?;
         if got == 0 {
             return Ok(out);

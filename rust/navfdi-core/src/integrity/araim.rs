@@ -49,6 +49,62 @@ pub struct Ism {
     pub p_const: Vec<f64>,
 }
 
+impl Ism {
+    /// Check every value: variances positive and finite, nominal biases finite and ≥ 0,
+    /// satellite priors in (0, 1), constellation priors in [0, 1). The error names the field and satellite (NaN never
+    /// passes: a NaN bias or prior would make the levels vanish).
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("c_int", &self.c_int), ("c_acc", &self.c_acc)] {
+            if let Some((i, x)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !(**x > 0.0 && x.is_finite()))
+            {
+                return Err(Error::InvalidParameter {
+                    name: format!("{name}[{i}]"),
+                    value: *x,
+                    requirement: "a variance must be positive and finite".into(),
+                });
+            }
+        }
+        if let Some((i, x)) = self
+            .b_nom
+            .iter()
+            .enumerate()
+            .find(|(_, x)| !(**x >= 0.0 && x.is_finite()))
+        {
+            return Err(Error::InvalidParameter {
+                name: format!("b_nom[{i}]"),
+                value: *x,
+                requirement: "a nominal bias bound must be finite and non-negative (m)".into(),
+            });
+        }
+        // A constellation prior may be 0 (no constellation fault monitored); a satellite's may
+        // not (every satellite can fail).
+        for (name, v, zero) in [
+            ("p_sat", &self.p_sat, false),
+            ("p_const", &self.p_const, true),
+        ] {
+            if let Some((i, x)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !((**x > 0.0 || (zero && **x == 0.0)) && **x < 1.0))
+            {
+                return Err(Error::InvalidParameter {
+                    name: format!("{name}[{i}]"),
+                    value: *x,
+                    requirement: if zero {
+                        "a constellation prior must be in [0, 1) (0: none monitored)".into()
+                    } else {
+                        "a satellite prior must be a probability in (0, 1)".into()
+                    },
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Integrity allocation (LPV-200 in [`Allocation::lpv200`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Allocation {
@@ -189,6 +245,10 @@ fn phi(x: f64) -> f64 {
 /// Inverse of [`q`], as `−Φ⁻¹(p)`: evaluating `Φ⁻¹(1 − p)` loses the tail's precision for
 /// p ~ 1e-9 (the horizontal false-alert allocation per mode).
 fn q_inv(p: f64) -> f64 {
+    // statrs panics outside [0, 1]; the inputs are validated, but no value may panic.
+    if !(p > 0.0 && p < 1.0) {
+        return f64::NAN;
+    }
     -Normal::standard().inverse_cdf(p)
 }
 
@@ -442,19 +502,7 @@ pub(crate) fn araim_inner(
             got: format!("({},)", ism.p_const.len()),
         });
     }
-    for (name, v) in [("c_int", &ism.c_int), ("c_acc", &ism.c_acc)] {
-        if let Some((i, x)) = v
-            .iter()
-            .enumerate()
-            .find(|(_, x)| !(**x > 0.0 && x.is_finite()))
-        {
-            return Err(Error::InvalidParameter {
-                name: format!("{name}[{i}]"),
-                value: *x,
-                requirement: "a variance must be positive and finite".into(),
-            });
-        }
-    }
+    ism.validate()?;
     let mut g = DMatrix::zeros(n, 3 + nc);
     for (i, r) in rows.iter().enumerate() {
         for c in 0..3 {

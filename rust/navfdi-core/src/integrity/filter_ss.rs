@@ -261,7 +261,6 @@ impl SeparationBank {
     /// alarm stands without an exclusion (the ADD's answer to an exclusion it cannot
     /// validate).
     pub fn identify(&self, main: &KalmanFilter) -> Option<usize> {
-        use statrs::distribution::{ChiSquared, ContinuousCDF};
         let (x0, p0) = (main.x(), main.p());
         let mut scores: Vec<(f64, usize)> = Vec::new();
         for (s, f) in self.subs.iter().enumerate() {
@@ -286,9 +285,7 @@ impl SeparationBank {
                 continue;
             }
             // log of the χ² tail: comparable across ranks, and finite far in the tail.
-            let tail = ChiSquared::new(rank as f64)
-                .map(|c| c.sf(m2))
-                .unwrap_or(f64::NAN);
+            let tail = crate::stats::chi2_sf(rank, m2);
             let score = if tail > 0.0 { -tail.ln() } else { m2 };
             scores.push((score, s));
         }

@@ -8,9 +8,11 @@
 //! layer checks the arrays again (finite, increasing, overlapping) before anything runs.
 //!
 //! The record epochs are the GNSS log's epochs (time 0 = its first epoch). A GNSS sensor of
-//! the scenario takes a measurement at the epochs on its `rate` grid outside its outages.
+//! the scenario takes a measurement at every n-th log epoch (its `rate` the log's divided by
+//! n; [`sample_epochs`]) outside its outages, each at its own recorded time.
 //! The reference is scored only at epochs where no GNSS measurement was an input.
 
+pub mod imu_csv;
 mod ranges;
 
 use crate::error::{Error, Result};
@@ -92,10 +94,43 @@ pub struct LoggedSource {
     pub reference: Reference,
 }
 
-/// Whether epoch time `t` (s) is on the grid of a sensor of `rate` Hz starting at 0.
-fn on_grid(t: f64, rate: f64) -> bool {
-    let x = t * rate;
-    (x - x.round()).abs() < 1e-3
+/// The log epochs a sensor of `rate` Hz (`sensor`: its field path for messages) measures at:
+/// every epoch when the rate is the log's, else every n-th interval (n = log rate / rate, an
+/// integer): from the first epoch, an epoch is taken when at least n − ½ median intervals
+/// have passed since the last one taken. Epochs are taken at their own time, so receiver
+/// time-tag jitter (a few ms) and a drifting receiver clock neither drop nor move them, and a
+/// gap restarts the count. A rate above the log's, or not the log's divided by an integer,
+/// is an error naming the rates the log allows.
+pub(crate) fn sample_epochs(t: &[f64], rate: f64, sensor: &str) -> Result<Vec<bool>> {
+    let n = t.len();
+    if n < 2 {
+        return Ok(vec![true; n]);
+    }
+    let mut d: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    d.sort_by(f64::total_cmp);
+    let dt = d[d.len() / 2];
+    let log_rate = 1.0 / dt;
+    let ratio = log_rate / rate;
+    let every = ratio.round();
+    if !(rate > 0.0) || every < 1.0 || (ratio - every).abs() > 0.02 * every {
+        let allowed: Vec<String> = (1..=4)
+            .map(|k| format!("{:.4} Hz", log_rate / k as f64))
+            .collect();
+        return Err(Error::Invalid(format!(
+            "{sensor}.rate = {rate} Hz: the log's epochs are {dt} s apart ({log_rate:.4} Hz); a sensor measures at the log's rate divided by an integer ({}, ...)",
+            allowed.join(", ")
+        )));
+    }
+    let step = (every - 0.5) * dt;
+    let mut out = vec![false; n];
+    let mut last = f64::NEG_INFINITY;
+    for (k, &tk) in t.iter().enumerate() {
+        if tk - last >= step {
+            out[k] = true;
+            last = tk;
+        }
+    }
+    Ok(out)
 }
 
 impl LoggedSource {
@@ -121,6 +156,7 @@ impl LoggedSource {
         let mut z = vec![vec![DVector::zeros(0); epochs]; ns];
         let mut sigma = vec![vec![DVector::zeros(0); epochs]; ns];
         for (si, sen) in spec.sensors.iter().enumerate() {
+            let grid = sample_epochs(&gnss.t, sen.rate, &format!("sensors[{si}]"))?;
             let (pos, vel) = match sen.kind {
                 SensorKind::Gnss => (true, true),
                 SensorKind::GnssPosition => (true, false),
@@ -134,7 +170,7 @@ impl LoggedSource {
             for k in 0..epochs {
                 let t = gnss.t[k];
                 let out = sen.outages.iter().any(|w| t >= w[0] && t < w[1]);
-                if out || !on_grid(t, sen.rate) {
+                if out || !grid[k] {
                     z[si][k] = DVector::from_element(sen.kind.dim(), f64::NAN);
                     continue;
                 }
@@ -237,8 +273,10 @@ impl LoggedSource {
     }
 }
 
-/// The reference's antenna east, north, up (m, from `origin`) and velocity per record epoch
-/// `t` (s): its epochs matched within `tol` s, NaN where unmatched or where `skip(k)`.
+/// The reference east, north, up (m from `origin`) and velocity (m/s) at the epochs `t`: each
+/// reference epoch is matched to the nearest epoch within `tol` s (or a tenth of the epochs'
+/// median interval, if larger: receiver time tags jitter by milliseconds), moved to that
+/// epoch's time with its own velocity when it has one; epochs `skip` says are not scored.
 fn reference_enu(
     r: &GnssLog,
     t: &[f64],
@@ -246,14 +284,22 @@ fn reference_enu(
     tol: f64,
     skip: impl Fn(usize) -> bool,
 ) -> Vec<[f64; 6]> {
+    let mut d: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    d.sort_by(f64::total_cmp);
+    let tol = d.get(d.len() / 2).map_or(tol, |m| tol.max(0.1 * m));
     let mut enu = vec![[f64::NAN; 6]; t.len()];
     for (j, &tr) in r.t.iter().enumerate() {
         let k = t.partition_point(|&x| x < tr - tol);
         if k >= t.len() || (t[k] - tr).abs() > tol || skip(k) {
             continue;
         }
-        let p = origin.to_enu(&r.pos[j]);
         let v = r.vel[j];
+        let shift = if v.iter().all(|x| x.is_finite()) {
+            v * (t[k] - tr)
+        } else {
+            Vector3::zeros()
+        };
+        let p = origin.to_enu(&r.pos[j]) + shift;
         enu[k] = [p.x, p.y, p.z, v.x, v.y, v.z];
     }
     enu
@@ -326,4 +372,40 @@ pub(crate) fn check_imu(imu: &ImuSamples) -> Result<()> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod sampling_tests {
+    use super::sample_epochs;
+
+    #[test]
+    fn jitter_and_clock_drift_drop_no_epoch() {
+        // 4 Hz with ±2 ms jitter, and with an unsteered clock drifting 5 µs/s over 200 s.
+        let jitter: Vec<f64> = (0..800)
+            .map(|k| k as f64 * 0.25 + if k % 2 == 0 { 0.002 } else { -0.002 })
+            .collect();
+        assert!(sample_epochs(&jitter, 4.0, "s").unwrap().iter().all(|&x| x));
+        let one = sample_epochs(&jitter, 1.0, "s").unwrap();
+        assert_eq!(one.iter().filter(|&&x| x).count(), 200);
+        let drift: Vec<f64> = (0..800).map(|k| k as f64 * 0.25 * (1.0 + 5e-6)).collect();
+        assert!(sample_epochs(&drift, 4.0, "s").unwrap().iter().all(|&x| x));
+        // A gap restarts the count: epochs 0, 1 s, then 2.75 s (after the gap), 3.75 s.
+        let gap = [0.0, 0.25, 0.5, 0.75, 1.0, 1.25, 2.75, 3.0, 3.25, 3.5, 3.75];
+        let g = sample_epochs(&gap, 1.0, "s").unwrap();
+        let taken: Vec<f64> = gap.iter().zip(&g).filter(|x| *x.1).map(|x| *x.0).collect();
+        assert_eq!(taken, vec![0.0, 1.0, 2.75, 3.75]);
+    }
+
+    #[test]
+    fn a_rate_the_log_cannot_give_is_refused() {
+        let t: Vec<f64> = (0..40).map(|k| k as f64 * 0.25).collect();
+        for r in [3.0, 8.0, 0.0, -1.0, f64::NAN] {
+            let e = sample_epochs(&t, r, "sensors[0]").unwrap_err().to_string();
+            assert!(
+                e.contains("sensors[0].rate") && e.contains("4.0000 Hz"),
+                "{e}"
+            );
+        }
+        assert!(sample_epochs(&t, 2.0, "s").is_ok());
+    }
 }

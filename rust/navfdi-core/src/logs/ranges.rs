@@ -248,12 +248,13 @@ impl LoggedSource {
             sen.noise.first().copied().unwrap_or(f64::NAN),
             sen.noise.get(1).copied().unwrap_or(f64::NAN),
         );
+        let grid = super::sample_epochs(&times, sen.rate, &format!("sensors[{si}]"))?;
         for (k, ep_rows) in rows.iter().enumerate() {
             let out = sen
                 .outages
                 .iter()
                 .any(|w| times[k] >= w[0] && times[k] < w[1]);
-            let on = !out && super::on_grid(times[k], sen.rate) && !ep_rows.is_empty();
+            let on = !out && grid[k] && !ep_rows.is_empty();
             let m = ep_rows.len();
             let grow = |r: &Row| {
                 let el = if elevation_noise {

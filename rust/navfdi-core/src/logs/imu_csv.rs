@@ -1,0 +1,466 @@
+//! IMU logs in CSV (plain or gzip): one streaming pass from the file to the samples, with the
+//! column mapping, units and checks a scenario's `[source.imu]` names, and errors that name the
+//! file, line and column.
+//!
+//! The file is read through a bounded decompressor ([`open_bounded`]): a `.gz` that inflates
+//! beyond [`crate::memory::MAX_INFLATION`] times its own size (a compression bomb: 300 million blank lines fit in
+//! under a megabyte) or beyond the memory limit is refused before it is held. Memory is
+//! bounded by the samples kept (7 floats per row), not by the file. A UTF-8 byte-order mark is
+//! skipped; blank lines are skipped and do not shift the line numbers reported.
+
+use crate::error::{Error, Result};
+use crate::memory::open_bounded;
+
+/// Largest angular rate accepted (rad/s, about 5 700 deg/s: above any MEMS or tactical range).
+pub const MAX_RATE: f64 = 100.0;
+/// Largest specific force accepted (m/s², about 100 g).
+pub const MAX_SPECIFIC_FORCE: f64 = 1000.0;
+/// Largest median angular rate accepted (rad/s): a log whose median rate is above 57 deg/s
+/// holds deg/s read as rad/s.
+pub const MAX_MEDIAN_RATE: f64 = 1.0;
+
+/// Which columns hold the time.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TimeColumns {
+    /// GPS week and seconds of week.
+    WeekSeconds(String, String),
+    /// GPS seconds since the GPS epoch (1980-01-06).
+    Seconds(String),
+}
+
+/// How to read an IMU CSV log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImuCsvSpec {
+    /// Time columns.
+    pub time: TimeColumns,
+    /// Angular rate (or angle increment) columns x, y, z.
+    pub gyro: [String; 3],
+    /// Specific force (or velocity increment) columns x, y, z.
+    pub accel: [String; 3],
+    /// Factor to rad/s (rad for increments).
+    pub gyro_scale: f64,
+    /// Factor to m/s² (m/s for increments).
+    pub accel_scale: f64,
+    /// The columns hold per-sample increments (divided by the sample interval).
+    pub increments: bool,
+    /// Largest interval between samples accepted (s).
+    pub max_gap: f64,
+    /// Names of the unit fields, for messages (e.g. `source.imu.gyro_unit`).
+    pub unit_fields: [String; 2],
+}
+
+/// An IMU log as read: times (GPS s), rates (rad/s) and specific forces (m/s²) in the IMU's
+/// axes, one row per sample.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ImuTable {
+    /// Sample times (GPS seconds since the GPS epoch), strictly increasing.
+    pub t: Vec<f64>,
+    /// Angular rate per sample (rad/s).
+    pub gyro: Vec<[f64; 3]>,
+    /// Specific force per sample (m/s²).
+    pub accel: Vec<[f64; 3]>,
+}
+
+/// An error at a cell: "`path`, line `l`, column '`col`': `msg`" (without a line when it is 0).
+fn cell_err(path: &str, line: u64, col: &str, msg: impl std::fmt::Display) -> Error {
+    if line > 0 {
+        Error::Format(format!("{path}, line {line}, column '{col}': {msg}"))
+    } else {
+        Error::Format(format!("{path}, column '{col}': {msg}"))
+    }
+}
+
+fn format_err(path: &str, line: Option<u64>, msg: impl std::fmt::Display) -> Error {
+    match line {
+        Some(l) => Error::Format(format!("{path}, line {l}: {msg}")),
+        None => Error::Format(format!("{path}: {msg}")),
+    }
+}
+
+/// Read an IMU CSV log (header line, then one sample per row) as `spec` says. Errors name the
+/// file, the line and the column: a missing column (with the header's), a row with another
+/// number of fields (a trailing comma says so), a value that is not a finite number, time not
+/// increasing, a gap over `max_gap`, a sample beyond [`MAX_RATE`] or [`MAX_SPECIFIC_FORCE`], a
+/// median specific force far from gravity or a median rate over [`MAX_MEDIAN_RATE`] (units),
+/// a file with no sample.
+pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
+    if !(spec.max_gap > 0.0 && spec.max_gap.is_finite()) {
+        return Err(Error::InvalidParameter {
+            name: "source.imu.max_gap".into(),
+            value: spec.max_gap,
+            requirement: "must be a positive number of seconds".into(),
+        });
+    }
+    for (name, v) in [
+        (&spec.unit_fields[0], spec.gyro_scale),
+        (&spec.unit_fields[1], spec.accel_scale),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(Error::InvalidParameter {
+                name: name.clone(),
+                value: v,
+                requirement: "unit factor must be positive".into(),
+            });
+        }
+    }
+    let reader = open_bounded(path)?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(reader);
+    let io = |e: csv::Error| -> Error {
+        let line = e.position().map(|p| p.line());
+        match e.kind() {
+            csv::ErrorKind::Io(io) => {
+                crate::memory::read_error(io, |io| Error::Io(format!("{path}: {io}")))
+            }
+            csv::ErrorKind::Utf8 { .. } => format_err(path, line, "not UTF-8 text"),
+            _ => format_err(path, line, e),
+        }
+    };
+    let header: Vec<String> = rdr
+        .headers()
+        .map_err(io)?
+        .iter()
+        .map(|h| h.trim_start_matches('\u{feff}').trim().to_string())
+        .collect();
+    if header.iter().all(|h| h.is_empty()) {
+        return Err(format_err(
+            path,
+            Some(1),
+            "empty file: a header line naming the columns is expected",
+        ));
+    }
+    let col = |name: &str| -> Result<usize> {
+        header.iter().position(|h| h == name).ok_or_else(|| {
+            format_err(
+                path,
+                Some(1),
+                format!("no column '{name}' (the header has {})", header.join(", ")),
+            )
+        })
+    };
+    let tcols: Vec<usize> = match &spec.time {
+        TimeColumns::WeekSeconds(w, s) => vec![col(w)?, col(s)?],
+        TimeColumns::Seconds(s) => vec![col(s)?],
+    };
+    let g = [
+        col(&spec.gyro[0])?,
+        col(&spec.gyro[1])?,
+        col(&spec.gyro[2])?,
+    ];
+    let a = [
+        col(&spec.accel[0])?,
+        col(&spec.accel[1])?,
+        col(&spec.accel[2])?,
+    ];
+    let width = header.len();
+    let mut out = ImuTable::default();
+    let mut rec = csv::StringRecord::new();
+    let mut last_line = 1u64;
+    let check_every = 1 << 16;
+    loop {
+        match rdr.read_record(&mut rec) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => return Err(io(e)),
+        }
+        let line = rec.position().map_or(last_line + 1, |p| p.line());
+        last_line = line;
+        if rec.len() == 1 && rec.get(0).is_some_and(|f| f.is_empty()) {
+            continue;
+        }
+        if rec.len() != width {
+            let hint = if rec.len() == width + 1 && rec.get(width).is_some_and(|f| f.is_empty()) {
+                " (a trailing comma?)"
+            } else {
+                ""
+            };
+            return Err(format_err(
+                path,
+                Some(line),
+                format!("{} fields, the header has {width}{hint}", rec.len()),
+            ));
+        }
+        let num = |c: usize| -> Result<f64> {
+            let s = rec.get(c).unwrap_or("");
+            match s.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(v),
+                Ok(_) | Err(_) => Err(cell_err(
+                    path,
+                    line,
+                    &header[c],
+                    format!(
+                        "'{s}' is {}",
+                        if s.is_empty() {
+                            "missing"
+                        } else {
+                            "not a finite number"
+                        }
+                    ),
+                )),
+            }
+        };
+        let t = match (tcols.first(), tcols.get(1)) {
+            (Some(&w), Some(&s)) => num(w)? * 604_800.0 + num(s)?,
+            (Some(&s), None) => num(s)?,
+            _ => return Err(format_err(path, Some(line), "no time column")),
+        };
+        let gv = [num(g[0])?, num(g[1])?, num(g[2])?];
+        let av = [num(a[0])?, num(a[1])?, num(a[2])?];
+        if let Some(&prev) = out.t.last() {
+            let tname = tcols.last().map_or("time", |&c| header[c].as_str());
+            if !(t > prev) {
+                return Err(cell_err(
+                    path,
+                    line,
+                    tname,
+                    format!("time does not increase ({t:.6} s after {prev:.6} s)"),
+                ));
+            }
+            if t - prev > spec.max_gap {
+                return Err(cell_err(
+                    path,
+                    line,
+                    tname,
+                    format!(
+                        "a gap of {:.3} s in the IMU log exceeds source.imu.max_gap = {} s",
+                        t - prev,
+                        spec.max_gap
+                    ),
+                ));
+            }
+        }
+        out.t.push(t);
+        out.gyro.push(gv.map(|v| v * spec.gyro_scale));
+        out.accel.push(av.map(|v| v * spec.accel_scale));
+        if out.t.len() % check_every == 0 {
+            crate::memory::check(
+                "reading the IMU log",
+                (out.t.len() * 7 * 8) as f64 * 2.0,
+                &format!("{} samples so far", out.t.len()),
+                "give a shorter log",
+            )?;
+        }
+        // Plausibility of this row (after units and increments are known, below for
+        // increments): rates and forces beyond any IMU's range name their cell.
+        if !spec.increments {
+            plausible(
+                path,
+                line,
+                &header,
+                &g,
+                &a,
+                out.gyro.last(),
+                out.accel.last(),
+            )?;
+        }
+    }
+    if out.t.is_empty() {
+        return Err(format_err(path, None, "no samples (only a header line)"));
+    }
+    if spec.increments {
+        let n = out.t.len();
+        for k in 0..n {
+            let dt = if k == 0 {
+                if n > 1 {
+                    out.t[1] - out.t[0]
+                } else {
+                    f64::NAN
+                }
+            } else {
+                out.t[k] - out.t[k - 1]
+            };
+            if !(dt > 0.0) {
+                return Err(format_err(
+                    path,
+                    None,
+                    "increments need at least two samples",
+                ));
+            }
+            out.gyro[k] = out.gyro[k].map(|v| v / dt);
+            out.accel[k] = out.accel[k].map(|v| v / dt);
+            plausible(
+                path,
+                0,
+                &header,
+                &g,
+                &a,
+                Some(&out.gyro[k]),
+                Some(&out.accel[k]),
+            )?;
+        }
+    }
+    let mut mags: Vec<f64> = out
+        .accel
+        .iter()
+        .map(|f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt())
+        .collect();
+    let mid = mags.len() / 2;
+    let med = *mags.select_nth_unstable_by(mid, f64::total_cmp).1;
+    if !(2.0..=50.0).contains(&med) {
+        return Err(format_err(
+            path,
+            None,
+            format!(
+                "median specific force {} m/s² after the unit conversion; at rest it is about 9.8: check {}",
+                g3(med),
+                spec.unit_fields[1]
+            ),
+        ));
+    }
+    let mut rates: Vec<f64> = out
+        .gyro
+        .iter()
+        .map(|w| (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt())
+        .collect();
+    let med = *rates.select_nth_unstable_by(mid, f64::total_cmp).1;
+    if med > MAX_MEDIAN_RATE {
+        return Err(format_err(
+            path,
+            None,
+            format!(
+                "median angular rate {med:.3} rad/s ({:.0} deg/s) after the unit conversion: no vehicle turns that fast most of the time; check {} (deg/s read as rad/s?)",
+                med.to_degrees(),
+                spec.unit_fields[0]
+            ),
+        ));
+    }
+    Ok(out)
+}
+
+/// `v` with three significant digits and no trailing zeros (`1`, `9.81`, `1.5e+03`).
+fn g3(v: f64) -> String {
+    if !(v.abs() >= 1e-3 && v.abs() < 1e4) {
+        return format!("{v:.2e}");
+    }
+    let digits = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// A sample beyond any IMU's range is an error naming its line (0: unknown) and column.
+fn plausible(
+    path: &str,
+    line: u64,
+    header: &[String],
+    g: &[usize; 3],
+    a: &[usize; 3],
+    gyro: Option<&[f64; 3]>,
+    accel: Option<&[f64; 3]>,
+) -> Result<()> {
+    for (j, v) in gyro.into_iter().flatten().enumerate() {
+        if v.abs() > MAX_RATE {
+            return Err(cell_err(
+                path,
+                line,
+                &header[g[j]],
+                format!("angular rate {v:.4e} rad/s is beyond any IMU's range ({MAX_RATE} rad/s); check the value and the unit"),
+            ));
+        }
+    }
+    for (j, v) in accel.into_iter().flatten().enumerate() {
+        if v.abs() > MAX_SPECIFIC_FORCE {
+            return Err(cell_err(
+                path,
+                line,
+                &header[a[j]],
+                format!("specific force {v:.4e} m/s² is beyond any IMU's range ({MAX_SPECIFIC_FORCE} m/s²); check the value and the unit"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn spec() -> ImuCsvSpec {
+        ImuCsvSpec {
+            time: TimeColumns::Seconds("t".into()),
+            gyro: ["gx".into(), "gy".into(), "gz".into()],
+            accel: ["ax".into(), "ay".into(), "az".into()],
+            gyro_scale: 1.0,
+            accel_scale: 1.0,
+            increments: false,
+            max_gap: 0.1,
+            unit_fields: ["gyro_unit".into(), "accel_unit".into()],
+        }
+    }
+
+    fn write(dir: &std::path::Path, name: &str, text: &str) -> String {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_string_lossy().into_owned()
+    }
+
+    fn rows(n: usize) -> String {
+        let mut s = String::from("t,gx,gy,gz,ax,ay,az\n");
+        for k in 0..n {
+            s.push_str(&format!("{},0.01,0,0,0,0,-9.8\n", 1000.0 + k as f64 * 0.01));
+        }
+        s
+    }
+
+    #[test]
+    fn reads_bom_blank_lines_and_reports_true_lines() {
+        let d = std::env::temp_dir().join(format!("navfdi_imu_{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let text = format!("\u{feff}{}", rows(5)).replace("\n1000.02", "\n\n\n1000.02");
+        let p = write(&d, "a.csv", &text);
+        let t = read_imu_csv(&p, &spec()).unwrap();
+        assert_eq!(t.t.len(), 5);
+        let bad = text.replace("1000.03,0.01", "1000.03,abc");
+        let e = read_imu_csv(&write(&d, "b.csv", &bad), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 7") && e.contains("'gx'") && e.contains("abc"),
+            "{e}"
+        );
+        let trailing = rows(3).replace("-9.8\n1000.01", "-9.8,\n1000.01");
+        let e = read_imu_csv(&write(&d, "c.csv", &trailing), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 2") && e.contains("trailing comma"), "{e}");
+        let e = read_imu_csv(&write(&d, "h.csv", "t,gx,gy,gz,ax,ay,az\n"), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("no samples"), "{e}");
+        let huge = rows(3).replace("1000.01,0.01", "1000.01,1e300");
+        let e = read_imu_csv(&write(&d, "u.csv", &huge), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("line 3") && e.contains("beyond any IMU"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    #[test]
+    fn a_compression_bomb_is_refused_without_inflating_it() {
+        let d = std::env::temp_dir().join(format!("navfdi_bomb_{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let p = d.join("bomb.csv.gz");
+        let f = std::fs::File::create(&p).unwrap();
+        let mut gz = flate2::write::GzEncoder::new(f, flate2::Compression::best());
+        gz.write_all(rows(2).as_bytes()).unwrap();
+        let blank = vec![b'\n'; 1 << 20];
+        for _ in 0..64 {
+            gz.write_all(&blank).unwrap();
+        }
+        gz.finish().unwrap();
+        let e = read_imu_csv(&p.to_string_lossy(), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("decompresses to more than"), "{e}");
+        let e = read_imu_csv("/dev/zero", &spec()).unwrap_err().to_string();
+        assert!(e.contains("not a regular file"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
+    }
+}
