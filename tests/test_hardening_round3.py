@@ -281,3 +281,477 @@ def test_names_that_would_become_paths_are_refused_before_the_run(tmp_path, path
 def test_a_detector_name_with_a_slash_is_refused():
     with pytest.raises(navfdi.ScenarioError, match=r"detectors\[0\]\.name"):
         navfdi.load_scenario("drive_lc").with_value("loosely_coupled.sensors[0].detectors[0].name", "chi/2")
+
+
+# ---- 5. unbounded reads ----------------------------------------------------------------------
+
+
+def _imu_cols():
+    return {"time": "t", "gyro": ["gx", "gy", "gz"], "accel": ["ax", "ay", "az"]}
+
+
+def _imu_text(n=50):
+    return "t,gx,gy,gz,ax,ay,az\n" + "".join(f"{1e9 + k * 0.01:.2f},0.01,0,0,0,0,-9.8\n" for k in range(n))
+
+
+@pytest.mark.parametrize("filler", [b"\n", b",,,,,,\n", b"0" * 64 + b"\n"])
+def test_a_compressed_log_that_inflates_implausibly_is_refused_while_read(tmp_path, filler):
+    """An 852 kB .csv.gz inflating to 300 M newlines peaked at 4.9 GB: now refused at 200
+    times its size while being read (IMU CSV, .pos and RINEX alike)."""
+    import zlib
+
+    from navfdi.logs import read_imu, read_pos
+
+    body = _imu_text().encode() + filler * (80_000_000 // len(filler))
+    p = tmp_path / "imu.csv.gz"
+    co = zlib.compressobj(9, zlib.DEFLATED, 31)
+    p.write_bytes(co.compress(body) + co.flush())
+    # Refused as a bomb, or earlier at its first bad row: either way without inflating it.
+    with pytest.raises(navfdi.ScenarioError, match="decompresses to more than|is missing|fields, the header has"):
+        read_imu(p, _imu_cols())
+    pos = tmp_path / "g.pos.gz"
+    pos.write_bytes(gzip.compress(b"% GPST latitude(deg) longitude(deg) height(m)\n" + filler * (80_000_000 // len(filler)), 9))
+    with pytest.raises(navfdi.ScenarioError, match="decompresses to more than"):
+        read_pos(pos)
+    rnx = tmp_path / "r.obs.gz"
+    text = gzip.open(OBS).read()
+    head = text[: text.index(b"END OF HEADER") + 14]
+    rnx.write_bytes(gzip.compress(head + filler * (80_000_000 // len(filler)), 9))
+    with pytest.raises(navfdi.FileFormatError, match="decompresses to more than"):
+        navfdi.read_rinex(rnx)
+
+
+@pytest.mark.parametrize("target", ["/dev/zero", "fifo", "dir"])
+def test_a_source_path_that_is_not_a_regular_file_is_refused(tmp_path, target):
+    """/dev/zero or a FIFO as a [source] path read forever or blocked."""
+    import os
+
+    from navfdi.logs import read_imu, read_pos
+
+    if target == "fifo":
+        p = tmp_path / "fifo"
+        os.mkfifo(p)
+    elif target == "dir":
+        p = tmp_path
+    else:
+        p = Path(target)
+    with pytest.raises((navfdi.ScenarioError, OSError), match="not a regular file|directory"):
+        read_imu(p, _imu_cols())
+    with pytest.raises((navfdi.ScenarioError, OSError), match="not a regular file|directory"):
+        read_pos(p)
+    with pytest.raises(OSError, match="not a regular file|directory"):
+        navfdi.gnss_solve(OBS, NAV, truth=None) if False else navfdi.read_rinex(p)
+    with pytest.raises(OSError, match="not a regular file|directory"):
+        from navfdi.gnss import read_truth_file
+
+        read_truth_file(p)
+
+
+# ---- 7. old formats truncated ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name, cut", [("delf0010.21o.gz", 5), ("delf0010.21o.gz", 1), ("delf0010.21d.gz", 3), ("delf0010.21d.gz", 2)])
+def test_a_rinex2_or_compact_rinex1_file_cut_mid_epoch_is_named(tmp_path, name, cut):
+    from navfdi._core import read_rinex_obs
+
+    src = Path(__file__).parent / "data" / "rinex_formats" / name
+    lines = gzip.open(src, "rt").read().splitlines()
+    f = tmp_path / name.removesuffix(".gz")
+    f.write_text("\n".join(lines[:-cut]) + "\n")
+    with pytest.raises(navfdi.FileFormatError, match=r"line \d+: the file ends inside this epoch: \d+ satellites announced, observations for \d+"):
+        read_rinex_obs(str(f))
+
+
+# ---- 8. one bad ephemeris --------------------------------------------------------------------
+
+
+def _nav_with(tmp_path, sat, af0):
+    import re
+
+    text = NAV.read_text()
+    new = re.sub(rf"^({sat} \d{{4}} \d\d \d\d \d\d \d\d \d\d)([ -]\d\.\d{{12}}[ED][+-]\d\d)", lambda m: m.group(1) + af0, text, flags=re.M)
+    assert new != text
+    p = tmp_path / "b.nav"
+    p.write_text(new)
+    return p
+
+
+@pytest.mark.parametrize("sat, af0", [("G13", " 1.000000000000E+00"), ("G13", "-5.000000000000E-03"), ("G05", " 1.000000000000E+00"), ("E12", " 2.000000000000E-01")])
+def test_one_implausible_ephemeris_costs_its_satellite_not_the_file(tmp_path, sat, af0):
+    """A GPS record with a 1 s clock bias made every epoch 'no first fix' (solved 0): the
+    satellite is reported bad_ephemeris and the others solve."""
+    truth = "35.13469901,136.97757549,104.8626"
+    clean = navfdi.gnss_solve(OBS, NAV, systems="G,E", truth=truth).summary()
+    s = navfdi.gnss_solve(OBS, _nav_with(tmp_path, sat, af0), systems="G,E", truth=truth)
+    sm = s.summary()
+    assert sm["solved"] == clean["solved"]
+    assert sm["skipped"].get("bad_ephemeris", 0) > clean["skipped"].get("bad_ephemeris", 0)
+    st = s.satellites
+    assert (st.loc[st["satellite"] == sat, "status"].isin(["bad_ephemeris", "below_mask"])).all()
+    assert sm["horizontal_rms"] < clean["horizontal_rms"] + 1.0
+
+
+# ---- 9. huge but finite values ---------------------------------------------------------------
+
+
+@pytest.mark.parametrize("column, value", [("gx", "1e300"), ("az", "-1e12"), ("gy", "150")])
+def test_implausible_imu_samples_are_refused_at_reading(tmp_path, column, value):
+    from navfdi.logs import read_imu
+
+    text = _imu_text().splitlines()
+    head = text[0].split(",")
+    row = text[5].split(",")
+    row[head.index(column)] = value
+    text[5] = ",".join(row)
+    p = tmp_path / "imu.csv"
+    p.write_text("\n".join(text) + "\n")
+    with pytest.raises(navfdi.ScenarioError, match=rf"line 6, column '{column}': .* beyond any IMU's range"):
+        read_imu(p, _imu_cols())
+
+
+def test_deg_per_s_declared_as_rad_per_s_is_refused(tmp_path):
+    """deg/s data declared as rad/s ran with exit 0 and 8.5 m RMS."""
+    from navfdi.logs import read_imu
+
+    p = tmp_path / "imu.csv"
+    p.write_text("t,gx,gy,gz,ax,ay,az\n" + "".join(f"{1e9 + k * 0.01:.2f},{60 + k % 7},-3,20,0,0,-9.8\n" for k in range(200)))
+    with pytest.raises(navfdi.ScenarioError, match=r"median angular rate .* check source.imu.gyro_unit"):
+        read_imu(p, _imu_cols())
+
+
+def _pos_with(tmp_path, column, value):
+    from importlib import resources
+
+    src = Path(str(resources.files("navfdi") / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"))
+    lines = gzip.open(src, "rt").read().splitlines()
+    head = next(ln for ln in lines if "latitude" in ln)[1:].split()
+    k = next(i for i, ln in enumerate(lines) if not ln.startswith("%")) + 10
+    tok = lines[k].split()
+    tok[1 + head.index(column)] = value
+    lines[k] = " ".join(tok)
+    p = tmp_path / "g.pos"
+    p.write_text("\n".join(lines) + "\n")
+    return p, k + 1
+
+
+@pytest.mark.parametrize("column, value", [("height(m)", "1e20"), ("sdn(m)", "1e300"), ("ve(m/s)", "-3e5"), ("latitude(deg)", "91.0"), ("sde(m)", "-1")])
+def test_implausible_pos_values_are_refused_with_line_and_column(tmp_path, column, value):
+    from navfdi.logs import read_pos
+
+    p, line = _pos_with(tmp_path, column, value)
+    with pytest.raises(navfdi.ScenarioError, match=rf"line {line}, column '{re_escape(column)}'"):
+        read_pos(p)
+
+
+def re_escape(s):
+    import re
+
+    return re.escape(s)
+
+
+def test_a_run_that_fails_in_a_campaign_is_recorded_and_the_campaign_goes_on(monkeypatch):
+    """A run failing on its draw (here: an innovation covariance that is not positive
+    definite from a 1e150 m fault) is recorded as failed with its error; the other runs'
+    figures stand (was: the finished runs were lost)."""
+    sc = navfdi.load_scenario("drive_lc").with_values({
+        "faults[0].draw.shapes[0].magnitude": ["10 m", "1e154 m"],
+    })
+    camp = navfdi.montecarlo(sc, runs=8, seed=5, workers=2, progress=False)
+    f = camp.failures()
+    ok = camp.completed_runs()
+    # 8 runs × 2 variants; the variant without FDE takes the 1e154 m fault and fails.
+    assert f["count"] > 0 and f["count"] + len(ok.drop_duplicates(["point", "run", "variant"])) == 16
+    assert all("t = " in m and "epoch" in m for m in f["errors"])
+    assert "failed and are left out" in camp.format_table()
+    s = camp.summary()
+    assert s["runs"].max() <= 8
+
+
+# ---- 10. readers -----------------------------------------------------------------------------
+
+
+def test_a_pos_without_velocity_columns_reads_and_positions_still_run(tmp_path):
+    from importlib import resources
+
+    from navfdi.logs import read_pos
+
+    src = Path(str(resources.files("navfdi") / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"))
+    lines = gzip.open(src, "rt").read().splitlines()
+    cut = []
+    for ln in lines:
+        tok = ln.split()
+        if "latitude" in ln:
+            cut.append(" ".join(tok[:13]))  # up to sdun(m): no velocity columns
+        elif ln.startswith("%"):
+            cut.append(ln)
+        else:
+            cut.append(" ".join(tok[:14]))
+    p = tmp_path / "novel.pos"
+    p.write_text("\n".join(cut) + "\n")
+    log = read_pos(p)
+    assert np.isnan(log.vel).all() and np.isfinite(log.sd_pos).all()
+
+
+def test_columns_are_matched_by_name_not_prefix(tmp_path):
+    """sdun was taken for sdu when it came first."""
+    from navfdi.logs import read_pos
+
+    head = "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdun(m)   sdn(m)   sde(m)   sdu(m)\n"
+    row = "2025/07/08 19:34:18.499 40.0966268 -105.1474483 1601.474 1 21 0.5 0.01 0.02 0.03\n"
+    p = tmp_path / "x.pos"
+    p.write_text(head + row + row.replace("18.499", "19.499"))
+    log = read_pos(p)
+    assert log.sd_pos[0].tolist() == [0.02, 0.01, 0.03]
+
+
+@pytest.mark.parametrize("kind", ["imu", "pos", "rinex", "toml", "truth"])
+def test_a_utf8_byte_order_mark_is_accepted_by_every_reader(tmp_path, kind):
+    from navfdi.logs import read_imu, read_pos
+
+    bom = "\ufeff"
+    if kind == "imu":
+        p = tmp_path / "imu.csv"
+        p.write_text(bom + _imu_text(), encoding="utf-8")
+        assert read_imu(p, _imu_cols()).t.size == 50
+    elif kind == "pos":
+        head = "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)\n"
+        row = "2025/07/08 19:34:18.499 40.0966268 -105.1474483 1601.474 1 21 0.01 0.02 0.03\n"
+        p = tmp_path / "x.pos"
+        p.write_text(bom + head + row, encoding="utf-8")
+        assert read_pos(p).t.size == 1
+    elif kind == "rinex":
+        p = tmp_path / "r.obs"
+        p.write_text(bom + gzip.open(OBS, "rt").read(), encoding="utf-8")
+        assert len(navfdi.read_rinex(p)) > 0
+    elif kind == "toml":
+        from importlib import resources
+
+        p = tmp_path / "y.toml"
+        p.write_text(bom + (resources.files("navfdi") / "scenarios" / "yang2013.toml").read_text(), encoding="utf-8")
+        assert navfdi.load_scenario(p).name == "yang2013"
+    else:
+        from navfdi.gnss import read_truth_file
+
+        p = tmp_path / "truth.txt"
+        p.write_text(bom + "35.13469901 136.97757549 104.8626\n", encoding="utf-8")
+        assert np.linalg.norm(read_truth_file(p)) > 6e6
+
+
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("t,gx,gy,gz,ax,ay,az\n", "no samples"),
+        (None, r"line 3: 8 fields, the header has 7 \(a trailing comma\?\)"),
+        ("", "empty file"),
+        (None, "blank"),
+    ],
+)
+def test_imu_reader_edge_cases_name_file_and_line(tmp_path, text, match):
+    from navfdi.logs import read_imu
+
+    p = tmp_path / "imu.csv"
+    if match.startswith("line 3"):
+        lines = _imu_text(5).splitlines()
+        lines[2] += ","
+        text = "\n".join(lines) + "\n"
+    if match == "blank":
+        lines = _imu_text(5).splitlines()
+        lines.insert(2, "")
+        lines.insert(2, "")
+        lines[5] = lines[5].replace("0.01", "abc", 1)
+        p.write_text("\n".join(lines) + "\n")
+        # The bad value is on the file's line 6 (blank lines count).
+        with pytest.raises(navfdi.ScenarioError, match=r"line 6, column 'gx': 'abc'"):
+            read_imu(p, _imu_cols())
+        return
+    p.write_text(text)
+    with pytest.raises(navfdi.ScenarioError, match=match) as e:
+        read_imu(p, _imu_cols())
+    assert str(p) in str(e.value)
+
+
+@pytest.mark.parametrize("key, value, match", [("max_gap", "abc", "max_gap"), ("max_gap", float("nan"), "max_gap"), ("max_gap", -1, "max_gap"), ("gyro_units", "deg/s", "gyro_unit"), ("acel", ["a"], "accel")])
+def test_source_imu_keys_and_values_are_checked(key, value, match):
+    sc = navfdi.load_scenario("drive_lc").with_value(f"source.imu.{key}", value, create=True)
+    with pytest.raises(navfdi.ScenarioError, match=match):
+        navfdi.run_scenario(sc)
+
+
+# ---- 11. gross observations ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("value", [-2.0e7, 9e9, 5.0, -1.0])
+def test_a_gross_pseudorange_is_recorded_and_excluded_not_dropped(tmp_path, value):
+    text = gzip.open(OBS, "rt").read().splitlines()
+    i = next(i for i, ln in enumerate(text) if ln.startswith("G13"))
+    text[i] = text[i][:19] + f"{value:14.3f}" + text[i][33:]
+    p = tmp_path / "g.obs"
+    p.write_text("\n".join(text) + "\n")
+    s = navfdi.gnss_solve(p, NAV, systems="G", truth="35.13469901,136.97757549,104.8626")
+    st = s.satellites
+    row = st[(st["epoch"] == 0) & (st["satellite"] == "G13")]
+    assert row["status"].tolist() == ["excluded"]
+    assert s.summary()["exclusions"].get("G13", 0) >= 1
+    assert s.summary()["solved"] == len(s.solution)
+
+
+# ---- 12. workers -----------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("workers", [1_000_000, 5000, 4 * 4096])
+def test_absurd_worker_counts_are_refused_with_the_machines_numbers(workers):
+    import os
+
+    with pytest.raises(ValueError, match=rf"workers = {workers}: this machine has {os.cpu_count()} core"):
+        navfdi.montecarlo("yang2013", runs=2, workers=workers)
+    assert main(["montecarlo", "yang2013", "--runs", "2", "--workers", str(workers)]) == 2
+
+
+# ---- 13. smaller -----------------------------------------------------------------------------
+
+
+def test_set_errors_name_set(capsys):
+    assert main(["run", "yang2013", "--set", "=x"]) == 2
+    err = capsys.readouterr().err
+    assert "--set '=x'" in err and "--sweep" not in err
+
+
+def test_a_binary_truth_file_is_named(tmp_path):
+    from navfdi.gnss import read_truth_file
+
+    p = tmp_path / "t.bin"
+    p.write_bytes(bytes(range(256)) * 10)
+    with pytest.raises(ValueError, match=r"--truth-file .*not a text file"):
+        read_truth_file(p)
+    p.write_text("35.1 136.9\n")
+    with pytest.raises(ValueError, match="--truth-file"):
+        read_truth_file(p)
+
+
+def test_one_fault_string_is_one_fault_and_mask_is_a_number():
+    one = navfdi.gnss_solve(OBS, NAV, faults="G13:step:20m:100s:200s")
+    assert [f.satellite for f in one.faults] == ["G13"]
+    for bad in (True, "10", float("nan"), 90.0):
+        with pytest.raises(ValueError, match="mask"):
+            navfdi.gnss_solve(OBS, NAV, mask_deg=bad)
+
+
+def test_a_one_epoch_pos_log_says_so(tmp_path):
+    import copy
+    from importlib import resources
+
+    from navfdi.scenario import from_dict
+
+    base = Path(str(resources.files("navfdi") / "scenarios"))
+    raw = copy.deepcopy(navfdi.load_scenario("drive_lc").raw)
+    raw["source"]["imu"]["file"] = str((base / raw["source"]["imu"]["file"]).resolve())
+    raw["source"].pop("reference")
+    head = "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)\n"
+    p = tmp_path / "one.pos"
+    p.write_text(head + "2025/07/08 19:35:18.499 40.0966268 -105.1474483 1601.474 1 21 0.01 0.02 0.03\n")
+    raw["source"]["gnss"] = str(p)
+    with pytest.raises(navfdi.ScenarioError, match=r"1 epoch\(s\); a run needs at least two") as e:
+        navfdi.run_scenario(from_dict(raw, source=str(tmp_path / "x.toml")))
+    assert "nan" not in str(e.value)
+
+
+# ---- no panic reachable from Python ----------------------------------------------------------
+
+BAD = [math.nan, math.inf, -math.inf, -1.0, -1e300, 1e300, 0.0, 5e-324]
+
+
+def _calls():
+    """(name, function of the arguments, valid arguments): every public constructor, method
+    and function with numeric arguments."""
+    from navfdi import _core
+
+    eye3 = np.eye(3)
+    sky = _sky(8)
+    rx = np.array([-2.18e6, 4.38e6, 4.08e6])
+    sats = rx + 2.2e7 * sky[:, [1, 0, 2]]
+    rho = np.linalg.norm(sats - rx, axis=1)
+
+    def kf_predict(x0, P0, Phi, Q):
+        navfdi.KalmanFilter(x0, P0).predict(Phi=Phi, Q=Q)
+
+    def kf_update(z, H, R):
+        navfdi.KalmanFilter(np.zeros(3), eye3).update(z=z, H=H, R=R)
+
+    def state_step(x, P, Phi, Q):
+        navfdi.StateChi2(0.01, 3, 10).step(x, P, Phi, Q)
+
+    def fusion_step(values, predicted):
+        navfdi.WeightedFusion([3.0, 1.0, 0.5], window=5).step(values, predicted=predicted, healthy=[True, True, True])
+
+    def pre_step(z_code, z_freq, cn0):
+        navfdi.Prefilter().step(z_code, z_freq, cn0)
+
+    alloc = (9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5, 0.05)
+    return [
+        ("chi2_threshold", navfdi.chi2_threshold, [0.01, 3]),
+        ("sprt_threshold", navfdi.sprt_threshold, [0.01, 0.01]),
+        ("noncentrality", navfdi.noncentrality, [0.01, 0.05, 3]),
+        ("ncx2_cdf", navfdi.ncx2_cdf, [2.0, 3, 1.0]),
+        ("mdb", navfdi.mdb, [eye3, 0.01, 0.05]),
+        ("dll_variance", navfdi.dll_variance, [45.0, 0.02, 1.0]),
+        ("fll_variance", navfdi.fll_variance, [45.0, 0.02]),
+        ("KalmanFilter", navfdi.KalmanFilter, [np.zeros(3), eye3]),
+        ("KalmanFilter.predict", kf_predict, [np.zeros(3), eye3, eye3, eye3 * 0.1]),
+        ("KalmanFilter.update", kf_update, [np.ones(3), eye3, eye3]),
+        ("ResidualChi2", lambda pf, r, a: navfdi.ResidualChi2(pf).test(r, a), [0.01, np.ones(3), eye3]),
+        ("ImprovedSprt", lambda pf, pm, r, a: navfdi.ImprovedSprt(pf, pm).test(r, a), [0.01, 0.01, np.ones(3), eye3]),
+        ("JointChi2Sprt", lambda pf, pm, r, a: navfdi.JointChi2Sprt(pf, pm).test(r, a), [0.01, 0.01, np.ones(3), eye3]),
+        ("Aime", lambda pf, w, r, a: navfdi.Aime(pf, w).test(r, a), [0.01, 5, np.ones(3), eye3]),
+        ("TwoStageAime", lambda pf, w1, w2, q, b, r: navfdi.TwoStageAime(pf, w1, w2, q=q, b=b).test(r, eye3), [0.01, 2, 10, 10.0, 0.99, np.ones(3)]),
+        ("StateChi2", lambda pf, n, every: navfdi.StateChi2(pf, n, every), [0.01, 3, 10]),
+        ("StateChi2.step", state_step, [np.zeros(3), eye3, eye3, eye3 * 0.01]),
+        ("WeightedFusion", lambda s, w: navfdi.WeightedFusion(s, window=w), [[3.0, 1.0], 5]),
+        ("WeightedFusion.step", fusion_step, [[101.0, 99.0, 100.0], 100.0]),
+        ("Prefilter", lambda t, j, c, s: navfdi.Prefilter(t=t, jerk_psd=j, code_psd=c, spacing=s), [0.02, 1.0, 0.0, 1.0]),
+        ("Prefilter.step", pre_step, [1.0, 0.5, 45.0]),
+        ("run_filter", lambda x0, P0, Phi, Q, zs, H, R, f: navfdi.run_filter(x0, P0, Phi, Q, zs, H, R, fading=f), [np.zeros(3), eye3, eye3, eye3 * 0.01, np.ones((4, 3)), eye3, eye3, 1.0]),
+        ("snapshot_fde", lambda p, r, s, a: navfdi.snapshot_fde(p, r, s, alpha=a), [sats, rho, np.full(8, 3.0), 0.01]),
+        ("araim", lambda los, ci, ca, res: navfdi.araim(los, ["G"] * 8, c_int=ci, c_acc=ca, residuals=res), [sky, np.ones(8), np.ones(8), np.zeros(8)]),
+        ("araim_epoch", lambda rows, ci, ca, b, ps, pc, al: _core.araim_epoch(rows, [0] * 8, ci, ca, b, ps, pc, tuple(al)), [(-sky).tolist(), [1.0] * 8, [1.0] * 8, [0.5] * 8, [1e-5] * 8, [1e-4], list(alloc)]),
+        ("snapshot_pl", lambda los, s2, thr, k: _core.snapshot_pl(los, [0] * 8, s2, thr, k), [sky.tolist(), [1.0] * 8, 20.0, 3.29]),
+        ("Ism", lambda u, e, b, p: navfdi.Ism(u, e, b, p), [0.75, 0.5, 0.5, 1e-5]),
+        ("Allocation", lambda *a: navfdi.Allocation(*a), [9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5, 40.0, 35.0, 0.05]),
+    ]
+
+
+def _variants(args):
+    """Each numeric argument (a scalar, one element of an array or list) replaced by each bad
+    value, one at a time."""
+    for i, a in enumerate(args):
+        for bad in BAD:
+            out = list(args)
+            if isinstance(a, (bool, str)):
+                continue
+            if isinstance(a, (int, float)):
+                out[i] = bad
+            elif isinstance(a, np.ndarray):
+                b = a.astype(float).copy()
+                b.flat[0] = bad
+                out[i] = b
+            elif isinstance(a, list) and a and all(isinstance(v, (int, float)) for v in a):
+                out[i] = [bad, *a[1:]]
+            elif isinstance(a, list) and a and isinstance(a[0], list):
+                out[i] = [[bad, *a[0][1:]], *a[1:]]
+            else:
+                continue
+            yield i, bad, out
+
+
+@pytest.mark.parametrize("name, fn, args", _calls(), ids=[c[0] for c in _calls()])
+def test_no_numeric_input_reaches_a_panic(name, fn, args):
+    """NaN, ±inf, negative, huge and tiny values to every public constructor and function with
+    numeric arguments: a result or an ordinary exception, never a PanicException (which
+    ``except Exception`` does not catch)."""
+    fn(*args)  # the valid call works
+    for i, bad, a in _variants(args):
+        try:
+            fn(*a)
+        except Exception:
+            pass
+        except BaseException as e:  # PanicException derives from BaseException
+            pytest.fail(f"{name}: argument {i} = {bad!r} raised {type(e).__name__}: {e}")

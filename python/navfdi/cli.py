@@ -221,7 +221,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         from navfdi.scenario import load_scenario
 
         scenario = load_scenario(args.scenario)
-        sets = parse_sweep(args.set)
+        sets = parse_sweep(args.set, "--set")
         for path, vals in sets.items():
             if len(vals) != 1:
                 raise ScenarioError(f"--set {path}: one value expected, got {len(vals)} ({', '.join(map(str, vals))}); use navfdi montecarlo --sweep for several")

@@ -211,11 +211,11 @@ def check_input_file(path: str | os.PathLike[str], name: str) -> None:
     such file", "is a directory", or "not a regular file" (a device, pipe or socket)."""
     p = os.fspath(path)
     if os.path.isdir(p):
-        raise IsADirectoryError(21, f"{name}: is a directory, not a RINEX file", p)
+        raise IsADirectoryError(21, f"{name}: is a directory, not a file", p)
     if not os.path.exists(p):
         raise FileNotFoundError(2, f"{name}: no such file", p)
     if not os.path.isfile(p):
-        raise OSError(f"{name}: {p}: not a regular file (a device, pipe or socket); give the path of a RINEX file")
+        raise OSError(f"{name}: {p}: not a regular file (a device, pipe or socket); give the path of a file")
 
 
 def check_ecef_truth(t_ecef: np.ndarray) -> None:
@@ -245,12 +245,27 @@ def parse_truth(text: str) -> np.ndarray:
 
 
 def read_truth_file(path: str | os.PathLike[str]) -> np.ndarray:
-    """A file whose first non-comment line is ``LAT LON H`` (deg, deg, m) → ECEF (3,) m."""
-    with open(path, encoding="utf-8") as f:
-        for line in f:
-            if line.strip() and not line.lstrip().startswith(("#", "%")):
+    """A file whose first non-comment line is ``LAT LON H`` (deg, deg, m) → ECEF (3,) m. It
+    must be a regular text file (not a directory, device or pipe; a byte-order mark is
+    accepted); only its first 64 kB are read. ``ValueError`` / ``OSError`` name it."""
+    name = f"--truth-file {os.fspath(path)}"
+    check_input_file(path, "--truth-file")
+    with open(path, "rb") as f:
+        head = f.read(65536)
+    try:
+        text = head.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        if len(head) == 65536 and e.start >= 65532:
+            text = head[: e.start].decode("utf-8-sig")
+        else:
+            raise ValueError(f"{name}: not a text file (byte {e.start} is not UTF-8); give a file whose first line is 'LAT LON H'") from None
+    for line in text.splitlines():
+        if line.strip() and not line.lstrip().startswith(("#", "%")):
+            try:
                 return parse_truth(line)
-    raise ValueError(f"--truth-file {os.fspath(path)}: no 'LAT LON H' line found")
+            except ValueError as e:
+                raise ValueError(f"{name}: {e}") from None
+    raise ValueError(f"{name}: no 'LAT LON H' line found")
 
 
 @dataclass
@@ -619,8 +634,10 @@ def gnss_solve(
     if noise_scale != 1.0:
         given = {str(kk).upper(): float(v) for kk, v in (noise_factors or {}).items()}
         noise_factors = {s_: given.get(s_, 1.0) * float(noise_scale) for s_ in ("G", "E", "C", "J")}
+    if isinstance(faults, (str, GnssFault)):
+        faults = [faults]  # one fault given alone, not a sequence of characters
     parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f, f"faults[{i}]") for i, f in enumerate(faults)]
-    if not (isinstance(mask_deg, (int, float)) and math.isfinite(mask_deg) and 0 <= mask_deg < 90):
+    if isinstance(mask_deg, bool) or not (isinstance(mask_deg, (int, float)) and math.isfinite(mask_deg) and 0 <= mask_deg < 90):
         raise ValueError(f"mask: {mask_deg} deg; the elevation mask must be in [0, 90) deg")
     if chunk < 1:
         raise ValueError(f"chunk = {chunk}: must be >= 1")

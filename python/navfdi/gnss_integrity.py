@@ -118,7 +118,7 @@ def load_allocation_file(path: str | os.PathLike[str]) -> IntegritySettings:
     if not p.is_file():
         raise ValueError(f"{where}: no such file")
     try:
-        doc = tomllib.loads(p.read_text(encoding="utf-8"))
+        doc = tomllib.loads(p.read_text(encoding="utf-8-sig"))
     except (OSError, UnicodeDecodeError) as e:
         raise ValueError(f"{where}: cannot read it ({e})") from None
     except tomllib.TOMLDecodeError as e:

@@ -75,35 +75,53 @@ class PosLog:
                       self.vel[mask], self.sd_pos[mask], self.sd_vel[mask], self.path)
 
 
+#: Largest ratio of decompressed to compressed size accepted for a ``.gz`` log (the core's
+#: ``navfdi_core::memory::MAX_INFLATION``): text logs compress 3–20×.
+MAX_INFLATION = 200
+
+
 def _open_text(path: Path) -> list[str]:
+    """The lines of a text log (``.gz`` by its magic bytes, a UTF-8 byte-order mark skipped).
+    The path must be a regular file (a device or pipe could stream forever or block); a gzip
+    that inflates beyond :data:`MAX_INFLATION` times its size (a compression bomb) is refused
+    while it is being read."""
+    import zlib
+
+    try:
+        st = path.stat()
+    except OSError as e:
+        raise ScenarioError(f"{path}: cannot read the file ({e.strerror or e})") from None
+    import stat as _stat
+
+    if not _stat.S_ISREG(st.st_mode):
+        raise ScenarioError(f"{path}: not a regular file (a directory, device or pipe); give the path of a file")
     try:
         raw = path.read_bytes()
     except OSError as e:
         raise ScenarioError(f"{path}: cannot read the file ({e.strerror or e})") from None
     if raw[:2] == b"\x1f\x8b":
+        cap = max(len(raw), 1) * MAX_INFLATION
+        d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+        parts, total, data = [], 0, raw
         try:
-            raw = gzip.decompress(raw)
-        except (OSError, EOFError) as e:
+            while data:
+                chunk = d.decompress(data, 1 << 20)
+                total += len(chunk)
+                if total > cap:
+                    raise ScenarioError(f"{path}: decompresses to more than {cap // 1_000_000} MB ({MAX_INFLATION} times its {len(raw) // 1000} kB): not a plausible log (a compression bomb or a corrupted file)")
+                parts.append(chunk)
+                data = d.unconsumed_tail or (d.unused_data if d.eof and d.unused_data[:2] == b"\x1f\x8b" else b"")
+                if d.eof and data:
+                    d = zlib.decompressobj(16 + zlib.MAX_WBITS)
+            if not d.eof:
+                raise EOFError("truncated")
+        except (zlib.error, EOFError) as e:
             raise ScenarioError(f"{path}: not a readable gzip file ({e})") from None
+        raw = b"".join(parts)
     try:
-        return raw.decode("utf-8").splitlines()
+        return raw.decode("utf-8-sig").splitlines()
     except UnicodeDecodeError as e:
         raise ScenarioError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
-
-
-def _numeric(df: pd.DataFrame, path: Path, first_line: int) -> pd.DataFrame:
-    import pandas as pd
-
-    out = df.apply(pd.to_numeric, errors="coerce")
-    bad = out.isna() & df.notna() | out.isin([np.inf, -np.inf])
-    missing = df.isna()
-    for mask, what in ((bad, "is not a finite number"), (missing, "is missing")):
-        if mask.to_numpy().any():
-            r, c = np.argwhere(mask.to_numpy())[0]
-            col = df.columns[c]
-            val = df.iat[r, c]
-            raise ScenarioError(f"{path}, line {first_line + r}, column {col!r}: {val!r} {what}")
-    return out
 
 
 #: Keys of a scenario's ``[source.imu]`` table.
@@ -216,6 +234,7 @@ def read_pos(path: str | Path) -> PosLog:
         raise ScenarioError(f"{path}: latitude and longitude in degrees-minutes-seconds; write them in decimal degrees (out-degform = deg)")
     fields = names[1:]
     data = []
+    line_of: list[int] = []
     first = None
     for i, ln in enumerate(lines):
         if ln.startswith("%") or not ln.strip():
@@ -235,14 +254,17 @@ def read_pos(path: str | Path) -> PosLog:
             j = next(j for j, x in enumerate(tok[2:2 + len(fields)]) if not _isfloat(x))
             raise ScenarioError(f"{path}, line {i + 1}, column {fields[j]!r}: {tok[2 + j]!r} is not a number") from None
         data.append([t, *vals])
+        line_of.append(i + 1)
     if not data:
         raise ScenarioError(f"{path}: no solution epochs")
     a = np.asarray(data)
     col = {n: a[:, j + 1] for j, n in enumerate(fields)}
+    _check_pos_values(path, fields, a[:, 1:], line_of)
 
     def get(name: str, default: float = np.nan) -> np.ndarray:
+        # Exact names without their unit ("sdu(m)" is sdu, never sdun's).
         for k, v in col.items():
-            if k.startswith(name):
+            if k.split("(")[0] == name:
                 return v
         return np.full(len(a), default)
 
@@ -254,9 +276,36 @@ def read_pos(path: str | Path) -> PosLog:
     vel = np.column_stack([get("ve"), get("vn"), get("vu")])
     sd_vel = np.column_stack([get("sdve"), get("sdvn"), get("sdvu")])
     # RTKLIB names the height "height(m)"; an ellipsoidal height may be labelled "ellh(m)".
-    height = get("height") if any(k.startswith("height") for k in col) else get("ellh")
+    height = get("height") if any(k.split("(")[0] == "height" for k in col) else get("ellh")
     return PosLog(times, get("latitude"), get("longitude"), height, get("Q", 0), vel,
                   np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path))
+
+
+def _pos_limit(name: str) -> tuple[float, float] | None:
+    """The range of values a receiver on or near the Earth reports in a ``.pos`` column (by its
+    name's prefix): heights to 100 km, speeds to 10 km/s, σ to 100 km and 1 km/s (the
+    off-diagonal ``sdne``… terms signed); None for the other columns (Q, ns, age, ratio)."""
+    cross = name.startswith(("sdne", "sdeu", "sdun", "sdvne", "sdveu", "sdvun"))
+    for prefix, lim in (("latitude", (-90.0, 90.0)), ("longitude", (-180.0, 360.0)), ("height", (-1e4, 1e5)), ("ellh", (-1e4, 1e5)),
+                        ("sdv", (-1e3 if cross else 0.0, 1e3)), ("sd", (-1e5 if cross else 0.0, 1e5)), ("v", (-1e4, 1e4))):
+        if name.startswith(prefix):
+            return lim
+    return None
+
+
+def _check_pos_values(path: Path, fields: Sequence[str], values: np.ndarray, line_of: Sequence[int]) -> None:
+    """``ScenarioError`` naming the line and column of a value outside what a receiver can
+    report (:func:`_pos_limit`; a height of 1e20 m or a σ of 1e300 would otherwise reach the
+    filter as a not-positive-definite covariance with no line named)."""
+    for j, name in enumerate(fields):
+        lim = _pos_limit(name)
+        if lim is None:
+            continue
+        v = values[:, j]
+        bad = ~((v >= lim[0]) & (v <= lim[1]))
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise ScenarioError(f"{path}, line {line_of[k]}, column {name!r}: {v[k]!r} is outside [{lim[0]:g}, {lim[1]:g}], what a receiver on or near the Earth reports")
 
 
 def _isfloat(x: str) -> bool:
@@ -350,8 +399,10 @@ def logged_source(sc: Any) -> Any:
             what = f"the GNSS log {data['gnss_log'].path}"
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+    if len(t) < 2:
+        raise ScenarioError(f"{what} has {len(t)} epoch(s); a run needs at least two")
     span = float(t[-1] - t[0])
-    dt = float(np.median(np.diff(t))) if len(t) > 1 else float("nan")
+    dt = float(np.median(np.diff(t)))
     _warn_partial(data["imu_log"], t, float(src.time0) if src is not None else float(data["t0"]), what)
     if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
         raise ScenarioError(

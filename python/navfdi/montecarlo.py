@@ -17,6 +17,7 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import os
 import platform
 import statistics
 import sys
@@ -37,6 +38,7 @@ Z95 = statistics.NormalDist().inv_cdf(0.975)
 RUN_COLUMNS = [
     "point",
     "run",
+    "failed",
     "subfilter",
     "detector",
     "fault_id",
@@ -116,8 +118,9 @@ def wilson(successes: np.ndarray, trials: np.ndarray, z: float = Z95) -> tuple[n
     return lo, hi
 
 
-def parse_sweep(items: Iterable[str]) -> dict[str, list[Any]]:
-    """Parse ``PATH=v1,v2,...`` strings (CLI form) into ``{path: [values]}``.
+def parse_sweep(items: Iterable[str], option: str = "--sweep") -> dict[str, list[Any]]:
+    """Parse ``PATH=v1,v2,...`` strings (CLI form) into ``{path: [values]}``; ``option`` is
+    the option they came from (``--sweep`` or ``--set``), named in errors.
 
     Values that read as numbers become floats (ints stay ints), ``true``/``false`` become
     booleans, everything else stays a string (e.g. ``"0.2 sigma/s"``).
@@ -127,7 +130,9 @@ def parse_sweep(items: Iterable[str]) -> dict[str, list[Any]]:
         path, sep, values = item.partition("=")
         path = path.strip()
         if not sep or not path or not values.strip():
-            raise ScenarioError(f"--sweep {item!r}: expected PATH=v1,v2,... (e.g. faults[0].magnitude=0.1 sigma/s,0.2 sigma/s)")
+            example = "faults[0].magnitude=0.1 sigma/s,0.2 sigma/s" if option == "--sweep" else "faults[0].magnitude=30 m"
+            form = "PATH=v1,v2,..." if option == "--sweep" else "PATH=VALUE"
+            raise ScenarioError(f"{option} {item!r}: expected {form} (e.g. {example})")
         vals: list[Any] = []
         for v in values.split(","):
             v = v.strip()
@@ -250,7 +255,7 @@ class Campaign:
         """
         import pandas as pd
 
-        df = self.runs
+        df = self.completed_runs()
         keys = ["point", *self.sweep_columns, "subfilter", "detector", "fault_id", "pf"]
         per_point = self.runs_per_point()
         rows = []
@@ -362,7 +367,7 @@ class Campaign:
         epoch's pseudoranges, mean over the epochs with both)."""
         import pandas as pd
 
-        df = self.runs
+        df = self.completed_runs()
         cols = [*self.sweep_columns, "runs", "epochs", "misleading_h", "misleading_v", "hazardous_h", "hazardous_v", "hmi_rate_h", "hmi_rate_v",
                 "alarm_epochs", "error_over_hpl_max", "error_over_vpl_max", "hpl_mean", "vpl_mean", "hpl_ratio_mean", "vpl_ratio_mean"]
         if "pl_epochs" not in df or not len(df):
@@ -433,6 +438,11 @@ class Campaign:
         if self.partial:
             head += "  [PARTIAL: interrupted]"
         lines = [head, ""]
+        fails = self.failures()
+        if fails["count"]:
+            lines.insert(1, f"{fails['count']} run(s) failed and are left out of the figures:")
+            for msg, k in list(fails["errors"].items())[:3]:
+                lines.insert(2, f"  {k} × {msg}")
         arcsec = math.degrees(1) * 3600
         sat_of = {f["id"]: "drawn" if (f.get("draw") or {}).get("satellites") else f.get("satellite") or "" for f in self.scenario.faults()}
         cut = lambda v, n: v if len(v) <= n else v[: n - 1] + "…"  # noqa: E731
@@ -502,6 +512,22 @@ class Campaign:
         lines.append("of the fault's epochs in alarm. summary.csv has every figure with its interval.")
         return "\n".join(lines) + "\n"
 
+    def completed_runs(self):
+        """:attr:`runs` without the runs that failed (their ``failed`` column holds the error;
+        every figure of theirs is NaN): what the summary tables are computed from."""
+        df = self.runs
+        return df[df["failed"] == ""] if "failed" in df and len(df) else df
+
+    def failures(self) -> dict[str, Any]:
+        """Runs that failed (a numerical failure on their draw): ``count`` (point × run ×
+        variant) and
+        ``errors``: ``{error message: count}``. The campaign went on without them."""
+        df = self.runs
+        if "failed" not in df or not len(df):
+            return {"count": 0, "errors": {}}
+        bad = df[df["failed"] != ""].drop_duplicates(["point", "run", *(["variant"] if "variant" in df else [])])
+        return {"count": int(len(bad)), "errors": {str(k): int(v) for k, v in bad["failed"].value_counts().items()}}
+
     def campaign_info(self) -> dict[str, Any]:
         """What ``campaign.json`` holds."""
         done = self.runs.groupby("point")["run"].nunique().to_dict() if len(self.runs) else {}
@@ -514,6 +540,7 @@ class Campaign:
             "sweep": self.sweep,
             "points": self.points,
             "partial": self.partial,
+            "failed_runs": self.failures(),
             "backend": self.backend,
             "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
         }
@@ -589,6 +616,7 @@ def _assemble(chunks: list[tuple[int, dict[str, Any]]], cells: list[list[tuple[s
         cols: dict[str, Any] = {
             "point": np.full(n * c, point),
             "run": np.repeat(ch["run"], c),
+            "failed": np.repeat(np.asarray(ch.get("failed", [""] * n), dtype=object), c),
             "subfilter": np.tile(sub, n),
             "detector": np.tile(det, n),
             "fault_id": np.tile(fid, n),
@@ -634,6 +662,16 @@ def _check_campaign_memory(base: Scenario, runs: int, points: int, keep: tuple[i
         raise ScenarioTooLarge(str(e)) from None
 
 
+#: Threads per core a campaign may ask for (``workers``).
+MAX_THREADS_PER_CORE = 4
+
+
+def max_workers() -> int:
+    """The most threads :func:`montecarlo` accepts: :data:`MAX_THREADS_PER_CORE` per core of
+    this machine."""
+    return MAX_THREADS_PER_CORE * (os.cpu_count() or 1)
+
+
 def montecarlo(
     scenario: Scenario | str | Path,
     runs: int,
@@ -664,7 +702,8 @@ def montecarlo(
         sigma/s", "0.1 sigma/s"]}``); the campaign runs the cartesian product of the values.
         Every point is validated before anything runs.
     workers : int, optional
-        Threads for the in-process backend (default: all cores).
+        Threads for the in-process backend (default: all cores; at most :func:`max_workers`,
+        4 per core).
     client : dask.distributed.Client, optional
         Run chunks on a Dask cluster instead (``pip install navfdi[dask]``).
     chunk_size : int, optional
@@ -695,6 +734,9 @@ def montecarlo(
         raise ValueError(f"seed = {seed!r}: must be an integer in 0 .. 2**64 - 1")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r}: must be a positive integer")
+    if workers is not None and workers > max_workers():
+        cores = os.cpu_count() or 1
+        raise ValueError(f"workers = {workers}: this machine has {cores} core(s); at most {max_workers()} threads ({MAX_THREADS_PER_CORE} per core) are allowed (more only add overhead; each thread holds a run)")
     if workers is not None and client is not None:
         raise ValueError("workers and client are exclusive: threads are set by the Dask workers")
     base = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)

@@ -830,7 +830,7 @@ def load_scenario(source: str | Path | Mapping[str, Any]) -> Scenario:
         if not path.is_file():
             raise ScenarioError(f"{s}: no such scenario file")
         try:
-            text = path.read_text(encoding="utf-8")
+            text = path.read_text(encoding="utf-8-sig")
         except (OSError, UnicodeDecodeError) as e:
             raise ScenarioError(f"{s}: cannot read the scenario file: {e}") from None
         origin = str(path)

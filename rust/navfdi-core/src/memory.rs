@@ -109,28 +109,6 @@ pub fn check_against(
     )))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn refuses_beyond_the_fraction() {
-        let gib = 1024.0 * 1024.0 * 1024.0;
-        assert!(check_against("x", 0.5 * gib, "d", "a", gib).is_ok());
-        let e = check_against("run", 2.0 * gib, "1000 epochs", "reduce duration", gib)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("2.0 GiB") && e.contains("1.0 GiB") && e.contains("reduce duration"));
-        assert!(check_against("x", f64::INFINITY, "d", "a", gib).is_err());
-        assert_eq!(human(8e15 * gib), "8.0e15 GiB");
-        assert!(available() > 0.0);
-        // Small needs pass without consulting the system; NaN or huge ones never do.
-        assert!(check("x", NEGLIGIBLE, "d", "a").is_ok());
-        assert!(check("x", f64::NAN, "d", "a").is_err());
-        assert!(check("x", 1e30, "d", "a").is_err());
-    }
-}
-
 /// Largest ratio of decompressed to compressed size [`open_bounded`] accepts (numeric CSV and
 /// RINEX compress 3–20×; 300 million blank lines fit in under a megabyte of gzip).
 pub const MAX_INFLATION: u64 = 200;
@@ -213,5 +191,27 @@ pub fn read_error(e: &std::io::Error, other: impl FnOnce(&std::io::Error) -> Err
         }
         (std::io::ErrorKind::FileTooLarge, Some(inner)) => Error::TooLarge(inner.to_string()),
         _ => other(e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn refuses_beyond_the_fraction() {
+        let gib = 1024.0 * 1024.0 * 1024.0;
+        assert!(check_against("x", 0.5 * gib, "d", "a", gib).is_ok());
+        let e = check_against("run", 2.0 * gib, "1000 epochs", "reduce duration", gib)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("2.0 GiB") && e.contains("1.0 GiB") && e.contains("reduce duration"));
+        assert!(check_against("x", f64::INFINITY, "d", "a", gib).is_err());
+        assert_eq!(human(8e15 * gib), "8.0e15 GiB");
+        assert!(available() > 0.0);
+        // Small needs pass without consulting the system; NaN or huge ones never do.
+        assert!(check("x", NEGLIGIBLE, "d", "a").is_ok());
+        assert!(check("x", f64::NAN, "d", "a").is_err());
+        assert!(check("x", 1e30, "d", "a").is_err());
     }
 }

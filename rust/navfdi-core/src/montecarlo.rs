@@ -123,6 +123,49 @@ pub struct RunMetrics {
     pub integrity: Option<IntegrityMetrics>,
     /// Optional full record of the run (kept for chosen runs).
     pub record: Option<RunRecord>,
+    /// The run failed (its error: a numerical failure on this draw's measurements, with the
+    /// epoch); every figure is NaN and it is left out of the campaign's statistics, which
+    /// go on with the other runs.
+    pub failed: Option<String>,
+}
+
+impl RunMetrics {
+    /// The metrics of run `run` that failed with `error`: `cells` cells, every figure NaN.
+    pub fn failed(run: u64, cells: usize, error: String) -> Self {
+        let cell = CellMetrics {
+            detected: false,
+            delay: f64::NAN,
+            clear_delay: f64::NAN,
+            false_alarm_epochs: 0,
+            outside_epochs: 0,
+            wrong_isolations: 0,
+            at_onset: false,
+            alarm_fraction: f64::NAN,
+            applied: false,
+            sat: Default::default(),
+        };
+        RunMetrics {
+            run,
+            cells: vec![cell; cells],
+            att_rms: f64::NAN,
+            att_max: f64::NAN,
+            pos_rms: f64::NAN,
+            pos_max: f64::NAN,
+            lat_rms: f64::NAN,
+            lat_max: f64::NAN,
+            fused_alt_rms: f64::NAN,
+            fused_alt_max: f64::NAN,
+            hor_rms: f64::NAN,
+            hor_max: f64::NAN,
+            fault_hor_max: f64::NAN,
+            hor_rel_rms: f64::NAN,
+            fault_hor_rel_max: f64::NAN,
+            drawn: Vec::new(),
+            integrity: None,
+            record: None,
+            failed: Some(error),
+        }
+    }
 }
 
 /// Protection levels of one run against its true position error (see [`integrity_metrics`]).
@@ -395,6 +438,7 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
         drawn: Vec::new(),
         integrity: integrity_metrics(rec),
         record: None,
+        failed: None,
     }
 }
 
@@ -478,6 +522,7 @@ fn logged_errors(
         drawn: spec.faults.clone(),
         integrity: integrity_metrics(rec),
         record: None,
+        failed: None,
     }
 }
 
@@ -503,13 +548,17 @@ pub fn run_logged_chunk(
     let one = |i: u64| -> Result<RunMetrics> {
         cancel.check()?;
         let run_spec = spec.drawn(seed, i);
-        let rec =
-            run_logged(src, &run_spec, seed, i, keep.contains(&i), cancel).map_err(
-                |e| match e {
-                    Error::Cancelled => Error::Cancelled,
-                    e => Error::Invalid(format!("run {i}: {e}")),
-                },
-            )?;
+        // A run that fails is recorded as failed; the campaign goes on.
+        let rec = match run_logged(src, &run_spec, seed, i, keep.contains(&i), cancel) {
+            Ok(rec) => rec,
+            Err(Error::Cancelled) => return Err(Error::Cancelled),
+            Err(e @ Error::TooLarge(_)) => return Err(e),
+            Err(e) => {
+                let mut m = RunMetrics::failed(i, cells.len(), e.to_string());
+                m.drawn = run_spec.faults.clone();
+                return Ok(m);
+            }
+        };
         let rec = RunRecord { datum, ..rec };
         let mut m = metrics_of(&run_spec, i, &rec, &cells);
         if keep.contains(&i) {
@@ -573,12 +622,13 @@ pub fn one_run(
 ) -> Result<RunMetrics> {
     cancel.check()?;
     let sim = simulate(prep, seed, run);
-    let rec = run_architecture(&prep.spec, &sim.streams(prep), true, keep, cancel).map_err(
-        |e| match e {
-            Error::Cancelled => Error::Cancelled,
-            e => Error::Invalid(format!("run {run}: {e}")),
-        },
-    )?;
+    // A run that fails is recorded as failed; the campaign goes on.
+    let rec = match run_architecture(&prep.spec, &sim.streams(prep), true, keep, cancel) {
+        Ok(rec) => rec,
+        Err(Error::Cancelled) => return Err(Error::Cancelled),
+        Err(e @ Error::TooLarge(_)) => return Err(e),
+        Err(e) => return Ok(RunMetrics::failed(run, cells.len(), e.to_string())),
+    };
     let mut m = metrics(prep, run, &rec, cells);
     if keep {
         m.record = Some(rec);

@@ -102,6 +102,26 @@ pub fn at_epoch(k: usize, e: Error) -> Error {
     }
 }
 
+/// [`at_epoch`] for a run on recorded logs: the error names the run time `t` (s from the
+/// first GNSS epoch) beside the epoch index, so the record can be found in the log.
+pub fn at_time(k: usize, t: f64, e: Error) -> Error {
+    match e {
+        Error::NotPositiveDefinite { name, detail } => Error::NotPositiveDefinite {
+            name: format!("t = {t} s (epoch {k}): {name}"),
+            detail: format!(
+                "{detail}; a measurement or its σ there is far outside what the filter can hold (check the log at that time)"
+            ),
+        },
+        Error::Numerical { context, detail } => Error::Numerical {
+            context: format!("t = {t} s (epoch {k}): {context}"),
+            detail,
+        },
+        Error::Cancelled => Error::Cancelled,
+        Error::TooLarge(m) => Error::TooLarge(m),
+        other => Error::Invalid(format!("t = {t} s (epoch {k}): {other}")),
+    }
+}
+
 /// Run predict + update over `epochs` epochs.
 ///
 /// * `x0` (n), `p0` (n × n): prior before epoch 0.

@@ -186,6 +186,13 @@ pub fn ncx2_cdf(x: f64, dof: usize, lambda: f64) -> Result<f64> {
     if half == 0.0 {
         return Ok(lower_gamma(0.5 * k, 0.5 * x));
     }
+    if half > 1e6 {
+        // The Poisson mixture would need millions of terms (and `j + 1` stops changing beyond
+        // 2⁵³): the normal limit of χ²(k, λ), mean k + λ, variance 2(k + 2λ), is exact to
+        // O(λ^-1/2) there.
+        let z = (x - (k + lambda)) / (2.0 * (k + 2.0 * lambda)).sqrt();
+        return Ok(0.5 * statrs::function::erf::erfc(-z / std::f64::consts::SQRT_2));
+    }
     let log_w = |j: f64| -half + j * half.ln() - ln_gamma(j + 1.0);
     let term = |j: f64| lower_gamma(0.5 * k + j, 0.5 * x);
     let mode = half.floor();

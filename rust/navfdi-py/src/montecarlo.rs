@@ -104,6 +104,12 @@ pub fn rows_to_py<'py>(
         "run",
         to_numpy(py, rows.iter().map(|r| r.run as i64).collect(), &[n])?,
     )?;
+    d.set_item(
+        "failed",
+        rows.iter()
+            .map(|r| r.failed.clone().unwrap_or_default())
+            .collect::<Vec<String>>(),
+    )?;
     let grid = |f: &dyn Fn(&navfdi_core::montecarlo::CellMetrics) -> f64| -> Vec<f64> {
         rows.iter().flat_map(|r| r.cells.iter().map(f)).collect()
     };

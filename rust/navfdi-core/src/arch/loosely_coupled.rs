@@ -188,6 +188,7 @@ fn run<const NS: usize>(
             cancel.check()?;
         }
         let tk = models.t[k];
+        let at = |e: Error| crate::run::at_time(k, tk, e);
         if tk > imu.end() {
             // The IMU log has ended: no navigation.
             push_empty(&mut rec, &mut outcomes, &dims);
@@ -210,7 +211,7 @@ fn run<const NS: usize>(
                     h,
                     r: diag(&c.noise),
                 };
-                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true)?;
+                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
         }
         if let (Some(ch), Some(c)) = (nhc_ch, l.nhc.as_ref()) {
@@ -232,7 +233,7 @@ fn run<const NS: usize>(
                     h,
                     r: diag(&c.noise),
                 };
-                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true)?;
+                outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
         }
         // GNSS: every channel tested on the pre-update state; with `witness`, a channel's
@@ -267,7 +268,7 @@ fn run<const NS: usize>(
                     meas.r[(off + j, off + j)] += v;
                 }
             }
-            let o = test(&kf, aid, &meas, isolation)?;
+            let o = test(&kf, aid, &meas, isolation).map_err(at)?;
             tested.push((a, meas, o));
         }
         // Convergence: every tested GNSS channel's predicted σ within `convergence` times its
@@ -350,7 +351,7 @@ fn run<const NS: usize>(
             let mut keep: Vec<usize> = (0..meas.res.len()).collect();
             if o.excluded && l.isolate_components && aids[a].decision_pf.is_finite() {
                 if let Some((r, sv)) = o.inn.as_ref() {
-                    keep = isolate(r, sv, aids[a].decision_pf)?;
+                    keep = isolate(r, sv, aids[a].decision_pf).map_err(at)?;
                 }
                 if !keep.is_empty() {
                     o.excluded = false;
@@ -417,7 +418,7 @@ fn run<const NS: usize>(
                         }
                     }
                 }
-                update(&mut kf, &mut s, &rows(&fresh, &keep))?;
+                update(&mut kf, &mut s, &rows(&fresh, &keep)).map_err(at)?;
             }
             outcomes[a] = o;
         }

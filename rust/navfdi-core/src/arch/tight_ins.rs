@@ -220,7 +220,7 @@ pub fn run_tight_ins(
         // w are recorded) goes on to the batch innovation and the w-test.
         let (p_seq, dx_seq, lambda) = kf
             .sequential(&rows.res, &rows.h, &r_diag)
-            .map_err(|e| crate::run::at_epoch(k, e))?;
+            .map_err(|e| crate::run::at_time(k, tk, e))?;
         let thr = cfg.threshold(rows.res.len())?;
         let out = match t.fde {
             FdePlacement::LsPrecheck => ls_precheck(&rows, &s, &kf, &lever, t.rates, &cfg)?,
@@ -229,7 +229,7 @@ pub fn run_tight_ins(
                     let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
                     let inn = kf
                         .innovation(&rows.res, &rows.h, &r)
-                        .map_err(|e| crate::run::at_epoch(k, e))?;
+                        .map_err(|e| crate::run::at_time(k, tk, e))?;
                     innovation_fde(&inn.r, &inn.s, m, false, Some(lambda), true, &cfg)?.w
                 } else {
                     vec![f64::NAN; m]
@@ -245,7 +245,7 @@ pub fn run_tight_ins(
                 let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
                 let inn = kf
                     .innovation(&rows.res, &rows.h, &r)
-                    .map_err(|e| crate::run::at_epoch(k, e))?;
+                    .map_err(|e| crate::run::at_time(k, tk, e))?;
                 innovation_fde(&inn.r, &inn.s, m, true, Some(lambda), full, &cfg)?
             }
         };
@@ -271,7 +271,7 @@ pub fn run_tight_ins(
             let rk: Vec<f64> = keep.iter().map(|&i| r_diag[i]).collect();
             let (p, dx, _) = kf
                 .sequential(&res, &h, &rk)
-                .map_err(|e| crate::run::at_epoch(k, e))?;
+                .map_err(|e| crate::run::at_time(k, tk, e))?;
             kf.p = p;
             kf.feedback(&mut s, &dx);
         }
@@ -288,7 +288,7 @@ pub fn run_tight_ins(
                 },
                 &gone,
             )
-            .map_err(|e| crate::run::at_epoch(k, e))?;
+            .map_err(|e| crate::run::at_time(k, tk, e))?;
             let lv = b.levels(&s, &kf);
             let js: Vec<usize> = (0..m).filter(|j| !excluded.contains(j)).collect();
             let los: Vec<Vector3<f64>> = js.iter().map(|&j| rows.los[j]).collect();

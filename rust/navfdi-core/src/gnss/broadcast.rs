@@ -328,6 +328,8 @@ pub enum EphProblem {
     Missing,
     /// The nearest usable record marks the satellite unhealthy.
     Unhealthy,
+    /// Every record in range has an implausible orbit or clock ([`Ephemeris::plausible`]).
+    Implausible,
 }
 
 /// Pick the ephemeris of `sat` for time `t` from `ephs` (all of that satellite, any order):
@@ -338,16 +340,54 @@ pub fn select<'a>(ephs: &'a [Ephemeris], t: &GpsTime) -> Result<&'a Ephemeris, E
     let best = |healthy: bool, fnav: bool| {
         ephs.iter()
             .filter(in_range)
+            .filter(|e| e.plausible())
             .filter(|e| e.unhealthy != healthy && e.fnav == fnav)
             .min_by(|a, b| t.diff(&a.toe).abs().total_cmp(&t.diff(&b.toe).abs()))
     };
     if let Some(e) = best(true, false).or_else(|| best(true, true)) {
         return Ok(e);
     }
-    if ephs.iter().any(|e| in_range(&e)) {
+    if ephs.iter().any(|e| in_range(&e) && e.plausible()) {
         Err(EphProblem::Unhealthy)
+    } else if ephs.iter().any(|e| in_range(&e)) {
+        Err(EphProblem::Implausible)
     } else {
         Err(EphProblem::Missing)
+    }
+}
+
+/// Largest broadcast clock bias accepted (s): twice the GPS and BeiDou `af0` field range
+/// (±2⁻¹⁰ s); a corrupt record (1 s: 3·10⁸ m) would otherwise defeat the first fix of every
+/// epoch, while a bias within it (1 ms: 300 km) is left to the FDE, which excludes it.
+pub const MAX_CLOCK_BIAS: f64 = 2e-3;
+
+impl Ephemeris {
+    /// Whether the record's orbit and clock could be a navigation satellite's: every field
+    /// finite, `√A` in [4000, 8000] √m (GPS 5154, Galileo 5440, BeiDou MEO 5282, GEO/IGSO and
+    /// QZSS 6493), eccentricity in [0, 0.1), `|af0|` ≤ [`MAX_CLOCK_BIAS`], `|af1|` ≤ 1e-7 s/s.
+    /// Implausible records are never selected (the satellite is reported `bad_ephemeris`).
+    pub fn plausible(&self) -> bool {
+        let finite = self.af.iter().all(|v| v.is_finite())
+            && [
+                self.sqrt_a,
+                self.e,
+                self.i0,
+                self.omega0,
+                self.omega,
+                self.m0,
+                self.delta_n,
+                self.idot,
+                self.omega_dot,
+                self.toe_sow,
+            ]
+            .iter()
+            .all(|v| v.is_finite())
+            && self.harmonics.iter().all(|v| v.is_finite());
+        finite
+            && (4000.0..=8000.0).contains(&self.sqrt_a)
+            && (0.0..0.1).contains(&self.e)
+            && self.af[0].abs() <= MAX_CLOCK_BIAS
+            && self.af[1].abs() <= 1e-7
     }
 }
 

@@ -597,8 +597,37 @@ fn major(text: &str) -> Option<char> {
 /// [`super::rinex2::obs_to_v3`], errors naming the original lines).
 pub fn read_obs(path: &str) -> Result<ObsData> {
     let text = read_text(path)?;
-    if major(&text) == Some('2') {
-        let (v3, map) = super::rinex2::obs_to_v3(path, &text)?;
+    read_obs_text(path, &text).map_err(|e| {
+        // Compact RINEX was expanded: its line numbers are the expanded text's.
+        if is_compact_file(path) {
+            match e {
+                crate::error::Error::Format(m) => crate::error::Error::Format(m.replacen(
+                    &format!("{path}, line "),
+                    &format!("{path} (expanded from Compact RINEX), line "),
+                    1,
+                )),
+                other => other,
+            }
+        } else {
+            e
+        }
+    })
+}
+
+/// Whether the file at `path` starts as Compact RINEX (Hatanaka), plain or gzipped.
+fn is_compact_file(path: &str) -> bool {
+    use std::io::Read;
+    let Ok(mut r) = crate::memory::open_bounded(path) else {
+        return false;
+    };
+    let mut head = [0u8; 40];
+    let n = r.read(&mut head).unwrap_or(0);
+    head[..n].windows(13).any(|w| w == b"COMPACT RINEX")
+}
+
+fn read_obs_text(path: &str, text: &str) -> Result<ObsData> {
+    if major(text) == Some('2') {
+        let (v3, map) = super::rinex2::obs_to_v3(path, text)?;
         let mut obs = parse_obs(path, &v3).map_err(|e| remap_line(e, path, &map))?;
         obs.version = text
             .lines()
@@ -610,7 +639,7 @@ pub fn read_obs(path: &str) -> Result<ObsData> {
             .to_string();
         return Ok(obs);
     }
-    parse_obs(path, &text)
+    parse_obs(path, text)
 }
 
 /// Read and parse a navigation file from disk (RINEX 3; RINEX 4 through

@@ -131,6 +131,15 @@ pub(crate) fn obs_to_v3(path: &str, text: &str) -> Result<(String, Vec<usize>)> 
         ));
         body_map.push(i + 1);
         let mut k = j;
+        // A file cut inside an epoch: fewer observation lines than its satellites need.
+        if k + rows * n > lines.len() {
+            let have = lines.len().saturating_sub(k) / rows.max(1);
+            return Err(format_err(
+                path,
+                Some(i + 1),
+                format!("the file ends inside this epoch: {n} satellites announced, observations for {have} (truncated?)"),
+            ));
+        }
         for s in &sats {
             let mut row = s.clone();
             for r in 0..rows {

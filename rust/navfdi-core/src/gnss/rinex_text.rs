@@ -68,6 +68,11 @@ pub fn read_text(path: &str) -> Result<String> {
     if bytes.is_empty() {
         return Err(format_err(path, None, "the file is empty"));
     }
+    // A UTF-8 byte-order mark (an editor's) is not part of the format.
+    let bytes = match bytes.strip_prefix(b"\xef\xbb\xbf") {
+        Some(rest) => rest.to_vec(),
+        None => bytes,
+    };
     let compact = bytes.starts_with(b"1.0                 COMPACT RINEX")
         || bytes.starts_with(b"3.0                 COMPACT RINEX");
     let text = String::from_utf8(bytes).map_err(|e| {

@@ -35,7 +35,7 @@ use super::C;
 
 /// Travel distance (m) of a medium-orbit satellite's signal, for a pseudorange outside
 /// 1e7 … 1e8 m (no receiver measures one there).
-const NOMINAL_RANGE: f64 = 2.3e7;
+pub const NOMINAL_RANGE: f64 = 2.3e7;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -265,7 +265,9 @@ pub enum SatStatus {
     NoEphemeris,
     /// Only unhealthy ephemerides.
     Unhealthy,
-    /// The selected ephemeris gives an impossible position or clock (corrupt record).
+    /// Every ephemeris in range has an implausible orbit or clock
+    /// ([`super::broadcast::Ephemeris::plausible`]), or the selected one gives an impossible
+    /// position or clock (corrupt records).
     BadEphemeris,
     /// No solution at this epoch (satellite above the mask with an ephemeris).
     Unsolved,
@@ -518,8 +520,12 @@ pub fn solve(
             else {
                 continue;
             };
-            if !(o.value > 1e6 && o.value < 1e8) {
-                continue; // blank / zero / nonsense pseudorange
+            // A blank (zero) or unreadable pseudorange is no observation. Any other value, however
+            // gross (negative, 9e9 m), is one: it is tested and excluded by the FDE like an
+            // injected fault (its satellite placed at a nominal travel time), so it is recorded
+            // in the satellite rows and counted among the exclusions, never dropped unseen.
+            if o.value == 0.0 || !o.value.is_finite() {
+                continue;
             }
             let fault: f64 = faults
                 .iter()
@@ -560,6 +566,7 @@ pub fn solve(
                     sr.status = match p {
                         EphProblem::Missing => SatStatus::NoEphemeris,
                         EphProblem::Unhealthy => SatStatus::Unhealthy,
+                        EphProblem::Implausible => SatStatus::BadEphemeris,
                     };
                     out.sats.push(sr);
                 }
@@ -675,7 +682,10 @@ fn solve_epoch(
     let r0 = match &state.last {
         Some((p, _)) => *p,
         None => {
-            let (systems, col) = clock_columns(cands, |_| true);
+            // The coarse fix uses the pseudoranges a receiver can measure (1e7 … 1e8 m); a gross
+            // one (negative, 9e9 m) would stop it, and is left to the FDE at the fine fix.
+            let measurable = |i: usize| (1e7..=1e8).contains(&cands[i].rho_c);
+            let (systems, col) = clock_columns(cands, measurable);
             let u = 3 + systems.len();
             if n < u {
                 empty.fde.reason = format!(
@@ -693,10 +703,12 @@ fn solve_epoch(
                 x: vec![0.0; u],
                 x0: vec![0.0; u],
             };
-            let idx: Vec<usize> = (0..n).collect();
-            if coarse
-                .solve(&idx, &DMatrix::identity(n, n), &cfg.fde)
-                .is_none()
+            let idx: Vec<usize> = (0..n).filter(|&i| measurable(i)).collect();
+            let m = idx.len();
+            if m < u
+                || coarse
+                    .solve(&idx, &DMatrix::identity(m, m), &cfg.fde)
+                    .is_none()
             {
                 empty.fde.reason = "no first fix (singular geometry or no convergence)".into();
                 return Ok(empty);

@@ -54,14 +54,15 @@ impl GnssLog {
         }
         for k in 0..n {
             let p = &self.pos[k];
+            // Velocity may be missing (NaN: RTKLIB writes none by default), not infinite.
             let finite = self.t[k].is_finite()
                 && p.lat.is_finite()
                 && p.lon.is_finite()
                 && p.h.is_finite()
-                && self.vel[k].iter().all(|v| v.is_finite());
+                && !self.vel[k].iter().any(|v| v.is_infinite());
             if !finite {
                 return Err(Error::Invalid(format!(
-                    "{what}: epoch {k} has a NaN or infinite time, position or velocity"
+                    "{what}: epoch {k} has a NaN or infinite time or position, or an infinite velocity"
                 )));
             }
             if k > 0 && self.t[k] <= self.t[k - 1] {
@@ -157,6 +158,14 @@ impl LoggedSource {
         let mut sigma = vec![vec![DVector::zeros(0); epochs]; ns];
         for (si, sen) in spec.sensors.iter().enumerate() {
             let grid = sample_epochs(&gnss.t, sen.rate, &format!("sensors[{si}]"))?;
+            if matches!(sen.kind, SensorKind::Gnss | SensorKind::GnssVelocity)
+                && !gnss.vel.iter().any(|v| v.iter().all(|x| x.is_finite()))
+            {
+                return Err(Error::Invalid(format!(
+                    "sensors[{si}] ({:?}, kind {:?}): the GNSS log has no velocity (no ve, vn, vu columns); use a gnss_position sensor, or a log with velocities",
+                    sen.name, sen.kind
+                )));
+            }
             let (pos, vel) = match sen.kind {
                 SensorKind::Gnss => (true, true),
                 SensorKind::GnssPosition => (true, false),

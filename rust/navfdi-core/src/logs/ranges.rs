@@ -167,9 +167,16 @@ impl LoggedSource {
                 let scale = (F_L1 / f).powi(2);
                 let lambda = C / f;
                 for o in ep.obs.iter().filter(|o| o.sat.sys == sys && o.code == ci) {
-                    if !(o.value > 1e7 && o.value < 1e8) {
+                    // Blank (zero) is no observation; a gross value is one, left to the FDE
+                    // (the satellite placed at a nominal travel time), as in `navfdi gnss`.
+                    if o.value == 0.0 || !o.value.is_finite() {
                         continue;
                     }
+                    let rho_tx = if (1e7..=1e8).contains(&o.value) {
+                        o.value
+                    } else {
+                        crate::gnss::spp::NOMINAL_RANGE
+                    };
                     let Some(eph) = nav
                         .ephemerides
                         .get(&o.sat)
@@ -177,7 +184,7 @@ impl LoggedSource {
                     else {
                         continue;
                     };
-                    let ttx = eph.transmission_time(&ep.time, o.value);
+                    let ttx = eph.transmission_time(&ep.time, rho_tx);
                     let st = eph.state(&ttx);
                     let rn = st.pos.norm();
                     if !(rn > 1e7 && rn < 6e7 && st.clock.is_finite() && st.clock.abs() < 1.0) {
