@@ -39,7 +39,7 @@ PY_LAYERS = [
     {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
     {"_terrain", "_fields", "_lc_schema"},
     {"scenario"},
-    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity"},
+    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries"},
     {"plots", "plots_logged"},
     {"runs", "montecarlo"},
     {"federated", "cli", "__init__", "__main__"},

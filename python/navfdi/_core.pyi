@@ -32,6 +32,7 @@ __all__ = [
     "FileFormatError",
     "read_rinex_obs",
     "read_imu_csv",
+    "simulate_logs",
     "read_rinex_nav",
     "GnssRun",
     "LoggedSource",
@@ -526,6 +527,18 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
     same measurements with every scenario of ``spec_jsons`` (variants; only ``architecture``,
     ``federated`` and ``centralized`` may differ), isolation active. One record per variant
     (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
+
+def simulate_logs(
+    trajectory_json: str, duration: float, noise: dict[str, Any], seed: int, run: int
+) -> dict[str, Any]:
+    """Simulate a car's recorded-style logs, GIL released: ``trajectory_json`` the SI
+    trajectory, ``duration`` (s), ``noise`` the ``LogNoise`` fields (SI; ``mounting`` three
+    angles in rad, ``ground`` a bool; absent fields keep their defaults), ``seed``, ``run``
+    the random stream. Returns ``imu`` (N, 7: time s, gyro rad/s, accel m/s², in the IMU's
+    axes), ``gnss`` and ``reference`` (M, 13: time, latitude, longitude rad, height m,
+    velocity east/north/up m/s, σ position, σ velocity m, m/s), ``attitude`` (M, 4:
+    body-to-NED quaternion w, x, y, z), ``gnss_error`` (M, 3: east, north, up m), ``stale``
+    and ``burst`` (M,) bool. ``ValueError`` names a bad noise field."""
 
 def read_imu_csv(
     path: str,

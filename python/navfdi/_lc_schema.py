@@ -7,6 +7,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
+from collections.abc import Sequence
 from typing import Any
 
 from navfdi._errors import ScenarioError
@@ -38,6 +41,70 @@ def _axes(v: Any, dim: str, q: str) -> list[float]:
     return [_unit(x, dim, f"{q}[{i}]") for i, x in enumerate(vals)]
 
 
+_AXES = {"forward": (1, 0, 0), "back": (-1, 0, 0), "right": (0, 1, 0), "left": (0, -1, 0), "down": (0, 0, 1), "up": (0, 0, -1)}
+
+
+def axes_mounting(axes: Sequence[str]) -> tuple[float, float, float]:
+    """The mounting (roll, pitch, yaw, rad; ``navfdi_core::ins::strapdown::mounting``'s
+    convention) of an IMU whose x, y, z axes point along ``axes`` of the vehicle (each one of
+    forward, back, right, left, down, up; a right-handed set)."""
+    if len(axes) != 3 or any(a not in _AXES for a in axes):
+        raise ValueError(f"imu_axes = {list(axes)!r}: three of {', '.join(_AXES)}")
+    c = np.array([_AXES[a] for a in axes], dtype=float).T  # columns: IMU axes in body = C_imu^b
+    if abs(np.linalg.det(c) - 1.0) > 1e-9:
+        raise ValueError(f"imu_axes = {list(axes)!r}: not a right-handed set of axes (the third must be the cross product of the first two)")
+    return _euler_of_mounting(c)
+
+
+def _euler_of_mounting(c_imu_b: np.ndarray) -> tuple[float, float, float]:
+    """Roll, pitch, yaw (rad) with ``mounting(r, p, y) = c_imu_b``, i.e. ``R_z R_y R_x = c_imu_bᵀ``."""
+    m = c_imu_b.T
+    pitch = -math.asin(max(-1.0, min(1.0, m[2, 0])))
+    roll = math.atan2(m[2, 1], m[2, 2])
+    yaw = math.atan2(m[1, 0], m[0, 0])
+    return roll, pitch, yaw
+
+
+def _rot(r: float, p: float, y: float) -> np.ndarray:
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def true_mounting(axes: Sequence[str], boresight_deg: Sequence[float]) -> tuple[float, float, float]:
+    """The mounting (rad) of an IMU with nominal ``axes`` and a boresight error (roll, pitch,
+    yaw, deg: rotations about the vehicle's forward, right and down axes, in the ``mounting``
+    convention, so that for forward-right-down axes the mounting is the boresight itself):
+    ``C_imu^b = R_boreᵀ · C_axes``."""
+    r0 = axes_mounting(axes)
+    c_axes = _rot(*r0).T
+    bore = _rot(*np.radians(boresight_deg))
+    return _euler_of_mounting(bore.T @ c_axes)
+
+
+def _mounting(t: Any, p: str) -> list[float]:
+    """``mounting`` (roll, pitch, yaw of the IMU in the forward-right-down body frame) or
+    ``imu_axes`` (where the IMU's x, y, z point: forward, back, right, left, down, up), with an
+    optional ``boresight`` (roll, pitch, yaw, small angles) on top: the mounting angles (rad)."""
+    given = [k for k in ("mounting", "imu_axes") if k in t]
+    if len(given) != 1:
+        raise ScenarioError(f"{p}: give the IMU's orientation as imu_axes (e.g. [\"right\", \"forward\", \"up\"]: where its x, y, z axes point) or as mounting (roll, pitch, yaw angles), {'not both' if given else 'one of them'}")
+    bore = [math.degrees(v) for v in _axes(t["boresight"], "angle", f"{p}.boresight")] if "boresight" in t else [0.0, 0.0, 0.0]
+    if "imu_axes" in t:
+        axes = _list(t["imu_axes"], f"{p}.imu_axes")
+        try:
+            return list(true_mounting([str(a) for a in axes], bore))
+        except ValueError as e:
+            raise ScenarioError(f"{p}.{e}") from None
+    m = _axes(t["mounting"], "angle", f"{p}.mounting")
+    if any(bore):
+        c = _rot(*m).T
+        return list(_euler_of_mounting(_rot(*np.radians(bore)).T @ c))
+    return m
+
+
 def _strapdown(t: Any, p: str) -> dict[str, Any]:
     """The strapdown INS fields of table ``t`` at field path ``p``: ``imu``, ``mounting``,
     ``lever_arm``, ``imu_time_offset``, ``alignment`` (SI)."""
@@ -55,7 +122,7 @@ def _strapdown(t: Any, p: str) -> dict[str, Any]:
             "gyro_scale": _unit(imu.get("gyro_scale", "0 ppm"), "fraction", f"{p}.imu.gyro_scale"),
             "accel_scale": _unit(imu.get("accel_scale", "0 ppm"), "fraction", f"{p}.imu.accel_scale"),
         },
-        "mounting": _axes(_need(t, "mounting", p), "angle", f"{p}.mounting"),
+        "mounting": _mounting(t, p),
         "lever_arm": _axes(_need(t, "lever_arm", p), "length", f"{p}.lever_arm"),
         "imu_time_offset": _unit(t.get("imu_time_offset", "0 s"), "time", f"{p}.imu_time_offset"),
         "alignment": {
@@ -74,13 +141,13 @@ def _strapdown(t: Any, p: str) -> dict[str, Any]:
 def _tight_strapdown(t: Any) -> dict[str, Any]:
     """``[tight.strapdown]``: the strapdown INS of a tight filter on recorded logs."""
     p = "tight.strapdown"
-    _check_keys(t, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment"}, p)
+    _check_keys(t, {"imu", "mounting", "imu_axes", "boresight", "lever_arm", "imu_time_offset", "alignment"}, p)
     return _strapdown(t, p)
 
 
 def _loosely_coupled(lc: Any) -> dict[str, Any]:
     p = "loosely_coupled"
-    _check_keys(lc, {"imu", "mounting", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate", "convergence"}, p)
+    _check_keys(lc, {"imu", "mounting", "imu_axes", "boresight", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate", "convergence", "noise_scale"}, p)
     out: dict[str, Any] = {
         **_strapdown(lc, p),
         "sensors": [],
@@ -89,6 +156,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
         "accommodate": _bool(lc.get("accommodate", True), f"{p}.accommodate"),
         "isolate": _bool(lc.get("isolate", True), f"{p}.isolate"),
         "convergence": _number(lc.get("convergence", 3.0), f"{p}.convergence"),
+        "noise_scale": None if lc.get("noise_scale", "auto") == "auto" else _number(lc["noise_scale"], f"{p}.noise_scale"),
     }
     for i, a in enumerate(_list(_need(lc, "sensors", p), f"{p}.sensors")):
         q = f"{p}.sensors[{i}]"

@@ -28,6 +28,7 @@ from navfdi import _core, _json
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, tested_epochs, window_alarm
 from navfdi._text import fit
 from navfdi.consistency import consistency, format_consistency, no_reference_line
+from navfdi._timeseries import timeseries_columns
 from navfdi.record import ERROR_COLUMNS, RunRecord, integrity_figures
 from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
 
@@ -232,7 +233,10 @@ class ScenarioRun(RunRecord):
         record is tested only at its own epochs, and the epochs between its tests neither end
         an interval nor count; fault columns empty where no fault matches); the state
         chi-square test (``[state_chi2]``) as subfilter ``navigation``, detector
-        ``state_chi2``, matched to every fault. Returns a pandas DataFrame."""
+        ``state_chi2``, matched to every fault; the loosely coupled filter's exclusion
+        intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``:
+        the tested epochs at which the channel, or some of its components, was left out for
+        that reason). Returns a pandas DataFrame."""
         import pandas as pd
 
         rows = []
@@ -261,6 +265,13 @@ class ScenarioRun(RunRecord):
         if st is not None:
             # The state test watches the whole navigation solution: matched to every fault.
             add("navigation", "state_chi2", st, sorted(self.scenario.faults(), key=lambda f: f["start"]))
+        for s in self.record["subfilters"]:
+            if "noise_scale" not in s:
+                continue
+            reason = np.asarray(s["reason"])
+            for r in np.unique(reason[reason > 0]):
+                # An exclusion interval: the tested epochs left out for one reason.
+                add(s["sensor"], f"excluded:{s['reason_names'][r]}", {"alarm": list(reason == r), "statistic": s["statistic"]}, self._faults_on(s["sensor"]))
         cols = ["subfilter", "detector", "alarm_start", "alarm_end", "tests", "fault_id", "fault_start", "fault_end", "delay"]
         df = pd.DataFrame(rows, columns=cols)
         for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
@@ -349,6 +360,9 @@ class ScenarioRun(RunRecord):
             lines += pl_lines + [""]
         if "nav" in self.record:
             lines += format_consistency(consistency(self)) + [""]
+            for sen, c in self.exclusion_counts().items():
+                why = ", ".join(f"{n} {c[n]}" for n in c if n != "tested" and c[n])
+                lines.append(f"{sen}: left out (wholly or in part) at {sum(v for n, v in c.items() if n != 'tested')} of {c['tested']} tested epochs" + (f" ({why})" if why else ""))
             e = self.errors()
         if "nav" in self.record and not e["scored"]:
             lines.append(no_reference_line(self.scenario))
@@ -389,7 +403,10 @@ class ScenarioRun(RunRecord):
 
     def timeseries(self):
         """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,
-        ``{sub}.isolated``, ``{sub}.fused`` and per detector ``{sub}.{det}.statistic``,
+        ``{sub}.isolated``, ``{sub}.fused`` (loosely coupled GNSS channels also
+        ``{sub}.excluded``: why the measurement or some of its components were left out —
+        ``test``, ``step``, ``stale``, ``ramp``, empty when used as measured — and
+        ``{sub}.noise_scale``, the σ scale its tests used) and per detector ``{sub}.{det}.statistic``,
         ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
         component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
         isolation, ``error_no_isolation.{col}`` (attitude in rad, velocity m/s, position m).
@@ -406,63 +423,7 @@ class ScenarioRun(RunRecord):
         (sub-filters)."""
         import pandas as pd
 
-        cols: dict[str, Any] = {"t": self.t}
-        for s in self.record["subfilters"]:
-            sub = s["sensor"]
-            cols[f"{sub}.statistic"] = s["statistic"]
-            if "mdb" in s:
-                for j, comp in enumerate(self.components(sub)):
-                    cols[f"{sub}.mdb.{comp}"] = s["mdb"][:, j]
-            cols[f"{sub}.isolated"] = s["isolated"]
-            cols[f"{sub}.fused"] = s["fused"]
-            for d in s["detectors"]:
-                for k in ("statistic", "threshold", "alarm"):
-                    cols[f"{sub}.{d['name']}.{k}"] = d[k]
-        if "fused_alt" in self.record:
-            cols["fused_alt.error"] = self.record["fused_alt"]
-        fu = self.record.get("fusion")
-        if fu is not None:
-            for j, name in enumerate(fu["sensors"]):
-                cols[f"fused_alt.{name}.error"] = fu["error"][:, j]
-                cols[f"fused_alt.{name}.weight"] = fu["weight"][:, j]
-        if "mode" in self.record:
-            cols["mode"] = np.array(["", "q1", "q2", "q3"], dtype=object)[self.record["mode"]]
-        st = self.record.get("state_chi2")
-        if st is not None:
-            for k in ("statistic", "threshold", "alarm", "ready", "ill_conditioned"):
-                cols[f"state_chi2.{k}"] = st[k]
-        sat = self.record.get("satellites")
-        if sat is not None:
-            names = sat["names"]
-            status = np.array(sat["status_names"], dtype=object)[sat["status"]]
-            cols["fde.status"] = status
-            cols["fde.used"] = sat["used"]
-            cols["fde.excluded"] = [",".join(names[j] for j in np.flatnonzero(row)) for row in sat["excluded"]]
-            for j, nm in enumerate(names):
-                if sat["in_view"][:, j].any():
-                    cols[f"sat.{nm}.in_view"] = sat["in_view"][:, j]
-                    cols[f"sat.{nm}.excluded"] = sat["excluded"][:, j]
-                    cols[f"sat.{nm}.w"] = sat["w"][:, j]
-        it = self.record.get("integrity")
-        if it is not None:
-            for k in ("hpl", "vpl", "hpl_snapshot", "vpl_snapshot", "statistic", "alarm", "modes"):
-                cols[f"integrity.{k}"] = it[k]
-        nav = self.record.get("nav")
-        if nav is not None:
-            cols["time"] = self.t
-            for j, c in enumerate(self.record["nav_columns"]):
-                v = nav[:, j]
-                if c in ("lat", "lon"):
-                    v = np.degrees(v)
-                elif c in ("roll", "pitch", "yaw"):
-                    c, v = f"{c}_deg", np.degrees(v)
-                cols[c] = v
-        for i, c in enumerate(ERROR_COLUMNS):
-            cols[f"error.{c}"] = self.record["error"][:, i]
-            cols[f"sigma.{c}"] = self.record["sigma"][:, i]
-            if self.baseline is not None:
-                cols[f"error_no_isolation.{c}"] = self.baseline["error"][:, i]
-        return pd.DataFrame(cols)
+        return pd.DataFrame(timeseries_columns(self))
 
     def errors(self) -> dict[str, float]:
         """Navigation-error RMS and maximum |error| over the whole run, per component of the
@@ -556,7 +517,25 @@ class ScenarioRun(RunRecord):
             "faults": [m.__dict__ for m in self.fault_table()],
             "integrity": self.integrity(),
             **({"consistency": consistency(self)} if "nav" in self.record else {}),
+            **({"exclusions": self.exclusion_counts()} if "nav" in self.record else {}),
         }
+
+    def exclusion_counts(self) -> dict[str, dict[str, int]]:
+        """Per loosely coupled GNSS channel, the tested epochs left out (wholly or in some
+        components) per reason (``test``, ``step``, ``stale``, ``ramp``) and ``tested``, the
+        epochs it was tested at. Empty for other architectures."""
+        out: dict[str, dict[str, int]] = {}
+        for s in self.record["subfilters"]:
+            if "noise_scale" not in s:
+                continue
+            reason = np.asarray(s["reason"])
+            tested = tested_epochs(s["statistic"])
+            row = {"tested": int(np.sum(tested))}
+            for r, name in enumerate(s["reason_names"]):
+                if r:
+                    row[name] = int(np.sum((reason == r) & tested))
+            out[s["sensor"]] = row
+        return out
 
     def write(self, out: str | Path, figures: bool = True) -> list[Path]:
         """Write ``events.csv``, ``timeseries.parquet``, ``summary.json`` and (optionally) PNG

@@ -468,6 +468,44 @@ def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
 
 
 
+def convert_trajectory(tr: Any, duration: float) -> dict[str, Any]:
+    """A ``[trajectory]`` table (segments or waypoints, values with units) in its SI form for
+    a run of ``duration`` s; errors name the field. Warns (:class:`ScenarioWarning`) when the
+    segments cover less than the run (the last one is held)."""
+    if isinstance(tr, Mapping) and "waypoints" in tr:
+        tr = _waypoints(tr, duration)
+    _check_keys(tr, {"latitude", "longitude", "height", "heading", "speed", "segments"}, "trajectory")
+    segs = []
+    for i, s in enumerate(_list(_need(tr, "segments", "trajectory"), "trajectory.segments")):
+        p = f"trajectory.segments[{i}]"
+        kind = _str(_need(s, "kind", p), f"{p}.kind")
+        if kind not in _SEGMENTS:
+            raise ScenarioError(f"{p}.kind = {kind!r}: unknown segment (use one of: {', '.join(_SEGMENTS)})")
+        _check_keys(s, {"kind", *_SEGMENTS[kind]}, p)
+        seg: dict[str, Any] = {"kind": kind}
+        for key, dim in _SEGMENTS[kind].items():
+            seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
+        segs.append(seg)
+    covered = sum(seg["duration"] for seg in segs)
+    if segs and covered < duration - 1e-9 * max(duration, 1.0):
+        import warnings
+
+        warnings.warn(
+            f"trajectory.segments cover {covered:g} s of the {duration:g} s run: the last segment "
+            f"({segs[-1]['kind']}) is held for the remaining {duration - covered:g} s",
+            ScenarioWarning,
+            stacklevel=4,
+        )
+    return {
+        "latitude": _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude"),
+        "longitude": _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude"),
+        "height": _unit(_need(tr, "height", "trajectory"), "length", "trajectory.height"),
+        "heading": _unit(tr.get("heading", "0 deg"), "angle", "trajectory.heading"),
+        "speed": _unit(tr.get("speed", "0 m/s"), "velocity", "trajectory.speed"),
+        "segments": segs,
+    }
+
+
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
     _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "loosely_coupled", "source", "terrain", "state_chi2", "modes", "variants"}, "")
@@ -486,40 +524,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     }
     if logged:
         return _convert_logged(raw, core)
-    tr = _need(raw, "trajectory", "")
-    if isinstance(tr, Mapping) and "waypoints" in tr:
-        tr = _waypoints(tr, core["duration"])
-    _check_keys(tr, {"latitude", "longitude", "height", "heading", "speed", "segments"}, "trajectory")
-    segs = []
-    for i, s in enumerate(_list(_need(tr, "segments", "trajectory"), "trajectory.segments")):
-        p = f"trajectory.segments[{i}]"
-        kind = _str(_need(s, "kind", p), f"{p}.kind")
-        if kind not in _SEGMENTS:
-            raise ScenarioError(f"{p}.kind = {kind!r}: unknown segment (use one of: {', '.join(_SEGMENTS)})")
-        _check_keys(s, {"kind", *_SEGMENTS[kind]}, p)
-        seg: dict[str, Any] = {"kind": kind}
-        for key, dim in _SEGMENTS[kind].items():
-            seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
-        segs.append(seg)
-    covered = sum(seg["duration"] for seg in segs)
-    duration = core["duration"]
-    if segs and covered < duration - 1e-9 * max(duration, 1.0):
-        import warnings
-
-        warnings.warn(
-            f"trajectory.segments cover {covered:g} s of the {duration:g} s run: the last segment "
-            f"({segs[-1]['kind']}) is held for the remaining {duration - covered:g} s",
-            ScenarioWarning,
-            stacklevel=4,
-        )
-    core["trajectory"] = {
-        "latitude": _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude"),
-        "longitude": _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude"),
-        "height": _unit(_need(tr, "height", "trajectory"), "length", "trajectory.height"),
-        "heading": _unit(tr.get("heading", "0 deg"), "angle", "trajectory.heading"),
-        "speed": _unit(tr.get("speed", "0 m/s"), "velocity", "trajectory.speed"),
-        "segments": segs,
-    }
+    core["trajectory"] = convert_trajectory(_need(raw, "trajectory", ""), core["duration"])
     if "terrain" in raw:
         core["terrain"] = _terrain(raw["terrain"])
     if "state_chi2" in raw:

@@ -47,7 +47,21 @@ pub struct SubRecord {
     /// autocorrelation over consecutive tests measures the filter's consistency without a
     /// reference. Empty where the architecture does not record it (loosely coupled does).
     pub whitened: Vec<f64>,
+    /// Why the measurement (or some of its components) was left out at each epoch
+    /// ([`EXCLUSION_REASONS`] index; 0 where it was used as measured or not tested). Empty
+    /// where the architecture does not record it (loosely coupled does).
+    pub reason: Vec<u8>,
+    /// Scale of the measurement σ its tests used at each epoch (the noise scale estimated
+    /// from its innovations; NaN where untested). Empty where the architecture does not
+    /// estimate it (loosely coupled does, for GNSS channels).
+    pub noise_scale: Vec<f64>,
 }
+
+/// Names of [`SubRecord::reason`]: used as measured; left out by the deciding test; a held
+/// step (used as a relative fix while its offset explains it, or left out); a stale fix (the
+/// receiver's last fix repeated while the INS moved); a slow ramp flagged by the sequential
+/// test, held until the fix meets the INS again.
+pub const EXCLUSION_REASONS: [&str; 5] = ["", "test", "step", "stale", "ramp"];
 
 impl SubRecord {
     /// An epoch without a test: NaN statistics, not isolated, nothing fused.
@@ -365,6 +379,8 @@ impl RunRecord {
                         .collect(),
                     mdb: Vec::new(),
                     whitened: Vec::new(),
+                    reason: Vec::new(),
+                    noise_scale: Vec::new(),
                 })
                 .collect(),
             sats: None,

@@ -298,3 +298,127 @@ pub fn read_imu_csv<'py>(
         crate::convert::to_numpy(py, flat(table.accel), &[n, 3])?,
     ))
 }
+
+/// `log` as a (M, 13) table of the column layout [`gnss_log`] reads: time (s), latitude,
+/// longitude (rad), height (m), velocity east, north, up (m/s), σ position, σ velocity.
+fn gnss_table(log: &GnssLog) -> Vec<f64> {
+    let mut out = Vec::with_capacity(log.t.len() * 13);
+    for k in 0..log.t.len() {
+        let p = &log.pos[k];
+        out.extend([log.t[k], p.lat, p.lon, p.h]);
+        out.extend(log.vel[k].iter());
+        out.extend(log.sd_pos[k].iter());
+        out.extend(log.sd_vel[k].iter());
+    }
+    out
+}
+
+/// Simulate recorded-style logs (`navfdi_core::sim::logs::simulate_logs`, GIL released):
+/// `trajectory_json` the SI trajectory, `duration` (s), `noise` a dict of the `LogNoise`
+/// fields (SI; `mounting` three angles in rad, `ground` a bool; absent fields keep their
+/// defaults), `seed`, `run`. Returns `imu` (N, 7: time, gyro rad/s, accel m/s², in the IMU's
+/// axes), `gnss` and `reference` (M, 13 in the layout of `LoggedSource`), `attitude` (M, 4:
+/// body-to-NED quaternion w, x, y, z), `gnss_error` (M, 3: east, north, up, m), `stale` and
+/// `burst` (M, bool).
+#[pyfunction]
+pub fn simulate_logs<'py>(
+    py: Python<'py>,
+    trajectory_json: &str,
+    duration: f64,
+    noise: &Bound<'py, pyo3::types::PyDict>,
+    seed: u64,
+    run: u64,
+) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    use navfdi_core::sim::logs::{simulate_logs as simulate, LogNoise};
+    let trajectory: navfdi_core::spec::TrajectorySpec = serde_json::from_str(trajectory_json)
+        .map_err(|e| PyValueError::new_err(format!("trajectory: {e}")))?;
+    let mut n = LogNoise::default();
+    for (k, v) in noise.iter() {
+        let key: String = k.extract()?;
+        let f = |v: &Bound<'py, PyAny>| -> PyResult<f64> { v.extract::<f64>() };
+        match key.as_str() {
+            "imu_rate" => n.imu_rate = f(&v)?,
+            "gyro_noise" => n.gyro_noise = f(&v)?,
+            "accel_noise" => n.accel_noise = f(&v)?,
+            "gyro_bias" => n.gyro_bias = f(&v)?,
+            "accel_bias" => n.accel_bias = f(&v)?,
+            "gyro_scale" => n.gyro_scale = f(&v)?,
+            "accel_scale" => n.accel_scale = f(&v)?,
+            "gnss_dt" => n.gnss_dt = f(&v)?,
+            "gnss_pos" => n.gnss_pos = f(&v)?,
+            "gnss_vel" => n.gnss_vel = f(&v)?,
+            "gnss_tau" => n.gnss_tau = f(&v)?,
+            "gnss_white" => n.gnss_white = f(&v)?,
+            "burst_rate" => n.burst_rate = f(&v)?,
+            "burst_size" => n.burst_size = f(&v)?,
+            "burst_duration" => n.burst_duration = f(&v)?,
+            "stale_rate" => n.stale_rate = f(&v)?,
+            "stale_duration" => n.stale_duration = f(&v)?,
+            "reported_pos" => n.reported_pos = f(&v)?,
+            "reported_vel" => n.reported_vel = f(&v)?,
+            "time_lag" => n.time_lag = f(&v)?,
+            "ground" => n.ground = v.extract::<bool>()?,
+            "mounting" => n.mounting = v.extract::<[f64; 3]>()?,
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "noise: unknown field {other:?}"
+                )))
+            }
+        }
+    }
+    if !(duration > 0.0 && duration <= 86_400.0) {
+        return Err(PyValueError::new_err(format!(
+            "duration = {duration}: must be in (0, 86400] s"
+        )));
+    }
+    let sim = py
+        .detach(move || simulate(&trajectory, duration, &n, seed, run))
+        .py()?;
+    let d = pyo3::types::PyDict::new(py);
+    let ni = sim.imu.t.len();
+    let mut imu = Vec::with_capacity(ni * 7);
+    for i in 0..ni {
+        imu.push(sim.imu.t[i]);
+        imu.extend(sim.imu.gyro[i].iter());
+        imu.extend(sim.imu.accel[i].iter());
+    }
+    let m = sim.gnss.t.len();
+    d.set_item("imu", crate::convert::to_numpy(py, imu, &[ni, 7])?)?;
+    d.set_item(
+        "gnss",
+        crate::convert::to_numpy(py, gnss_table(&sim.gnss), &[m, 13])?,
+    )?;
+    d.set_item(
+        "reference",
+        crate::convert::to_numpy(py, gnss_table(&sim.reference), &[m, 13])?,
+    )?;
+    let att: Vec<f64> = sim
+        .attitude
+        .iter()
+        .flat_map(|q| [q.w, q.i, q.j, q.k])
+        .collect();
+    d.set_item("attitude", crate::convert::to_numpy(py, att, &[m, 4])?)?;
+    let err: Vec<f64> = sim
+        .gnss_errors
+        .iter()
+        .flat_map(|e| e.error.iter().copied().collect::<Vec<_>>())
+        .collect();
+    d.set_item("gnss_error", crate::convert::to_numpy(py, err, &[m, 3])?)?;
+    d.set_item(
+        "stale",
+        crate::convert::to_numpy(
+            py,
+            sim.gnss_errors.iter().map(|e| e.stale).collect::<Vec<_>>(),
+            &[m],
+        )?,
+    )?;
+    d.set_item(
+        "burst",
+        crate::convert::to_numpy(
+            py,
+            sim.gnss_errors.iter().map(|e| e.burst).collect::<Vec<_>>(),
+            &[m],
+        )?,
+    )?;
+    Ok(d)
+}

@@ -83,6 +83,16 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
             let m = s.mdb.len() / t;
             sd.set_item("mdb", to_numpy(py, s.mdb, &[t, m])?)?;
         }
+        if !s.noise_scale.is_empty() {
+            sd.set_item("noise_scale", to_numpy(py, s.noise_scale, &[t])?)?;
+        }
+        if !s.reason.is_empty() {
+            sd.set_item("reason", to_numpy(py, s.reason, &[t])?)?;
+            sd.set_item(
+                "reason_names",
+                navfdi_core::record::EXCLUSION_REASONS.to_vec(),
+            )?;
+        }
         if !s.whitened.is_empty() && t > 0 {
             let m = s.whitened.len() / t;
             sd.set_item("whitened", to_numpy(py, s.whitened, &[t, m])?)?;

@@ -68,7 +68,8 @@ pub struct Aligned {
 
 /// Align on record epochs `t` (s): `vel(k)`, `pos(k)` the GNSS velocity and position east,
 /// north, up (m/s; m from `origin`) at epoch k where measured; `sig_v` the velocity σ at the
-/// alignment epoch (m/s, given its index). `section` names the configuration in errors.
+/// alignment epoch (m/s, given its index); `rest_by_sigma`: `sig_v` is the receiver's velocity
+/// σ, and speeds below 2.5 σ count as rest. `section` names the configuration in errors.
 #[allow(clippy::too_many_arguments)]
 pub fn align(
     a: &AlignmentSpec,
@@ -79,6 +80,7 @@ pub fn align(
     vel: impl Fn(usize) -> Option<Vector3<f64>>,
     pos: impl Fn(usize) -> Option<Vector3<f64>>,
     sig_v: impl Fn(usize) -> f64,
+    rest_by_sigma: bool,
 ) -> Result<Aligned> {
     let speed_at = |k: usize| vel(k).map(|v| v.xy().norm());
     let ka = (0..t.len())
@@ -91,16 +93,29 @@ pub fn align(
                 a.speed
             ))
         })?;
-    // The last static stretch before ka.
+    // The last static stretch before ka: speeds below the static speed or 2.5 times the
+    // receiver's velocity σ (a meter-level receiver at rest reports decimetres per second);
+    // it ends at the third consecutive epoch above (one or two noisy speeds do not cut it).
     let mut end = None;
     let mut start = None;
+    let mut moving = 0;
     for k in (0..ka).rev() {
         match speed_at(k) {
-            Some(s) if s < a.static_speed => {
+            Some(s)
+                if s < a
+                    .static_speed
+                    .max(if rest_by_sigma { 2.5 * sig_v(k) } else { 0.0 }) =>
+            {
                 end.get_or_insert(k);
                 start = Some(k);
+                moving = 0;
             }
-            Some(_) if end.is_some() => break,
+            Some(_) if end.is_some() => {
+                moving += 1;
+                if moving >= 3 {
+                    break;
+                }
+            }
             _ => {}
         }
     }

@@ -15,6 +15,7 @@
 //! from that epoch's fix. Epochs before it are recorded as NaN.
 
 mod checks;
+mod hold;
 
 use super::common::make_detector;
 use super::inertial::{align, record_nav, BodyImu, Mechaniser};
@@ -27,7 +28,7 @@ use crate::ins::strapdown::{mounting, skew, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
-use checks::{antenna, isolate, ned, rows, shift, Meas, Track};
+use checks::{antenna, isolate, rows, shift, Meas};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
@@ -61,6 +62,11 @@ struct Outcome {
     inn: Option<(DVector<f64>, DMatrix<f64>)>,
     /// Whitened innovation `L⁻¹ r` (tested measurements).
     white: Option<DVector<f64>>,
+    /// Why (some of) it was left out ([`crate::record::EXCLUSION_REASONS`]; 0: used as
+    /// measured).
+    reason: u8,
+    /// Scale of the measurement σ in its test (1 for constraints).
+    scale: f64,
 }
 
 const NOT_MEASURED: Outcome = Outcome {
@@ -72,7 +78,14 @@ const NOT_MEASURED: Outcome = Outcome {
     partial: false,
     inn: None,
     white: None,
+    reason: 0,
+    scale: f64::NAN,
 };
+
+/// The heading σ (rad) below which the filter may count as converged (with its GNSS channels'
+/// predicted σ within `loosely_coupled.convergence` times their own): an unsettled heading
+/// turns the speed into position innovations that no GNSS fault explains.
+pub const CONVERGED_HEADING: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
 /// Run the loosely coupled filter over one run's streams (`isolation = false`: detectors
 /// report but every measurement updates the filter).
@@ -122,6 +135,9 @@ fn run<const NS: usize>(
         ));
     };
     let n_gnss = l.sensors.len();
+    // Without a velocity channel the receiver's own consistency is never measured: a jump of
+    // a position innovation against the INS then marks a step.
+    let vel_aid_none = !aids.iter().take(n_gnss).any(|a| a.vel.is_some());
     let zupt_ch = l.zupt.as_ref().map(|_| n_gnss);
     let nhc_ch = l
         .nhc
@@ -155,6 +171,7 @@ fn run<const NS: usize>(
                 .and_then(|s| s.get(aids[vel_aid].vel.unwrap_or(0)).copied())
                 .unwrap_or(0.1)
         },
+        true,
     )?;
     let ka = aligned.epoch;
     let mut s = aligned.state;
@@ -173,16 +190,29 @@ fn run<const NS: usize>(
     let mut outcomes = vec![NOT_MEASURED.clone(); aids.len()];
     let dims: Vec<usize> = aids.iter().map(|a| a.floor.len()).collect();
     for _ in 0..ka {
-        push_empty(&mut rec, &mut outcomes, &dims);
+        push_empty(&mut rec, &mut outcomes, &dims, n_gnss);
     }
     let mut mech = Mechaniser::new(&imu, models.t[ka], &kf.bg);
+    let fix_interval: Vec<f64> = aids
+        .iter()
+        .map(|a| a.sensor.map_or(1.0, |si| 1.0 / spec.sensors[si].rate))
+        .collect();
+    // The receiver's own consistency needs no INS: fed from the first fix.
+    let mut receivers: Vec<hold::ReceiverConsistency> =
+        vec![hold::ReceiverConsistency::default(); aids.len()];
+    for k in 0..ka {
+        receiver_epoch(&aids, n_gnss, models, src, k, &fix_interval, &mut receivers);
+    }
     let mut excluded_before = vec![false; aids.len()];
-    let mut track: Vec<Option<Track>> = (0..aids.len()).map(|_| None).collect();
-    // Accommodation of an isolated position component: its offset from the INS when it was
-    // isolated (and that offset's variance); while the offset explains it, the component is
-    // used as a relative fix. `stepless`: its fault was not a step (the offset did not hold).
-    let mut accom: Vec<[Option<(f64, f64)>; 3]> = vec![[None; 3]; aids.len()];
-    let mut stepless: Vec<[bool; 3]> = vec![[false; 3]; aids.len()];
+    // Per GNSS channel: the position hold (faults held to their end) and the time of its
+    // last fix, against its nominal interval (a longer gap forgets the jump reference).
+    let mut holds: Vec<hold::PositionHold> = vec![hold::PositionHold::default(); aids.len()];
+    let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
+    let mut scales: Vec<hold::NoiseScale> = aids
+        .iter()
+        .map(|_| hold::NoiseScale::new(l.noise_scale, 1.0, 10.0))
+        .collect();
+
     for k in ka..epochs {
         if k % 256 == 0 {
             cancel.check()?;
@@ -191,7 +221,7 @@ fn run<const NS: usize>(
         let at = |e: Error| crate::run::at_time(k, tk, e);
         if tk > imu.end() {
             // The IMU log has ended: no navigation.
-            push_empty(&mut rec, &mut outcomes, &dims);
+            push_empty(&mut rec, &mut outcomes, &dims, n_gnss);
             continue;
         }
         mech.advance(&imu, &mut s, &mut kf, tk);
@@ -236,10 +266,21 @@ fn run<const NS: usize>(
                 outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
         }
-        // GNSS: every channel tested on the pre-update state; with `witness`, a channel's
-        // alarm excludes it only if another GNSS channel of the epoch passes (when all alarm,
-        // the INS is as likely at fault as the GNSS: none is excluded).
+        // GNSS: every channel tested on the pre-update state (its raw fix: the detectors'
+        // records show what the receiver gave); with `witness`, a channel's alarm excludes it
+        // only if another GNSS channel of the epoch passes.
+        let ant = antenna(&s, &lever);
+        let ant_enu = logged.origin.to_enu(&Nominal {
+            lat: ant.lat,
+            lon: ant.lon,
+            h: ant.h,
+        });
         let mut tested: Vec<(usize, Meas, Outcome)> = Vec::new();
+        let mut stale_epoch = false;
+        let recv = receiver_epoch(&aids, n_gnss, models, src, k, &fix_interval, &mut receivers);
+        // At rest (or nearly) the receiver's consistency is not measured, and the INS, held
+        // by the constraints, is at its best: a jump against it marks a step.
+        let slow = s.v.xy().norm() < hold::MOVING;
         for (a, aid) in aids.iter_mut().enumerate().take(n_gnss) {
             let Some(si) = aid.sensor else { continue };
             if !models.available[si][k] {
@@ -249,107 +290,120 @@ fn run<const NS: usize>(
             if z.iter().any(|x| !x.is_finite()) {
                 continue;
             }
-            let sig = logged.sigma.get(si).and_then(|v| v.get(k));
-            let mut meas = gnss_measurement::<NS>(&s, aid, z, sig, &logged.origin, &lever, &w_last);
             if let Some(off) = aid.pos {
-                // An accommodated component whose raw fix agrees with the INS again is used
-                // as it is; the others are corrected by their offsets.
-                let thr = crate::stats::chi2_threshold(aid.decision_pf, 1).unwrap_or(f64::INFINITY);
-                for (j, acc) in accom[a].iter_mut().enumerate() {
-                    let Some((b, v)) = *acc else { continue };
-                    let row = meas.h.row(off + j);
-                    let p = DMatrix::from_column_slice(NS, NS, kf.p.as_slice());
-                    let sjj = (row * &p * row.transpose())[(0, 0)] + meas.r[(off + j, off + j)];
-                    if meas.res[off + j].powi(2) / sjj <= thr {
-                        *acc = None;
-                        continue;
-                    }
-                    meas.res[off + j] -= b;
-                    meas.r[(off + j, off + j)] += v;
+                if last_fix_t[a].is_some_and(|t0| tk - t0 > 2.5 * fix_interval[a]) {
+                    holds[a].gap();
                 }
+                last_fix_t[a] = Some(tk);
+                let fix = Vector3::new(z[off], z[off + 1], z[off + 2]);
+                stale_epoch |= holds[a].stale(&fix, &ant_enu);
             }
-            let o = test(&kf, aid, &meas, isolation).map_err(at)?;
+            let sig = logged.sigma.get(si).and_then(|v| v.get(k));
+            // Tested with the σ scaled by the channel's noise scale; updated with it as given.
+            let mut meas = gnss_measurement::<NS>(&s, aid, z, sig, &logged.origin, &lever, &w_last);
+            let c = scales[a].scale();
+            meas.r *= c * c;
+            let mut o = test(&kf, aid, &meas, isolation).map_err(at)?;
+            o.scale = c;
             tested.push((a, meas, o));
         }
         // Convergence: every tested GNSS channel's predicted σ within `convergence` times its
         // measurement σ. Before it, only gross innovations exclude.
         if rec.converged_at.is_none() && !tested.is_empty() {
+            let heading_settled = kf.p[(PHI + 2, PHI + 2)].max(0.0).sqrt() <= CONVERGED_HEADING;
             let settled = l.convergence == 0.0
-                || tested.iter().all(|(_, meas, o)| {
-                    o.inn.as_ref().is_some_and(|(_, sv)| {
-                        let m = meas.r.nrows() as f64;
-                        let r = meas.r.diagonal().sum() / m;
-                        let hph = (sv.diagonal().sum() - meas.r.diagonal().sum()) / m;
-                        hph.max(0.0) <= l.convergence * l.convergence * r
-                    })
-                });
+                || heading_settled
+                    && tested.iter().all(|(_, meas, o)| {
+                        o.inn.as_ref().is_some_and(|(_, sv)| {
+                            let m = meas.r.nrows() as f64;
+                            let r = meas.r.diagonal().sum() / m;
+                            let hph = (sv.diagonal().sum() - meas.r.diagonal().sum()) / m;
+                            hph.max(0.0) <= l.convergence * l.convergence * r
+                        })
+                    });
             if settled {
                 rec.converged_at = Some(tk);
             }
         }
-        if rec.converged_at.is_none() {
-            for (a, _, o) in tested.iter_mut() {
-                let gross = aids[*a]
-                    .decision
-                    .and_then(|j| o.tests.get(j))
-                    .is_some_and(|&(st, th, _)| st >= 16.0 * th);
-                o.excluded &= gross;
-                o.fused = !o.excluded;
-            }
-        }
+        let converged = rec.converged_at.is_some();
+        let gross_of = |aid: &Aid, o: &Outcome| {
+            aid.decision
+                .and_then(|j| o.tests.get(j))
+                .is_some_and(|&(st, th, _)| st >= 16.0 * th)
+        };
         let witnessed = !l.witness || tested.iter().any(|(_, _, o)| !o.excluded);
-        let ant = antenna(&s, &lever);
-        let sig_v = (kf.p[(V, V)] + kf.p[(V + 1, V + 1)] + kf.p[(V + 2, V + 2)]).max(0.0) / 3.0;
         for (a, meas, mut o) in tested {
-            o.excluded &= witnessed;
-            let si = aids[a].sensor.unwrap_or(0);
-            let z = &src.meas.z[si][k];
-            // A position channel excluded at its previous measurement and alarming now is
-            // re-admitted when its fix jumped relative to the INS since then (the fault
-            // ended, or changed): what stays excluded is a fault that persists, not the
-            // INS's own error after a fault pulled it.
-            let mut readmit = false;
-            let mut drift = None;
-            if let (Some(off), Some(prev)) = (aids[a].pos, track[a].as_ref()) {
-                let g = logged
-                    .origin
-                    .from_enu(&Vector3::new(z[off], z[off + 1], z[off + 2]));
-                if o.excluded && prev.excluded {
-                    // How the fix moved against the INS since the previous measurement: a
-                    // persisting fault repeats it (0 for a step, the rate for a ramp); its end
-                    // (or a change) breaks it.
-                    let dt = models.t[k] - prev.t;
-                    let d = ned(&g, &prev.fix) - ned(&ant, &prev.ins);
-                    if let Some(dp) = prev.drift {
-                        let var = meas.r.diagonal().rows(off, 3).into_owned() + &prev.var;
-                        let lam: f64 = (0..3)
-                            .map(|j| (d[j] - dp[j]).powi(2) / (2.0 * (var[j] + sig_v * dt * dt)))
-                            .sum();
-                        let thr = aids[a]
-                            .decision
-                            .and_then(|j| o.tests.get(j))
-                            .map_or(f64::INFINITY, |t| t.1);
-                        // A fault's end removes (most of) the offset the fix had: a jump of
-                        // at least half the previous innovation, beyond the noise.
-                        let jump = (d - dp).norm();
-                        readmit = lam > thr && jump > 0.5 * prev.innovation;
-                    }
-                    drift = Some(d);
-                }
-            }
-            if readmit {
-                o.excluded = false;
-                // Let the filter move to the re-admitted fix: position σ grown by the
-                // innovation (east, north, up components into north, east, down).
-                if let Some(off) = aids[a].pos {
-                    for (j, row) in [(0usize, R + 1), (1, R), (2, R + 2)] {
-                        kf.p[(row, row)] += meas.res[off + j].powi(2);
-                    }
-                }
-            }
-            // Component isolation: of an alarming measurement keep what passes.
+            let alarm = o.excluded;
+            let gross = gross_of(&aids[a], &o);
+            o.excluded &= witnessed && (converged || gross);
             let mut keep: Vec<usize> = (0..meas.res.len()).collect();
-            if o.excluded && l.isolate_components && aids[a].decision_pf.is_finite() {
+            let mut fresh_adj: Vec<(usize, f64, f64)> = Vec::new();
+            let mut reason = 0u8;
+            if stale_epoch && isolation {
+                // The receiver repeated its last fix while the INS moved: position and
+                // velocity of this epoch are its stale state.
+                o.excluded = true;
+                reason = hold::STALE;
+            } else if let (Some(off), true) = (aids[a].pos, isolation) {
+                // Position: the hold machine decides each component.
+                let (r, sv) = o
+                    .inn
+                    .clone()
+                    .unwrap_or_else(|| (meas.res.clone(), meas.r.clone()));
+                let d = Vector3::new(r[off], r[off + 1], r[off + 2]);
+                let sd = Vector3::new(
+                    sv[(off, off)],
+                    sv[(off + 1, off + 1)],
+                    sv[(off + 2, off + 2)],
+                );
+                let thr1 =
+                    crate::stats::chi2_threshold(aids[a].decision_pf, 1).unwrap_or(f64::INFINITY);
+                let isolated: Vec<usize> = if alarm && l.isolate_components {
+                    let kept = isolate(&r, &sv, aids[a].decision_pf).map_err(at)?;
+                    (0..3).filter(|j| !kept.contains(&(off + j))).collect()
+                } else {
+                    vec![0, 1, 2]
+                };
+                let uses = holds[a].decide(
+                    tk,
+                    &d,
+                    &sd,
+                    alarm && witnessed,
+                    &isolated,
+                    thr1,
+                    recv[a].as_ref(),
+                    vel_aid_none || slow,
+                    converged,
+                    gross,
+                    l.accommodate,
+                );
+                keep.retain(|&i| i < off || i >= off + 3);
+                for (j, u) in uses.iter().enumerate() {
+                    match *u {
+                        hold::Use::Raw => keep.push(off + j),
+                        hold::Use::Relative(b, var) => {
+                            keep.push(off + j);
+                            fresh_adj.push((off + j, b, var));
+                            let why = match holds[a].comps[j] {
+                                hold::Comp::Drift { .. } => hold::RAMP,
+                                _ => hold::STEP,
+                            };
+                            reason = reason.max(why);
+                        }
+                        hold::Use::Out(why) => reason = reason.max(why),
+                    }
+                }
+                keep.sort_unstable();
+                // The other components of a channel (velocity of a `gnss` sensor) follow its
+                // deciding test.
+                if alarm && o.excluded && aids[a].vel.is_some() {
+                    let vo = aids[a].vel.unwrap_or(0);
+                    keep.retain(|&i| i < vo || i >= vo + 3);
+                }
+                o.excluded = keep.is_empty();
+                o.partial = !o.excluded && (keep.len() < meas.res.len() || !fresh_adj.is_empty());
+            } else if o.excluded && l.isolate_components && aids[a].decision_pf.is_finite() {
+                // Velocity: of an alarming measurement keep what passes.
                 if let Some((r, sv)) = o.inn.as_ref() {
                     keep = isolate(r, sv, aids[a].decision_pf).map_err(at)?;
                 }
@@ -357,66 +411,36 @@ fn run<const NS: usize>(
                     o.excluded = false;
                     o.partial = true;
                 }
+                reason = hold::TEST;
+            } else if o.excluded {
+                reason = hold::TEST;
+            }
+            if o.excluded && reason == 0 {
+                reason = hold::TEST;
             }
             o.fused = !o.excluded;
-            let active = accom[a];
-            if let (Some(off), true) = (aids[a].pos, l.accommodate && isolation) {
-                for j in 0..3 {
-                    let out = o.excluded || !keep.contains(&(off + j));
-                    match (active[j], out) {
-                        // The offset no longer explains the fix: not a step; excluded until it
-                        // agrees with the INS again.
-                        (Some(_), true) => {
-                            accom[a][j] = None;
-                            stepless[a][j] = true;
-                        }
-                        // A gross jump (|w| over 4× the deciding test's 1-dof critical value),
-                        // not an alarm at the edge of the noise: accommodated from the next fix.
-                        (None, true) if !stepless[a][j] => {
-                            let var = o
-                                .inn
-                                .as_ref()
-                                .map_or(f64::NAN, |(_, sv)| sv[(off + j, off + j)]);
-                            let crit = crate::stats::chi2_threshold(aids[a].decision_pf, 1)
-                                .unwrap_or(f64::INFINITY);
-                            if var.is_finite() && meas.res[off + j].powi(2) / var > 16.0 * crit {
-                                accom[a][j] = Some((meas.res[off + j], var));
-                            } else {
-                                // Isolated without a jump (a ramp growing into the test): not
-                                // a step, whatever it grows to.
-                                stepless[a][j] = true;
-                            }
-                        }
-                        (None, false) => stepless[a][j] = false,
-                        _ => {}
-                    }
+            o.reason = reason;
+            // The noise scale learns from fixes used as measured.
+            if reason == 0 && !o.excluded && !o.partial {
+                if let Some((r, sv)) = o.inn.as_ref() {
+                    let c2 = o.scale * o.scale;
+                    let n = r.len();
+                    let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
+                    let hph: Vec<f64> = (0..n).map(|i| sv[(i, i)] - meas.r[(i, i)]).collect();
+                    let rr: Vec<f64> = (0..n).map(|i| meas.r[(i, i)] / c2).collect();
+                    scales[a].add(&d2, &hph, &rr);
                 }
-            }
-            if let Some(off) = aids[a].pos {
-                track[a] = Some(Track {
-                    t: models.t[k],
-                    fix: logged
-                        .origin
-                        .from_enu(&Vector3::new(z[off], z[off + 1], z[off + 2])),
-                    ins: ant,
-                    var: meas.r.diagonal().rows(off, 3).into_owned(),
-                    excluded: o.excluded || o.partial,
-                    drift: if o.excluded || o.partial { drift } else { None },
-                    innovation: meas.res.rows(off, 3).norm(),
-                });
             }
             if o.fused {
                 // Re-linearised after the updates before it in this epoch.
+                let si = aids[a].sensor.unwrap_or(0);
+                let z = &src.meas.z[si][k];
                 let sig = logged.sigma.get(si).and_then(|v| v.get(k));
                 let mut fresh =
                     gnss_measurement::<NS>(&s, &aids[a], z, sig, &logged.origin, &lever, &w_last);
-                if let Some(off) = aids[a].pos {
-                    for (j, acc) in active.iter().enumerate() {
-                        if let (Some((b, v)), true) = (acc, accom[a][j].is_some()) {
-                            fresh.res[off + j] -= b;
-                            fresh.r[(off + j, off + j)] += v;
-                        }
-                    }
+                for &(i, b, var) in &fresh_adj {
+                    fresh.res[i] -= b;
+                    fresh.r[(i, i)] += var;
                 }
                 update(&mut kf, &mut s, &rows(&fresh, &keep)).map_err(at)?;
             }
@@ -437,6 +461,10 @@ fn run<const NS: usize>(
                 Some(w) if w.len() == dims[c] => sub.whitened.extend(w.iter()),
                 _ => sub.whitened.extend(std::iter::repeat_n(f64::NAN, dims[c])),
             }
+            sub.reason.push(o.reason);
+            if c < n_gnss {
+                sub.noise_scale.push(o.scale);
+            }
             for (j, d) in sub.detectors.iter_mut().enumerate() {
                 let (st, th, al) = o
                     .tests
@@ -456,6 +484,37 @@ fn run<const NS: usize>(
     }
     rec.restrict_faults_to_navigated(spec, models);
     Ok(rec)
+}
+
+/// Feed epoch `k`'s GNSS position fixes and the receiver's velocity to each position channel's
+/// [`hold::ReceiverConsistency`]; what each says (None without a velocity channel, a fix or
+/// enough history).
+fn receiver_epoch(
+    aids: &[Aid],
+    n_gnss: usize,
+    models: &crate::stream::Models,
+    src: &Streams,
+    k: usize,
+    intervals: &[f64],
+    receivers: &mut [hold::ReceiverConsistency],
+) -> Vec<Option<hold::Consistency>> {
+    let measured = |aid: &Aid, off: Option<usize>| -> Option<Vector3<f64>> {
+        let (si, o) = (aid.sensor?, off?);
+        if !models.available[si][k] {
+            return None;
+        }
+        let z = &src.meas.z[si][k];
+        let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
+        v.iter().all(|x| x.is_finite()).then_some(v)
+    };
+    let vel = aids.iter().take(n_gnss).find_map(|a| measured(a, a.vel));
+    let mut out = vec![None; aids.len()];
+    for (a, aid) in aids.iter().enumerate().take(n_gnss) {
+        if let (Some(p), Some(v)) = (measured(aid, aid.pos), vel) {
+            out[a] = receivers[a].step(models.t[k], &p, &v, 2.5 * intervals[a]);
+        }
+    }
+    out
 }
 
 fn diag(sig: &[f64]) -> DMatrix<f64> {
@@ -581,6 +640,8 @@ fn test<const NS: usize>(
         partial: false,
         white: Some(inn.whitened()),
         inn: Some((inn.r, inn.s)),
+        reason: 0,
+        scale: 1.0,
     })
 }
 
@@ -607,13 +668,17 @@ fn apply<const NS: usize>(
     Ok(o)
 }
 
-fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome], dims: &[usize]) {
+fn push_empty(rec: &mut RunRecord, outcomes: &mut [Outcome], dims: &[usize], n_gnss: usize) {
     for (c, o) in outcomes.iter_mut().enumerate() {
         *o = NOT_MEASURED.clone();
         rec.subs[c].push_untested();
         rec.subs[c]
             .whitened
             .extend(std::iter::repeat_n(f64::NAN, dims[c]));
+        rec.subs[c].reason.push(0);
+        if c < n_gnss {
+            rec.subs[c].noise_scale.push(f64::NAN);
+        }
     }
     rec.sources.push(0);
     rec.error.extend([f64::NAN; 9]);

@@ -130,6 +130,7 @@ pub fn run_tight_ins(
         |k| fix(k, 3),
         |k| fix(k, 0),
         |_| sig_rate,
+        false,
     )?;
     let ka = aligned.epoch;
     let mut s = aligned.state;

@@ -1,14 +1,21 @@
 //! The simulator as a source of *recorded-style* logs: IMU samples (specific force and
 //! angular rate from the truth trajectory plus white noise and a constant bias per run) and a
-//! GNSS solution (truth positions and velocities plus white noise, with their σ), and the
-//! truth as the reference — so that the loosely coupled architecture's strapdown INS and
-//! filter, which run on recorded logs, can be checked where the truth is known (NEES).
+//! GNSS solution (truth positions and velocities plus errors, with their σ), and the truth as
+//! the reference — so that the loosely coupled architecture's strapdown INS and filter, which
+//! run on recorded logs, can be checked where the truth is known (NEES), and so that FDE and
+//! calibration can be measured against known errors.
 //!
-//! The trajectory's body axes are right-forward-up: the IMU is "mounted" with roll 180°,
-//! pitch 0, yaw 90° in the filter's forward-right-down body frame
+//! The GNSS errors can be what a receiver's own single-point fix has ([`LogNoise`]): white
+//! noise, a first-order Gauss-Markov error per axis (time-correlated, metres), multipath
+//! bursts (an offset held for seconds) and stale fixes (the last fix repeated while the
+//! vehicle moves). The IMU can sit in any orientation (`mounting`, its axes in the vehicle's
+//! forward-right-down body frame), with a boresight error and a time-stamp offset.
+//!
+//! By default the IMU axes are the trajectory's right-forward-up body axes: the IMU is
+//! "mounted" with roll 180°, pitch 0, yaw 90° in the filter's forward-right-down body frame
 //! ([`crate::ins::strapdown::mounting`]).
 
-use super::trajectory::generate;
+use super::trajectory::generate_vehicle;
 use crate::error::{Error, Result};
 use crate::logs::GnssLog;
 use crate::spec::TrajectorySpec;
@@ -46,6 +53,78 @@ pub struct LogNoise {
     pub gnss_pos: f64,
     /// See [`LogNoise::gnss_pos`].
     pub gnss_vel: f64,
+    /// Correlation time (s) of the GNSS position errors: a first-order Gauss-Markov process
+    /// per axis of stationary σ `gnss_pos` (0: white).
+    pub gnss_tau: f64,
+    /// σ of the white GNSS position noise (m per axis) added to the Gauss-Markov error.
+    pub gnss_white: f64,
+    /// Multipath bursts: expected bursts per second, each an offset (horizontal σ
+    /// `burst_size` m per axis) held for `burst_duration` s.
+    pub burst_rate: f64,
+    /// See [`LogNoise::burst_rate`].
+    pub burst_size: f64,
+    /// See [`LogNoise::burst_rate`].
+    pub burst_duration: f64,
+    /// Stale fixes: expected stale spells per second while moving, each repeating the last
+    /// fix (position and velocity) for `stale_duration` s.
+    pub stale_rate: f64,
+    /// See [`LogNoise::stale_rate`].
+    pub stale_duration: f64,
+    /// The σ the receiver reports with each fix (m, m/s per axis); 0: `gnss_pos`, `gnss_vel`.
+    pub reported_pos: f64,
+    /// See [`LogNoise::reported_pos`].
+    pub reported_vel: f64,
+    /// The IMU's orientation in the vehicle's forward-right-down body frame: roll, pitch, yaw
+    /// (rad, the convention of [`crate::ins::strapdown::mounting`]).
+    pub mounting: [f64; 3],
+    /// Seconds the IMU's time stamps lag the truth (`t_imu = t − lag`): the filter's
+    /// `imu_time_offset` that undoes it is `+lag`.
+    pub time_lag: f64,
+    /// A ground vehicle (no bank in turns) rather than an aircraft.
+    pub ground: bool,
+}
+
+impl Default for LogNoise {
+    /// A consumer IMU at 100 Hz and a 4 Hz white-noise GNSS of 0.5 m, IMU axes
+    /// right-forward-up ([`MOUNTING`]), an aircraft.
+    fn default() -> Self {
+        LogNoise {
+            imu_rate: 100.0,
+            gyro_noise: 0.01f64.to_radians(),
+            accel_noise: 100e-6 * 9.80665,
+            gyro_bias: (10.0f64 / 3600.0).to_radians(),
+            accel_bias: 1e-3 * 9.80665,
+            gyro_scale: 0.0,
+            accel_scale: 0.0,
+            gnss_dt: 0.25,
+            gnss_pos: 0.5,
+            gnss_vel: 0.05,
+            gnss_tau: 0.0,
+            gnss_white: 0.0,
+            burst_rate: 0.0,
+            burst_size: 0.0,
+            burst_duration: 0.0,
+            stale_rate: 0.0,
+            stale_duration: 0.0,
+            reported_pos: 0.0,
+            reported_vel: 0.0,
+            mounting: MOUNTING,
+            time_lag: 0.0,
+            ground: false,
+        }
+    }
+}
+
+/// What the simulated GNSS did at one epoch: its position error (east, north, up, m) and
+/// whether the fix was a stale repeat or inside a multipath burst.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GnssTruthError {
+    /// Position error east, north, up (m).
+    pub error: Vector3<f64>,
+    /// The fix repeats the previous one (the receiver had none).
+    pub stale: bool,
+    /// A multipath burst was active.
+    pub burst: bool,
 }
 
 /// One simulated run's logs and truth.
@@ -59,6 +138,8 @@ pub struct SimulatedLogs {
     pub reference: GnssLog,
     /// True body (forward-right-down) to north-east-down attitude at the GNSS epochs.
     pub attitude: Vec<UnitQuaternion<f64>>,
+    /// The GNSS errors at its epochs.
+    pub gnss_errors: Vec<GnssTruthError>,
 }
 
 fn normal3(rng: &mut ChaCha8Rng) -> Vector3<f64> {
@@ -83,9 +164,37 @@ pub fn simulate_logs(
             "simulated logs: rates, interval and duration must be positive".into(),
         ));
     }
+    for (name, v) in [
+        ("gnss_tau", noise.gnss_tau),
+        ("gnss_white", noise.gnss_white),
+        ("burst_rate", noise.burst_rate),
+        ("burst_size", noise.burst_size),
+        ("burst_duration", noise.burst_duration),
+        ("stale_rate", noise.stale_rate),
+        ("stale_duration", noise.stale_duration),
+        ("reported_pos", noise.reported_pos),
+        ("reported_vel", noise.reported_vel),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(Error::Invalid(format!(
+                "simulated logs: {name} = {v} must be finite and non-negative"
+            )));
+        }
+    }
+    if !(noise.time_lag.abs() <= 10.0 && noise.mounting.iter().all(|v| v.is_finite())) {
+        return Err(Error::Invalid(
+            "simulated logs: time_lag within ±10 s and finite mounting angles".into(),
+        ));
+    }
     let dt = 1.0 / noise.imu_rate;
     let n = (duration / dt).floor() as usize + 1;
-    let truth = generate(trajectory, dt, n);
+    crate::memory::check(
+        "simulated logs",
+        n as f64 * 200.0,
+        &format!("{n} IMU samples"),
+        "shorten the duration or lower the IMU rate",
+    )?;
+    let truth = generate_vehicle(trajectory, dt, n, !noise.ground);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(run);
     let bg = normal3(&mut rng) * noise.gyro_bias;
@@ -94,27 +203,55 @@ pub fn simulate_logs(
     let sa = Vector3::repeat(1.0) + normal3(&mut rng) * noise.accel_scale;
     let sgn = noise.gyro_noise * noise.imu_rate.sqrt();
     let san = noise.accel_noise * noise.imu_rate.sqrt();
+    // ENU (right-forward-up body) to NED (forward-right-down body), and the IMU's axes.
+    let enu_ned = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
+    let to_imu =
+        crate::ins::strapdown::mounting(noise.mounting[0], noise.mounting[1], noise.mounting[2])
+            .transpose()
+            * enu_ned;
     let mut imu = ImuSamples::default();
     for e in &truth {
-        imu.t.push(e.t);
+        imu.t.push(e.t - noise.time_lag);
+        let w = to_imu * e.w_b;
+        let f = to_imu * e.f_b;
         imu.gyro
-            .push(e.w_b.component_mul(&sg) + bg + normal3(&mut rng) * sgn);
+            .push(w.component_mul(&sg) + bg + normal3(&mut rng) * sgn);
         imu.accel
-            .push(e.f_b.component_mul(&sa) + ba + normal3(&mut rng) * san);
+            .push(f.component_mul(&sa) + ba + normal3(&mut rng) * san);
     }
-    // ENU (right-forward-up body) to NED (forward-right-down body).
-    let enu_ned = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0);
     let step = (noise.gnss_dt / dt).round().max(1.0) as usize;
+    let gdt = step as f64 * dt;
+    let phi = if noise.gnss_tau > 0.0 {
+        (-gdt / noise.gnss_tau).exp()
+    } else {
+        0.0
+    };
+    let mut gm = normal3(&mut rng) * noise.gnss_pos;
+    let mut burst = (0.0f64, Vector3::zeros());
+    let mut stale_left = 0.0f64;
     let mut gnss = GnssLog::default();
     let mut reference = GnssLog::default();
     let mut attitude = Vec::new();
-    for e in truth.iter().step_by(step) {
+    let mut gnss_errors = Vec::new();
+    let uniform = |rng: &mut ChaCha8Rng| -> f64 { rand::RngExt::random::<f64>(rng) };
+    for (k, e) in truth.iter().step_by(step).enumerate() {
         let p = Nominal {
             lat: e.lat,
             lon: e.lon,
             h: e.h,
         };
-        let d = normal3(&mut rng) * noise.gnss_pos;
+        if k > 0 {
+            gm = gm * phi + normal3(&mut rng) * (noise.gnss_pos * (1.0 - phi * phi).sqrt());
+        }
+        // Multipath burst: started at random, an offset held for its duration.
+        if burst.0 <= 0.0 && uniform(&mut rng) < noise.burst_rate * gdt {
+            let d = normal3(&mut rng) * noise.burst_size;
+            burst = (noise.burst_duration, Vector3::new(d.x, d.y, 0.5 * d.z));
+        }
+        let in_burst = burst.0 > 0.0;
+        let b = if in_burst { burst.1 } else { Vector3::zeros() };
+        burst.0 -= gdt;
+        let d = gm + normal3(&mut rng) * noise.gnss_white + b;
         let rm = crate::ins::earth::r_meridian(e.lat) + e.h;
         let rn = crate::ins::earth::r_normal(e.lat) + e.h;
         let noisy = Nominal {
@@ -123,16 +260,45 @@ pub fn simulate_logs(
             h: e.h + d.z,
         };
         let dv = normal3(&mut rng) * noise.gnss_vel;
-        for (log, pos, vel, sp, sv) in [
-            (&mut gnss, noisy, e.v + dv, noise.gnss_pos, noise.gnss_vel),
-            (&mut reference, p, e.v, 0.0, 0.0),
-        ] {
-            log.t.push(e.t);
-            log.pos.push(pos);
-            log.vel.push(vel);
-            log.sd_pos.push(Vector3::repeat(sp));
-            log.sd_vel.push(Vector3::repeat(sv));
+        let moving = e.v.xy().norm() > 1.0;
+        if stale_left <= 0.0 && moving && k > 0 && uniform(&mut rng) < noise.stale_rate * gdt {
+            stale_left = noise.stale_duration;
         }
+        let stale = stale_left > 0.0 && k > 0;
+        stale_left -= gdt;
+        let (sp, sv) = (
+            if noise.reported_pos > 0.0 {
+                noise.reported_pos
+            } else {
+                noise.gnss_pos.hypot(noise.gnss_white)
+            },
+            if noise.reported_vel > 0.0 {
+                noise.reported_vel
+            } else {
+                noise.gnss_vel
+            },
+        );
+        let (pos, vel) = if stale {
+            (gnss.pos[k - 1], gnss.vel[k - 1])
+        } else {
+            (noisy, e.v + dv)
+        };
+        gnss.t.push(e.t);
+        gnss.pos.push(pos);
+        gnss.vel.push(vel);
+        gnss.sd_pos.push(Vector3::repeat(sp));
+        gnss.sd_vel.push(Vector3::repeat(sv));
+        reference.t.push(e.t);
+        reference.pos.push(p);
+        reference.vel.push(e.v);
+        reference.sd_pos.push(Vector3::zeros());
+        reference.sd_vel.push(Vector3::zeros());
+        let err = crate::stream::Nominal::to_enu(&p, &pos);
+        gnss_errors.push(GnssTruthError {
+            error: err,
+            stale,
+            burst: in_burst,
+        });
         let c_ned = enu_ned * e.c_bn * enu_ned;
         attitude.push(UnitQuaternion::from_matrix(&c_ned));
     }
@@ -141,5 +307,6 @@ pub fn simulate_logs(
         gnss,
         reference,
         attitude,
+        gnss_errors,
     })
 }

@@ -118,8 +118,27 @@ fn motion_at(spec: &TrajectorySpec, t: f64) -> Motion {
     m
 }
 
-/// Truth at epochs `t_k = k·dt`, `k = 0..epochs`.
+/// Truth at epochs `t_k = k·dt`, `k = 0..epochs` (an aircraft: coordinated turns bank).
 pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch> {
+    generate_vehicle(spec, dt, epochs, true)
+}
+
+/// [`generate`] for an aircraft (`banked`: coordinated turns roll the body) or a ground
+/// vehicle (`banked = false`: the body stays level in turns and the centripetal acceleration
+/// is a lateral specific force, as in a car).
+pub fn generate_vehicle(
+    spec: &TrajectorySpec,
+    dt: f64,
+    epochs: usize,
+    banked: bool,
+) -> Vec<TruthEpoch> {
+    let bank = |speed: f64, turn: f64, g: f64| {
+        if banked {
+            (speed * turn / g).atan()
+        } else {
+            0.0
+        }
+    };
     let (mut lat, mut lon, mut h) = (spec.latitude, spec.longitude, spec.height);
     let mut out: Vec<TruthEpoch> = Vec::with_capacity(epochs);
     let w = earth::OMEGA_IE;
@@ -129,7 +148,7 @@ pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch
         let m = motion_at(spec, t);
         let v = Vector3::new(m.speed * m.heading.sin(), m.speed * m.heading.cos(), m.vu);
         let g = earth::gravity(lat, h);
-        let roll = (m.speed * m.turn / g).atan();
+        let roll = bank(m.speed, m.turn, g);
         let pitch = m.vu.atan2(m.speed.max(1e-9));
         let pitch = if m.speed < 1e-9 && m.vu == 0.0 {
             0.0
@@ -152,7 +171,7 @@ pub fn generate(spec: &TrajectorySpec, dt: f64, epochs: usize) -> Vec<TruthEpoch
         // ω_nb^b from the attitude one small step ahead (finite difference).
         let eps = 1e-3;
         let m2 = motion_at(spec, t + eps);
-        let roll2 = (m2.speed * m2.turn / g).atan();
+        let roll2 = bank(m2.speed, m2.turn, g);
         let pitch2 = if m2.speed < 1e-9 && m2.vu == 0.0 {
             0.0
         } else {

@@ -129,6 +129,14 @@ pub struct LooselyCoupledSpec {
     /// filter's innovations are not yet a fault's evidence. 0: converged from the start.
     #[serde(default = "default_convergence")]
     pub convergence: f64,
+    /// Scale of the GNSS measurement σ in the tests: None (`"auto"`, default) estimates it per
+    /// channel from its own innovations (median-based, over the last 60 fixes used as
+    /// measured; clamped to [1, 10]: an optimistic σ no longer makes the tests alarm at good
+    /// fixes, and they never get more sensitive than the σ given — on the bundled RTK drive the
+    /// innovations' median is half the σ floor, and tests twice as sensitive cost accuracy in
+    /// its manoeuvres); a number fixes it. The filter's update uses the σ as given either way.
+    #[serde(default)]
+    pub noise_scale: Option<f64>,
 }
 
 fn default_convergence() -> f64 {
@@ -221,6 +229,14 @@ impl ScenarioSpec {
                     l.convergence
                 ),
             ));
+        }
+        if let Some(c) = l.noise_scale {
+            if !(c > 0.0 && c <= 1e3) {
+                return Err(bad(
+                    format!("{p}.noise_scale"),
+                    format!("{c}: \"auto\" or a positive factor up to 1000"),
+                ));
+            }
         }
         if self.state_chi2.is_some() {
             return Err(bad("state_chi2", "the state chi-square test needs the error model's Φ and Q of a simulated scenario; it is not available with loosely_coupled"));

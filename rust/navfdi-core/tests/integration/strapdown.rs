@@ -30,6 +30,7 @@ fn noise_with(scale: f64) -> LogNoise {
         gnss_dt: 0.25,
         gnss_pos: 0.5,
         gnss_vel: 0.05,
+        ..LogNoise::default()
     }
 }
 

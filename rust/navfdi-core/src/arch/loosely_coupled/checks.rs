@@ -1,12 +1,9 @@
 //! The loosely coupled architecture's measurements and checks: a measurement and its rows,
-//! the GNSS exclusion bookkeeping (a position channel's previous measurement, component
-//! isolation by the w-test).
+//! component isolation by the w-test.
 
-pub(super) use super::super::inertial::{antenna, ned, shift};
+pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
-use crate::ins::strapdown::NavState;
-use crate::stream::Nominal;
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector};
 
 /// A measurement ready for the filter, components in the channel's order.
 pub(super) struct Meas {
@@ -14,21 +11,6 @@ pub(super) struct Meas {
     pub res: DVector<f64>,
     pub h: DMatrix<f64>,
     pub r: DMatrix<f64>,
-}
-
-/// A position channel's previous measurement: time, fix, the INS antenna position then, the
-/// fix's variances (east, north, up), whether it was excluded and, while excluded, how the fix
-/// had moved against the INS.
-pub(super) struct Track {
-    pub t: f64,
-    pub fix: Nominal,
-    pub ins: NavState,
-    pub var: DVector<f64>,
-    pub excluded: bool,
-    /// While excluded: how the fix moved against the INS since the measurement before.
-    pub drift: Option<Vector3<f64>>,
-    /// Size of the position innovation (m).
-    pub innovation: f64,
 }
 
 /// Components to keep of an alarming innovation `r` with covariance `s`: the component with

@@ -1,0 +1,850 @@
+//! GNSS position faults held out from their first epoch to their last: the INS prediction is
+//! the reference a fix is tested against, and after an exclusion it stays the reference.
+//!
+//! Per position component (east, north, up) of one GNSS position channel:
+//!
+//! * **Normal**: used as measured when the channel's deciding test passes.
+//! * On an alarm the components the w-test isolates are classified by the **jump** of their
+//!   innovation since the previous used fix: `Δ = d_k − d_{k−1}` against `S_k + R_{k−1}` (the
+//!   INS is continuous; a receiver's fault is not). A significant jump is a **step**: its size
+//!   `b = d_k` (the INS was right a moment ago) is held, and while `d − b` agrees with the INS
+//!   the fix is used as a relative fix (`d − b`, variance of `b` added: accommodation), so the
+//!   solution stays aided through the fault. Without a jump (a ramp growing into the test, or
+//!   INS drift) it is a **drift**: excluded.
+//! * A held component is **re-admitted** only when its raw fix agrees with the prediction for
+//!   [`AGREE`] consecutive fixes: for a step when the offset is gone (the fault ended); for a
+//!   drift when the fix and the INS meet again — the INS stays anchored by the GNSS velocity
+//!   and the vehicle constraints meanwhile, so its covariance does not grow toward a fault
+//!   (a ramp on the position stays out until it ends), while an INS that was itself off (a
+//!   drift at the start, before the heading has settled) is re-admitted once corrected.
+//! * A step whose offset stops explaining the fix (the fault changed) is re-estimated.
+//!
+//! **Stale fixes**: a fix identical to the previous one (to 1 mm) while the INS moved more than
+//! [`STALE_MOTION`] m is the receiver repeating its last fix; position and velocity of the
+//! epoch are left out.
+
+use nalgebra::Vector3;
+
+// Why a GNSS measurement (or some of its components) was left out at an epoch: indices into
+// `crate::record::EXCLUSION_REASONS`.
+/// Left out by its deciding test (a gross innovation, or a channel whose faulty component the
+/// w-test could not name).
+pub const TEST: u8 = 1;
+/// A held step (accommodated or excluded).
+pub const STEP: u8 = 2;
+/// A stale fix (the receiver's last fix repeated while the INS moved).
+pub const STALE: u8 = 3;
+/// A ramp flagged by the sequential test on the innovations, held.
+pub const RAMP: u8 = 4;
+
+/// Consecutive agreeing fixes before a held component is used as measured again.
+pub const AGREE: u32 = 2;
+/// Consecutive strictly agreeing fixes that re-admit a held step whose end the receiver's
+/// consistency did not show.
+pub const AGREE_LONG: u32 = 10;
+/// A fix agrees with the prediction when its normalised innovation is within this (the
+/// two-sided 1 % critical value: |w| ≤ 2.58).
+pub const AGREE_W2: f64 = 6.634_896_6;
+
+/// Fixes a ramp flagged by the sequential test is held before the fix must have left the
+/// INS prediction (|w| > 2.58) to confirm it.
+pub const PROBATION: u32 = 5;
+
+/// INS motion (m) between two identical fixes that marks the second as stale.
+pub const STALE_MOTION: f64 = 0.5;
+
+/// The state of one position component.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Comp {
+    /// Used as measured.
+    Normal,
+    /// A held step of size `b` (innovation units: INS − fix, m) with variance `var`; `back`:
+    /// the fix has jumped back since (the fault's end).
+    Step {
+        /// Held offset (m).
+        b: f64,
+        /// Its variance (m²).
+        var: f64,
+        /// The fix jumped back by at least half the offset since.
+        back: bool,
+        /// Consecutive fixes whose raw innovation agreed.
+        agree: u32,
+    },
+    /// A held ramp since `since` (s): its size `b` (innovation units, m) followed by the
+    /// receiver's own displacement against its velocity, with variance `var` (m²).
+    Drift {
+        /// Start of the hold (s).
+        since: f64,
+        /// The ramp's present size (INS − fix units, m).
+        b: f64,
+        /// Its variance (m²).
+        var: f64,
+        /// The fix left the INS prediction during the hold (else, after [`PROBATION`]
+        /// fixes, the sequential test's alarm was a false one).
+        confirmed: bool,
+        /// Fixes since the hold began.
+        fixes: u32,
+        /// Consecutive fixes whose raw innovation agreed.
+        agree: u32,
+    },
+}
+
+/// What to do with one component this epoch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Use {
+    /// Use as measured.
+    Raw,
+    /// Use with the held offset removed (innovation − `b`, variance + `var`).
+    Relative(f64, f64),
+    /// Leave out, for this reason.
+    Out(u8),
+}
+
+/// Hold state of one GNSS position channel.
+#[derive(Debug, Clone)]
+pub struct PositionHold {
+    /// Per component east, north, up.
+    pub comps: [Comp; 3],
+    /// The previous fix's raw innovation and its innovation variances (diagonal of S): the
+    /// reference of the next fix's jump.
+    prev: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// The previous fix (east, north, up, m) and the INS position then (same frame).
+    last_fix: Option<(Vector3<f64>, Vector3<f64>)>,
+}
+
+impl Default for PositionHold {
+    fn default() -> Self {
+        PositionHold {
+            comps: [Comp::Normal; 3],
+            prev: None,
+            last_fix: None,
+        }
+    }
+}
+
+impl PositionHold {
+    /// Whether `fix` (east, north, up, m) repeats the previous fix while the INS (`ins`, same
+    /// frame) moved more than [`STALE_MOTION`] since then; remembers both.
+    pub fn stale(&mut self, fix: &Vector3<f64>, ins: &Vector3<f64>) -> bool {
+        let out = self
+            .last_fix
+            .is_some_and(|(f, i)| (fix - f).amax() < 1e-3 && (ins - i).norm() > STALE_MOTION);
+        if !out {
+            self.last_fix = Some((*fix, *ins));
+        }
+        out
+    }
+
+    /// Decide the components of a fix with raw innovation `d` (INS − fix per component, m)
+    /// and innovation variances `s` (diagonal of S) at time `t`: `alarm` the channel's
+    /// deciding test on the raw fix, `isolated` the components the w-test names when it
+    /// alarms (all, when it cannot say), `thr1` the 1-dof critical value of the deciding test,
+    /// `ramp` the components the sequential test flags, `converged`: the filter has settled
+    /// (before, only a `gross` innovation starts a hold), `accommodate`: a step is used as a
+    /// relative fix.
+    ///
+    /// An alarm whose innovation appeared since the previous fix (a jump of at least half the
+    /// innovation and 2σ of the jump) is a step, held; one that grew into the test (no jump:
+    /// a ramp, or the INS's own error) leaves that fix out and holds nothing — ramps are the
+    /// sequential test's (`ramp`, when the fix is also off the INS by more than |w| 2.58),
+    /// held until the fix meets the INS again. A held step is
+    /// re-admitted after [`AGREE`] fixes that agree strictly ([`AGREE_W2`]) — or, once the fix
+    /// has jumped back, within the deciding test.
+    #[allow(clippy::too_many_arguments)]
+    pub fn decide(
+        &mut self,
+        t: f64,
+        d: &Vector3<f64>,
+        s: &Vector3<f64>,
+        alarm: bool,
+        isolated: &[usize],
+        thr1: f64,
+        recv: Option<&Consistency>,
+        ins_jumps: bool,
+        converged: bool,
+        gross: bool,
+        accommodate: bool,
+    ) -> [Use; 3] {
+        let mut out = [Use::Raw; 3];
+        // The jump of this fix, in innovation units (INS − fix: a step of +x in the fix is
+        // −x), and its variance: from the receiver's own consistency when known, else from
+        // the innovation's change since the previous fix.
+        let delta = |j: usize| -> Option<(f64, f64)> {
+            match recv {
+                Some(c) => Some((-c.e[j], c.sigma[j] * c.sigma[j])),
+                None if ins_jumps => self.prev.map(|(pd, ps)| (d[j] - pd[j], s[j] + ps[j])),
+                None => None,
+            }
+        };
+        // A jump: most of the innovation appeared at this fix, beyond its noise (3σ of the
+        // receiver's consistency, 2σ of the innovation's change).
+        let k2 = if recv.is_some() { 9.0 } else { 4.0 };
+        let jumped = |j: usize| {
+            delta(j).is_some_and(|(dd, v)| dd * dd > 0.25 * d[j] * d[j] && dd * dd / v > k2)
+        };
+        let w2 = |j: usize| d[j] * d[j] / s[j];
+        // A jump of the receiver that cancels its earlier inconsistency (brings the sum of `e`
+        // over the window closer to zero by half the jump at least) returns it to where its
+        // velocity says it is: the end of a fault the filter followed, not the start of one.
+        let returned = |j: usize| {
+            recv.is_some_and(|c| {
+                let (w, e) = (c.window[j], c.e[j]);
+                e.abs() > RECEIVER_JUMP * c.sigma[j] && (w + e).abs() <= w.abs() - 0.5 * e.abs()
+            })
+        };
+        // The fix has left the INS prediction the way the receiver's inconsistency `b` says
+        // (|w| > 2.58, same sign, a quarter of its size at least): the second witness of a
+        // ramp.
+        let leaves =
+            |j: usize, b: f64| w2(j) > AGREE_W2 && d[j] * b > 0.0 && d[j].abs() > 0.25 * b.abs();
+        for j in 0..3 {
+            let jump = jumped(j);
+            self.comps[j] = match self.comps[j] {
+                Comp::Normal => {
+                    // A jump of the receiver's own position against its velocity beyond
+                    // [`RECEIVER_JUMP`] σ, confirmed by the INS (the fix off the prediction by
+                    // more than |w| 2.58, the same way), is a step even below the deciding
+                    // test: two witnesses of one fault.
+                    let receiver_step = converged
+                        && recv.is_some_and(|c| {
+                            c.e[j].abs() > RECEIVER_JUMP * c.sigma[j]
+                                && -c.e[j] * d[j] > 0.0
+                                && w2(j) > AGREE_W2
+                        });
+                    let flagged =
+                        (alarm && (converged || gross) && isolated.contains(&j)) || receiver_step;
+                    if returned(j) {
+                        // Used as measured: it corrects the filter.
+                        Comp::Normal
+                    } else if flagged && jump {
+                        out[j] = if accommodate {
+                            Use::Relative(d[j], s[j])
+                        } else {
+                            Use::Out(STEP)
+                        };
+                        Comp::Step {
+                            b: d[j],
+                            var: s[j],
+                            back: false,
+                            agree: 0,
+                        }
+                    } else if let (true, Some((sum, var))) =
+                        (converged, recv.and_then(|c| c.onset[j]))
+                    {
+                        // The receiver's displacement drifts from its velocity (CUSUM): held
+                        // out, its size followed from the estimated onset; confirmed when
+                        // the fix also leaves the INS prediction.
+                        out[j] = Use::Out(RAMP);
+                        Comp::Drift {
+                            since: t,
+                            b: -sum,
+                            var,
+                            confirmed: leaves(j, -sum),
+                            fixes: 0,
+                            agree: 0,
+                        }
+                    } else if flagged {
+                        out[j] = Use::Out(TEST);
+                        Comp::Normal
+                    } else {
+                        Comp::Normal
+                    }
+                }
+                Comp::Step {
+                    b,
+                    var,
+                    back,
+                    agree,
+                } => {
+                    let back = back
+                        || delta(j).is_some_and(|(dd, _)| dd * b < 0.0 && dd.abs() > 0.5 * b.abs());
+                    // The offset is gone: the fix jumped back and agrees with the INS (the
+                    // deciding test), or it agrees strictly — for [`AGREE`] fixes when no
+                    // receiver consistency can show the jump back, else for [`AGREE_LONG`]
+                    // (an offset of a few σ can wander into agreement with time-correlated
+                    // errors while the fault lasts).
+                    let needed = if recv.is_some() && !back {
+                        AGREE_LONG
+                    } else {
+                        AGREE
+                    };
+                    if (back && w2(j) <= thr1) || w2(j) <= AGREE_W2 {
+                        let agree = agree + 1;
+                        if agree >= needed {
+                            Comp::Normal
+                        } else {
+                            out[j] = Use::Out(STEP);
+                            Comp::Step {
+                                b,
+                                var,
+                                back,
+                                agree,
+                            }
+                        }
+                    } else if (d[j] - b).powi(2) / (s[j] + var) <= thr1 {
+                        out[j] = if accommodate {
+                            Use::Relative(b, var)
+                        } else {
+                            Use::Out(STEP)
+                        };
+                        Comp::Step {
+                            b,
+                            var,
+                            back: false,
+                            agree: 0,
+                        }
+                    } else {
+                        out[j] = Use::Out(STEP);
+                        // The fault changed (a new jump): a new offset; else the old one held.
+                        let b = if jump { d[j] } else { b };
+                        Comp::Step {
+                            b,
+                            var: if jump { s[j] } else { var },
+                            back: false,
+                            agree: 0,
+                        }
+                    }
+                }
+                Comp::Drift {
+                    since,
+                    b,
+                    var,
+                    confirmed,
+                    fixes,
+                    agree,
+                } => {
+                    // The ramp's size moves with the receiver's inconsistency (its end: a
+                    // jump back to zero).
+                    let (b, var) = match recv {
+                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j]),
+                        None => (b, var),
+                    };
+                    let confirmed = confirmed || leaves(j, b);
+                    let fixes = fixes + 1;
+                    // Over: the receiver says the fault is gone and the fix agrees with the
+                    // INS, for [`AGREE`] fixes.
+                    let ok = w2(j) <= thr1 && b * b <= AGREE_W2 * var;
+                    let agree = if ok { agree + 1 } else { 0 };
+                    // The receiver jumped back to where its velocity says it is: the ramp
+                    // ended, and the fix corrects what the filter followed before the hold.
+                    if (!confirmed && fixes >= PROBATION) || agree >= AGREE || returned(j) {
+                        Comp::Normal
+                    } else {
+                        out[j] = if confirmed
+                            && accommodate
+                            && (d[j] - b).powi(2) / (s[j] + var) <= thr1
+                        {
+                            Use::Relative(b, var)
+                        } else {
+                            Use::Out(RAMP)
+                        };
+                        Comp::Drift {
+                            since,
+                            b,
+                            var,
+                            confirmed,
+                            fixes,
+                            agree,
+                        }
+                    }
+                }
+            };
+        }
+        // The next fix's jump is measured from this one's raw innovation.
+        self.prev = Some((*d, *s));
+        out
+    }
+
+    /// Forget the jump reference (after an outage: no fix to measure a jump from).
+    pub fn gap(&mut self) {
+        self.prev = None;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64) -> Vector3<f64> {
+        Vector3::new(0.0, x, 0.0)
+    }
+
+    const THR: f64 = 28.37; // χ²₁ at pf 1e-7
+
+    fn step(h: &mut PositionHold, t: f64, d: f64, alarm: bool, ramp: bool) -> Use {
+        step_e(h, t, d, alarm, ramp.then_some((-1.0, -11.0)))
+    }
+
+    /// One fix: `recv` the receiver's `e` on north and, where the CUSUM fires, the sum since
+    /// its onset (σ_e 1 m); None: no velocity channel.
+    fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, f64)>) -> Use {
+        let s = Vector3::repeat(4.5);
+        let c = recv.map(|(e, sum)| Consistency {
+            e: Vector3::new(0.0, e, 0.0),
+            sigma: Vector3::repeat(1.0),
+            ramp: [false, sum != 0.0, false],
+            onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
+            window: Vector3::zeros(),
+        });
+        h.decide(
+            t,
+            &v(d),
+            &s,
+            alarm,
+            &[1],
+            THR,
+            c.as_ref(),
+            c.is_none(),
+            true,
+            false,
+            true,
+        )[1]
+    }
+
+    /// A 20 m step on north at σ 2 m: held from its first fix to its last (used as a relative
+    /// fix), re-admitted two fixes after it ends.
+    #[test]
+    fn steps_are_held_to_their_end() {
+        let mut h = PositionHold::default();
+        for k in 0..5 {
+            assert_eq!(step(&mut h, k as f64, 0.5, false, false), Use::Raw);
+        }
+        assert_eq!(
+            step(&mut h, 5.0, 20.0, true, false),
+            Use::Relative(20.0, 4.5)
+        );
+        for k in 6..30 {
+            // The raw fix stays 19.5 m off the INS: never re-admitted while it lasts.
+            assert_eq!(
+                step(&mut h, k as f64, 19.5, true, false),
+                Use::Relative(20.0, 4.5),
+                "{k}"
+            );
+        }
+        assert_eq!(step(&mut h, 30.0, 0.3, false, false), Use::Out(STEP));
+        assert_eq!(step(&mut h, 31.0, 0.3, false, false), Use::Raw);
+    }
+
+    /// An alarm that grew into the test (no jump) leaves that fix out and holds nothing; a
+    /// ramp flagged by the sequential test is held, its size followed by the receiver's
+    /// inconsistency (used as a relative fix once the fix leaves the INS), until the receiver
+    /// jumps back and the fix agrees with the INS.
+    #[test]
+    fn ramps_are_held_until_the_receiver_returns() {
+        let mut h = PositionHold::default();
+        for k in 0..10 {
+            step(&mut h, k as f64, 0.0, false, false);
+        }
+        let mut d = 0.0;
+        for k in 10..20 {
+            d += 1.0;
+            let alarm = d * d / 4.5 > THR;
+            let u = step(&mut h, k as f64, d, alarm, false);
+            assert_eq!(u, if alarm { Use::Out(TEST) } else { Use::Raw }, "{k}");
+        }
+        // Flagged at the 11th fix of the ramp (fix 11 m off, receiver −11 m since onset).
+        d += 1.0;
+        assert_eq!(
+            step_e(&mut h, 20.0, d, true, Some((-1.0, -11.0))),
+            Use::Out(RAMP)
+        );
+        for k in 21..40 {
+            d += 1.0;
+            let u = step_e(&mut h, k as f64, d, true, Some((-1.0, 0.0)));
+            // b = 11 + (k − 20) follows the fix exactly: used relative to it.
+            assert_eq!(u, Use::Relative(d, 11.0 + (k - 20) as f64), "{k}");
+        }
+        // The ramp's end: the receiver jumps back by its size (b ≈ −1 m, σ 5.6 m: used
+        // relative to it); re-admitted on the second agreement.
+        assert_eq!(
+            step_e(&mut h, 40.0, 0.2, false, Some((31.0, 0.0))),
+            Use::Relative(-1.0, 31.0)
+        );
+        assert_eq!(step_e(&mut h, 41.0, 0.2, false, Some((0.0, 0.0))), Use::Raw);
+    }
+
+    /// A sequential-test alarm whose fix never leaves the INS is a false one: held for
+    /// [`PROBATION`] fixes only.
+    #[test]
+    fn a_false_ramp_alarm_is_over_after_probation() {
+        let mut h = PositionHold::default();
+        assert_eq!(
+            step_e(&mut h, 0.0, 0.5, false, Some((0.3, -12.0))),
+            Use::Out(RAMP)
+        );
+        for k in 1..PROBATION {
+            assert_eq!(
+                step_e(&mut h, k as f64, 0.5, false, Some((0.3, 0.0))),
+                Use::Out(RAMP)
+            );
+        }
+        assert_eq!(step_e(&mut h, 9.0, 0.5, false, Some((0.3, 0.0))), Use::Raw);
+    }
+
+    /// A receiver jump that cancels its earlier drift (a ramp the filter followed, ending) is
+    /// used as measured, not held as a new step.
+    #[test]
+    fn a_return_to_consistency_is_not_a_step() {
+        let mut h = PositionHold::default();
+        let s = Vector3::repeat(0.01);
+        let c = Consistency {
+            e: Vector3::new(0.0, 4.0, 0.0),
+            sigma: Vector3::repeat(0.05),
+            ramp: [false; 3],
+            onset: [None; 3],
+            window: Vector3::new(0.0, -3.9, 0.0),
+        };
+        let u = h.decide(
+            0.0,
+            &v(-4.0),
+            &s,
+            true,
+            &[1],
+            THR,
+            Some(&c),
+            false,
+            true,
+            false,
+            true,
+        );
+        assert_eq!(u[1], Use::Raw);
+        // The same jump without an earlier drift is a step.
+        let mut h = PositionHold::default();
+        let c = Consistency {
+            window: Vector3::zeros(),
+            ..c
+        };
+        let u = h.decide(
+            0.0,
+            &v(-4.0),
+            &s,
+            true,
+            &[1],
+            THR,
+            Some(&c),
+            false,
+            true,
+            false,
+            true,
+        );
+        assert_eq!(u[1], Use::Relative(-4.0, 0.01));
+    }
+
+    #[test]
+    fn a_stale_fix_is_one_repeated_while_the_ins_moves() {
+        let mut h = PositionHold::default();
+        let f = Vector3::new(1.0, 2.0, 3.0);
+        assert!(!h.stale(&f, &Vector3::zeros()));
+        assert!(h.stale(&f, &Vector3::new(10.0, 0.0, 0.0)));
+        assert!(!h.stale(&f, &Vector3::new(0.1, 0.0, 0.0)));
+        assert!(!h.stale(&(f + Vector3::repeat(0.01)), &Vector3::new(20.0, 0.0, 0.0)));
+    }
+}
+
+/// The scale `c` of a GNSS channel's measurement σ, estimated from its own innovations: over
+/// the last [`SCALE_WINDOW`] components of fixes used as measured, `c² = (med(d²)/0.4549 −
+/// med(HPHᵀ)) / med(R)` (0.4549: the median of χ²₁), so that the innovations' median matches
+/// a consistent filter's — robust to the faults it must find (held fixes are not counted, and
+/// a median ignores the rest). Optimistic σ give `c > 1` (tests that hold their pf); the
+/// loosely coupled filter clamps it to `[1, 10]`. Clamped to `[lo, hi]`; 1 until
+/// [`SCALE_MIN`] samples are in.
+#[derive(Debug, Clone)]
+pub struct NoiseScale {
+    d2: std::collections::VecDeque<f64>,
+    hph: std::collections::VecDeque<f64>,
+    r: std::collections::VecDeque<f64>,
+    /// Fixed scale (no estimation) when set.
+    fixed: Option<f64>,
+    lo: f64,
+    hi: f64,
+}
+
+/// Components (3 per fix) the scale is estimated over.
+pub const SCALE_WINDOW: usize = 180;
+/// Components needed before the scale departs from 1.
+pub const SCALE_MIN: usize = 30;
+
+impl NoiseScale {
+    /// An estimated scale clamped to `[lo, hi]`, or a `fixed` one.
+    pub fn new(fixed: Option<f64>, lo: f64, hi: f64) -> Self {
+        NoiseScale {
+            d2: Default::default(),
+            hph: Default::default(),
+            r: Default::default(),
+            fixed,
+            lo,
+            hi,
+        }
+    }
+
+    /// Add a fix used as measured: its components' squared innovations `d²`, predicted
+    /// variances `HPHᵀ` and measurement variances `R` (unscaled).
+    pub fn add(&mut self, d2: &[f64], hph: &[f64], r: &[f64]) {
+        if self.fixed.is_some() {
+            return;
+        }
+        for j in 0..d2.len().min(hph.len()).min(r.len()) {
+            if !(d2[j].is_finite() && hph[j].is_finite() && r[j] > 0.0) {
+                continue;
+            }
+            if self.d2.len() == SCALE_WINDOW {
+                self.d2.pop_front();
+                self.hph.pop_front();
+                self.r.pop_front();
+            }
+            self.d2.push_back(d2[j]);
+            self.hph.push_back(hph[j].max(0.0));
+            self.r.push_back(r[j]);
+        }
+    }
+
+    /// The current scale `c` (of σ).
+    pub fn scale(&self) -> f64 {
+        if let Some(f) = self.fixed {
+            return f;
+        }
+        if self.d2.len() < SCALE_MIN {
+            return 1.0;
+        }
+        let med = |v: &std::collections::VecDeque<f64>| {
+            let mut x: Vec<f64> = v.iter().copied().collect();
+            let m = x.len() / 2;
+            *x.select_nth_unstable_by(m, f64::total_cmp).1
+        };
+        let c2 = (med(&self.d2) / 0.454_936_4 - med(&self.hph)) / med(&self.r);
+        c2.max(self.lo * self.lo).sqrt().clamp(self.lo, self.hi)
+    }
+}
+
+#[cfg(test)]
+mod scale_tests {
+    use super::*;
+
+    #[test]
+    fn the_scale_matches_the_innovations_and_ignores_outliers() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut s = NoiseScale::new(None, 0.1, 10.0);
+        assert_eq!(s.scale(), 1.0);
+        // Innovations of σ 0.6 m against a reported R of 4 m² and HPHᵀ 0.04 m²: c ≈ 0.29.
+        for k in 0..200 {
+            let n: f64 = StandardNormal.sample(&mut rng);
+            let d = 0.6 * n;
+            let d = if k % 10 == 0 { 30.0 } else { d }; // 10 % gross outliers
+            s.add(&[d * d], &[0.04], &[4.0]);
+        }
+        let c = s.scale();
+        assert!((c - (0.36f64 - 0.04).sqrt() / 2.0).abs() < 0.06, "{c}");
+        assert_eq!(NoiseScale::new(Some(2.0), 0.1, 10.0).scale(), 2.0);
+    }
+}
+
+/// The receiver's own consistency: its position displacement between two fixes against its
+/// velocity, `e = p_k − p_{k−1} − ½(v_k + v_{k−1})(t_k − t_{k−1})` per component (east,
+/// north, up, m). A position fault shows in it and nothing of the INS does: a step as one
+/// `e` of the step's size (and one of the opposite sign at its end), a ramp as a steady bias
+/// of rate × interval, which a two-sided Page CUSUM on `e / σ_e` accumulates (reference
+/// [`CUSUM_K`], threshold [`CUSUM_H`]; `σ_e` robust, from the median |e| of the last
+/// [`SCALE_WINDOW`] values while moving, above [`MOVING`]; the velocity's latency estimated
+/// and removed). Needs a velocity channel from the same receiver.
+#[derive(Debug, Clone, Default)]
+pub struct ReceiverConsistency {
+    prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    abs_e: [std::collections::VecDeque<f64>; 3],
+    up: [f64; 3],
+    down: [f64; 3],
+    /// The sums of `e` (m) and their count since each CUSUM side was last at zero: the
+    /// ramp's displacement from its estimated onset.
+    acc_up: [(f64, u32); 3],
+    acc_down: [(f64, u32); 3],
+    /// The last [`HISTORY`] values of `e` per component, for the window sum.
+    hist: [std::collections::VecDeque<f64>; 3],
+    /// The last [`HISTORY`] raw `e` and velocity changes, for the velocity's latency.
+    pairs: std::collections::VecDeque<(Vector3<f64>, Vector3<f64>)>,
+}
+/// Fixes over which the receiver's displacement is compared with its velocity
+/// ([`Consistency::window`]).
+pub const HISTORY: usize = 120;
+
+/// A jump of the receiver's position against its velocity beyond this many σ_e, confirmed
+/// by the INS, is a step ([`PositionHold::decide`]).
+pub const RECEIVER_JUMP: f64 = 8.0;
+
+/// CUSUM reference value (σ_e per fix).
+pub const CUSUM_K: f64 = 0.5;
+/// CUSUM threshold (σ_e).
+pub const CUSUM_H: f64 = 12.0;
+/// Speed (m/s) below which the receiver's consistency is not measured: at rest its
+/// displacement noise is millimetres, in motion its velocity's latency makes it decimetres,
+/// and one σ_e would not fit both.
+pub const MOVING: f64 = 0.5;
+
+/// What [`ReceiverConsistency::step`] reports for one fix.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Consistency {
+    /// `e` per component (m).
+    pub e: Vector3<f64>,
+    /// Its robust σ per component (m).
+    pub sigma: Vector3<f64>,
+    /// The CUSUM flags a ramp per component.
+    pub ramp: [bool; 3],
+    /// Where the CUSUM flags a ramp: the receiver's displacement against its velocity since
+    /// the ramp's estimated onset (m; the fault's size at this fix) and its variance (m²).
+    pub onset: [Option<(f64, f64)>; 3],
+    /// The sum of `e` over the previous fixes (up to [`HISTORY`], this one excluded, m): a
+    /// jump `e` that cancels it returns the receiver to where its velocity says it is.
+    pub window: Vector3<f64>,
+}
+
+impl ReceiverConsistency {
+    /// Feed the fix `p` (east, north, up, m) and velocity `v` (m/s) at time `t` (s); None for
+    /// the first fixes (until `σ_e` is estimated) or after a gap of more than `max_gap` s
+    /// (the CUSUM restarts).
+    pub fn step(
+        &mut self,
+        t: f64,
+        p: &Vector3<f64>,
+        v: &Vector3<f64>,
+        max_gap: f64,
+    ) -> Option<Consistency> {
+        let prev = self.prev.replace((t, *p, *v));
+        let (t0, p0, v0) = prev?;
+        let dt = t - t0;
+        if !(dt > 0.0 && dt <= max_gap) {
+            self.up = [0.0; 3];
+            self.down = [0.0; 3];
+            self.acc_up = [(0.0, 0); 3];
+            self.acc_down = [(0.0, 0); 3];
+            self.hist.iter_mut().for_each(|h| h.clear());
+            // The latency (`pairs`) and σ_e are the receiver's: kept across the gap.
+            return None;
+        }
+        if v.xy().norm() < MOVING || v0.xy().norm() < MOVING {
+            return None;
+        }
+        // A receiver's velocity lags its position by some latency τ (≈ 0.13 s on drive_0708's
+        // receiver): the trapezoid then misses τ·Δv. τ is estimated by least squares over the
+        // last fixes (all components) and removed.
+        let raw = p - p0 - (v + v0) * (0.5 * dt);
+        let dv = v - v0;
+        let (sxy, sxx) = self
+            .pairs
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (e, x)| (a + e.dot(x), b + x.dot(x)));
+        let tau = if self.pairs.len() >= SCALE_MIN && sxx > 0.0 {
+            (sxy / sxx).clamp(-dt, dt)
+        } else {
+            0.0
+        };
+        let e = raw - dv * tau;
+        let mut pending = Some((raw, dv));
+        let mut sigma = Vector3::zeros();
+        let mut ramp = [false; 3];
+        let mut onset = [None; 3];
+        let mut window = Vector3::zeros();
+        for j in 0..3 {
+            window[j] = self.hist[j].iter().sum();
+            if self.hist[j].len() == HISTORY {
+                self.hist[j].pop_front();
+            }
+            self.hist[j].push_back(e[j]);
+            let w = &mut self.abs_e[j];
+            let med = if w.len() >= SCALE_MIN {
+                let mut x: Vec<f64> = w.iter().copied().collect();
+                let m = x.len() / 2;
+                *x.select_nth_unstable_by(m, f64::total_cmp).1
+            } else {
+                f64::NAN
+            };
+            sigma[j] = if med.is_finite() {
+                (med / 0.674_489_75).max(1e-3)
+            } else {
+                f64::NAN
+            };
+            if w.len() == SCALE_WINDOW {
+                w.pop_front();
+            }
+            w.push_back(e[j].abs());
+            // A jump or a fault's drift does not teach the latency.
+            if !(sigma[j].is_finite() && e[j].abs() <= 4.0 * sigma[j]) {
+                pending = None;
+            }
+            // Clipped at 4σ: one jump (a step) cannot fire the CUSUM, a ramp of any rate
+            // does within a few fixes.
+            if sigma[j].is_finite() {
+                let x = (e[j] / sigma[j]).clamp(-4.0, 4.0);
+                self.up[j] = (self.up[j] + x - CUSUM_K).max(0.0);
+                self.down[j] = (self.down[j] - x - CUSUM_K).max(0.0);
+                let acc = |a: (f64, u32), stat: f64| {
+                    if stat > 0.0 {
+                        (a.0 + e[j], a.1 + 1)
+                    } else {
+                        (0.0, 0)
+                    }
+                };
+                self.acc_up[j] = acc(self.acc_up[j], self.up[j]);
+                self.acc_down[j] = acc(self.acc_down[j], self.down[j]);
+                let fired = if self.up[j] > CUSUM_H {
+                    Some(self.acc_up[j])
+                } else if self.down[j] > CUSUM_H {
+                    Some(self.acc_down[j])
+                } else {
+                    None
+                };
+                if let Some((sum, n)) = fired {
+                    ramp[j] = true;
+                    onset[j] = Some((sum, f64::from(n) * sigma[j] * sigma[j]));
+                    self.up[j] = 0.0;
+                    self.down[j] = 0.0;
+                    self.acc_up[j] = (0.0, 0);
+                    self.acc_down[j] = (0.0, 0);
+                }
+            }
+        }
+        if let Some(pair) = pending {
+            if self.pairs.len() == HISTORY {
+                self.pairs.pop_front();
+            }
+            self.pairs.push_back(pair);
+        }
+        // Until σ_e is known (the first fixes) the receiver says nothing.
+        sigma.iter().all(|x| x.is_finite()).then_some(Consistency {
+            e,
+            sigma,
+            ramp,
+            onset,
+            window,
+        })
+    }
+}
+
+#[cfg(test)]
+mod consistency_tests {
+    use super::*;
+
+    #[test]
+    fn steps_jump_once_and_ramps_accumulate() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut rc = ReceiverConsistency::default();
+        let v = Vector3::new(10.0, 0.0, 0.0);
+        let mut flagged = Vec::new();
+        for k in 0..200 {
+            let t = k as f64;
+            let n: f64 = StandardNormal.sample(&mut rng);
+            let noise = 0.3 * n;
+            // A 0.5 m/s ramp on north from 120 s.
+            let ramp = if k >= 120 { 0.5 * (t - 120.0) } else { 0.0 };
+            let p = Vector3::new(10.0 * t, noise + ramp, 0.0);
+            if let Some(c) = rc.step(t, &p, &v, 2.5) {
+                if c.ramp[1] {
+                    flagged.push(k);
+                }
+            }
+        }
+        assert!(flagged.iter().all(|&k| k >= 120), "{flagged:?}");
+        assert!(flagged.first().is_some_and(|&k| k <= 150), "{flagged:?}");
+    }
+}
