@@ -38,6 +38,7 @@ CORE_LAYERS = [
 PY_LAYERS = [
     {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
     {"_terrain", "_fields", "_lc_schema"},
+    {"frames"},
     {"scenario"},
     {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries"},
     {"plots", "plots_logged"},

@@ -75,6 +75,7 @@ from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import NeverAppliedWarning, PartialLogWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
+from navfdi.frames import FrameWarning
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 from navfdi.integrity import Allocation, AraimResult, Ism, araim, lpv200
 
@@ -98,6 +99,7 @@ __all__ = [
     "lpv200",
     "NeverAppliedWarning",
     "PartialLogWarning",
+    "FrameWarning",
     "GnssSolution",
     "ImprovedSprt",
     "Innovation",

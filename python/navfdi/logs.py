@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 from ._errors import ScenarioError
+from .frames import check_gravity
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors"]
 
@@ -383,11 +384,15 @@ def scenario_folder(sc: Any) -> Path:
 
 def logged_source(sc: Any) -> Any:
     """Read scenario ``sc``'s logs and prepare them (:class:`navfdi._core.LoggedSource`).
+    Refuses a mounting that puts gravity on the wrong axis (:func:`navfdi.frames.check_gravity`).
     Checks that the scenario's ``duration`` and ``dt`` match the GNSS log (the RINEX
     observations' epochs for a tight scenario)."""
     from . import _core
 
     data = load_source(sc.raw["source"], scenario_folder(sc))
+    for sec, table in (("loosely_coupled", sc.core.get("loosely_coupled")), ("tight.strapdown", (sc.core.get("tight") or {}).get("strapdown"))):
+        if isinstance(table, Mapping) and "mounting" in table:
+            check_gravity(data["imu_log"].accel, table["mounting"], sec)
     try:
         if data["rinex"] is not None:
             src = _core.LoggedSource(sc.to_json(), data["imu"], None, data["reference"], data["rinex"])

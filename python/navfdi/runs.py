@@ -29,6 +29,7 @@ from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, test
 from navfdi._text import fit
 from navfdi.consistency import consistency, format_consistency, no_reference_line
 from navfdi._timeseries import timeseries_columns
+from navfdi.frames import FrameWarning, frame_warnings
 from navfdi.record import ERROR_COLUMNS, RunRecord, integrity_figures
 from navfdi.scenario import NeverAppliedWarning, Scenario, fault_on, load_scenario
 
@@ -824,8 +825,10 @@ def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun
         variants = sc.variants()
         recs = src.run([v.to_json() for _, v in variants])
         _warn_never_applied(sc, recs[0])
+        _warn_frames(ScenarioRun(variants[0][1], seed, recs[0], None))
         return VariantRuns(sc, seed, {name: ScenarioRun(v, seed, rec, None, name) for (name, v), rec in zip(variants, recs)})
     recs = src.run([sc.to_json()])
+    _warn_frames(ScenarioRun(sc, seed, recs[0], None))
     base = src.run([sc.to_json()], isolation=False)[0] if compare_isolation else None
     _warn_never_applied(sc, recs[0])
     return ScenarioRun(sc, seed, recs[0], base)
@@ -856,6 +859,12 @@ def _span(n: np.ndarray) -> str:
     """``"8"`` or ``"7–9"``: the range of a count over the run."""
     lo, hi = int(n.min()), int(n.max())
     return str(lo) if lo == hi else f"{lo}–{hi}"
+
+
+def _warn_frames(run: ScenarioRun) -> None:
+    """:class:`navfdi.frames.FrameWarning` for what a logged run says of its IMU's mounting."""
+    for msg in frame_warnings(run, consistency(run)):
+        warnings.warn(msg, FrameWarning, stacklevel=4)
 
 
 def _warn_never_applied(sc: Scenario, record: dict[str, Any]) -> None:
