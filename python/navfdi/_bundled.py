@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from importlib import resources
+from pathlib import Path
 
 
 def bundled_toml(name: str) -> str:
@@ -12,6 +13,20 @@ def bundled_toml(name: str) -> str:
     if name not in names:
         raise ValueError(f"{name!r} is not a bundled scenario (bundled: {', '.join(names)})")
     return (resources.files("navfdi") / "scenarios" / f"{name}.toml").read_text(encoding="utf-8")
+
+
+def exported_toml(name: str) -> str:
+    """:func:`bundled_toml` for a copy written elsewhere: its relative data paths (``"../…"``,
+    relative to the bundled scenarios' folder) made absolute, so that the copy runs from
+    wherever it is saved."""
+    import re
+
+    base = Path(str(resources.files("navfdi") / "scenarios"))
+
+    def absolute(m: re.Match[str]) -> str:
+        return '"' + (base / m.group(1)).resolve().as_posix() + '"'
+
+    return re.sub(r'"(\.\./[^"\n]+)"', absolute, bundled_toml(name))
 
 
 def bundled_scenarios() -> list[str]:

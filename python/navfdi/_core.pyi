@@ -932,6 +932,8 @@ class LoggedSource:
     east, north, up (m) and of velocity (m/s). Or ``rinex`` = (observation path, navigation
     path) instead of ``gnss`` (tight scenarios): the record epochs are the observation
     epochs, time 0 the first, and ``imu`` and ``reference`` times are GPS seconds (GPST).
+    ``score_inputs``: score the reference at the GNSS input epochs too (after their update),
+    for a reference with no other epochs (GNSS-log sources).
     Raises ValueError naming the array and row, FileFormatError for a malformed RINEX file."""
 
     def __new__(
@@ -941,7 +943,11 @@ class LoggedSource:
         gnss: ArrayLike | None = None,
         reference: ArrayLike | None = None,
         rinex: tuple[str, str] | None = None,
+        score_inputs: bool = False,
     ) -> LoggedSource: ...
+    @property
+    def scored(self) -> int:
+        """Record epochs at which the reference is scored."""
     @property
     def epochs(self) -> int:
         """Number of record epochs (the GNSS log's or the RINEX observations')."""

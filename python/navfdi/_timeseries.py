@@ -13,6 +13,11 @@ from navfdi.record import ERROR_COLUMNS, RunRecord
 def timeseries_columns(run: RunRecord) -> dict[str, Any]:
     """The columns of ``run``'s per-epoch table, name to array (T,), in table order."""
     cols: dict[str, Any] = {"t": run.t}
+    t0 = getattr(run, "gps_t0", None)
+    if t0 is not None:
+        gps = t0 + np.asarray(run.t, dtype=float)
+        cols["gps_week"] = np.floor(gps / 604800.0).astype(np.int64)
+        cols["gps_sow"] = gps - cols["gps_week"] * 604800.0
     for s in run.record["subfilters"]:
         sub = s["sensor"]
         cols[f"{sub}.statistic"] = s["statistic"]

@@ -191,13 +191,14 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         print(report(seed=args.seed, pf=args.pf, pm=args.pm))
     elif args.command == "scenarios":
+        from navfdi._bundled import exported_toml
         from navfdi.scenario import bundled_scenarios, bundled_toml, load_scenario
 
         if args.show:
             print(bundled_toml(args.show), end="")
         elif args.export:
             name, path = args.export
-            text = bundled_toml(name)
+            text = exported_toml(name)
             target = Path(path)
             if target.is_dir():
                 target = target / f"{name}.toml"

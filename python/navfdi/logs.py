@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 from ._errors import ScenarioError
+from ._logtime import pos_time
 from .frames import check_gravity
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors"]
@@ -206,11 +207,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     return ImuLog(t, gyro, accel, str(path))
 
 
-def _pos_time(tok0: str, tok1: str) -> float:
-    if "/" in tok0:
-        d = _dt.datetime.strptime(f"{tok0} {tok1[:15]}", "%Y/%m/%d %H:%M:%S.%f" if "." in tok1 else "%Y/%m/%d %H:%M:%S")
-        return (d - GPS_EPOCH).total_seconds()
-    return float(tok0) * _WEEK + float(tok1)
+_pos_time = pos_time
 
 
 def read_pos(path: str | Path) -> PosLog:
@@ -331,7 +328,13 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     if "reference" in source:
         ref = read_pos(file_in(source, base, "source.reference", "reference"))
         quality = source.get("reference_quality", [1])
-        ref = ref.select(np.isin(ref.q, quality))
+        keep = np.isin(ref.q, quality)
+        if not keep.any():
+            have = ", ".join(str(int(q)) for q in np.unique(ref.q))
+            raise ScenarioError(
+                f"source.reference: {ref.path}: no epoch of quality {list(quality)} (source.reference_quality; default [1], "
+                f"RTK fixed); the file's qualities are {have}: set reference_quality = [{have}] to score against them")
+        ref = ref.select(keep)
     if "rinex_obs" in source:
         obs = file_in(source, base, "source.rinex_obs", "rinex_obs")
         nav = file_in(source, base, "source.rinex_nav", "rinex_nav")
@@ -383,10 +386,18 @@ def scenario_folder(sc: Any) -> Path:
 
 
 def logged_source(sc: Any) -> Any:
+    """:func:`scored_source`'s prepared source alone."""
+    return scored_source(sc)[0]
+
+
+def scored_source(sc: Any) -> tuple[Any, str, float]:
     """Read scenario ``sc``'s logs and prepare them (:class:`navfdi._core.LoggedSource`).
     Refuses a mounting that puts gravity on the wrong axis (:func:`navfdi.frames.check_gravity`).
     Checks that the scenario's ``duration`` and ``dt`` match the GNSS log (the RINEX
-    observations' epochs for a tight scenario)."""
+    observations' epochs for a tight scenario). Returns the source and where its reference
+    is scored: ``"held_out"`` (epochs that are not GNSS inputs) or ``"inputs"`` (the input
+    epochs, after their update: ``[source] reference_epochs``), and the GPS seconds of the
+    run's time 0."""
     from . import _core
 
     data = load_source(sc.raw["source"], scenario_folder(sc))
@@ -414,11 +425,29 @@ def logged_source(sc: Any) -> Any:
             f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: {what} spans {span:g} s "
             f"at {dt:g} s epochs; set duration = \"{span:g} s\" and dt = \"{dt:g} s\"")
     if src is not None:
-        return src
+        return src, "held_out", float(src.time0)
+    mode = reference_epochs(sc.raw["source"])
     try:
-        return _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"])
+        src = _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"], score_inputs=mode == "inputs")
+        if mode == "auto" and data["reference"] is not None and src.scored == 0:
+            # Every reference epoch is a GNSS input: scored there, after the update (labelled).
+            src = _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"], data["reference"], score_inputs=True)
+            src_mode = "inputs"
+        else:
+            src_mode = "held_out" if mode == "auto" else mode
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+    return src, src_mode, float(data["t0"])
+
+
+def reference_epochs(source: Mapping[str, Any]) -> str:
+    """``[source] reference_epochs``: ``"auto"`` (default: the reference epochs that are not
+    GNSS inputs, or — when there are none — the input epochs, after their update),
+    ``"held_out"`` or ``"inputs"``."""
+    mode = source.get("reference_epochs", "auto")
+    if mode not in ("auto", "held_out", "inputs"):
+        raise ScenarioError(f"source.reference_epochs = {mode!r}: one of \"auto\", \"held_out\", \"inputs\"")
+    return str(mode)
 
 
 #: Seconds by which an IMU log may start after, or end before, the GNSS log without a warning.

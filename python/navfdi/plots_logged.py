@@ -103,7 +103,7 @@ def plot_logged(run: RunRecord, out: Path, prefix: str = "") -> list[Path]:
         ax.grid(alpha=0.3)
     _legend_patches(axes[0], run)
     axes[0].legend(fontsize=8, ncol=4, loc="upper left")
-    axes[0].set_title(f"{run.scenario.name}{var}: position error against the reference (epochs not used as input)", fontsize=10)
+    axes[0].set_title(f"{run.scenario.name}{var}: position error against the reference (epochs {run.scored_label()})", fontsize=10)
     axes[-1].set_xlabel("time [s]")
     paths.append(out / f"{prefix}errors.png")
     fig.savefig(paths[-1], dpi=110)

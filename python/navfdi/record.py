@@ -61,6 +61,12 @@ class RunRecord:
         Raw record of the same run without isolation (None if not computed).
     variant : str
         Variant name (``"base"`` for a scenario without variants).
+    scored_at : str
+        Runs on recorded logs: where the reference is scored, ``"held_out"`` (epochs that
+        were not GNSS inputs) or ``"inputs"`` (the GNSS input epochs, after their update).
+    gps_t0 : float or None
+        Runs on recorded logs: GPS seconds (GPST, since 1980-01-06) of time 0; None for
+        simulated runs.
     """
 
     def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None, variant: str = "base"):
@@ -70,6 +76,14 @@ class RunRecord:
         self.baseline = baseline
         self.variant = variant
         self.t: np.ndarray = record["t"]
+        self.scored_at = "held_out"
+        self.gps_t0: float | None = None
+
+    def scored_label(self) -> str:
+        """How the console and report name the scored reference epochs."""
+        if self.scored_at == "held_out":
+            return "not used as input"
+        return "at the GNSS input epochs (after their update: not an independent check)"
 
     def reference_offset(self) -> np.ndarray:
         """Runs on recorded logs: the mean error (m; east, north, up) against the reference

@@ -368,7 +368,7 @@ class ScenarioRun(RunRecord):
         if "nav" in self.record and not e["scored"]:
             lines.append(no_reference_line(self.scenario))
         elif "nav" in self.record:
-            lines.append(f"horizontal error against the {int(e['scored'])} reference epochs not used as input: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
+            lines.append(f"horizontal error against the {int(e['scored'])} reference epochs {self.scored_label()}: RMS {e['hor_rms']:.3f} m, max {e['hor_max']:.3f} m; vertical RMS {e['ver_rms']:.3f} m")
             steady = self.steady_offset()
             if steady:
                 lines.append(
@@ -403,7 +403,8 @@ class ScenarioRun(RunRecord):
         return f"master attitude error RMS over {t0:g}–{self.t[-1]:g} s ({span}): {a:.2f} arcsec with isolation, {b:.2f} arcsec without"
 
     def timeseries(self):
-        """Per-epoch table (pandas DataFrame): ``t``; per sub-filter ``{sub}.statistic``,
+        """Per-epoch table (pandas DataFrame): ``t`` (s from time 0; runs on recorded logs
+        also ``gps_week`` and ``gps_sow``, GPST, beside it); per sub-filter ``{sub}.statistic``,
         ``{sub}.isolated``, ``{sub}.fused`` (loosely coupled GNSS channels also
         ``{sub}.excluded``: why the measurement or some of its components were left out —
         ``test``, ``step``, ``stale``, ``ramp``, empty when used as measured — and
@@ -671,9 +672,9 @@ class VariantRuns:
             parts.append(no_reference_line(self.scenario) + "\n")
             return fit("\n".join(parts))
         if "hor_rms" in err.columns:
-            lines = ["navigation error per variant against the reference epochs not used as input: RMS / max"]
-            lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
             first = next(iter(self.runs.values()))
+            lines = [f"navigation error per variant against the reference epochs {first.scored_label()}: RMS / max"]
+            lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
             steady = all(r.steady_offset() for r in self.runs.values())
             if steady:
                 lines[0] += "; horizontal also with each run's mean offset removed"
@@ -820,18 +821,23 @@ def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun
     from . import logs
 
     sc = logs.resolve_range_errors(sc)
-    src = logs.logged_source(sc)
+    src, scored_at, gps_t0 = logs.scored_source(sc)
     if sc.variant_names():
         variants = sc.variants()
         recs = src.run([v.to_json() for _, v in variants])
         _warn_never_applied(sc, recs[0])
         _warn_frames(ScenarioRun(variants[0][1], seed, recs[0], None))
-        return VariantRuns(sc, seed, {name: ScenarioRun(v, seed, rec, None, name) for (name, v), rec in zip(variants, recs)})
+        out = VariantRuns(sc, seed, {name: ScenarioRun(v, seed, rec, None, name) for (name, v), rec in zip(variants, recs)})
+        for r in out.runs.values():
+            r.scored_at, r.gps_t0 = scored_at, gps_t0
+        return out
     recs = src.run([sc.to_json()])
     _warn_frames(ScenarioRun(sc, seed, recs[0], None))
     base = src.run([sc.to_json()], isolation=False)[0] if compare_isolation else None
     _warn_never_applied(sc, recs[0])
-    return ScenarioRun(sc, seed, recs[0], base)
+    run = ScenarioRun(sc, seed, recs[0], base)
+    run.scored_at, run.gps_t0 = scored_at, gps_t0
+    return run
 
 
 def _error_unit(c: str) -> str:

@@ -29,6 +29,7 @@ from typing import Any
 from navfdi import _core
 from navfdi._errors import NeverAppliedWarning, PartialLogWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
 from navfdi._bundled import bundled_scenarios, bundled_toml
+from navfdi._logtime import resolve_log_times
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, split
 from navfdi._fields import _bool, _check_keys, _count, _detectors, _list, _name, _need, _number, _str, _unit
@@ -764,7 +765,7 @@ def _convert_logged(raw: Mapping[str, Any], core: dict[str, Any]) -> dict[str, A
         for k in ("rinex_obs", "rinex_nav"):
             _need(src, k, "source")
     else:
-        _check_keys(src, {"gnss", "reference", "reference_quality", "imu"}, "source")
+        _check_keys(src, {"gnss", "reference", "reference_quality", "reference_epochs", "imu"}, "source")
     _sensors_and_faults(raw, core)
     core["architecture"] = arch
     _variants(raw)
@@ -783,7 +784,7 @@ def from_dict(raw: Mapping[str, Any], source: str = "<python>") -> Scenario:
     """Validate a scenario given as a Python mapping with the TOML structure."""
     if not isinstance(raw, Mapping):
         raise ScenarioError(f"scenario: expected a table, got {type(raw).__name__}")
-    core = _convert(raw)
+    core = _convert(resolve_log_times(raw, source))
     text = json.dumps(core)
     try:
         _core.validate_scenario(text)

@@ -68,7 +68,7 @@ pub struct PyLoggedSource {
 #[pymethods]
 impl PyLoggedSource {
     #[new]
-    #[pyo3(signature = (spec_json, imu, gnss=None, reference=None, rinex=None))]
+    #[pyo3(signature = (spec_json, imu, gnss=None, reference=None, rinex=None, score_inputs=false))]
     fn new(
         py: Python<'_>,
         spec_json: &str,
@@ -76,6 +76,7 @@ impl PyLoggedSource {
         gnss: Option<&Bound<'_, PyAny>>,
         reference: Option<&Bound<'_, PyAny>>,
         rinex: Option<(String, String)>,
+        score_inputs: bool,
     ) -> PyResult<Self> {
         let spec = ScenarioSpec::from_json(spec_json).py()?;
         let m = columns("imu", imu, 7)?;
@@ -95,7 +96,9 @@ impl PyLoggedSource {
             (Some(g), None) => {
                 let gnss = gnss_log("gnss", g)?;
                 let src = py
-                    .detach(move || LoggedSource::new(&sp, imu, &gnss, reference.as_ref()))
+                    .detach(move || {
+                        LoggedSource::with_scoring(&sp, imu, &gnss, reference.as_ref(), score_inputs)
+                    })
                     .py()?;
                 (src, 0.0)
             }
@@ -126,6 +129,17 @@ impl PyLoggedSource {
     #[getter]
     fn time0(&self) -> f64 {
         self.time0
+    }
+
+    /// Record epochs at which the reference is scored (it has a matched epoch there).
+    #[getter]
+    fn scored(&self) -> usize {
+        self.src
+            .reference
+            .enu
+            .iter()
+            .filter(|e| e[0].is_finite())
+            .count()
     }
 
     /// Record epoch times (s from time 0), shape (T,).

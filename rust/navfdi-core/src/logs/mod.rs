@@ -143,6 +143,19 @@ impl LoggedSource {
         gnss: &GnssLog,
         reference: Option<&GnssLog>,
     ) -> Result<Self> {
+        Self::with_scoring(spec, imu, gnss, reference, false)
+    }
+
+    /// As [`LoggedSource::new`]; `score_inputs`: the reference is scored at every matched
+    /// epoch, the GNSS input epochs included (the filter's error after their update), for a
+    /// reference that has no other epochs.
+    pub fn with_scoring(
+        spec: &ScenarioSpec,
+        imu: ImuSamples,
+        gnss: &GnssLog,
+        reference: Option<&GnssLog>,
+        score_inputs: bool,
+    ) -> Result<Self> {
         spec.validate()?;
         check_imu(&imu)?;
         gnss.check("GNSS log")?;
@@ -198,12 +211,12 @@ impl LoggedSource {
                 sigma[si][k] = DVector::from_vec(s);
             }
         }
-        // Scored only where no GNSS measurement was an input.
+        // Scored only where no GNSS measurement was an input (unless asked to score those).
         let enu = reference.map_or_else(
             || vec![[f64::NAN; 6]; epochs],
             |r| {
                 reference_enu(r, &gnss.t, &origin, 1e-3, |k| {
-                    available.iter().any(|a| a[k])
+                    !score_inputs && available.iter().any(|a| a[k])
                 })
             },
         );
