@@ -1,4 +1,4 @@
-"""Speed of the loosely coupled filter on the recorded drive (issue 22).
+"""Speed of the loosely coupled filter on the recorded drive.
 
     python benches/bench_drive_lc.py            # prints the figures of benches/README.md
     python -m pytest benches/bench_drive_lc.py --benchmark-enable

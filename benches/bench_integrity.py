@@ -1,4 +1,4 @@
-"""Speed of the protection levels (issue 24), in one process.
+"""Speed of the protection levels, in one process.
 
     python benches/bench_integrity.py
 

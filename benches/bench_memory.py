@@ -1,5 +1,5 @@
 """Peak memory of `navfdi gnss` on a day-length observation file, beside RTKLIB's `rnx2rtkp`
-on the same file (issue 23, item 7: a full-day 30 s file ≤ 150 MB peak).
+on the same file (a full-day 30 s file ≤ 150 MB peak).
 
     python benches/bench_memory.py
 

@@ -1,4 +1,4 @@
-"""Monte-Carlo speed and memory (issue 4), each against a reference measured in the same run.
+"""Monte-Carlo speed and memory, each against a reference measured in the same run.
 
 Usage: ``python benches/bench_montecarlo.py [RUNS]`` (default 1000) prints a markdown table:
 

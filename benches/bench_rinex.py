@@ -1,7 +1,7 @@
 """Real-data speed: reading rover.obs + base.nav, single-point positioning and FDE for all 301
 epochs, beside RTKLIB's ``rnx2rtkp`` (Debian package ``rtklib``) and gnss_lib_py, in one run;
 the same with GPS + Galileo, C/N0 weighting and Doppler velocity beside ``rnx2rtkp -sys G,E``;
-and reading Compact RINEX 3 and 1 files beside their plain pairs (issue 23's speed targets).
+and reading Compact RINEX 3 and 1 files beside their plain pairs.
 
     python benches/bench_rinex.py            # table (gnss_lib_py: pip install gnss-lib-py)
     python -m pytest benches/bench_rinex.py --benchmark-enable

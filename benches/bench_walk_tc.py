@@ -1,4 +1,4 @@
-"""Speed of the tight filter on the recorded walk (issue 25).
+"""Speed of the tight filter on the recorded walk.
 
     python benches/bench_walk_tc.py            # prints the figures of benches/README.md
     python -m pytest benches/bench_walk_tc.py --benchmark-enable

@@ -1,4 +1,4 @@
-//! Federated run cost against its filters' `run_filter` costs (issue 3's speed target).
+//! Federated run cost against its filters' `run_filter` costs.
 //!
 //! yang2013 (n = 15; CNS sub-filter m = 3 with three detectors, GNSS sub-filter m = 6 with
 //! one; T = 1000 epochs). Measured in the same criterion run:

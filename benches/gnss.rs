@@ -219,7 +219,7 @@ fn bench(c: &mut Criterion) {
             b.iter(|| run_architecture(&s, &src, true, false, &NEVER).expect("run"))
         });
     }
-    // Filter protection levels (issue 24: a filter-PL epoch with 10 satellites ≤ 20× a plain
+    // Filter protection levels (a filter-PL epoch with 10 satellites ≤ 20× a plain
     // tight epoch): the innovation run with the sub-filter bank and the snapshot ARAIM of each
     // epoch beside it, and the separation placement; compare with `shao2018_innovation`.
     for (name, fde) in [
@@ -240,7 +240,7 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// The tight update of a strapdown filter on recorded logs (issue 25's target: ≤ 15 µs per
+/// The tight update of a strapdown filter on recorded logs (target: ≤ 15 µs per
 /// epoch with FDE at 25 satellites): the 18-state error filter updated with 25 pseudoranges and
 /// 25 rates row by row (which yields the global statistic), the test, and the commit with the
 /// feedback into the state — `tight_ins_update_18x50`; the rows themselves (geometry, lever

@@ -2,7 +2,7 @@
 variant and its printed tables) and a small Monte-Carlo campaign (summary table and per-run
 metrics) hash to the values stored in ``tests/data/golden_outputs.json``.
 
-The stored hashes were taken on the code before the measurement-stream refactor (issue 20).
+The stored hashes were taken on the code before the measurement-stream refactor.
 They are bit-level: any change of arithmetic order shows. They depend on the floating-point
 code paths chosen at run time (the tight filter's AVX2+FMA row loop), so the test runs only
 on a processor with the same features as the one the hashes were taken on.

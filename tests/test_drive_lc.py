@@ -1,4 +1,4 @@
-"""Loosely coupled INS/GNSS on the recorded car drive (issue 22): the bundled ``drive_lc``
+"""Loosely coupled INS/GNSS on the recorded car drive: the bundled ``drive_lc``
 scenario against the reference epochs not used as input, beside KF-GINS's numbers on exactly
 this data (``navfdi/data/drive_0708/README.md``, docs/drive_lc.md)."""
 

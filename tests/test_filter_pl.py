@@ -1,4 +1,4 @@
-"""Filter protection levels of the tight INS/GNSS filter (issue 24, item 4): a bank of
+"""Filter protection levels of the tight INS/GNSS filter: a bank of
 sub-filters beside the filter, solution-separation test and exclusion, HPL/VPL per epoch,
 the snapshot ARAIM levels of the same epochs, and the metrics engine's misleading /
 hazardously misleading counts in `run` and `montecarlo`."""

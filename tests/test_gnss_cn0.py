@@ -1,4 +1,4 @@
-"""C/N0 weighting of the single-point solution (issue 23, item 2): on the handheld u-blox walk,
+"""C/N0 weighting of the single-point solution: on the handheld u-blox walk,
 whose weak satellites are its noisy ones, ``weighting="cn0"`` cuts the fault-free exclusions of
 the elevation model and keeps a 20 m step on a high satellite excluded; with ``--noise auto``
 none is excluded fault-free."""

@@ -1,4 +1,4 @@
-"""Integrity on the bundled static RINEX (issue 24): ARAIM and snapshot-RAIM protection levels
+"""Integrity on the bundled static RINEX: ARAIM and snapshot-RAIM protection levels
 per epoch with ``--integrity lpv200``; no hazardously misleading epoch fault-free or with a
 20 m step on any used satellite."""
 

@@ -1,4 +1,4 @@
-"""Signal selection per system (issue 23, item 1): the first code of a documented priority
+"""Signal selection per system: the first code of a documented priority
 that the file holds, a forced code that must be there, and errors naming what the file has."""
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ def test_a_system_without_usable_code_names_what_the_file_holds() -> None:
 
 
 def test_doppler_velocity_on_the_static_file() -> None:
-    """Issue 23, item 5: receiver velocity from D1C/D1X with the rate test; the receiver is
+    """receiver velocity from D1C/D1X with the rate test; the receiver is
     static, so the truth is zero."""
     from navfdi.gnss import read_truth_file
 
@@ -95,7 +95,7 @@ def test_doppler_velocity_beside_rtklib(tmp_path: Path) -> None:
 
 
 def test_small_defects(tmp_path: Path) -> None:
-    """Issue 23, smaller defects: solution.csv keeps the fractional GPS seconds at 4 Hz (a
+    """solution.csv keeps the fractional GPS seconds at 4 Hz (a
     fault on a satellite never observed is warned and kept out: tests/test_hardening_round2)."""
     s = navfdi.gnss_solve(*WALK, systems="G,E")
     s.write(tmp_path, figures=False)
@@ -107,7 +107,7 @@ def test_small_defects(tmp_path: Path) -> None:
 
 
 def test_noise_auto_fits_a_receiver_the_default_model_does_not(capsys) -> None:
-    """Issue 23, item 2, on the walk log (handheld u-blox): the default code-noise model
+    """On the walk log (handheld u-blox): the default code-noise model
     excludes a satellite at a third of the fault-free epochs; --noise auto estimates the σ
     factor from the file, brings the fault-free exclusions to ≤ 5 % and still excludes a 20 m
     step on the highest satellite exactly in ≥ 90 % of its epochs."""

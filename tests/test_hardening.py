@@ -612,7 +612,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 def test_demo_matches_alarms_with_the_rule_of_run_and_montecarlo():
     """The demo, run and montecarlo all match through the Rust engine (match_events), by the
-    onset rule of issue 21: an alarm detects a fault when it is raised inside the window or up
+    onset rule: an alarm detects a fault when it is raised inside the window or up
     to GRACE = 1 s (one epoch) after it; an alarm raised before the fault detects nothing."""
     from navfdi._intervals import GRACE, match_events
     from navfdi.demo import FAULTS

@@ -1,4 +1,4 @@
-"""Hardening, round 2 (issue 26): gross faults never pass silently, corrupted files never drop
+"""Hardening, round 2: gross faults never pass silently, corrupted files never drop
 data silently, outputs and messages do not mislead. One test per reported item, with the
 inputs the report gives, and property tests over the extremes of the float range."""
 

@@ -1,4 +1,4 @@
-"""ARAIM (issue 24): the ADD v3.0 Appendix D example through the Python API, the ADD's
+"""ARAIM: the ADD v3.0 Appendix D example through the Python API, the ADD's
 elevation models, a 30-satellite two-constellation geometry, fault detection and exclusion on
 residuals, and bad input."""
 

@@ -1,4 +1,4 @@
-"""The shape of the code (issue 20, docs/ARCHITECTURE.md): the import graphs of the Rust core,
+"""The shape of the code (docs/ARCHITECTURE.md): the import graphs of the Rust core,
 the binding crate and the Python package have no cycle between files, imports only point down
 the layers, no architecture and no building block imports the simulator, and no source file
 is over 900 lines (the hand-written stub ``_core.pyi`` aside).

@@ -1,4 +1,4 @@
-"""What a new user meets (issue 21): the detection definition, console output that fits 100
+"""What a new user meets: the detection definition, console output that fits 100
 columns, commands that say what they did, and objects that explain themselves."""
 
 from __future__ import annotations

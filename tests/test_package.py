@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import subprocess
+from pathlib import Path
 import sys
 
 import pytest
@@ -127,7 +128,7 @@ def _features(package: str, edges: str) -> dict[tuple[str, str], set[str]]:
 def test_the_wheel_and_the_rust_tests_build_the_same_dependencies():
     """The Quick start's `cargo test --release` reuses what `pip install` built only if every
     dependency the two share has the same features (rust/navfdi-core/Cargo.toml): a changed
-    dependency would silently double the build time and target/ (issue 21)."""
+    dependency would silently double the build time and target/."""
     wheel = _features("navfdi-py", "normal,build")
     tests = _features("navfdi-core", "normal,build,dev")
     differ = {k: (wheel[k], tests[k]) for k in set(wheel) & set(tests) if wheel[k] != tests[k]}
@@ -136,8 +137,8 @@ def test_the_wheel_and_the_rust_tests_build_the_same_dependencies():
 
 def test_import_navfdi_leaves_pandas_out():
     """`import navfdi` loads numpy and the core, not pandas (and the pyarrow it loads, ~72 MB
-    resident): a day-length RINEX file is parsed and solved before pandas arrives (issue 23,
-    item 7: 137 MB peak for `navfdi gnss` on benches/bench_memory.py's file)."""
+    resident): a day-length RINEX file is parsed and solved before pandas arrives
+    (item 7: 137 MB peak for `navfdi gnss` on benches/bench_memory.py's file)."""
     import subprocess
     import sys
 
@@ -169,3 +170,22 @@ def test_freed_heap_is_handed_back():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     freed, trimmed = float(out[0]), float(out[1])
     assert freed - trimmed > 100, (freed, trimmed)
+
+
+def test_no_internal_tracking_numbers_in_what_users_read():
+    """The project's issue numbers stay out of the package, the docs, the benchmarks and the
+    scenario descriptions."""
+    import re
+
+    root = Path(__file__).resolve().parent.parent
+    pattern = re.compile(r"\bissue ?#?\d+", re.IGNORECASE)
+    hits = []
+    for folder in ("python", "docs", "benches", "rust"):
+        for p in (root / folder).rglob("*"):
+            if p.is_file() and p.suffix in (".py", ".pyi", ".md", ".toml", ".rs") and "target" not in p.parts:
+                for i, line in enumerate(p.read_text(encoding="utf-8", errors="replace").splitlines(), 1):
+                    if pattern.search(line):
+                        hits.append(f"{p.relative_to(root)}:{i}")
+    for p in (root / "README.md",):
+        hits += [f"README.md:{i}" for i, line in enumerate(p.read_text(encoding="utf-8").splitlines(), 1) if pattern.search(line)]
+    assert hits == []

@@ -394,7 +394,7 @@ def test_corrupt_ephemeris_values_never_give_nan_positions(tmp_path):
 
 @pytest.mark.parametrize("rate", ["0.5m/s", "5m/s", "50m/s"])
 def test_no_epoch_is_lost_under_a_growing_fault(rate):
-    """Issue 23, item 3: a ramp on one satellite from the first epoch (0.5 m/s reaches 150 m
+    """a ramp on one satellite from the first epoch (0.5 m/s reaches 150 m
     by the end of the file, 50 m/s 15 km) never costs a solution: every epoch is solved, and
     the faulty satellite is excluded — alone — from the 16th epoch on."""
     for sat in ("G13", "E12"):

@@ -1,4 +1,4 @@
-"""A RINEX 2.11 observation file solved with its RINEX 2 navigation file (issue 23, formats).
+"""A RINEX 2.11 observation file solved with its RINEX 2 navigation file.
 
 The shared RINEX 2 pair (delf0010.21o with cbw10010.21n) cannot be solved: the navigation file
 holds ephemerides for only two of the satellites in view in the observations' hour (its other

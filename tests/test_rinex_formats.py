@@ -1,4 +1,4 @@
-"""File formats (issue 23, item 4): Compact RINEX (Hatanaka) read directly — CRINEX 3 gives
+"""File formats: Compact RINEX (Hatanaka) read directly — CRINEX 3 gives
 exactly the observations of its plain RINEX 3 pair, CRINEX 1 expands to RINEX 2.11, which is
 then refused with what to do, a damaged compressed file names its line; RINEX 4 navigation
 files (their `> EPH` records, the GPS Klobuchar `> ION` record) and RINEX 4 observation files;

@@ -1,4 +1,4 @@
-"""Tight INS/GNSS on a recorded IMU and raw GNSS (issue 25): the bundled ``walk_tc`` (a handheld
+"""Tight INS/GNSS on a recorded IMU and raw GNSS: the bundled ``walk_tc`` (a handheld
 walk, u-blox pseudoranges and Dopplers, consumer IMU) against its must-shows — fault-free spread
 below single-point positioning's with no exclusion, a 20 m step on a high and a low satellite
 excluded with the position held, an outage bridged, the outputs of a tight run, a campaign with

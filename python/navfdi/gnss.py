@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 # pandas (with pyarrow, ~80 MB resident) is imported where a table is built, not with the
 # package: `gnss_solve` solves a file with only numpy and the core loaded, frees the file's
-# observations, and then builds its tables (peak memory of a day-length file, issue 23).
+# observations, and then builds its tables (the peak memory of a day-length file).
 
 #: The GPS time origin (1980-01-06 00:00:00 GPST), as numpy datetime64.
 GPS_EPOCH = np.datetime64("1980-01-06T00:00:00", "ns")

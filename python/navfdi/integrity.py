@@ -1,4 +1,4 @@
-"""Integrity: ARAIM protection levels and fault detection and exclusion (issue 24).
+"""Integrity: ARAIM protection levels and fault detection and exclusion.
 
 :func:`araim` runs the EU–US ARAIM Technical Subgroup's Reference Airborne Algorithm (ADD v3.0,
 multiple-hypothesis solution separation) on one epoch, in Rust

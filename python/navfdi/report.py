@@ -1,4 +1,4 @@
-"""``report.html``: one self-contained page to hand a colleague (issue 21).
+"""``report.html``: one self-contained page to hand a colleague.
 
 The page holds the scenario (its TOML), the headline numbers, the tables, every figure
 (embedded PNG), an interactive time-series panel (wheel to zoom, drag to pan, double-click to

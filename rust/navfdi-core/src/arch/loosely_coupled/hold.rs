@@ -258,6 +258,16 @@ impl PositionHold {
                 } => {
                     let back = back
                         || delta(j).is_some_and(|(dd, _)| dd * b < 0.0 && dd.abs() > 0.5 * b.abs());
+                    // The held offset moves with the receiver's own inconsistency where it is
+                    // significant (beyond 3σ_e: a fault that keeps growing after its jump — a
+                    // ramp taken for a step — is followed, not let into the solution; its end
+                    // brings it back to zero), and stays put otherwise (a step).
+                    let (b, var) = match recv {
+                        Some(c) if c.e[j].abs() > 3.0 * c.sigma[j] => {
+                            (b - c.e[j], var + c.sigma[j] * c.sigma[j])
+                        }
+                        _ => (b, var),
+                    };
                     // The offset is gone: the fix jumped back and agrees with the INS (the
                     // deciding test), or it agrees strictly — for [`AGREE`] fixes when no
                     // receiver consistency can show the jump back, else for [`AGREE_LONG`]
@@ -295,11 +305,12 @@ impl PositionHold {
                         }
                     } else {
                         out[j] = Use::Out(STEP);
-                        // The fault changed (a new jump): a new offset; else the old one held.
-                        let b = if jump { d[j] } else { b };
+                        // The fault changed (a new jump the receiver cannot account for): a
+                        // new offset; else the old one held.
+                        let renew = jump && recv.is_none();
                         Comp::Step {
-                            b,
-                            var: if jump { s[j] } else { var },
+                            b: if renew { d[j] } else { b },
+                            var: if renew { s[j] } else { var },
                             back: false,
                             agree: 0,
                         }
@@ -315,9 +326,11 @@ impl PositionHold {
                 } => {
                     // The ramp's size moves with the receiver's inconsistency (its end: a
                     // jump back to zero).
+                    // Without it (at rest, or after a gap) the INS, held by the constraints,
+                    // is the reference: the offset is re-anchored to the fix's innovation.
                     let (b, var) = match recv {
                         Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j]),
-                        None => (b, var),
+                        None => (d[j], s[j]),
                     };
                     let confirmed = confirmed || leaves(j, b);
                     let fixes = fixes + 1;
