@@ -40,7 +40,7 @@ PY_LAYERS = [
     {"_terrain", "_fields", "_lc_schema", "_logtime"},
     {"frames"},
     {"scenario"},
-    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries"},
+    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs"},
     {"plots", "plots_logged"},
     {"runs", "montecarlo"},
     {"federated", "cli", "__init__", "__main__"},

@@ -76,6 +76,7 @@ from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
 from navfdi.scenario import NeverAppliedWarning, PartialLogWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
 from navfdi.frames import FrameWarning
+from navfdi import gnss_logs as _gnss_logs  # noqa: F401  (registers the GNSS log readers)
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
 from navfdi.integrity import Allocation, AraimResult, Ism, araim, lpv200
 

@@ -68,6 +68,11 @@ def gps_seconds(value: Any, field: str) -> float | None:
     return None
 
 
+#: Readers of a ``[source] gnss`` entry's epoch times (GPS s), registered by
+#: :mod:`navfdi.gnss_logs` (which reads every format it accepts).
+EPOCH_READERS: list[Any] = []
+
+
 def _folder(source: str) -> Path:
     from importlib import resources
 
@@ -83,6 +88,11 @@ def log_epochs(src: Mapping[str, Any], source: str) -> np.ndarray | None:
     """GPS seconds of the GNSS log's epochs (``[source] gnss``, a ``.pos``; or ``rinex_obs``),
     or None when the file cannot be read here (the run's reader then names the problem)."""
     base = _folder(source)
+    if src.get("gnss") is not None and EPOCH_READERS:
+        try:
+            return np.asarray(EPOCH_READERS[0](src["gnss"], base), dtype=float)
+        except ScenarioError:
+            return None
     if isinstance(src.get("gnss"), str):
         path = base / src["gnss"]
         try:

@@ -346,7 +346,9 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
             "reference": None if ref is None else ref.rows(0.0), "rinex": (str(obs), str(nav)),
             "t0": None, "imu_log": imu, "gnss_log": None, "reference_log": ref,
         }
-    pos = read_pos(file_in(source, base, "source.gnss", "gnss"))
+    from .gnss_logs import read_gnss
+
+    pos = read_gnss(source.get("gnss"), base)
     t0 = float(pos.t[0])
     if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
         raise ScenarioError(

@@ -1,0 +1,306 @@
+"""GNSS solution logs in the formats receivers and tools write, read into one
+:class:`~navfdi.logs.PosLog` for the loosely coupled filter.
+
+``[source] gnss`` is a path or a table ``{ file = …, format = …, … }``. Formats:
+
+* ``pos`` — an RTKLIB solution (``.pos``; :func:`navfdi.logs.read_pos`);
+* ``solution`` — ``navfdi gnss``'s own ``solution.csv`` (``gps_seconds``, ``lat``, ``lon``,
+  ``height``, ``vel_e/n/u``; epochs without a solution are left out; no σ: the sensors'
+  ``noise`` is used);
+* ``nmea`` — NMEA 0183 sentences: ``GGA`` (position; the height above the ellipsoid is the
+  altitude above mean sea level plus the geoid separation the sentence gives), ``RMC`` (date,
+  speed and course → horizontal velocity), ``VTG`` (speed and course), ``GST`` (σ of latitude,
+  longitude and altitude). Times are UTC, turned into GPST with the leap seconds; a log without
+  ``RMC`` needs ``date = "YYYY-MM-DD"`` in the table. Sentences with a bad checksum are
+  refused with their line;
+* ``csv`` — any CSV with a ``columns`` mapping: ``time`` (one column of GPS seconds, or
+  ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
+  ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
+  ``undulation`` m), optional ``sd`` (three columns σ east, north, up, m), ``vel`` (three
+  columns east, north, up, m/s), ``sd_vel``.
+
+Without a ``format`` it is told from the file: ``.pos`` / ``.pos.gz``, a CSV whose header has
+``gps_seconds`` and ``lat`` (``solution``), lines that start with ``$`` (``nmea``).
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime as _dt
+import gzip
+import io
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from navfdi._errors import ScenarioError
+from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, LEAP_SECONDS
+from navfdi.logs import PosLog, read_pos
+
+__all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
+
+#: The formats ``[source] gnss`` accepts.
+FORMATS = ("pos", "solution", "nmea", "csv")
+
+
+def _text(path: Path) -> str:
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise ScenarioError(f"source.gnss: {path}: {e.strerror or e}") from None
+    if raw[:2] == b"\x1f\x8b":
+        raw = gzip.decompress(raw)
+    return raw.decode("utf-8-sig", errors="replace")
+
+
+def _guess(path: Path, text: str) -> str:
+    name = path.name.lower()
+    if name.endswith((".pos", ".pos.gz")):
+        return "pos"
+    first = next((ln for ln in text.splitlines() if ln.strip()), "")
+    if first.startswith("$") or first.startswith("!"):
+        return "nmea"
+    if "gps_seconds" in first and "lat" in first.split(","):
+        return "solution"
+    if first.startswith("%"):
+        return "pos"
+    raise ScenarioError(f"source.gnss: {path}: format not recognised (an RTKLIB .pos, navfdi's solution.csv or NMEA); "
+                        "give source.gnss = { file = …, format = \"csv\", columns = { … } } for another CSV")
+
+
+def read_gnss(spec: Any, base: Path) -> PosLog:
+    """Read ``[source] gnss`` (a path, or a table with ``file``, ``format`` and its options)
+    relative to ``base``. Raises :class:`ScenarioError` naming the file, line and field of bad
+    input."""
+    cfg: Mapping[str, Any] = spec if isinstance(spec, Mapping) else {"file": spec}
+    allowed = {"file", "format", "columns", "time_scale", "date", "undulation"}
+    unknown = sorted(set(cfg) - allowed)
+    if unknown:
+        raise ScenarioError(f"source.gnss: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
+    f = cfg.get("file")
+    if not isinstance(f, str):
+        raise ScenarioError("source.gnss: a file path is required")
+    path = Path(f) if Path(f).is_absolute() else base / f
+    fmt = cfg.get("format")
+    if fmt is not None and fmt not in FORMATS:
+        raise ScenarioError(f"source.gnss.format = {fmt!r}: one of {', '.join(FORMATS)}")
+    if fmt == "pos" or (fmt is None and path.name.lower().endswith((".pos", ".pos.gz"))):
+        return read_pos(path)
+    text = _text(path)
+    fmt = fmt or _guess(path, text)
+    if fmt == "pos":
+        return read_pos(path)
+    if fmt == "solution":
+        return read_solution_csv(path, text)
+    if fmt == "nmea":
+        return read_nmea(path, text, cfg.get("date"))
+    return read_gnss_csv(path, text, cfg)
+
+
+def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndarray, vel: np.ndarray, sd: np.ndarray, sd_vel: np.ndarray, q: np.ndarray | None = None) -> PosLog:
+    ok = np.isfinite(t) & np.isfinite(lat) & np.isfinite(lon) & np.isfinite(h)
+    if not ok.any():
+        raise ScenarioError(f"source.gnss: {path}: no epoch with a position")
+    order = np.argsort(t[ok], kind="stable")
+    sel = np.flatnonzero(ok)[order]
+    tt = t[sel]
+    if (np.diff(tt) <= 0).any():
+        i = int(np.argmax(np.diff(tt) <= 0))
+        raise ScenarioError(f"source.gnss: {path}: two epochs at {tt[i]:.3f} GPS s")
+    if (np.abs(lat[sel]) > 90).any() or (np.abs(lon[sel]) > 360).any() or (np.abs(h[sel]) > 1e5).any():
+        raise ScenarioError(f"source.gnss: {path}: latitude, longitude or height out of range (degrees and metres expected)")
+    qq = np.full(len(sel), 5.0) if q is None else q[sel]
+    return PosLog(tt, lat[sel], lon[sel], h[sel], qq, vel[sel], sd[sel], sd_vel[sel], str(path))
+
+
+def read_solution_csv(path: Path, text: str | None = None) -> PosLog:
+    """``navfdi gnss``'s ``solution.csv``: its solved epochs (``gps_seconds``, ``lat``, ``lon``,
+    ``height``, ``vel_e/n/u``); no σ (the sensors' noise applies)."""
+    import pandas as pd
+
+    df = pd.read_csv(io.StringIO(text if text is not None else _text(path)))
+    need = {"gps_seconds", "lat", "lon", "height"}
+    if not need <= set(df.columns):
+        raise ScenarioError(f"source.gnss: {path}: not a navfdi solution.csv (missing {', '.join(sorted(need - set(df.columns)))})")
+    n = len(df)
+    vel = np.column_stack([df.get(c, pd.Series(np.nan, index=df.index)).to_numpy(float) for c in ("vel_e", "vel_n", "vel_u")])
+    nan3 = np.full((n, 3), np.nan)
+    return _log(path, df["gps_seconds"].to_numpy(float), df["lat"].to_numpy(float), df["lon"].to_numpy(float), df["height"].to_numpy(float), vel, nan3, nan3.copy())
+
+
+def _nmea_fields(line: str, path: Path, i: int) -> list[str] | None:
+    line = line.strip()
+    if not line.startswith("$"):
+        return None
+    body, _, cs = line[1:].partition("*")
+    if cs:
+        want = 0
+        for ch in body:
+            want ^= ord(ch)
+        try:
+            got = int(cs[:2], 16)
+        except ValueError:
+            got = -1
+        if got != want:
+            raise ScenarioError(f"source.gnss: {path}, line {i}: NMEA checksum *{cs[:2]} does not match the sentence ({want:02X})")
+    return body.split(",")
+
+
+def _deg(v: str, hemi: str) -> float:
+    if not v:
+        return math.nan
+    d = float(v)
+    deg = int(d // 100)
+    out = deg + (d - 100 * deg) / 60.0
+    return -out if hemi in ("S", "W") else out
+
+
+def _utc_to_gps(d: _dt.datetime) -> float:
+    leap = next((n for since, n in reversed(LEAP_SECONDS) if d >= since), 13)
+    return (d - GPS_EPOCH).total_seconds() + leap
+
+
+def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> PosLog:
+    """NMEA 0183 ``GGA`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
+    module's description."""
+    text = text if text is not None else _text(path)
+    day: _dt.date | None = None
+    if date is not None:
+        try:
+            day = _dt.date.fromisoformat(str(date))
+        except ValueError:
+            raise ScenarioError(f"source.gnss.date = {date!r}: YYYY-MM-DD") from None
+    rows: dict[str, dict[str, float]] = {}
+    order: list[str] = []
+    pending_day: dict[str, _dt.date] = {}
+
+    def row(hms: str) -> dict[str, float]:
+        if hms not in rows:
+            rows[hms] = {}
+            order.append(hms)
+        return rows[hms]
+
+    for i, ln in enumerate(text.splitlines(), 1):
+        f = _nmea_fields(ln, path, i)
+        if not f or len(f[0]) < 5:
+            continue
+        kind = f[0][-3:]
+        try:
+            if kind == "GGA" and len(f) >= 12 and f[1] and f[6] not in ("", "0"):
+                r = row(f[1])
+                r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
+                r["h"] = float(f[9]) + (float(f[11]) if f[11] else 0.0)
+                r["q"] = float(f[6])
+            elif kind == "RMC" and len(f) >= 10 and f[1] and f[2] == "A":
+                r = row(f[1])
+                pending_day[f[1]] = _dt.datetime.strptime(f[9], "%d%m%y").date()
+                if f[7] and f[8]:
+                    sp, cog = float(f[7]) * 0.514444, math.radians(float(f[8]))
+                    r["ve"], r["vn"] = sp * math.sin(cog), sp * math.cos(cog)
+            elif kind == "VTG" and len(f) >= 8 and f[1] and f[7]:
+                # No time in VTG: it belongs to the last timed sentence.
+                if order:
+                    sp, cog = float(f[7]) / 3.6, math.radians(float(f[1]))
+                    rows[order[-1]].setdefault("ve", sp * math.sin(cog))
+                    rows[order[-1]].setdefault("vn", sp * math.cos(cog))
+            elif kind == "GST" and len(f) >= 9 and f[1] and f[6] and f[7] and f[8]:
+                r = row(f[1])
+                r["sdn"], r["sde"], r["sdu"] = float(f[6]), float(f[7]), float(f[8].split("*")[0])
+        except (ValueError, IndexError):
+            raise ScenarioError(f"source.gnss: {path}, line {i}: malformed {kind} sentence: {ln.strip()[:80]!r}") from None
+    if not order:
+        raise ScenarioError(f"source.gnss: {path}: no NMEA GGA/RMC sentences")
+    if day is None and not pending_day:
+        raise ScenarioError(f"source.gnss: {path}: no RMC sentence gives the date; add date = \"YYYY-MM-DD\" (UTC) to source.gnss")
+    t, cur, prev_sec = [], day, None
+    for hms in order:
+        d = pending_day.get(hms, cur)
+        if d is None:
+            d = next(iter(pending_day.values()))
+        sec = int(hms[0:2]) * 3600 + int(hms[2:4]) * 60 + float(hms[4:])
+        if day is not None and hms not in pending_day and prev_sec is not None and sec < prev_sec - 43200:
+            d = d + _dt.timedelta(days=1)  # midnight rollover
+        cur, prev_sec = d, sec
+        t.append(_utc_to_gps(_dt.datetime.combine(d, _dt.time()) + _dt.timedelta(seconds=sec)))
+    g = lambda k: np.array([rows[h].get(k, math.nan) for h in order])  # noqa: E731
+    vel = np.column_stack([g("ve"), g("vn"), np.where(np.isfinite(g("ve")), 0.0, np.nan)])
+    sd = np.column_stack([g("sde"), g("sdn"), g("sdu")])
+    return _log(path, np.array(t), g("lat"), g("lon"), g("h"), vel, sd, np.full_like(sd, np.nan), g("q"))
+
+
+def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
+    """A CSV with a ``columns`` mapping (see the module's description)."""
+    cols = cfg.get("columns")
+    if not isinstance(cols, Mapping):
+        raise ScenarioError("source.gnss.columns: a table mapping time, lat, lon, height (and optionally sd, vel, sd_vel) to the file's column names")
+    allowed = {"time", "lat", "lon", "height", "height_msl", "sd", "vel", "sd_vel"}
+    unknown = sorted(set(cols) - allowed)
+    if unknown:
+        raise ScenarioError(f"source.gnss.columns: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
+    reader = csv.reader(io.StringIO(text))
+    try:
+        header = [h.strip() for h in next(reader)]
+    except StopIteration:
+        raise ScenarioError(f"source.gnss: {path}: empty file") from None
+    data = [r for r in reader if r and any(x.strip() for x in r)]
+
+    def col(name: str, key: str) -> list[str]:
+        if name not in header:
+            raise ScenarioError(f"source.gnss.columns.{key} = {name!r}: no such column in {path} (columns: {', '.join(header)})")
+        j = header.index(name)
+        return [r[j].strip() if j < len(r) else "" for r in data]
+
+    def num(name: str, key: str) -> np.ndarray:
+        out = []
+        for i, v in enumerate(col(name, key)):
+            try:
+                out.append(float(v) if v else math.nan)
+            except ValueError:
+                raise ScenarioError(f"source.gnss: {path}, line {i + 2}, column {name!r}: {v!r} is not a number") from None
+        return np.array(out)
+
+    def three(key: str) -> np.ndarray:
+        v = cols.get(key)
+        if v is None:
+            return np.full((len(data), 3), np.nan)
+        if not (isinstance(v, list) and len(v) == 3):
+            raise ScenarioError(f"source.gnss.columns.{key}: three column names (east, north, up)")
+        return np.column_stack([num(c, key) for c in v])
+
+    tc = cols.get("time")
+    scale = str(cfg.get("time_scale", "gpst")).lower()
+    if scale not in ("gpst", "utc"):
+        raise ScenarioError(f"source.gnss.time_scale = {scale!r}: 'gpst' or 'utc'")
+    if isinstance(tc, list) and len(tc) == 2:
+        t = num(tc[0], "time") * 604800.0 + num(tc[1], "time")
+    elif isinstance(tc, str):
+        vals = col(tc, "time")
+        try:
+            t = np.array([float(v) for v in vals])
+        except ValueError:
+            try:
+                ds = [_dt.datetime.fromisoformat(v.replace("Z", "")) for v in vals]
+            except ValueError:
+                raise ScenarioError(f"source.gnss.columns.time = {tc!r}: GPS seconds or ISO date-times") from None
+            t = np.array([_utc_to_gps(d) if scale == "utc" else (d - GPS_EPOCH).total_seconds() for d in ds])
+    else:
+        raise ScenarioError("source.gnss.columns.time: a column name (GPS seconds or ISO date-time) or [week, seconds]")
+    for k in ("lat", "lon"):
+        if not isinstance(cols.get(k), str):
+            raise ScenarioError(f"source.gnss.columns.{k}: the column name is required")
+    if isinstance(cols.get("height"), str):
+        h = num(cols["height"], "height")
+    elif isinstance(cols.get("height_msl"), str):
+        und = cfg.get("undulation")
+        if not isinstance(und, (int, float)) or isinstance(und, bool):
+            raise ScenarioError("source.gnss.undulation: the geoid undulation (m) that turns height_msl into a height above the ellipsoid")
+        h = num(cols["height_msl"], "height_msl") + float(und)
+    else:
+        raise ScenarioError("source.gnss.columns: height (above the ellipsoid) or height_msl with source.gnss.undulation")
+    return _log(path, t, num(cols["lat"], "lat"), num(cols["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"))
+
+
+EPOCH_READERS.append(lambda spec, base: read_gnss(spec, base).t)
