@@ -25,8 +25,10 @@ UNITS: dict[str, dict[str, float]] = {
     "carrier_to_noise": {"dB-Hz": 1.0},
     "chips2_per_time": {"chips^2/s": 1.0, "chip^2/s": 1.0},
     "frequency2_per_time3": {"Hz^2/s^3": 1.0},
-    "angular_rate_density": {"rad/s/sqrt(Hz)": 1.0, "deg/s/sqrt(Hz)": math.pi / 180, "deg/h/sqrt(Hz)": math.pi / 180 / 3600, "deg/sqrt(h)": math.pi / 180 / 60},
-    "acceleration_density": {"m/s2/sqrt(Hz)": 1.0, "m/s^2/sqrt(Hz)": 1.0, "g/sqrt(Hz)": _G0, "mg/sqrt(Hz)": _G0 * 1e-3, "ug/sqrt(Hz)": _G0 * 1e-6},
+    "angular_rate_density": {"rad/s/sqrt(Hz)": 1.0, "deg/s/sqrt(Hz)": math.pi / 180, "deg/h/sqrt(Hz)": math.pi / 180 / 3600, "deg/sqrt(h)": math.pi / 180 / 60, "rad/sqrt(s)": 1.0, "deg/sqrt(s)": math.pi / 180},
+    "acceleration_density": {"m/s2/sqrt(Hz)": 1.0, "m/s^2/sqrt(Hz)": 1.0, "g/sqrt(Hz)": _G0, "mg/sqrt(Hz)": _G0 * 1e-3, "ug/sqrt(Hz)": _G0 * 1e-6,
+                             # Velocity random walk, as datasheets give it: 1 m/s/√h = 1/60 m/s/√s.
+                             "m/s/sqrt(h)": 1 / 60, "m/s/sqrt(s)": 1.0, "ft/s/sqrt(h)": 0.3048 / 60},
 }
 
 
