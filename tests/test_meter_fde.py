@@ -166,3 +166,41 @@ def test_exclusions_are_visible(drive) -> None:
     assert counts["step"] == int(row.tests) and counts["tested"] > 500
     assert run.summary()["exclusions"]["gnss_pos"] == counts
     assert f"(test {counts['test']}, step {counts['step']})" in run.format_tables()
+
+
+@pytest.fixture(scope="module")
+def comma() -> navfdi.Scenario:
+    return navfdi.load_scenario("comma_lc")
+
+
+def test_comma_runs_from_its_in_motion_start(comma) -> None:
+    """comma2k19: moving from the first sample (no rest to level on): aligned in motion, the
+    heading follows the course, and the fault-free solution stays within 1.1 m of comma's pose
+    (the u-blox fixes themselves: 1.4 m median)."""
+    run = navfdi.run_scenario(comma.with_values({"faults[0].magnitude": "0 m"})).runs["fde"]
+    e = run.errors()
+    assert e["scored"] >= 55
+    assert e["hor_max"] < 1.1
+    from navfdi.consistency import consistency
+
+    assert consistency(run)["heading"]["median_deg"] < 1.0
+
+
+@pytest.mark.parametrize("size", [10.0, 20.0, 40.0])
+@pytest.mark.parametrize("onset", [12.0, 20.5, 30.0])
+def test_comma_steps_are_held_out(comma, size: float, onset: float) -> None:
+    """The meter-level real log: a 10-40 m step at any onset is left out from the first fix
+    after it to its last, the error during it within 3x the fault-free maximum, nothing left
+    out 5 s after it."""
+    clean = navfdi.run_scenario(comma.with_values({"faults[0].magnitude": "0 m"})).runs["fde"].errors()["hor_max"]
+    sc = comma.with_values({"faults[0].magnitude": f"{size} m", "faults[0].start": f"{onset} s", "faults[0].end": f"{onset + 15} s"})
+    x = navfdi.run_scenario(sc).runs["fde"]
+    t = x.t
+    sub = _gnss_pos(x)
+    tested = np.asarray(sub["dof"]) > 0
+    out = np.asarray(sub["reason"]) > 0
+    during = tested & (t >= onset) & (t < onset + 15)
+    assert out[during].all() and t[during][0] - onset <= 1.0
+    late = t[tested & out & (t >= onset + 15)]
+    assert late.size == 0 or late.max() - (onset + 15) <= 5.0
+    assert x.errors()["gnss_fault.hor_max"] <= 3.0 * clean

@@ -120,10 +120,13 @@ pub fn align(
         }
     }
     let (Some(k0), Some(k1)) = (start, end) else {
-        return Err(Error::Invalid(format!(
-            "alignment: no static start (GNSS speed below {section}.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s: levelling needs the vehicle at rest",
-            a.static_speed, a.speed
-        )));
+        // No rest before moving: align in motion (a car's velocity is along its forward axis).
+        return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
+            Error::Invalid(format!(
+                "alignment: no static start (GNSS speed below {section}.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s, and no second GNSS velocity within 2 s of that epoch to align in motion",
+                a.static_speed, a.speed
+            ))
+        });
     };
     let (t0, t1) = (t[k0], t[k1]);
     let idx: Vec<usize> = (0..imu.t.len())
@@ -176,6 +179,82 @@ pub fn align(
         },
         bg0,
         sig_att: Vector3::new(a.sigma_level, a.sigma_level, sig_heading),
+    })
+}
+
+/// In-motion alignment at epoch `ka` (the first moving one, no rest before it): TRIAD on two
+/// vector pairs — the specific force averaged over the IMU samples between `ka` and the next
+/// GNSS velocity (within 2 s), against the GNSS acceleration over that interval less gravity
+/// (NED), which levels; and the body's forward axis against the direction of the GNSS
+/// velocity, which heads (a ground vehicle moves along its forward axis: the non-holonomic
+/// constraint). No gyro bias estimate (the filter's own from then on). None without a second
+/// velocity or with too few IMU samples.
+#[allow(clippy::too_many_arguments)]
+fn in_motion(
+    a: &AlignmentSpec,
+    imu: &BodyImu,
+    t: &[f64],
+    origin: &Nominal,
+    ka: usize,
+    vel: &impl Fn(usize) -> Option<Vector3<f64>>,
+    pos: &impl Fn(usize) -> Option<Vector3<f64>>,
+    sig_v: &impl Fn(usize) -> f64,
+) -> Option<Aligned> {
+    let kb = (ka + 1..t.len())
+        .take_while(|&k| t[k] - t[ka] <= 2.0)
+        .find(|&k| vel(k).is_some())?;
+    let (ta, tb) = (t[ka], t[kb]);
+    let idx: Vec<usize> = (0..imu.t.len())
+        .filter(|&i| imu.t[i] >= ta && imu.t[i] <= tb)
+        .collect();
+    if idx.len() < 5 {
+        return None;
+    }
+    let f_b = idx.iter().map(|&i| imu.acc[i]).sum::<Vector3<f64>>() / idx.len() as f64;
+    let ned = |v: Vector3<f64>| Vector3::new(v.y, v.x, -v.z);
+    let (va, vb) = (ned(vel(ka)?), ned(vel(kb)?));
+    let g = earth::gravity(origin.lat, origin.h);
+    let f_n = (vb - va) / (tb - ta) - Vector3::new(0.0, 0.0, g);
+    let v_mid = (va + vb) * 0.5;
+    let speed = v_mid.xy().norm();
+    let fwd_n = Vector3::new(v_mid.x, v_mid.y, v_mid.z) / v_mid.norm().max(1e-9);
+    let triad = |r1: Vector3<f64>, r2: Vector3<f64>| {
+        let t1 = r1.normalize();
+        let t2 = r1.cross(&r2).normalize();
+        let t3 = t1.cross(&t2);
+        nalgebra::Matrix3::from_columns(&[t1, t2, t3])
+    };
+    let c_bn = triad(f_n, fwd_n) * triad(f_b, Vector3::x()).transpose();
+    if !c_bn.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let q = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix(&c_bn));
+    let q = match a.heading {
+        Some(yaw) => {
+            let (r, p, _) = q.euler_angles();
+            UnitQuaternion::from_euler_angles(r, p, yaw)
+        }
+        None => q,
+    };
+    let sig_heading = if a.heading.is_some() {
+        a.sigma_heading
+    } else {
+        a.sigma_heading.max(sig_v(ka) / speed.max(1e-3))
+    };
+    // Levelling from a GNSS acceleration: its error over the interval adds to the level σ.
+    let sig_level = a.sigma_level.max((2.0 * sig_v(ka) / (tb - ta)) / g);
+    let fix = origin.from_enu(&pos(ka).unwrap_or_default());
+    Some(Aligned {
+        epoch: ka,
+        state: NavState {
+            lat: fix.lat,
+            lon: fix.lon,
+            h: fix.h,
+            v: va,
+            q,
+        },
+        bg0: Vector3::zeros(),
+        sig_att: Vector3::new(sig_level, sig_level, sig_heading),
     })
 }
 

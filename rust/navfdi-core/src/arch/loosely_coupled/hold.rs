@@ -684,6 +684,8 @@ pub const HISTORY: usize = 120;
 /// by the INS, is a step ([`PositionHold::decide`]).
 pub const RECEIVER_JUMP: f64 = 8.0;
 
+/// Fixes (while moving) before the receiver's consistency speaks: its σ_e is their median.
+pub const RECEIVER_MIN: usize = 10;
 /// CUSUM reference value (σ_e per fix).
 pub const CUSUM_K: f64 = 0.5;
 /// CUSUM threshold (σ_e).
@@ -763,7 +765,7 @@ impl ReceiverConsistency {
             }
             self.hist[j].push_back(e[j]);
             let w = &mut self.abs_e[j];
-            let med = if w.len() >= SCALE_MIN {
+            let med = if w.len() >= RECEIVER_MIN {
                 let mut x: Vec<f64> = w.iter().copied().collect();
                 let m = x.len() / 2;
                 *x.select_nth_unstable_by(m, f64::total_cmp).1
