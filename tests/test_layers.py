@@ -43,7 +43,7 @@ PY_LAYERS = [
     {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs"},
     {"plots", "plots_logged"},
     {"runs", "montecarlo"},
-    {"federated", "cli", "__init__", "__main__"},
+    {"calibrate", "federated", "cli", "__init__", "__main__"},
 ]
 
 

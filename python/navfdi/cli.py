@@ -104,6 +104,9 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     run.add_argument("--set", action="append", default=[], metavar="PATH=VALUE", help='override a scenario field, e.g. --set "faults[0].magnitude=30 m" or --set "sensors[0].rate=2 Hz" (repeatable; the --sweep syntax with one value)')
+    cal = sub.add_parser("calibrate", help="estimate a loosely coupled scenario's IMU noise, gyro bias and IMU time offset from its own logs")
+    cal.add_argument("scenario", help="bundled scenario name or a TOML file")
+    cal.add_argument("--out", default=None, metavar="FILE.toml", help="write the scenario with the calibrated values (a TOML file scenario)")
     sc = sub.add_parser("scenarios", help="list the bundled scenarios, show or export one as TOML")
     show = sc.add_mutually_exclusive_group()
     show.add_argument("--show", metavar="NAME", default=None, help="print a bundled scenario's TOML")
@@ -190,6 +193,24 @@ def _dispatch(args: argparse.Namespace) -> int:
         from navfdi.demo import report
 
         print(report(seed=args.seed, pf=args.pf, pm=args.pm))
+    elif args.command == "calibrate":
+        from navfdi.calibrate import calibrate, write_calibrated
+
+        c = calibrate(args.scenario)
+        print("\n".join(c.lines()))
+        if args.out:
+            src = Path(args.scenario)
+            if src.suffix != ".toml":
+                from navfdi._bundled import exported_toml
+
+                tmp = Path(args.out)
+                if tmp.exists():
+                    raise ValueError(f"--out: {tmp} exists; remove it or choose another path")
+                tmp.write_text(exported_toml(args.scenario), encoding="utf-8")
+                src = tmp
+            elif Path(args.out).exists() and Path(args.out).resolve() != src.resolve():
+                raise ValueError(f"--out: {args.out} exists; remove it or choose another path")
+            print(f"wrote {write_calibrated(src, c, args.out)} (run it with: navfdi run {args.out})")
     elif args.command == "scenarios":
         from navfdi._bundled import exported_toml
         from navfdi.scenario import bundled_scenarios, bundled_toml, load_scenario
