@@ -148,7 +148,7 @@ def _offset_by_innovations(sc: Any) -> tuple[float | None, float | None]:
     (mean normalised innovation squared per degree of freedom, fault-free, without FDE):
     a 0.05 s grid over ± :data:`MAX_LAG` s around the scenario's value, refined by a
     parabola; its σ from the curvature of the misfit. Reference-free."""
-    from navfdi.runs import run_scenario
+    from navfdi.runs import ScenarioRun, run_scenario
 
     raw = dict(sc.raw)
     raw.pop("faults", None)
@@ -161,6 +161,7 @@ def _offset_by_innovations(sc: Any) -> tuple[float | None, float | None]:
     misfit = []
     for lag in lags:
         run = run_scenario(base.with_values({"loosely_coupled.imu_time_offset": f"{lag:.4f} s"}), compare_isolation=False)
+        assert isinstance(run, ScenarioRun)  # no variants: one run
         num = den = 0.0
         for s in run.record["subfilters"]:
             st, dof = np.asarray(s["statistic"], float), np.asarray(s["dof"], float)
