@@ -572,6 +572,13 @@ pub struct NoiseScale {
     hi: f64,
 }
 
+/// The (upper) median of a window (not empty).
+fn median(v: &std::collections::VecDeque<f64>) -> f64 {
+    let mut x: Vec<f64> = v.iter().copied().collect();
+    let m = x.len() / 2;
+    *x.select_nth_unstable_by(m, f64::total_cmp).1
+}
+
 /// Components (3 per fix) the scale is estimated over.
 pub const SCALE_WINDOW: usize = 180;
 /// Components needed before the scale departs from 1.
@@ -619,11 +626,7 @@ impl NoiseScale {
         if self.d2.len() < SCALE_MIN {
             return 1.0;
         }
-        let med = |v: &std::collections::VecDeque<f64>| {
-            let mut x: Vec<f64> = v.iter().copied().collect();
-            let m = x.len() / 2;
-            *x.select_nth_unstable_by(m, f64::total_cmp).1
-        };
+        let med = |v: &std::collections::VecDeque<f64>| median(v);
         let c2 = (med(&self.d2) / 0.454_936_4 - med(&self.hph)) / med(&self.r);
         c2.max(self.lo * self.lo).sqrt().clamp(self.lo, self.hi)
     }
@@ -766,9 +769,7 @@ impl ReceiverConsistency {
             self.hist[j].push_back(e[j]);
             let w = &mut self.abs_e[j];
             let med = if w.len() >= RECEIVER_MIN {
-                let mut x: Vec<f64> = w.iter().copied().collect();
-                let m = x.len() / 2;
-                *x.select_nth_unstable_by(m, f64::total_cmp).1
+                median(w)
             } else {
                 f64::NAN
             };
