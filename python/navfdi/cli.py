@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import argparse
 import os
 import sys
@@ -82,6 +84,20 @@ def _one_line_warnings() -> None:
         print(f"navfdi: warning: {message}", file=sys.stderr)
 
     warnings.showwarning = show
+
+
+def _headline_line(result: Any) -> str:
+    """One line with the numbers that matter first (per variant for a scenario with
+    variants): the navigation error and the deciding detections."""
+    from navfdi._text import fit
+
+    runs = getattr(result, "runs", None) or {"": result}
+    parts = []
+    for name, run in runs.items():
+        head = run._headline()
+        items = [f"{k} {v:.3g}" for k, v in list(head.items())[:3] if isinstance(v, (int, float))]
+        parts.append((f"{name}: " if name else "") + ", ".join(items))
+    return fit("headline — " + "; ".join(parts))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -250,7 +266,8 @@ def _dispatch(args: argparse.Namespace) -> int:
         if sets:
             scenario = scenario.with_values({p: v[0] for p, v in sets.items()})
         result = run_scenario(scenario, seed=args.seed)
-        print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}\n")
+        print(f"scenario {result.scenario.name} ({result.scenario.source}), seed {args.seed}")
+        print(_headline_line(result) + "\n")
         print(result.format_tables(), end="")
         if args.out:
             paths = result.write(args.out, figures=not args.no_figures)
