@@ -10,7 +10,6 @@ missing ``duration`` / ``dt`` become the log's span and median interval."""
 from __future__ import annotations
 
 import datetime as _dt
-import gzip
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -85,31 +84,15 @@ def _folder(source: str) -> Path:
 
 
 def log_epochs(src: Mapping[str, Any], source: str) -> np.ndarray | None:
-    """GPS seconds of the GNSS log's epochs (``[source] gnss``, a ``.pos``; or ``rinex_obs``),
-    or None when the file cannot be read here (the run's reader then names the problem)."""
+    """GPS seconds of the GNSS log's epochs (``[source] gnss`` in any format
+    :mod:`navfdi.gnss_logs` reads, through :data:`EPOCH_READERS`; or ``rinex_obs``), or None
+    when the file cannot be read here (the run's reader then names the problem)."""
     base = _folder(source)
     if src.get("gnss") is not None and EPOCH_READERS:
         try:
             return np.asarray(EPOCH_READERS[0](src["gnss"], base), dtype=float)
         except ScenarioError:
             return None
-    if isinstance(src.get("gnss"), str):
-        path = base / src["gnss"]
-        try:
-            raw = path.read_bytes()
-            text = (gzip.decompress(raw) if raw[:2] == b"\x1f\x8b" else raw).decode("utf-8-sig", errors="replace")
-        except (OSError, EOFError, gzip.BadGzipFile):
-            return None
-        t = []
-        for ln in text.splitlines():
-            tok = ln.split()
-            if ln.startswith("%") or len(tok) < 2:
-                continue
-            try:
-                t.append(pos_time(tok[0], tok[1]))
-            except ValueError:
-                return None
-        return np.asarray(t) if t else None
     if isinstance(src.get("rinex_obs"), str):
         from navfdi import _core
 

@@ -207,9 +207,6 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     return ImuLog(t, gyro, accel, str(path))
 
 
-_pos_time = pos_time
-
-
 def read_pos(path: str | Path) -> PosLog:
     """Read an RTKLIB solution file (``.pos``, ``.gz`` accepted) in latitude/longitude/height
     form, GPST time as ``yyyy/mm/dd hh:mm:ss.sss`` or GPS week and seconds, with or without
@@ -243,7 +240,7 @@ def read_pos(path: str | Path) -> PosLog:
         if len(tok) < 2 + len(fields):
             raise ScenarioError(f"{path}, line {i + 1}: {len(tok)} fields, the header names {2 + len(fields)}")
         try:
-            t = _pos_time(tok[0], tok[1])
+            t = pos_time(tok[0], tok[1])
         except ValueError:
             raise ScenarioError(f"{path}, line {i + 1}, column 'GPST': {tok[0]} {tok[1]!r} is not a GPST time") from None
         try:

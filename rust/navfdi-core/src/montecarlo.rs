@@ -129,10 +129,11 @@ pub struct RunMetrics {
     pub failed: Option<String>,
 }
 
-impl RunMetrics {
-    /// The metrics of run `run` that failed with `error`: `cells` cells, every figure NaN.
-    pub fn failed(run: u64, cells: usize, error: String) -> Self {
-        let cell = CellMetrics {
+impl CellMetrics {
+    /// A cell before scoring (nothing detected, every figure NaN); `applied`: its fault
+    /// reached a measurement.
+    fn unscored(applied: bool) -> Self {
+        CellMetrics {
             detected: false,
             delay: f64::NAN,
             clear_delay: f64::NAN,
@@ -141,9 +142,16 @@ impl RunMetrics {
             wrong_isolations: 0,
             at_onset: false,
             alarm_fraction: f64::NAN,
-            applied: false,
+            applied,
             sat: Default::default(),
-        };
+        }
+    }
+}
+
+impl RunMetrics {
+    /// The metrics of run `run` that failed with `error`: `cells` cells, every figure NaN.
+    pub fn failed(run: u64, cells: usize, error: String) -> Self {
+        let cell = CellMetrics::unscored(false);
         RunMetrics {
             run,
             cells: vec![cell; cells],
@@ -329,20 +337,10 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
             .into_iter()
             .map(|(iv, _)| iv)
             .collect();
-        let mut m = CellMetrics {
-            detected: false,
-            delay: f64::NAN,
-            clear_delay: f64::NAN,
-            false_alarm_epochs: 0,
-            outside_epochs: 0,
-            wrong_isolations: 0,
-            at_onset: false,
-            alarm_fraction: f64::NAN,
-            applied: c
-                .fault
+        let mut m = CellMetrics::unscored(
+            c.fault
                 .is_none_or(|fi| rec.faults_applied.get(fi).copied().unwrap_or(true)),
-            sat: Default::default(),
-        };
+        );
         if let Some(sr) = &rec.sats {
             if let Some(sm) = sr.metrics.iter().find(|m| m.fault == c.fault) {
                 m.sat = *sm;

@@ -22,14 +22,6 @@ fn noise_with(scale: f64) -> LogNoise {
     LogNoise {
         gyro_scale: scale,
         accel_scale: scale,
-        imu_rate: 100.0,
-        gyro_noise: 0.01f64.to_radians(),
-        accel_noise: 100e-6 * 9.80665,
-        gyro_bias: (10.0f64 / 3600.0).to_radians(),
-        accel_bias: 1e-3 * 9.80665,
-        gnss_dt: 0.25,
-        gnss_pos: 0.5,
-        gnss_vel: 0.05,
         ..LogNoise::default()
     }
 }
