@@ -78,7 +78,7 @@ def _interrupt_after(seconds: float) -> threading.Timer:
     return timer
 
 
-def test_long_rust_loop_stops_on_ctrl_c(yang):
+def test_long_rust_loop_stops_on_ctrl_c(yang, sigint_handled):
     """A chunk of 400 runs on one thread takes seconds; the interrupt must stop it at once."""
     prep = _core.PreparedScenario(yang.to_json())
     t0 = time.perf_counter()
@@ -96,7 +96,7 @@ def test_long_rust_loop_stops_on_ctrl_c(yang):
     assert prep.run_chunk(0, 0, 1, 1)["run"].tolist() == [0]
 
 
-def test_run_filter_stops_on_ctrl_c():
+def test_run_filter_stops_on_ctrl_c(sigint_handled):
     """A run_filter of about 4 s (large state, bounded memory) stops within ~1 s of Ctrl-C."""
     rng = np.random.default_rng(0)
     n = 150
@@ -116,12 +116,13 @@ def test_run_filter_stops_on_ctrl_c():
     assert elapsed < 0.2 + 1.5, f"stopped after {elapsed:.2f} s of a {T * per_epoch:.1f} s run"
 
 
-def test_ctrl_c_mid_chunk_on_the_command_line(tmp_path):
+def test_ctrl_c_mid_chunk_on_the_command_line(tmp_path, sigint_child):
     """One chunk of 4000 runs (tens of seconds); SIGINT must end the process within seconds,
     with exit 130 and the (empty) partial results written."""
     out = tmp_path / "mc"
     proc = subprocess.Popen(
         [sys.executable, "-m", "navfdi", "montecarlo", "yang2013", "--runs", "4000", "--chunk-size", "4000", "--out", str(out)],
+        preexec_fn=sigint_child,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

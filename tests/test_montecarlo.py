@@ -157,10 +157,11 @@ def test_interrupted_campaign_keeps_finished_runs(short, monkeypatch, tmp_path):
     assert pd.read_csv(tmp_path / "summary.csv").runs.max() == 8
 
 
-def test_ctrl_c_on_the_command_line(tmp_path):
+def test_ctrl_c_on_the_command_line(tmp_path, sigint_child):
     out = tmp_path / "mc"
     proc = subprocess.Popen(
         [sys.executable, "-m", "navfdi", "montecarlo", "yang2013", "--runs", "5000", "--workers", "1", "--chunk-size", "4", "--out", str(out)],
+        preexec_fn=sigint_child,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
