@@ -42,7 +42,7 @@ PY_LAYERS = [
     {"scenario"},
     {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs"},
     {"plots", "plots_logged"},
-    {"runs", "montecarlo"},
+    {"runs", "montecarlo", "_dask"},
     {"calibrate", "federated", "cli", "__init__", "__main__"},
 ]
 

@@ -978,6 +978,16 @@ class LoggedSource:
         """Run each scenario (the prepared one and its variants) on the recorded measurements
         with the prepared scenario's faults injected; one record dict per scenario, with
         ``nav`` (T, 21) and ``nav_columns``. GIL released; Ctrl-C stops it."""
+    def to_bytes(self) -> bytes:
+        """The prepared source as bytes (``NAVFDISR``, the navfdi version, then the scenario,
+        time 0, the fault-free datum of protection-level scoring — computed now if needed —
+        and the prepared streams): what a Dask worker runs chunks from. GIL released."""
+    @staticmethod
+    def from_bytes(data: bytes) -> LoggedSource:
+        """A source from :meth:`to_bytes`'s bytes; FileFormatError names what is wrong (not a
+        prepared source, another navfdi version, truncated or corrupted)."""
+    def __reduce__(self) -> tuple[Any, tuple[bytes]]:
+        """Pickle support: the source travels as :meth:`to_bytes`."""
 
 @final
 class GnssRun:

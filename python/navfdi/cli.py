@@ -135,6 +135,7 @@ def main(argv: list[str] | None = None) -> int:
     where = mc.add_mutually_exclusive_group()
     where.add_argument("--workers", type=_positive, default=None, help="threads in this process (default: all cores)")
     where.add_argument("--scheduler", default=None, metavar="ADDRESS", help="run on a Dask cluster (pip install navfdi[dask])")
+    mc.add_argument("--ship", default="scatter", metavar="scatter|DIR", help="with --scheduler and recorded logs: send each prepared log to every worker once (scatter, default) or write it to DIR, a directory every worker sees at that path, for each worker to read once")
     mc.add_argument("--out", default=None, help="directory for runs.parquet, summary.csv, campaign.json and plots")
     mc.add_argument("--keep-series", type=_keep_series, default=[], metavar="RUN,...", help="run indices whose time series to keep (written as series_pPOINT_rRUN.parquet)")
     mc.add_argument("--chunk-size", type=_positive, default=None, help="runs per chunk (default 16)")
@@ -368,8 +369,10 @@ def _montecarlo(args: argparse.Namespace) -> int:
             client = Client(args.scheduler, timeout="10s")
         except (OSError, TimeoutError, ValueError) as e:
             raise ValueError(f"--scheduler {args.scheduler}: cannot reach the Dask scheduler ({' '.join(str(e).split())})") from None
-    camp = montecarlo(args.scenario, runs=args.runs, seed=args.seed, sweep=sweep, workers=args.workers, client=client, chunk_size=args.chunk_size, keep_series=keep)
+    camp = montecarlo(args.scenario, runs=args.runs, seed=args.seed, sweep=sweep, workers=args.workers, client=client, chunk_size=args.chunk_size, keep_series=keep, ship=args.ship)
     print(camp.format_table(), end="")
+    if camp.transfer is not None:
+        print("\n" + camp.transfer.line())
     if args.out:
         paths = camp.write(args.out)
         import pandas as pd

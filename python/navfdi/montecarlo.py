@@ -21,6 +21,7 @@ import os
 import platform
 import statistics
 import sys
+import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -190,6 +191,9 @@ class Campaign:
     series : dict
         ``{(point, run): record}`` for the runs in ``keep_series`` (record: as
         :func:`navfdi._core.run_scenario` returns).
+    transfer : navfdi._dask.Transfer or None
+        On a Dask cluster: what was shipped to the workers (bytes per worker, time) and their
+        peak memory; None in-process.
     """
 
     scenario: Scenario
@@ -204,6 +208,7 @@ class Campaign:
     cells: list[list[tuple[str, str, str, float]]] = field(default_factory=list)
     variants: list[str] = field(default_factory=list)
     never_applied: list[set[str]] = field(default_factory=list)
+    transfer: Any = field(default_factory=lambda: None)
 
     def runs_per_point(self) -> list[int]:
         """Finished runs of each sweep point, in point order (all equal ``runs_requested``
@@ -542,6 +547,7 @@ class Campaign:
             "partial": self.partial,
             "failed_runs": self.failures(),
             "backend": self.backend,
+            "transfer": None if self.transfer is None else self.transfer.as_dict(),
             "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
         }
 
@@ -682,6 +688,7 @@ def montecarlo(
     chunk_size: int | None = None,
     keep_series: Sequence[int] = (),
     progress: bool | None = None,
+    ship: str | os.PathLike[str] = "scatter",
 ) -> Campaign:
     """Run a Monte-Carlo campaign.
 
@@ -705,7 +712,8 @@ def montecarlo(
         Threads for the in-process backend (default: all cores; at most :func:`max_workers`,
         4 per core).
     client : dask.distributed.Client, optional
-        Run chunks on a Dask cluster instead (``pip install navfdi[dask]``).
+        Run chunks on a Dask cluster instead (``pip install navfdi[dask]``); the runs are
+        bit-identical to the in-process ones.
     chunk_size : int, optional
         Runs per chunk (default 16, or enough for 4 chunks per Dask worker thread).
     keep_series : sequence of int
@@ -713,6 +721,10 @@ def montecarlo(
         (``Campaign.series``).
     progress : bool, optional
         Show a progress bar (default: when stderr is a terminal).
+    ship : str or path
+        With ``client`` and recorded logs: how each prepared source reaches the workers, once
+        per worker — ``"scatter"`` (sent by the client) or a directory every worker sees at the
+        same path (written there, read by each worker); see :mod:`navfdi._dask`.
 
     Returns
     -------
@@ -787,8 +799,10 @@ def montecarlo(
     tasks = [(p, s, min(chunk_size, runs - s)) for s in range(0, runs, chunk_size) for p in range(len(points))]
     jsons = [sc.to_json() for sc in scenarios]
     logged = "source" in base.raw
-    if logged and client is not None:
-        raise ValueError("client: a campaign on recorded logs runs in this process (its logs are not shipped to Dask workers); leave client unset")
+    if str(ship) != "scatter" and client is None:
+        raise ValueError(f"ship = {str(ship)!r}: only a campaign on a Dask cluster (client) ships its logs")
+    if str(ship) != "scatter" and not Path(ship).is_dir():
+        raise ValueError(f"ship = {str(ship)!r}: give \"scatter\" or a directory every Dask worker sees at this path")
     if logged:
         from navfdi import logs
 
@@ -809,6 +823,7 @@ def montecarlo(
         bar = tqdm(total=runs * len(points), unit="run", desc=base.name, file=sys.stderr)
     done: list[tuple[int, dict[str, Any]]] = []
     partial = False
+    transfer: Any = None
     backend = f"local ({threads or 'all'} threads)"
     try:
         if client is None:
@@ -819,21 +834,16 @@ def montecarlo(
                 if bar is not None:
                     bar.update(c)
         else:
-            from dask.distributed import as_completed
+            from navfdi import _dask
 
             info: dict[str, Any] = client.scheduler_info() if hasattr(client, "scheduler_info") else {}
             backend = f"dask ({info.get('address', 'client')})"
-            futures = {client.submit(_chunk, jsons[p], int(seed), s, c, 1, tuple(k for k in keep if s <= k < s + c), pure=False): (p, s, c) for p, s, c in tasks}
+            started = time.perf_counter()
+            sources, transfer = _dask.ship_sources(client, base.name, prepared, ship) if logged else (None, _dask.Transfer("scenario"))
             try:
-                for fut in as_completed(futures):
-                    p, s, c = futures[fut]
-                    done.append((p, fut.result()))
-                    if bar is not None:
-                        bar.update(c)
-            except KeyboardInterrupt:
-                for fut in futures:
-                    fut.cancel()
-                raise
+                _dask.run_chunks(client, tasks, int(seed), keep, sources, jsons, _chunk, transfer, done, bar)
+            finally:
+                transfer.wall_seconds = time.perf_counter() - started
     except KeyboardInterrupt:
         partial = True
     finally:
@@ -841,4 +851,4 @@ def montecarlo(
             bar.close()
     series = {(p, int(r)): rec for p, ch in done for r, rec in ch["records"].items()}
     runs_df = _assemble(sorted(done, key=lambda x: (x[0], int(x[1]["run"][0]))), cells, points, [f["id"] for f in base.faults()])
-    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names, never)
+    return Campaign(base, int(seed), int(runs), sweep_lists, points, runs_df, partial, backend, series, cells, variant_names, never, transfer)

@@ -527,11 +527,14 @@ fn logged_errors(
 /// Runs `start..start + count` of a campaign on recorded logs: run `i` draws its faults from
 /// `(seed, i)` ([`ScenarioSpec::drawn`]), injects them into the recorded measurements and runs
 /// the architecture; on `threads` threads (0: rayon's default), in run order. The cells are
-/// `spec`'s (drawn faults keep their ids).
+/// `spec`'s (drawn faults keep their ids). `datum`: what every run's errors are scored
+/// against for its protection levels ([`logged_datum`] of `src` and `spec`, computed once by
+/// the caller and reused for every chunk).
 #[allow(clippy::too_many_arguments)]
 pub fn run_logged_chunk(
     src: &crate::logs::LoggedSource,
     spec: &ScenarioSpec,
+    datum: Option<[f64; 3]>,
     seed: u64,
     start: u64,
     count: u64,
@@ -541,8 +544,6 @@ pub fn run_logged_chunk(
 ) -> Result<Vec<RunMetrics>> {
     check_range(start, count)?;
     let cells = spec_cells(spec);
-    // One fault-free pass per chunk gives the datum every run of the point is scored against.
-    let datum = logged_datum(src, spec, cancel)?;
     let one = |i: u64| -> Result<RunMetrics> {
         cancel.check()?;
         let run_spec = spec.drawn(seed, i);

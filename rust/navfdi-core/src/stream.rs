@@ -18,7 +18,7 @@ use crate::gnss::ranges::RangeStream;
 /// The point each epoch's error states are linearised about: latitude (rad), longitude
 /// (rad) and height (m) of the navigation solution (or, in simulation, of the truth). Error
 /// states in radians convert to metres there.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Nominal {
     /// Latitude (rad).
     pub lat: f64,
@@ -29,7 +29,7 @@ pub struct Nominal {
 }
 
 /// Everything about a run's measurements that does not depend on its noise.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Models {
     /// Epoch times (s from the run's time 0).
     pub t: Vec<f64>,
@@ -63,7 +63,7 @@ pub struct Models {
 /// Recorded IMU samples: time (s from the run's time 0, as logged: the configured time offset
 /// is applied by the architecture), angular rate (rad/s) and specific force (m/s²) in the
 /// IMU's own axes.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ImuSamples {
     /// Sample times (s), strictly increasing.
     pub t: Vec<f64>,
@@ -74,7 +74,7 @@ pub struct ImuSamples {
 }
 
 /// What a recorded-data source adds to [`Models`].
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Logged {
     /// The IMU log.
     pub imu: ImuSamples,
@@ -124,7 +124,7 @@ impl Models {
 }
 
 /// One run's measurements.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Measurements {
     /// Per sensor and epoch: the measurement (NaN when not taken). For a `gnss_ranges` sensor
     /// the tight measurement `z = ρ − ρ̂_INS` of the satellites in view (pseudoranges, then
@@ -139,7 +139,7 @@ pub struct Measurements {
 }
 
 /// The reference a run is scored against (never an input of the filters).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Reference {
     /// True error state `x_INS − x_true` per epoch (n); empty for a recorded-data source.
     pub x_true: Vec<DVector<f64>>,

@@ -14,6 +14,7 @@ use navfdi_core::stream::{ImuSamples, Nominal, Streams};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
+use std::sync::OnceLock;
 
 fn gnss_log(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<GnssLog> {
     let m = columns(name, obj, 13)?;
@@ -62,7 +63,23 @@ fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: usize) -> PyResult<DMatrix<
 pub struct PyLoggedSource {
     src: LoggedSource,
     spec: ScenarioSpec,
+    spec_json: String,
     time0: f64,
+    /// The fault-free datum of protection-level scoring, computed at the first chunk (or
+    /// decoded with the source) and reused by every later one.
+    datum: OnceLock<Option<[f64; 3]>>,
+}
+
+impl PyLoggedSource {
+    fn datum(&self, cancel: &navfdi_core::cancel::Cancel) -> navfdi_core::Result<Option<[f64; 3]>> {
+        if let Some(d) = self.datum.get() {
+            return Ok(*d);
+        }
+        let d = navfdi_core::montecarlo::logged_datum(&self.src, &self.spec, cancel)?;
+        // A concurrent first call computed the same value: either is kept.
+        let _ = self.datum.set(d);
+        Ok(d)
+    }
 }
 
 #[pymethods]
@@ -120,7 +137,58 @@ impl PyLoggedSource {
                 ))
             }
         };
-        Ok(PyLoggedSource { src, spec, time0 })
+        Ok(PyLoggedSource {
+            src,
+            spec,
+            spec_json: spec_json.to_owned(),
+            time0,
+            datum: OnceLock::new(),
+        })
+    }
+
+    /// The prepared source as bytes (``bytes``; see ``LoggedSource.from_bytes``): the
+    /// scenario, time 0, the prepared streams and — computed now if the scenario scores
+    /// protection levels and not yet done — the fault-free datum, so that a process that
+    /// decodes it runs chunks without reading or preparing the logs again. GIL released;
+    /// Ctrl-C stops the datum's run.
+    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
+        let bytes = crate::interrupt::run(py, |cancel| {
+            let datum = self.datum(cancel)?;
+            navfdi_core::logs::shipped::encode(&self.spec_json, self.time0, Some(datum), &self.src)
+        })?;
+        Ok(pyo3::types::PyBytes::new(py, &bytes))
+    }
+
+    /// A source from ``LoggedSource.to_bytes``'s bytes (``data``: bytes-like). Raises
+    /// FileFormatError naming what is wrong: not a prepared source, written by another navfdi
+    /// version, truncated or corrupted.
+    #[staticmethod]
+    fn from_bytes(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        let owned = data.to_vec();
+        let shipped = py
+            .detach(move || navfdi_core::logs::shipped::decode(&owned))
+            .py()?;
+        let spec = ScenarioSpec::from_json(&shipped.spec_json).py()?;
+        let datum = OnceLock::new();
+        if let Some(d) = shipped.datum {
+            let _ = datum.set(d);
+        }
+        Ok(PyLoggedSource {
+            src: shipped.source,
+            spec,
+            spec_json: shipped.spec_json,
+            time0: shipped.time0,
+            datum,
+        })
+    }
+
+    /// Pickle support: the source travels as ``to_bytes()`` (Dask scatters it this way).
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, pyo3::types::PyBytes>,))> {
+        let ctor = py.get_type::<PyLoggedSource>().getattr("from_bytes")?;
+        Ok((ctor, (self.to_bytes(py)?,)))
     }
 
     /// GPS seconds (since 1980-01-06, GPST) of time 0 for a source read from RINEX files (its
@@ -201,8 +269,9 @@ impl PyLoggedSource {
         let keep = keep.unwrap_or_default();
         let (src, spec) = (&self.src, &self.spec);
         let rows = crate::interrupt::run(py, move |cancel| {
+            let datum = self.datum(cancel)?;
             navfdi_core::montecarlo::run_logged_chunk(
-                src, spec, seed, start, count, threads, &keep, cancel,
+                src, spec, datum, seed, start, count, threads, &keep, cancel,
             )
         })?;
         let c = navfdi_core::montecarlo::spec_cells(&self.spec).len();

@@ -22,7 +22,7 @@ pub const CLOCK_BIAS: usize = crate::ins::N_STATES;
 pub const CLOCK_DRIFT: usize = crate::ins::N_STATES + 1;
 
 /// The satellites in view at one epoch, with everything the simulation and the filters need.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RangeEpoch {
     /// Satellite indices (into [`RangeStream::names`]) in view, in constellation order.
     pub sats: Vec<usize>,
@@ -63,7 +63,7 @@ impl RangeEpoch {
 }
 
 /// Satellite geometry of a `gnss_ranges` sensor over a run (the satellites in view per epoch).
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RangeStream {
     /// Index of the sensor in the scenario.
     pub sensor: usize,

@@ -14,6 +14,7 @@
 
 pub mod imu_csv;
 mod ranges;
+pub mod shipped;
 
 use crate::error::{Error, Result};
 use crate::spec::{ScenarioSpec, SensorKind};
@@ -85,7 +86,7 @@ impl GnssLog {
 
 /// A recorded-data source prepared for a scenario: the models (epochs, availability, IMU,
 /// σ), the recorded measurements before faults, and the reference.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct LoggedSource {
     /// Models of the run (the same for every fault draw).
     pub models: Models,
