@@ -759,6 +759,16 @@ class SnapshotFde:
         """w-test statistic per input satellite, shape (n,), from the final set; NaN for
         excluded satellites, satellites without redundancy and without a solution."""
     @property
+    def mdb(self) -> NDArray[np.float64]:
+        """Minimal detectable bias per input satellite, shape (n,), in m: the bias the deciding
+        test finds with probability ``power`` at ``alpha`` (``√(λ0 / q_i)``); NaN for excluded
+        satellites, satellites without redundancy and without a solution."""
+    @property
+    def allocation(self) -> tuple[float, float, float]:
+        """``(k0, alpha0, lambda0)`` of the final set: the w-test's critical value, its
+        per-satellite false-alarm probability (Šidák: ``1 − (1 − α)^(1/n)``; α/2 shared for
+        ``test="both"``) and the non-centrality behind ``mdb``; NaN without a solution."""
+    @property
     def excluded(self) -> list[int]:
         """Excluded satellites (indices into the inputs), in exclusion order."""
     @property
@@ -779,6 +789,8 @@ def snapshot_fde(
     alpha: float = 0.05,
     k: float | None = None,
     x0: ArrayLike | None = None,
+    test: str = "global",
+    power: float = 0.8,
 ) -> SnapshotFde:
     """Snapshot least-squares position and clock from pseudoranges with fault detection and
     exclusion (global chi-square test + Baarda w-test, iterative exclusion; METHODS §10).
@@ -787,7 +799,11 @@ def snapshot_fde(
     in m or a full (n, n) covariance in m²; ``alpha`` false-alarm probability of the global test;
     ``k`` the w-test critical value (default: the two-sided normal quantile of ``alpha``, 1.96
     for 0.05); ``x0`` start ``[x, y, z]`` or ``[x, y, z, clock]`` in m (default: the Earth's
-    centre). Fewer than 5 satellites left is ``status == "no_solution"`` (no position, never
+    centre); ``test`` what opens the exclusion loop: ``"global"`` (the χ² test), ``"wtest"``
+    (data snooping: the largest ``|w|`` above ``k0 = z(1 − α0/2)``, ``α0 = 1 − (1 − α)^(1/n)``)
+    , ``"both"`` (each at α/2) or ``"auto"`` (per call the one of the two with the smaller
+    minimal detectable bias); ``power`` (in (alpha, 1)) the power β0 of the reported minimal
+    detectable biases. Fewer than 5 satellites left is ``status == "no_solution"`` (no position, never
     NaN). Raises ``ValueError`` naming the argument for wrong shapes, non-finite values,
     non-positive sigma or a covariance that is not symmetric positive definite; ``MemoryError``
     when the n × n work matrices would not fit in memory."""
@@ -1014,6 +1030,8 @@ class GnssRun:
         aime: tuple[float, int],
         cusum: tuple[float, float, float, int, float],
         cn0_reference: float = 45.0,
+        test: str = "global",
+        power: float = 0.8,
     ) -> GnssRun: ...
     @property
     def codes(self) -> dict[str, str]:

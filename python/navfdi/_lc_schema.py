@@ -175,16 +175,20 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
 
 def _tight(t: Any) -> dict[str, Any]:
     """The ``[tight]`` table."""
-    _check_keys(t, {"sensor", "fde", "alpha", "k", "rates", "accel_psd", "strapdown", "integrity"}, "tight")
+    _check_keys(t, {"sensor", "fde", "alpha", "k", "ls_test", "rates", "accel_psd", "strapdown", "integrity"}, "tight")
     fde = _str(_need(t, "fde", "tight"), "tight.fde")
     if fde not in ("ls_precheck", "innovation", "gnss_filter", "separation", "none"):
         raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter, separation or none")
     rates = _bool(t.get("rates", True), "tight.rates")
+    ls_test = _str(t.get("ls_test", "global"), "tight.ls_test")
+    if ls_test not in ("global", "wtest", "both", "auto"):
+        raise ScenarioError(f"tight.ls_test = {ls_test!r}: use global (the chi-square test), wtest (data snooping), both or auto")
     return {
         "sensor": _str(_need(t, "sensor", "tight"), "tight.sensor"),
         "fde": fde,
         "alpha": _number(_need(t, "alpha", "tight"), "tight.alpha"),
         "k": None if t.get("k") is None else _number(t["k"], "tight.k"),
+        "ls_test": ls_test,
         "rates": rates,
         "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
         "strapdown": None if "strapdown" not in t else _tight_strapdown(t["strapdown"]),

@@ -149,6 +149,8 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
     gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^((ref - C/N0)/10), for low-cost receivers)")
     gn.add_argument("--cn0-reference", type=float, default=45.0, metavar="DBHZ", help="C/N0 (dB-Hz) at which --weighting cn0 gives the elevation model (default 45)")
+    gn.add_argument("--test", choices=["global", "wtest", "both", "auto"], default="global", help="what opens the exclusion loop: the global chi-square test (default), data snooping (the largest |w| against k0, alpha shared over the satellites: more powerful for one faulty satellite among many, less with few), both (each at alpha/2) or auto (per epoch the one of the two with the smaller minimal detectable bias)")
+    gn.add_argument("--power", type=float, default=0.8, metavar="BETA0", help="power at which the minimal detectable biases are computed (default 0.8)")
     gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' estimates the factor from the file (a first pass without exclusion), or give a number")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
     gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
@@ -323,6 +325,8 @@ def _gnss(args: argparse.Namespace) -> int:
         noise_factors=factors,
         codes=codes,
         noise_scale=_noise_scale(args.noise),
+        test=args.test,
+        power=args.power,
         truth=truth,
         progress=sys.stderr.isatty(),
         integrity=args.integrity,

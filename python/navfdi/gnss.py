@@ -341,6 +341,16 @@ class GnssSolution:
 
             out["integrity"] = integrity_summary(self)
         out["noise_scale"] = self.config.get("noise_scale", 1.0)
+        out["test"], out["power"] = self.config.get("test", "global"), self.config.get("power", 0.8)
+        out["k0_median"] = float(np.nanmedian(sol["k0"])) if "k0" in sol and sol["k0"].notna().any() else math.nan
+        out["alpha0_median"] = float(np.nanmedian(sol["alpha0"])) if "alpha0" in sol and sol["alpha0"].notna().any() else math.nan
+        clean = sats["epoch"].isin(np.flatnonzero((sol["faulty"] == "").to_numpy())) & (sats["status"] == "used")
+        w = sats.loc[clean, "w"].to_numpy(float)
+        w = w[np.isfinite(w)]
+        mdb = sats.loc[clean, "mdb"].to_numpy(float) if "mdb" in sats else np.array([])
+        out["mdb_median"] = float(np.nanmedian(mdb)) if np.isfinite(mdb).any() else math.nan
+        out["clean_w_sd"] = float(np.std(w)) if w.size > 1 else math.nan
+        out["clean_w_sd_robust"] = float(1.4826 * np.median(np.abs(w - np.median(w)))) if w.size > 1 else math.nan
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
@@ -427,6 +437,11 @@ class GnssSolution:
         lines.append(f"exclusions per satellite: {ex}")
         lines.append(f"sequential detectors, alarms per clean satellite-epoch: SPRT {s['sprt_false_alarm_rate']:.4f}, AIME {s['aime_false_alarm_rate']:.4f}, CUSUM {s['cusum_false_alarm_rate']:.4f}")
         lines.append(f"clean epochs {s['clean_epochs']}: false-exclusion epochs {s['false_exclusion_epochs']} (rate {s['false_exclusion_rate']:.4f}), global alarms {s['global_alarm_rate_clean']:.4f} vs alpha {s['alpha']:g}")
+        names = {"global": "global chi-square test", "wtest": "data snooping (largest |w|)", "both": "global test or largest |w|", "auto": "per epoch the more powerful of the global test and data snooping"}
+        lines.append(
+            f"test: {names.get(s['test'], s['test'])}; allocation alpha {s['alpha']:g}, power {s['power']:g} → w-test k0 {s['k0_median']:.2f} "
+            f"(alpha0 {s['alpha0_median']:.1e} per satellite; medians); minimal detectable bias median {s['mdb_median']:.2f} m; "
+            f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}; 1 when the sigma fit)")
         if self.config.get("noise_scale_estimated"):
             lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto)")
         elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
@@ -538,6 +553,8 @@ def gnss_solve(
     integrity: str | os.PathLike[str] | IntegritySettings | None = None,
     doppler_noise: tuple[float, float] = (0.05, 0.05),
     noise_scale: float | str = 1.0,
+    test: str = "global",
+    power: float = 0.8,
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
@@ -600,6 +617,16 @@ def gnss_solve(
         factor's square; the run is then solved with it (``config["noise_scale"]``).
     doppler_noise : (a, b)
         Pseudorange-rate noise (m/s) of the Doppler velocity, ``σ² = a² + b²/sin² el``.
+    test : str
+        What opens the exclusion loop: ``"global"`` (the χ² test at ``alpha``, default),
+        ``"wtest"`` (data snooping: the largest |w| above ``k0 = z(1 − α0/2)`` with ``α0 = 1 −
+        (1 − α)^(1/n)`` over the n satellites tested, which also identifies; the more powerful
+        with many satellites, the less with few), ``"both"`` (each at α/2, either opens) or
+        ``"auto"`` (per epoch, the one of the two whose minimal detectable bias is the smaller).
+        The epoch table has ``k0``, ``alpha0`` and ``lambda0`` and the satellite table each
+        satellite's minimal detectable bias ``mdb`` (m).
+    power : float
+        The power β0 (in (alpha, 1)) at which the minimal detectable biases are computed.
     integrity : str or path or IntegritySettings, optional
         An allocation — a name (``"lpv200"``) or the path of an allocation file (TOML; see
         :func:`navfdi.gnss_integrity.load_allocation_file`), checked before solving: add
@@ -623,7 +650,7 @@ def gnss_solve(
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise)
+        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
         first = gnss_solve(obs, nav, exclude=False, **common)
         scale = estimate_noise_scale(first.solution)
         out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=scale, **common)
@@ -665,6 +692,8 @@ def gnss_solve(
         (float(aime[0]), int(aime[1])),
         (float(cusum[0]), float(cusum[1]), float(cusum[2]), int(cusum[3]), float(cusum[4])),
         float(cn0_reference),
+        test,
+        float(power),
     )
     bar = None
     if progress:
@@ -703,6 +732,7 @@ def gnss_solve(
     sol["excluded"] = ep["excluded"]
     sol["status"] = ep["status"]
     sol["used"] = ep["used"].astype("int64")
+    sol["k0"], sol["alpha0"], sol["lambda0"] = ep["k0"], ep["alpha0"], ep["lambda0"]
     sol["faulty"] = ep["faulty"]
     for s in ("G", "E", "C", "J"):
         if s in systems:
@@ -754,6 +784,8 @@ def gnss_solve(
         "faults": [f.__dict__ for f in parsed],
         "doppler_noise": list(doppler_noise),
         "noise_scale": float(noise_scale),
+        "test": test,
+        "power": float(power),
         "dropped_observation_types": dropped,
         "receiver": receiver,
     }

@@ -3,7 +3,7 @@
 use crate::convert::{read, to_numpy};
 use crate::errors::IntoPyResult;
 use nalgebra::Vector3;
-use navfdi_core::gnss::snapshot::{self, FdeConfig, ObsCov};
+use navfdi_core::gnss::snapshot::{self, Detection, FdeConfig, ObsCov};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
@@ -26,12 +26,14 @@ struct SnapshotArgs {
     alpha: f64,
     k: Option<f64>,
     x0: Option<[f64; 4]>,
+    test: &'static str,
+    power: f64,
 }
 
 #[pymethods]
 impl PySnapshotFde {
     /// Pickle as the call that made it (the computation is deterministic): `(snapshot_fde,
-    /// (sat_pos, pseudoranges, sigma, alpha, k, x0))`.
+    /// (sat_pos, pseudoranges, sigma, alpha, k, x0, test, power))`.
     #[allow(clippy::type_complexity)]
     fn __reduce__<'py>(
         &self,
@@ -45,6 +47,8 @@ impl PySnapshotFde {
             f64,
             Option<f64>,
             Option<Bound<'py, PyAny>>,
+            &'static str,
+            f64,
         ),
     )> {
         let a = &self.args;
@@ -61,6 +65,8 @@ impl PySnapshotFde {
                 a.x0.map(|x| to_numpy(py, x.to_vec(), &[4]))
                     .transpose()?
                     .map(|x| x.into_any()),
+                a.test,
+                a.power,
             ),
         ))
     }
@@ -112,6 +118,28 @@ impl PySnapshotFde {
         Ok(to_numpy(py, self.inner.fde.w.clone(), &[n])?.into_any())
     }
 
+    /// Minimal detectable bias per input satellite (n,) in m at the final test: the bias the
+    /// tests find with the allocation's power (``power``) at ``alpha``, ``√(λ0 / q_i)``;
+    /// NaN for excluded satellites, satellites without redundancy and without a solution.
+    #[getter]
+    fn mdb<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let n = self.inner.fde.mdb.len();
+        Ok(to_numpy(py, self.inner.fde.mdb.clone(), &[n])?.into_any())
+    }
+
+    /// The final set's allocation ``(k0, alpha0, lambda0)``: the w-test's critical value, its
+    /// per-satellite false-alarm probability and the non-centrality behind ``mdb`` (the
+    /// deciding test's at ``alpha`` and ``power``); NaN without a solution.
+    #[getter]
+    fn allocation(&self) -> (f64, f64, f64) {
+        self.inner
+            .fde
+            .snooping
+            .map_or((f64::NAN, f64::NAN, f64::NAN), |s| {
+                (s.k0, s.alpha0, s.lambda0)
+            })
+    }
+
     /// Excluded satellites: indices into the inputs, in exclusion order.
     #[getter]
     fn excluded(&self) -> Vec<usize> {
@@ -155,9 +183,14 @@ impl PySnapshotFde {
 /// `sat_pos` (n, 3) ECEF in m; `pseudoranges` (n,) m; `sigma` (n,) standard deviations in m
 /// or a full (n, n) covariance in m²; `alpha` false-alarm probability of the global test;
 /// `k` w-test critical value (default: the two-sided normal quantile of `alpha`);
-/// `x0` start value `[x, y, z]` or `[x, y, z, clock]` in m (default: the Earth's centre).
+/// `x0` start value `[x, y, z]` or `[x, y, z, clock]` in m (default: the Earth's centre);
+/// `test` what opens the exclusion loop: ``"global"`` (the χ² test), ``"wtest"`` (data
+/// snooping: the largest |w| above k0, α shared over the satellites), ``"both"`` (each at
+/// α/2) or ``"auto"`` (the one of the two with the smaller MDB); `power` the β0 of the
+/// reported minimal detectable biases.
 #[pyfunction]
-#[pyo3(signature = (sat_pos, pseudoranges, sigma, alpha = 0.05, k = None, x0 = None))]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (sat_pos, pseudoranges, sigma, alpha = 0.05, k = None, x0 = None, test = "global", power = 0.8))]
 pub fn snapshot_fde(
     py: Python<'_>,
     sat_pos: &Bound<'_, PyAny>,
@@ -166,7 +199,10 @@ pub fn snapshot_fde(
     alpha: f64,
     k: Option<f64>,
     x0: Option<&Bound<'_, PyAny>>,
+    test: &str,
+    power: f64,
 ) -> PyResult<PySnapshotFde> {
+    let detection = Detection::parse(test).py()?;
     let sp = read("sat_pos", sat_pos)?;
     if sp.shape.len() != 2 || sp.shape[1] != 3 {
         return Err(PyValueError::new_err(format!(
@@ -212,7 +248,9 @@ pub fn snapshot_fde(
             }
         }
     };
-    let cfg = FdeConfig::new(alpha, k).py()?;
+    let cfg = FdeConfig::new(alpha, k)
+        .and_then(|c| c.with_test(detection, power))
+        .py()?;
     let rho = rho.as_slice().to_vec();
     let args = SnapshotArgs {
         sat_pos: sp.data.clone(),
@@ -222,6 +260,8 @@ pub fn snapshot_fde(
         alpha,
         k,
         x0,
+        test: detection.as_str(),
+        power,
     };
     let inner = py
         .detach(move || snapshot::snapshot_fde(&sats, &rho, &cov, &cfg, x0))

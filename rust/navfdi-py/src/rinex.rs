@@ -4,7 +4,7 @@ use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
 use navfdi_core::gnss::broadcast::{Sat, Sys};
 use navfdi_core::gnss::rinex::{self, NavData, ObsData};
-use navfdi_core::gnss::snapshot::FdeConfig;
+use navfdi_core::gnss::snapshot::{Detection, FdeConfig};
 use navfdi_core::gnss::spp::{
     self, FaultShape, InjectedFault, SppConfig, SppRun, SppState, Weighting,
 };
@@ -181,9 +181,11 @@ impl PyGnssRun {
     /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
     /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
     /// per-system σ factors; `sprt` (P_f, P_m), `aime` (P_f, window epochs) and `cusum` (drift, threshold, tau epochs,
-    /// warm-up epochs, floor m) of the sequential detectors.
+    /// warm-up epochs, floor m) of the sequential detectors; `test` what opens the exclusion
+    /// loop (``"global"``, ``"wtest"``: data snooping, ``"both"``, ``"auto"``) and `power` the
+    /// β0 of the reported minimal detectable biases.
     #[new]
-    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum, cn0_reference = 45.0))]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum, cn0_reference = 45.0, test = "global", power = 0.8))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -205,8 +207,13 @@ impl PyGnssRun {
         aime: (f64, usize),
         cusum: (f64, f64, f64, usize, f64),
         cn0_reference: f64,
+        test: &str,
+        power: f64,
     ) -> PyResult<Self> {
-        let mut cfg = SppConfig::new(FdeConfig::new(alpha, k).py()?);
+        let fde = FdeConfig::new(alpha, k)
+            .and_then(|c| c.with_test(Detection::parse(test)?, power))
+            .py()?;
+        let mut cfg = SppConfig::new(fde);
         cfg.systems = systems
             .iter()
             .map(|s| parse_sys(s))
@@ -448,7 +455,9 @@ impl PyGnssRun {
 
     /// Per-epoch columns of the epochs solved so far: ``time`` (GPS s), ``x, y, z`` (ECEF m,
     /// NaN without a solution), ``status`` (str), ``dof``, ``statistic``, ``threshold``,
-    /// ``first_statistic``, ``first_threshold``, ``first_dof``, ``excluded`` (space-separated
+    /// ``first_statistic``, ``first_threshold``, ``first_dof``, ``k0``, ``alpha0``,
+    /// ``lambda0`` (the final set's allocation: the w-test's critical value, its per-satellite
+    /// false-alarm probability and the non-centrality behind the MDB), ``excluded`` (space-separated
     /// names), ``faulty`` (names with an injected fault), ``used`` (int), ``reason`` (str),
     /// ``clock_G``/``clock_E``/``clock_C``/``clock_J`` (m, NaN when the system is not solved).
     fn epoch_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -493,6 +502,12 @@ impl PyGnssRun {
             "first_dof",
             to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
         )?;
+        let sn = |g: &dyn Fn(&navfdi_core::gnss::snapshot::Snooping) -> f64| {
+            f(&|s: &spp::EpochSolution| s.fde.snooping.as_ref().map_or(f64::NAN, g))
+        };
+        d.set_item("k0", to_numpy(py, sn(&|x| x.k0), &[n])?)?;
+        d.set_item("alpha0", to_numpy(py, sn(&|x| x.alpha0), &[n])?)?;
+        d.set_item("lambda0", to_numpy(py, sn(&|x| x.lambda0), &[n])?)?;
         d.set_item("used", to_numpy(py, f(&|s| s.used as f64), &[n])?)?;
         let names = |v: &[Sat]| v.iter().map(Sat::name).collect::<Vec<_>>().join(" ");
         d.set_item(
@@ -515,8 +530,8 @@ impl PyGnssRun {
     }
 
     /// Per epoch and satellite columns of the epochs solved so far: ``epoch`` (int),
-    /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``,
-    /// ``sigma`` (m), ``iono``, ``tropo`` (m), ``fault`` (injected, m), ``sat_x, sat_y,
+    /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``, ``mdb``
+    /// (minimal detectable bias, m), ``sigma`` (m), ``iono``, ``tropo`` (m), ``fault`` (injected, m), ``sat_x, sat_y,
     /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``aime``,
     /// ``cusum`` (sequential statistics), ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm``
     /// (bool), ``status`` (``used``,
@@ -544,6 +559,7 @@ impl PyGnssRun {
         )?;
         d.set_item("residual", to_numpy(py, f(&|x| x.residual), &[n])?)?;
         d.set_item("w", to_numpy(py, f(&|x| x.w), &[n])?)?;
+        d.set_item("mdb", to_numpy(py, f(&|x| x.mdb), &[n])?)?;
         d.set_item("sigma", to_numpy(py, f(&|x| x.sigma), &[n])?)?;
         d.set_item("iono", to_numpy(py, f(&|x| x.iono), &[n])?)?;
         d.set_item("tropo", to_numpy(py, f(&|x| x.tropo), &[n])?)?;

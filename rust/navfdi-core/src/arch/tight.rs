@@ -70,7 +70,8 @@ pub fn run_tight(
         .ok_or_else(|| Error::Invalid("tight: the scenario has no gnss_ranges sensor".into()))?;
     let si = rp.sensor;
     let n = spec.n_states();
-    let cfg = FdeConfig::new(t.alpha, t.k)?;
+    let cfg =
+        FdeConfig::new(t.alpha, t.k)?.with_test(t.ls_test, crate::gnss::lsq::DEFAULT_POWER)?;
     let mut kf = KalmanFilter::new(DVector::zeros(n), models.p0.clone())?;
     let s_count = rp.names.len();
     let epochs = src.epochs();

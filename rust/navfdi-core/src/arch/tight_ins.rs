@@ -106,7 +106,8 @@ pub fn run_tight_ins(
         .as_ref()
         .map(|r| r.clock)
         .ok_or_else(|| Error::Invalid(format!("sensors[{si}].ranges: missing")))?;
-    let cfg = FdeConfig::new(t.alpha, t.k)?;
+    let cfg =
+        FdeConfig::new(t.alpha, t.k)?.with_test(t.ls_test, crate::gnss::lsq::DEFAULT_POWER)?;
     let epochs = models.epochs();
     let mut rec = RunRecord::empty(spec, models);
     rec.nav = Vec::with_capacity(epochs * NAV_COLUMNS.len());

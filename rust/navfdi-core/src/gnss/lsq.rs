@@ -129,6 +129,103 @@ pub fn two_sided_quantile(alpha: f64) -> Result<f64> {
     Ok(n.inverse_cdf(1.0 - alpha / 2.0))
 }
 
+/// What opens the exclusion loop's door (METHODS §10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Detection {
+    /// The global χ² test at α; the largest |w| above K identifies (the default).
+    #[default]
+    Global,
+    /// Data snooping: the largest |w| of the n tested observations above `k0 =
+    /// z(1 − α0/2)`, with `α0 = 1 − (1 − α)^(1/n)` (Šidák: the epoch's false-alarm probability
+    /// is α for independent w, below it for correlated ones); it also identifies. More
+    /// powerful than the global test for one faulty observation among many (large
+    /// redundancy), less with few.
+    WTest,
+    /// Either, each at α/2 (so that the union holds α): the largest |w| above its `k0`, or the
+    /// global test (then identified as by [`Detection::Global`]).
+    Both,
+    /// Per tested set, the one of [`Detection::Global`] and [`Detection::WTest`] (each at α)
+    /// with the smaller minimal detectable bias for one faulty observation: the w-test when
+    /// its non-centrality at the power β0 is below the global test's (many observations),
+    /// else the global test. One test at α per set, so α holds.
+    Auto,
+}
+
+impl Detection {
+    /// Parse `global`, `wtest` or `both`.
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "global" => Ok(Detection::Global),
+            "wtest" => Ok(Detection::WTest),
+            "both" => Ok(Detection::Both),
+            "auto" => Ok(Detection::Auto),
+            _ => Err(Error::Invalid(format!(
+                "test = {s:?}: one of \"global\" (the χ² test), \"wtest\" (data snooping), \"both\" or \"auto\" (the more powerful of the two per epoch)"
+            ))),
+        }
+    }
+
+    /// The name [`Detection::parse`] reads.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Detection::Global => "global",
+            Detection::WTest => "wtest",
+            Detection::Both => "both",
+            Detection::Auto => "auto",
+        }
+    }
+}
+
+/// The default power β0 at which minimal detectable biases are reported.
+pub const DEFAULT_POWER: f64 = 0.8;
+
+/// Non-centrality `λ` at which the two-sided w-test with critical value `k0` detects with
+/// probability `power`: `P(|N(√λ, 1)| > k0) = power`.
+pub fn w_noncentrality(k0: f64, power: f64) -> Result<f64> {
+    let n = Normal::new(0.0, 1.0).map_err(|e| Error::Numerical {
+        context: "normal".into(),
+        detail: e.to_string(),
+    })?;
+    let p = |d: f64| n.cdf(d - k0) + n.cdf(-d - k0) - power; // increasing in d ≥ 0
+    let (mut lo, mut hi) = (0.0, k0 + 40.0);
+    if p(lo) >= 0.0 {
+        return Err(Error::Invalid(format!(
+            "power {power}: reached with no bias at k0 = {k0}; the power must exceed the false-alarm probability"
+        )));
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if p(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let d = 0.5 * (lo + hi);
+    Ok(d * d)
+}
+
+/// The allocation of one tested set (n observations, redundancy dof): the w-test's critical
+/// value and per-observation false-alarm probability, the global test's threshold, and the
+/// non-centrality behind the reported minimal detectable biases.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Snooping {
+    /// Non-centrality of the deciding test at power β0: the global test's for
+    /// [`Detection::Global`], the w-test's for [`Detection::WTest`], the smaller of the two
+    /// (each at α/2) for [`Detection::Both`]. MDB_i = √(λ0 / q_i).
+    pub lambda0: f64,
+    /// The w-test's critical value.
+    pub k0: f64,
+    /// Its per-observation false-alarm probability.
+    pub alpha0: f64,
+    /// The global test's threshold as used (at α/2 for [`Detection::Both`]).
+    pub threshold: f64,
+    /// The test that decides for this set ([`Detection::Auto`] resolved to `Global` or
+    /// `WTest`; the configured one otherwise).
+    pub test: Detection,
+}
+
 /// Settings of the exclusion loop.
 #[derive(Debug, Clone)]
 pub struct FdeConfig {
@@ -136,6 +233,12 @@ pub struct FdeConfig {
     pub alpha: f64,
     /// Critical value of the w-test.
     pub k: f64,
+    /// What opens the loop (the global test by default).
+    pub test: Detection,
+    /// Power β0 at which the minimal detectable biases are reported.
+    pub power: f64,
+    /// Allocations computed so far, by (observations, dof); shared by clones.
+    snooping: SnoopCache,
     /// Gauss-Newton iterations allowed per solution.
     pub max_iterations: usize,
     /// Convergence: step norm below this (m).
@@ -169,10 +272,69 @@ impl FdeConfig {
         Ok(FdeConfig {
             alpha,
             k,
+            test: Detection::Global,
+            power: DEFAULT_POWER,
+            snooping: SnoopCache::default(),
             max_iterations: 20,
             tolerance: 1e-7,
             thresholds,
         })
+    }
+
+    /// The same settings with detection `test` and the power `power` (β0, in (α, 1)) at
+    /// which minimal detectable biases are reported.
+    pub fn with_test(mut self, test: Detection, power: f64) -> Result<Self> {
+        crate::validate::check_probability("power", power)?;
+        if power <= self.alpha {
+            return Err(Error::InvalidParameter {
+                name: "power".into(),
+                value: power,
+                requirement: format!("must exceed alpha = {}", self.alpha),
+            });
+        }
+        self.test = test;
+        self.power = power;
+        self.snooping = SnoopCache::default();
+        Ok(self)
+    }
+
+    /// The allocation of a set of `n` observations with redundancy `dof` (cached).
+    pub fn snooping(&self, n: usize, dof: usize) -> Result<Snooping> {
+        if let Some(s) = self.snooping.get(n, dof) {
+            return Ok(s);
+        }
+        let a = if self.test == Detection::Both {
+            self.alpha / 2.0
+        } else {
+            self.alpha
+        };
+        let alpha0 = -(-a).ln_1p() / n.max(1) as f64; // ln(1 − a) / n, then 1 − e^that
+        let alpha0 = -(-alpha0).exp_m1();
+        let k0 = two_sided_quantile(alpha0)?;
+        let lw = w_noncentrality(k0, self.power)?;
+        let lg = crate::stats::noncentrality(a, 1.0 - self.power, dof)?;
+        let test = match self.test {
+            Detection::Auto if lw < lg => Detection::WTest,
+            Detection::Auto => Detection::Global,
+            t => t,
+        };
+        let s = Snooping {
+            lambda0: match test {
+                Detection::Global => lg,
+                Detection::WTest => lw,
+                _ => lg.min(lw),
+            },
+            k0,
+            alpha0,
+            test,
+            threshold: if self.test == Detection::Both {
+                chi2_threshold(a, dof)?
+            } else {
+                self.threshold(dof)?
+            },
+        };
+        self.snooping.put(n, dof, s);
+        Ok(s)
     }
 
     /// Global-test threshold `F⁻¹_{χ²(dof)}(1 − α)`.
@@ -186,6 +348,25 @@ impl FdeConfig {
                 }
             },
             None => chi2_threshold(self.alpha, dof),
+        }
+    }
+}
+
+/// [`FdeConfig`]'s allocations by (observations, dof), shared by its clones (a campaign's
+/// threads); the values depend only on α, the power and the test, fixed per configuration.
+#[derive(Debug, Clone, Default)]
+struct SnoopCache(
+    std::sync::Arc<std::sync::Mutex<std::collections::HashMap<(usize, usize), Snooping>>>,
+);
+
+impl SnoopCache {
+    fn get(&self, n: usize, dof: usize) -> Option<Snooping> {
+        self.0.lock().ok().and_then(|m| m.get(&(n, dof)).copied())
+    }
+
+    fn put(&self, n: usize, dof: usize, s: Snooping) {
+        if let Ok(mut m) = self.0.lock() {
+            m.insert((n, dof), s);
         }
     }
 }
@@ -233,6 +414,9 @@ pub struct LsTest {
     pub statistic: f64,
     /// w per observation (NaN where the observation has no redundancy).
     pub w: DVector<f64>,
+    /// `e_iᵀ D⁻¹ D_V D⁻¹ e_i` per observation (1/m², the w-test's variance factor; NaN where
+    /// the observation has no redundancy): a bias ∇ moves `w_i` by `∇ √q_i`.
+    pub q: DVector<f64>,
 }
 
 /// The test of `l = B x + ε`, `D⁻¹` given (`d` is `D`). None when `BᵀD⁻¹B` is singular.
@@ -253,21 +437,23 @@ pub fn ls_test(
     let statistic = v.dot(&g);
     let fn_ = &f * &n_inv; // D⁻¹B N⁻¹
     let n = v.len();
-    let w = DVector::from_fn(n, |i, _| {
+    let q = DVector::from_fn(n, |i, _| {
         // e_iᵀ D⁻¹ D_V D⁻¹ e_i = (D⁻¹)_ii − (D⁻¹B N⁻¹ BᵀD⁻¹)_ii
         let q = dinv[(i, i)] - fn_.row(i).dot(&f.row(i));
         if q > 1e-12 * dinv[(i, i)] {
-            g[i] / q.sqrt()
+            q
         } else {
             f64::NAN
         }
     });
+    let w = DVector::from_fn(n, |i, _| g[i] / q[i].sqrt());
     Some(LsTest {
         x,
         v,
         dv,
         statistic,
         w,
+        q,
     })
 }
 
@@ -375,4 +561,40 @@ pub fn check_size(what: &str, n: usize) -> Result<()> {
         &format!("{n} observations need n × n work matrices"),
         "give fewer observations per epoch",
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn snooping_allocation_is_sidak_and_its_power_is_the_one_asked() {
+        let cfg = FdeConfig::new(0.01, None)
+            .and_then(|c| c.with_test(Detection::WTest, 0.8))
+            .unwrap();
+        let s = cfg.snooping(10, 5).unwrap();
+        // 1 − (1 − α0)^n = α.
+        assert!((1.0 - (1.0 - s.alpha0).powi(10) - 0.01).abs() < 1e-12);
+        assert!((two_sided_quantile(s.alpha0).unwrap() - s.k0).abs() < 1e-12);
+        // P(|N(√λ0, 1)| > k0) = 0.8.
+        let n = Normal::new(0.0, 1.0).unwrap();
+        let d = s.lambda0.sqrt();
+        assert!((n.cdf(d - s.k0) + n.cdf(-d - s.k0) - 0.8).abs() < 1e-9);
+        // Both: each at α/2; the global threshold is the χ² quantile at α/2.
+        let both = FdeConfig::new(0.01, None)
+            .and_then(|c| c.with_test(Detection::Both, 0.8))
+            .unwrap();
+        let b = both.snooping(10, 5).unwrap();
+        assert!(b.k0 > s.k0 && b.threshold > cfg.threshold(5).unwrap());
+        // Auto: the w-test with many observations, the global test with few.
+        let auto = FdeConfig::new(0.01, None)
+            .and_then(|c| c.with_test(Detection::Auto, 0.8))
+            .unwrap();
+        assert_eq!(auto.snooping(16, 11).unwrap().test, Detection::WTest);
+        assert_eq!(auto.snooping(6, 2).unwrap().test, Detection::Global);
+        assert!(FdeConfig::new(0.05, None)
+            .and_then(|c| c.with_test(Detection::WTest, 0.01))
+            .is_err());
+        assert!(Detection::parse("chi2").is_err());
+    }
 }

@@ -10,6 +10,13 @@
 //!   the observation with the largest `|w_i|` above `K` is excluded and everything is
 //!   recomputed, until the global test passes.
 //!
+//! What opens the loop is [`FdeConfig::test`] ([`Detection`]): the global test (above, the
+//! default), data snooping (the largest `|w_i|` of the n tested observations above `k0 =
+//! z(1 − α0/2)`, `α0 = 1 − (1 − α)^(1/n)`, which also identifies; repeated until no `|w|`
+//! exceeds `k0`), both (each at α/2) or, per set, the one of the two whose non-centrality at
+//! the power β0 is the smaller. Each observation's minimal detectable bias
+//! `√(λ0 / e_iᵀD⁻¹D_VD⁻¹e_i)` at the deciding test's `λ0` is reported ([`FdeOutcome::mdb`]).
+//!
 //! Outcomes ([`FdeStatus`]): `passed` (nothing excluded), `excluded` (passed after excluding
 //! one or more), `unidentified` (the global test fails but no `|w_i|` exceeds `K`: the
 //! solution is kept and flagged), `no_solution` (fewer than `u + 1` observations left, a
@@ -25,8 +32,8 @@
 //! [`super::lsq`], re-exported here.
 
 pub use super::lsq::{
-    check_size, gauss_newton, ls_test, ls_test_cov, two_sided_quantile, FdeConfig, FdeModel,
-    FdeStatus, LsTest, ObsCov,
+    check_size, gauss_newton, ls_test, ls_test_cov, two_sided_quantile, Detection, FdeConfig,
+    FdeModel, FdeStatus, LsTest, ObsCov, Snooping,
 };
 use crate::error::{Error, Result};
 use nalgebra::{Cholesky, DMatrix, DVector, Vector3};
@@ -52,6 +59,12 @@ pub struct FdeOutcome {
     pub excluded: Vec<usize>,
     /// |w| of each excluded observation when it was excluded.
     pub excluded_w: Vec<f64>,
+    /// Minimal detectable bias per input observation at the final test (m; the bias that
+    /// gives the final set's non-centrality `λ0` at α and β0: `√(λ0 / q_i)`; NaN for excluded
+    /// or untestable observations and without a solution).
+    pub mdb: Vec<f64>,
+    /// The final set's allocation (`λ0`, `k0`, `α0`, the deciding test; None without a solution).
+    pub snooping: Option<super::lsq::Snooping>,
     /// How the loop ended.
     pub status: FdeStatus,
     /// Why, in words.
@@ -134,29 +147,21 @@ pub fn fde<M: FdeModel>(
         if out.excluded.is_empty() {
             out.first = (test.statistic, threshold, dof);
         }
+        let snoop = cfg.snooping(active.len(), dof)?;
         out.statistic = test.statistic;
-        out.threshold = threshold;
+        out.threshold = snoop.threshold;
         out.dof = dof;
+        out.snooping = Some(snoop);
         out.w = vec![f64::NAN; n];
+        out.mdb = vec![f64::NAN; n];
         for (j, &i) in active.iter().enumerate() {
             out.w[i] = test.w[j];
+            // q is in the normalised units: ∇ (σ given) = √(λ0 / q) · c.
+            out.mdb[i] = (snoop.lambda0 / test.q[j]).sqrt() * c;
         }
         out.solution = Some(model.solution());
         if first_solution.is_none() {
             first_solution = Some((model.solution(), out.w.clone()));
-        }
-        if test.statistic < threshold {
-            out.status = if out.excluded.is_empty() {
-                out.reason = "global test passed".into();
-                FdeStatus::Passed
-            } else {
-                out.reason = format!(
-                    "global test passed after excluding {} observation(s)",
-                    out.excluded.len()
-                );
-                FdeStatus::Excluded
-            };
-            return Ok(out);
         }
         // Largest |w| among the testable observations.
         let worst = active
@@ -164,8 +169,43 @@ pub fn fde<M: FdeModel>(
             .enumerate()
             .filter(|(j, _)| test.w[*j].is_finite())
             .max_by(|a, b| test.w[a.0].abs().total_cmp(&test.w[b.0].abs()));
+        let global_fails = test.statistic >= snoop.threshold;
+        let w_fails = snoop.test != Detection::Global
+            && worst.is_some_and(|(j, _)| test.w[j].abs() > snoop.k0);
+        let fails = match snoop.test {
+            Detection::Global => global_fails,
+            Detection::WTest => w_fails,
+            _ => global_fails || w_fails,
+        };
+        if !fails {
+            let what = match snoop.test {
+                Detection::Global => "global test passed".to_string(),
+                t => format!(
+                    "{}no |w| above k0 = {:.3}",
+                    if t == Detection::Both {
+                        "global test passed and "
+                    } else {
+                        ""
+                    },
+                    snoop.k0
+                ),
+            };
+            out.status = if out.excluded.is_empty() {
+                out.reason = what;
+                FdeStatus::Passed
+            } else {
+                out.reason = format!(
+                    "{what} after excluding {} observation(s)",
+                    out.excluded.len()
+                );
+                FdeStatus::Excluded
+            };
+            return Ok(out);
+        }
+        // Identified by the largest |w|: above k0 when the w-test fired, else above K.
+        let k_id = if w_fails { snoop.k0 } else { cfg.k };
         match worst {
-            Some((j, &i)) if test.w[j].abs() > cfg.k => {
+            Some((j, &i)) if test.w[j].abs() > k_id => {
                 let left = match groups {
                     Some(g) => active.iter().filter(|&&a| g[a] != g[i]).count(),
                     None => active.len() - 1,
@@ -182,10 +222,16 @@ pub fn fde<M: FdeModel>(
                         out.dof = out.first.2;
                     }
                     out.status = FdeStatus::Unidentified;
+                    let why = if w_fails {
+                        format!("|w| = {:.4} > k0 = {:.4}", test.w[j].abs(), snoop.k0)
+                    } else {
+                        format!(
+                            "global test fails ({:.4} ≥ {:.4})",
+                            test.statistic, threshold
+                        )
+                    };
                     out.reason = format!(
-                        "global test fails ({:.4} ≥ {:.4}) and no subset passes before too few observations would remain ({} excluded); the solution of every observation is kept",
-                        test.statistic,
-                        threshold,
+                        "{why} and no subset passes before too few observations would remain ({} excluded); the solution of every observation is kept",
                         out.excluded.len()
                     );
                     out.excluded.clear();
@@ -262,6 +308,8 @@ impl FdeOutcome {
             w: vec![f64::NAN; n],
             excluded: Vec::new(),
             excluded_w: Vec::new(),
+            mdb: vec![f64::NAN; n],
+            snooping: None,
             status: FdeStatus::NoSolution,
             reason: String::new(),
         }
@@ -283,6 +331,8 @@ impl FdeOutcome {
         self.threshold = f64::NAN;
         self.dof = 0;
         self.w = vec![f64::NAN; n];
+        self.mdb = vec![f64::NAN; n];
+        self.snooping = None;
         self.status = FdeStatus::NoSolution;
         self
     }

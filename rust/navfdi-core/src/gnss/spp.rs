@@ -303,6 +303,9 @@ pub struct SatRow {
     pub residual: f64,
     /// w of the final test (|w| at exclusion for excluded satellites; NaN when untested).
     pub w: f64,
+    /// Minimal detectable bias of the final test (m, at α and the allocation's power β0; NaN
+    /// for excluded or untested satellites).
+    pub mdb: f64,
     /// σ used (m; NaN when not used).
     pub sigma: f64,
     /// Ionospheric and tropospheric delays at the final solution (m).
@@ -547,6 +550,7 @@ pub fn solve(
                 azimuth: f64::NAN,
                 residual: f64::NAN,
                 w: f64::NAN,
+                mdb: f64::NAN,
                 sigma: f64::NAN,
                 iono: f64::NAN,
                 tropo: f64::NAN,
@@ -806,6 +810,7 @@ fn solve_epoch(
             row.iono = extra[0];
             row.tropo = extra[1];
             row.w = w[i];
+            row.mdb = outcome.mdb[i];
             row.status = if outcome.excluded.contains(&i) {
                 SatStatus::Excluded
             } else {

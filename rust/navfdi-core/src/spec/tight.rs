@@ -44,6 +44,10 @@ pub struct TightSpec {
     /// w-test critical value (None: the two-sided normal quantile of `alpha`).
     #[serde(default)]
     pub k: Option<f64>,
+    /// What opens `ls_precheck`'s exclusion loop: the global test (default), data snooping
+    /// (`wtest`), `both` or `auto` ([`crate::gnss::snapshot::Detection`]).
+    #[serde(default)]
+    pub ls_test: crate::gnss::snapshot::Detection,
     /// Also update with (and test) the pseudorange rates (default true).
     #[serde(default = "default_true")]
     pub rates: bool,
