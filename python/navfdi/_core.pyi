@@ -1146,10 +1146,13 @@ def snapshot_pl(
     sigma2: list[float],
     threshold: float,
     k_md: float,
+    overbound: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]:
     """Slope-based protection levels of the snapshot least-squares global test; use
-    :func:`navfdi.integrity.snapshot_pl`. Returns ``hpl``, ``vpl``, ``sigma_h``, ``sigma_v`` (m),
-    ``hslope``, ``vslope``, ``critical``."""
+    :func:`navfdi.gnss_integrity.snapshot_pl`. ``overbound``: ``(variances m², nominal biases
+    m)`` per satellite of an overbounding error model for the fault-free terms (the slopes keep
+    the test's σ). Returns ``hpl``, ``vpl``, ``sigma_h``, ``sigma_v`` (m), ``hslope``,
+    ``vslope``, ``critical``."""
 
 def araim_epoch(
     rows: list[list[float]] | list[tuple[float, float, float]],

@@ -137,8 +137,11 @@ pub fn araim_epoch<'py>(
 /// 0-based clock group per satellite; `sigma2` (n, m²); `threshold`: the χ² quantile the test
 /// compares `rᵀWr` with; `k_md`: the missed-detection quantile. Returns a dict: `hpl`, `vpl`,
 /// `sigma_h`, `sigma_v` (m), `hslope`, `vslope`, `critical` (index of the satellite with the
-/// largest vertical slope). ValueError for too few satellites or a singular geometry.
+/// largest vertical slope). `overbound` (optional): ``(variances m², nominal biases m)`` per
+/// satellite of an overbounding error model, for the fault-free terms (the slopes keep the
+/// test's σ). ValueError for too few satellites or a singular geometry.
 #[pyfunction]
+#[pyo3(signature = (los_enu, clock, sigma2, threshold, k_md, overbound = None))]
 pub fn snapshot_pl<'py>(
     py: Python<'py>,
     los_enu: Vec<[f64; 3]>,
@@ -146,14 +149,20 @@ pub fn snapshot_pl<'py>(
     sigma2: Vec<f64>,
     threshold: f64,
     k_md: f64,
+    overbound: Option<(Vec<f64>, Vec<f64>)>,
 ) -> PyResult<Bound<'py, PyDict>> {
     finite_rows(&los_enu)?;
     let los: Vec<nalgebra::Vector3<f64>> = los_enu
         .iter()
         .map(|r| nalgebra::Vector3::from(*r))
         .collect();
-    let pl = navfdi_core::integrity::snapshot::snapshot_pl(&los, &clock, &sigma2, threshold, k_md)
-        .py()?;
+    let ob = overbound
+        .as_ref()
+        .map(|(c, b)| (c.as_slice(), b.as_slice()));
+    let pl = navfdi_core::integrity::snapshot::snapshot_pl_overbound(
+        &los, &clock, &sigma2, threshold, k_md, ob,
+    )
+    .py()?;
     let d = PyDict::new(py);
     d.set_item("hpl", pl.hpl)?;
     d.set_item("vpl", pl.vpl)?;

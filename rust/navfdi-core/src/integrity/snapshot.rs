@@ -47,7 +47,41 @@ pub fn snapshot_pl(
     threshold: f64,
     k_md: f64,
 ) -> Result<SnapshotPl> {
+    snapshot_pl_overbound(los_enu, clock, sigma2, threshold, k_md, None)
+}
+
+/// [`snapshot_pl`] with the fault-free error taken from an overbounding error model instead
+/// of the test's σ: `overbound = (variances, nominal biases)` per satellite (m², m). The
+/// estimator and the test keep their weights (`sigma2`), so the slopes are unchanged; the
+/// position's fault-free σ is that of the estimator under the overbound, `K C_ob Kᵀ`, and the
+/// nominal biases add in the worst sign, `Σᵢ |K_uᵢ| bᵢ` (vertical) and the norm of the east
+/// and north sums (horizontal):
+/// `VPL = Vslope √T + k_md σ_v,ob + b_v`, `HPL = Hslope √T + k_md σ_h,ob + b_h`.
+pub fn snapshot_pl_overbound(
+    los_enu: &[Vector3<f64>],
+    clock: &[usize],
+    sigma2: &[f64],
+    threshold: f64,
+    k_md: f64,
+    overbound: Option<(&[f64], &[f64])>,
+) -> Result<SnapshotPl> {
     let n = los_enu.len();
+    if let Some((c, b)) = overbound {
+        if c.len() != n || b.len() != n {
+            return Err(Error::Invalid(format!(
+                "snapshot PL: {n} satellites, {} overbound variances and {} nominal biases",
+                c.len(),
+                b.len()
+            )));
+        }
+        if c.iter().any(|v| !(*v > 0.0 && v.is_finite()))
+            || b.iter().any(|v| !(*v >= 0.0 && v.is_finite()))
+        {
+            return Err(Error::Invalid(
+                "snapshot PL: overbound variances must be positive and nominal biases non-negative, all finite".into(),
+            ));
+        }
+    }
     if clock.len() != n || sigma2.len() != n {
         return Err(Error::Invalid(format!(
             "snapshot PL: {n} lines of sight, {} clock groups and {} variances",
@@ -103,6 +137,19 @@ pub fn snapshot_pl(
         }
         hs = hs.max(h);
     }
+    // Fault-free position covariance: the estimator's own, or under the overbound.
+    let (pcov, bias) = match overbound {
+        None => (cov.clone(), [0.0; 3]),
+        Some((c_ob, b_nom)) => {
+            let kc = DMatrix::from_fn(m, n, |r, i| k[(r, i)] * c_ob[i]);
+            let mut bias = [0.0; 3];
+            for (r, b) in bias.iter_mut().enumerate() {
+                *b = (0..n).map(|i| k[(r, i)].abs() * b_nom[i]).sum();
+            }
+            (&kc * k.transpose(), bias)
+        }
+    };
+    let cov = pcov;
     let sigma_v = cov[(2, 2)].max(0.0).sqrt();
     let (a, b, c) = (cov[(0, 0)], cov[(1, 1)], cov[(0, 1)]);
     let sigma_h = (0.5 * (a + b) + (0.25 * (a - b).powi(2) + c * c).sqrt())
@@ -110,8 +157,8 @@ pub fn snapshot_pl(
         .sqrt();
     let t = threshold.sqrt();
     Ok(SnapshotPl {
-        hpl: hs * t + k_md * sigma_h,
-        vpl: vs * t + k_md * sigma_v,
+        hpl: hs * t + k_md * sigma_h + bias[0].hypot(bias[1]),
+        vpl: vs * t + k_md * sigma_v + bias[2],
         hslope: hs,
         vslope: vs,
         critical: crit,
@@ -178,5 +225,37 @@ mod tests {
         assert!((b.vpl - a.vpl - 3.0 * a.sigma_v).abs() < 1e-12);
         assert!(b.hpl > a.hpl && a.hpl.is_finite());
         assert!(snapshot_pl(&los, &[0; 6], &[0.0; 6], 10.0, 3.0).is_err());
+        // The overbound equal to the test's σ and no bias: the same levels.
+        let same = snapshot_pl_overbound(
+            &los,
+            &[0; 6],
+            &[1.0; 6],
+            10.0,
+            3.0,
+            Some((&[1.0; 6], &[0.0; 6])),
+        )
+        .unwrap();
+        assert!((same.hpl - b.hpl).abs() < 1e-12 && (same.vpl - b.vpl).abs() < 1e-12);
+        // Four times the variance doubles the noise term; a bias adds Σ|K_u| b.
+        let ob = snapshot_pl_overbound(
+            &los,
+            &[0; 6],
+            &[1.0; 6],
+            10.0,
+            3.0,
+            Some((&[4.0; 6], &[0.5; 6])),
+        )
+        .unwrap();
+        assert!((ob.sigma_v - 2.0 * b.sigma_v).abs() < 1e-12);
+        assert!(ob.vpl > b.vpl + 3.0 * b.sigma_v && ob.vslope == b.vslope);
+        assert!(snapshot_pl_overbound(
+            &los,
+            &[0; 6],
+            &[1.0; 6],
+            10.0,
+            3.0,
+            Some((&[1.0; 5], &[0.0; 6]))
+        )
+        .is_err());
     }
 }
