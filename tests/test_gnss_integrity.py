@@ -56,6 +56,22 @@ def test_fault_free_levels_bound_the_errors(gps_galileo) -> None:
         assert (sat["raim_sigma_iono"] > sat["sigma"]).all()
 
 
+def test_levels_that_do_not_hold_are_said_in_one_line(gps_galileo) -> None:
+    import copy
+
+    from navfdi.gnss_integrity import _binom_sf, not_holding
+
+    assert not_holding(gps_galileo) == [] and "do not hold" not in gps_galileo.format_summary()
+    shrunk = copy.deepcopy(gps_galileo)
+    shrunk.solution["hpl_raim"] *= 0.05  # levels far below the 2.8 m error
+    lines = not_holding(shrunk)
+    assert len(lines) == 1 and lines[0].startswith("snapshot RAIM levels exceeded by the error at 301 of 301 epochs")
+    assert lines[0] in " ".join(shrunk.format_summary().split())  # wrapped at 100 columns
+    # One exceedance in 301 epochs is within snapshot RAIM's 1e-3 per epoch; not ARAIM's 1e-7.
+    assert _binom_sf(1, 301, 1e-3) > 0.01 and _binom_sf(1, 301, 1e-7) < 0.01
+    assert _binom_sf(0, 10, 0.5) == 1.0 and abs(_binom_sf(5, 10, 0.5) - 0.623046875) < 1e-12
+
+
 def test_klobuchar_residual_sigma_follows_do229() -> None:
     from navfdi.gnss_integrity import klobuchar_residual_sigma
 

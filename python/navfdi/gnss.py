@@ -431,6 +431,9 @@ class GnssSolution:
             lines.append(line)
             for reason, count in sorted(ig.get("failed_epochs", {}).items(), key=lambda kv: -kv[1]):
                 lines.append(f"  integrity not computed at {count} epoch(s): {reason}")
+            from navfdi.gnss_integrity import not_holding
+
+            lines += not_holding(self)
         skipped = ", ".join(f"{k} {v}" for k, v in sorted(s["skipped"].items())) or "none"
         lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"

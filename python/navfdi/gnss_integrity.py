@@ -398,7 +398,47 @@ def integrity_summary(solution: Any) -> dict[str, Any]:
             out[f"{kind}_{d}_hazardously_misleading"] = int((mi & (err > al)).sum())
             out[f"{kind}_{d}_pl_median"] = float(np.median(pl[ok])) if ok.any() else math.nan
             out[f"{kind}_{d}_error_over_pl_max"] = float(np.max(err[ok] / pl[ok])) if ok.any() else math.nan
+        # Every epoch with finite levels, available or not: the share the levels were allotted.
+        hp, vp = sol[h].to_numpy(float), sol[v].to_numpy(float)
+        tested = np.isfinite(hp) & np.isfinite(vp) & np.isfinite(he) & np.isfinite(ve)
+        out[f"{kind}_tested_epochs"] = int(tested.sum())
+        out[f"{kind}_exceeded_epochs"] = int((tested & ((he > hp) | (ve > vp))).sum())
     return out
+
+
+def allotted_share(config: dict[str, Any], kind: str) -> float:
+    """The per-epoch probability of error > PL a level kind (``araim``, ``raim``,
+    ``araim_fde``) is built for, from ``solution.config["integrity"]``."""
+    if kind == "raim":
+        return float(config["p_md_raim"])
+    p = config["probabilities"]
+    return float(p["p_hmi_vert"] + p["p_hmi_hor"])
+
+
+def not_holding(solution: Any) -> list[str]:
+    """One line per level kind whose levels the error exceeds at more epochs than its
+    allotted share allows (binomial, 1 % significance): empty when every kind holds or there is
+    no truth."""
+    if solution.truth is None or "integrity" not in solution.config:
+        return []
+    s = integrity_summary(solution)
+    names = {"araim": "ARAIM", "raim": "snapshot RAIM", "araim_fde": "ARAIM after its own exclusion"}
+    lines = []
+    for kind, name in names.items():
+        n, k = s.get(f"{kind}_tested_epochs", 0), s.get(f"{kind}_exceeded_epochs", 0)
+        p = allotted_share(solution.config["integrity"], kind)
+        if k and _binom_sf(k, n, p) < 0.01:
+            lines.append(f"{name} levels exceeded by the error at {k} of {n} epochs, more than their allotted {p:.1e} per epoch: they do not hold on these data")
+    return lines
+
+
+def _binom_sf(k: int, n: int, p: float) -> float:
+    """P(X ≥ k) for X ~ Binomial(n, p) (log-space terms; k ≤ n)."""
+    if k <= 0:
+        return 1.0
+    lp, lq = math.log(p), math.log1p(-p)
+    below = sum(math.exp(math.lgamma(n + 1) - math.lgamma(j + 1) - math.lgamma(n - j + 1) + j * lp + (n - j) * lq) for j in range(k))
+    return max(0.0, 1.0 - below)
 
 
 def plot_stanford(solution: Any, out: Path) -> list[Path]:
