@@ -201,6 +201,15 @@ def test_campaign_draws_faults_per_run_reproducibly() -> None:
     assert len(steps) and len(ramps)
     assert steps.fault_magnitude.between(10, 40).all() and ramps.fault_magnitude.between(0.2, 1.0).all()
     assert set(rows.fault_components) <= {"0", "1"}
+    # The hold machine's exclusions are counted (the channel as one satellite): the fde variant
+    # leaves the position out at nearly every fault epoch, the no-FDE variant never.
+    s = a.summary()
+    key = (s.subfilter == "gnss_pos") & (s.detector == "exclude")
+    fde, nofde = s[key & (s.variant == "fde")], s[key & (s.variant == "no_fde")]
+    assert fde.loc[fde.fault_id == "gnss_fault", "detection_rate"].iloc[0] > 0.9
+    assert 0 < fde.loc[fde.fault_id == "none", "false_exclusion_rate"].iloc[0] < 0.05
+    assert nofde.loc[nofde.fault_id == "gnss_fault", "detection_rate"].iloc[0] == 0
+    assert "exclusions (pooled)" in a.format_table()
     # A 10-40 m step is excluded at the first 1 Hz epoch, and the solution stays within a few
     # metres (velocity coasting) while the no-FDE variant follows the step.
     assert steps.detected.all() and (steps.delay <= 1.0).all()

@@ -72,7 +72,8 @@ RUN_COLUMNS = [
 ]
 
 
-#: Satellite-FDE counts per run and cell (tight architecture; zero otherwise), see
+#: Satellite-FDE counts per run and cell (tight architecture; for a loosely coupled channel its
+#: exclusions of any reason, the channel counted as one satellite; zero otherwise), see
 #: ``navfdi_core::metrics::SatFaultMetrics``.
 FDE_COUNTS = [c for c in RUN_COLUMNS if c.startswith("fde_")]
 
@@ -234,7 +235,9 @@ class Campaign:
         ``false_alarm_rate, false_alarm_ci_low, false_alarm_ci_high`` (per epoch outside the
         faults; Wilson 95 % treating epochs as independent trials, which understates the
         interval for detectors with memory such as the SPRT), ``wrong_isolations`` (per run),
-        satellite FDE (tight architecture, pooled over runs; NaN elsewhere):
+        satellite FDE (tight architecture, pooled over runs; for a loosely coupled channel its
+        exclusions of any reason — the test, a held step, a stale fix, a ramp — the channel
+        counted as one satellite; NaN elsewhere):
         ``detection_rate`` (faulty epochs with the faulty satellite excluded / faulty epochs
         with it in view), ``identification_rate`` (epochs with exactly it excluded / epochs
         with any exclusion in the window), ``false_exclusion_rate`` (satellites excluded per
@@ -501,15 +504,20 @@ class Campaign:
                         lines.append(f"  {cut(name, 11):<11} {cut(str(det), 8):<8} {'none':<10} {int(oo['runs'].iloc[0]):>5}  false alarms/epoch {fa:.5f}{ci}")
             fde = g[g["detection_rate"].notna() | g["false_exclusion_rate"].notna()]
             if len(fde):
-                lines.append(f"  satellite FDE (pooled): {'fault':<10} {'sat':<4} {'detection':>9} {'identif.':>9} {'after':>7} {'false excl./epoch':>18}")
+                # A loosely coupled channel's exclusions (any reason) are counted as one
+                # satellite's: the column names the channel instead.
+                lc = self.scenario.core.get("architecture") == "loosely_coupled"
+                title, col = ("exclusions (pooled):   ", "channel ") if lc else ("satellite FDE (pooled):", "sat     ")
+                lines.append(f"  {title} {'fault':<10} {col} {'detection':>9} {'identif.':>9} {'after':>7} {'false excl./epoch':>14}")
                 seen = set()
                 for _, r in fde.iterrows():
                     fe = r["false_exclusion_rate"]
-                    vals = (r["fault_id"], sat_of.get(r["fault_id"], ""), pct(r["detection_rate"]), pct(r["identification_rate"]), pct(r["after_fault_alarm_rate"]), "-" if fe != fe else f"{fe:.4f}")
+                    who = cut(str(r["subfilter"]), 8) if lc else sat_of.get(r["fault_id"], "")
+                    vals = (r["fault_id"], who, pct(r["detection_rate"]), pct(r["identification_rate"]), pct(r["after_fault_alarm_rate"]), "-" if fe != fe else f"{fe:.4f}")
                     if vals in seen:
                         continue
                     seen.add(vals)
-                    lines.append(f"  {'':<23} {cut(vals[0], 10):<10} {vals[1]:<4} {vals[2]:>9} {vals[3]:>9} {vals[4]:>7} {vals[5]:>18}")
+                    lines.append(f"  {'':<23} {cut(vals[0], 10):<10} {vals[1]:<8} {vals[2]:>9} {vals[3]:>9} {vals[4]:>7} {vals[5]:>14}")
             lines.append("")
         lines += self._integrity_lines()
         lines.append("P(det): share of runs with an alarm raised inside the fault window (or 1 s after);")

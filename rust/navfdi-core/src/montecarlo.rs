@@ -345,6 +345,25 @@ pub fn metrics_of(spec: &ScenarioSpec, run: u64, rec: &RunRecord, cells: &[Cell]
             if let Some(sm) = sr.metrics.iter().find(|m| m.fault == c.fault) {
                 m.sat = *sm;
             }
+        } else if !sub.reason.is_empty() {
+            // A loosely coupled channel's exclusions, whatever their reason (the test, a held
+            // step, a stale fix, a ramp), counted as satellite FDE counts them, the channel
+            // being the one "satellite": epochs it measured (tested or left out), epochs it
+            // was left out in each fault window, and outside them.
+            let out_k = |k: usize| sub.reason.get(k).is_some_and(|r| *r != 0);
+            let measured: Vec<bool> = (0..t.len()).map(|k| det_tested[k] || out_k(k)).collect();
+            let excluded: Vec<bool> = (0..t.len()).map(out_k).collect();
+            let fl: Vec<crate::metrics::SatFault> = spec
+                .faults
+                .iter()
+                .enumerate()
+                .filter(|(_, f)| channel.sees(f))
+                .map(|(i, f)| (i, 0, f.start, f.end))
+                .collect();
+            let all = crate::metrics::satellite_metrics(t, &measured, &measured, &excluded, 1, &fl);
+            if let Some(sm) = all.iter().find(|m| m.fault == c.fault) {
+                m.sat = *sm;
+            }
         }
         match c.fault {
             Some(fi) => {
