@@ -433,7 +433,7 @@ class GnssSolution:
                 lines.append(f"  integrity not computed at {count} epoch(s): {reason}")
             from navfdi.gnss_integrity import not_holding
 
-            lines += not_holding(self)
+            lines += not_holding(self, ig)
         skipped = ", ".join(f"{k} {v}" for k, v in sorted(s["skipped"].items())) or "none"
         lines.append(f"satellite-epochs skipped: {skipped}")
         ex = ", ".join(f"{k} {v}" for k, v in sorted(s["exclusions"].items())) or "none"

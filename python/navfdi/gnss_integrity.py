@@ -11,8 +11,9 @@ Per solved epoch, over the satellites the solution used (after exclusion):
 * snapshot RAIM (:func:`navfdi.integrity.snapshot_pl`): slope-based levels of the same global
   test (its threshold and weights) at the missed-detection probability ``p_md``, with the
   fault-free error from an overbounding model (:func:`range_error_model`: σ_URA, the Klobuchar
-  residual, the troposphere and the solution's own σ, plus the nominal bias); each term per
-  used satellite-epoch in ``satellites`` (``raim_sigma_ura``, ``raim_sigma_iono``,
+  residual the solve reports per satellite (``iono_sigma``), the troposphere and the
+  solution's own σ, plus the nominal bias); each term per
+  used satellite-epoch in ``satellites`` (``raim_sigma_ura``, ``iono_sigma`` from the solve,
   ``raim_sigma_tropo``, ``raim_sigma_total``, m).
 
 Columns added to ``solution``: ``hpl``, ``vpl``, ``emt`` (ARAIM, m), ``hpl_raim``,
@@ -197,48 +198,21 @@ def snapshot_pl(los_enu: Any, systems: list[str], sigma2: Any, threshold: float,
     return _core.snapshot_pl(los.tolist(), [letters.index(s) for s in systems], [float(v) for v in np.asarray(sigma2, dtype=float)], float(threshold), k_md, ob)
 
 
-#: Vertical ionospheric delay left after the broadcast correction, 1σ (m), by |geomagnetic
-#: latitude| of the pierce point (RTCA DO-229, appendix J: within 20°, to 55°, beyond).
-IONO_TAU_VERT = ((20.0, 9.0), (55.0, 4.5), (90.0, 6.0))
-
-
-def klobuchar_residual_sigma(elevation: Any, azimuth: Any, lat_deg: float, lon_deg: float, scale: Any = 1.0) -> np.ndarray:
-    """σ (m) of the ionospheric delay left after the Klobuchar correction on L1, per satellite:
-    DO-229's single-frequency model ``σ = F_pp τ_vert`` with ``F_pp = [1 − (R_e cos el /
-    (R_e + 350 km))²]^(−1/2)`` and ``τ_vert`` (:data:`IONO_TAU_VERT`) at the geomagnetic
-    latitude of the ionospheric pierce point (Klobuchar's formulas, IS-GPS-200).
-    ``elevation``, ``azimuth`` (n) in rad; ``scale`` (n) the delay's frequency factor
-    ((f_L1/f)², 1 on L1/E1)."""
-    el, az = np.asarray(elevation, dtype=float), np.asarray(azimuth, dtype=float)
-    e_sc = el / np.pi
-    psi = 0.0137 / (e_sc + 0.11) - 0.022
-    phi_i = np.clip(lat_deg / 180.0 + psi * np.cos(az), -0.416, 0.416)
-    lam_i = lon_deg / 180.0 + psi * np.sin(az) / np.cos(phi_i * np.pi)
-    phi_m = np.abs(phi_i + 0.064 * np.cos((lam_i - 1.617) * np.pi)) * 180.0
-    tau = np.where(phi_m <= IONO_TAU_VERT[0][0], IONO_TAU_VERT[0][1], np.where(phi_m <= IONO_TAU_VERT[1][0], IONO_TAU_VERT[1][1], IONO_TAU_VERT[2][1]))
-    re, hi = 6378.1363, 350.0
-    fpp = 1.0 / np.sqrt(1.0 - (re * np.cos(el) / (re + hi)) ** 2)
-    return fpp * tau * np.asarray(scale, dtype=float)
-
-
-#: (f_L1 / f)² of the first-band signals: the ionospheric delay's scale (BeiDou B1I 1561.098 MHz).
-IONO_SCALE = {"G": 1.0, "E": 1.0, "J": 1.0, "C": (1575.42 / 1561.098) ** 2}
-
-
-def range_error_model(elevation: Any, azimuth: Any, systems: Sequence[str], sigma_noise: Any, lat_deg: float, lon_deg: float, ism: Ism) -> dict[str, np.ndarray]:
+def range_error_model(elevation: Any, sigma_iono: Any, sigma_noise: Any, ism: Ism) -> dict[str, np.ndarray]:
     """The overbounding pseudorange error model of the snapshot RAIM levels, per satellite
-    (arrays (n,), m): ``ura`` (the ISM's σ_URA: orbit and clock), ``iono``
-    (:func:`klobuchar_residual_sigma`), ``tropo`` (the ADD's ``0.12 m · 1.001 / sqrt(0.002001 +
-    sin² el)``, as ARAIM's), ``noise`` (the solution's own σ: code noise and multipath by
-    elevation or C/N0, with ``--noise`` applied), ``total`` (the root sum of squares) and
-    ``b_nom`` (the ISM's nominal bias)."""
+    (arrays (n,), m; ``elevation`` in rad): ``ura`` (the ISM's σ_URA: orbit and clock),
+    ``iono`` (``sigma_iono``: the solution's ``iono_sigma``, the Klobuchar residual by DO-229's
+    single-frequency model, ``navfdi_core::gnss::atmosphere::klobuchar_residual_sigma``),
+    ``tropo`` (the ADD's ``0.12 m · 1.001 / sqrt(0.002001 + sin² el)``, as ARAIM's), ``noise``
+    (the solution's own σ: code noise and multipath by elevation or C/N0, with ``--noise``
+    applied), ``total`` (the root sum of squares) and ``b_nom`` (the ISM's nominal bias)."""
     from navfdi.integrity import elevation_variances
 
     el = np.asarray(elevation, dtype=float)
     n = el.size
     per = lambda v: np.broadcast_to(np.asarray(v, dtype=float), (n,)).astype(float)  # noqa: E731
     ura = per(ism.sigma_ura)
-    iono = klobuchar_residual_sigma(el, azimuth, lat_deg, lon_deg, [IONO_SCALE.get(s, 1.0) for s in systems])
+    iono = per(sigma_iono)
     tropo = np.sqrt(elevation_variances(el)[0])
     noise = per(sigma_noise)
     return {"ura": ura, "iono": iono, "tropo": tropo, "noise": noise, "total": np.sqrt(ura**2 + iono**2 + tropo**2 + noise**2), "b_nom": per(ism.b_nom)}
@@ -273,7 +247,7 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
     state = np.full(n, "no_solution", dtype=object)
     state_fde = np.full(n, "no_solution", dtype=object)
     # The snapshot RAIM levels' error model per used satellite-epoch (NaN elsewhere).
-    terms = {k: np.full(len(sats), np.nan) for k in ("ura", "iono", "tropo", "total")}
+    terms = {k: np.full(len(sats), np.nan) for k in ("ura", "tropo", "total")}
     fde_excluded = np.full(n, "", dtype=object)
     for i in range(n):
         if sol["status"].iat[i] != "no_solution" and i in all_by_epoch:
@@ -297,8 +271,8 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
         thr = float(sol["threshold"].iat[i])
         if math.isfinite(thr) and thr > 0:
             try:
-                em = range_error_model(el, az, systems, np.sqrt(s2), float(sol["lat"].iat[i]), float(sol["lon"].iat[i]), ism)
-                for k in ("ura", "iono", "tropo", "total"):
+                em = range_error_model(el, g["iono_sigma"].to_numpy(float), np.sqrt(s2), ism)
+                for k in terms:
                     terms[k][g.index.to_numpy()] = em[k]
                 p = snapshot_pl(los, systems, s2, thr, p_md, overbound=(em["total"] ** 2, em["b_nom"]))
                 cols["hpl_raim"][i], cols["vpl_raim"][i] = p["hpl"], p["vpl"]
@@ -415,13 +389,13 @@ def allotted_share(config: dict[str, Any], kind: str) -> float:
     return float(p["p_hmi_vert"] + p["p_hmi_hor"])
 
 
-def not_holding(solution: Any) -> list[str]:
+def not_holding(solution: Any, summary: dict[str, Any] | None = None) -> list[str]:
     """One line per level kind whose levels the error exceeds at more epochs than its
     allotted share allows (binomial, 1 % significance): empty when every kind holds or there is
-    no truth."""
+    no truth. ``summary``: :func:`integrity_summary` of ``solution`` when already computed."""
     if solution.truth is None or "integrity" not in solution.config:
         return []
-    s = integrity_summary(solution)
+    s = integrity_summary(solution) if summary is None else summary
     names = {"araim": "ARAIM", "raim": "snapshot RAIM", "araim_fde": "ARAIM after its own exclusion"}
     lines = []
     for kind, name in names.items():

@@ -32,10 +32,7 @@ pub fn klobuchar(coef: &Klobuchar, sow: f64, lat: f64, lon: f64, h: f64, az: f64
     } else {
         coef
     };
-    let psi = 0.0137 / (el / PI + 0.11) - 0.022;
-    let phi = (lat / PI + psi * az.cos()).clamp(-0.416, 0.416);
-    let lam = lon / PI + psi * az.sin() / (phi * PI).cos();
-    let phi = phi + 0.064 * ((lam - 1.617) * PI).cos();
+    let (phi, lam) = pierce_point(lat, lon, az, el);
     let mut tt = 43_200.0 * lam + sow;
     tt -= (tt / 86_400.0).floor() * 86_400.0;
     let f = 1.0 + 16.0 * (0.53 - el / PI).powi(3);
@@ -48,6 +45,34 @@ pub fn klobuchar(coef: &Klobuchar, sow: f64, lat: f64, lon: f64, h: f64, az: f64
         5e-9
     };
     super::C * f * delay
+}
+
+/// Klobuchar's ionospheric pierce point (IS-GPS-200): its geomagnetic latitude and its
+/// geodetic longitude, both in semicircles, for a receiver at `lat`, `lon` (rad) and a
+/// satellite at azimuth `az`, elevation `el` (rad).
+fn pierce_point(lat: f64, lon: f64, az: f64, el: f64) -> (f64, f64) {
+    let psi = 0.0137 / (el / PI + 0.11) - 0.022;
+    let phi = (lat / PI + psi * az.cos()).clamp(-0.416, 0.416);
+    let lam = lon / PI + psi * az.sin() / (phi * PI).cos();
+    (phi + 0.064 * ((lam - 1.617) * PI).cos(), lam)
+}
+
+/// Vertical ionospheric delay left after the Klobuchar correction, 1σ (m), by |geomagnetic
+/// latitude| of the pierce point (RTCA DO-229, appendix J): within 20°, to 55°, beyond.
+pub const IONO_TAU_VERT: [(f64, f64); 3] = [(20.0, 9.0), (55.0, 4.5), (90.0, 6.0)];
+
+/// σ (m) of the L1 ionospheric delay left after the Klobuchar correction: DO-229's
+/// single-frequency model `F_pp τ_vert`, `F_pp = [1 − (R_e cos el / (R_e + 350 km))²]^(−1/2)`,
+/// `τ_vert` ([`IONO_TAU_VERT`]) at the geomagnetic latitude of Klobuchar's pierce point;
+/// receiver `lat`, `lon`, satellite `az`, `el` in rad. Other frequencies scale by `(f_L1/f)²`.
+pub fn klobuchar_residual_sigma(lat: f64, lon: f64, az: f64, el: f64) -> f64 {
+    let phi_m = pierce_point(lat, lon, az, el).0.abs() * 180.0;
+    let tau = IONO_TAU_VERT
+        .iter()
+        .find(|(edge, _)| phi_m <= *edge)
+        .map_or(IONO_TAU_VERT[2].1, |b| b.1);
+    let (re, hi) = (6_378.136_3, 350.0);
+    tau / (1.0 - (re * el.cos() / (re + hi)).powi(2)).sqrt()
 }
 
 /// Saastamoinen tropospheric delay (m) with the standard atmosphere (15 °C and 1013.25 hPa at
@@ -71,6 +96,20 @@ pub fn saastamoinen(lat: f64, h: f64, el: f64, humidity: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn klobuchar_residual_sigma_follows_do229() {
+        let up = PI / 2.0;
+        let d = |x: f64| x.to_radians();
+        // Zenith: F_pp = 1, σ = τ_vert of the pierce point's geomagnetic band.
+        assert!((klobuchar_residual_sigma(d(35.0), d(137.0), 0.0, up) - 4.5).abs() < 1e-9); // Nagoya
+        assert!((klobuchar_residual_sigma(d(-5.0), d(-80.0), 0.0, up) - 9.0).abs() < 1e-9);
+        assert!((klobuchar_residual_sigma(d(70.0), 0.0, 0.0, up) - 6.0).abs() < 1e-9);
+        // Lower satellites: the obliquity factor, up to ≈ 3 at the horizon.
+        let low = klobuchar_residual_sigma(d(35.0), d(137.0), 0.0, d(5.0));
+        let mid = klobuchar_residual_sigma(d(35.0), d(137.0), 0.0, d(30.0));
+        assert!(2.5 * 4.5 < low && low < 3.1 * 4.5 && 4.5 < mid && mid < low);
+    }
 
     #[test]
     fn magnitudes_are_physical() {

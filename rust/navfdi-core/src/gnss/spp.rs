@@ -25,7 +25,7 @@
 //! Injected faults ([`InjectedFault`]) are added to the chosen satellites' pseudoranges before
 //! all of this, so detectors are scored on real noise with known faults.
 
-use super::atmosphere::{klobuchar, saastamoinen, Klobuchar};
+use super::atmosphere::{klobuchar, klobuchar_residual_sigma, saastamoinen, Klobuchar};
 use super::broadcast::{select, EphProblem, GpsTime, Sat, Sys};
 use super::geodesy::{ecef_to_lla, elevation_azimuth};
 use super::rinex::{NavData, ObsData};
@@ -310,6 +310,10 @@ pub struct SatRow {
     pub sigma: f64,
     /// Ionospheric and tropospheric delays at the final solution (m).
     pub iono: f64,
+    /// σ of the ionospheric delay left after the broadcast correction at the final solution
+    /// (m, DO-229's single-frequency model on this signal's frequency:
+    /// [`super::atmosphere::klobuchar_residual_sigma`]; NaN without a solution).
+    pub iono_sigma: f64,
     /// Tropospheric delay (m).
     pub tropo: f64,
     /// Injected fault (m; 0 when none).
@@ -553,6 +557,7 @@ pub fn solve(
                 mdb: f64::NAN,
                 sigma: f64::NAN,
                 iono: f64::NAN,
+                iono_sigma: f64::NAN,
                 tropo: f64::NAN,
                 fault,
                 sat_pos: Vector3::repeat(f64::NAN),
@@ -800,6 +805,7 @@ fn solve_epoch(
             .map(|(j, s)| (*s, x[3 + j]))
             .collect();
         let w = outcome.w_with_excluded();
+        let (lat, lon, _) = ecef_to_lla(&p);
         for (i, c) in cands.iter().enumerate() {
             let row = &mut out.sats[c.row];
             if !usable[i] {
@@ -808,6 +814,7 @@ fn solve_epoch(
             let (pred, _, extra) = model.geo.predict(x.as_slice(), i);
             row.residual = rho[i] - pred;
             row.iono = extra[0];
+            row.iono_sigma = klobuchar_residual_sigma(lat, lon, extra[3], extra[2]) * c.iono_scale;
             row.tropo = extra[1];
             row.w = w[i];
             row.mdb = outcome.mdb[i];
