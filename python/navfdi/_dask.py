@@ -6,20 +6,20 @@ point's prepared source (:class:`navfdi._core.LoggedSource`: IMU samples, GNSS s
 satellite ranges, reference and the fault-free datum, a few MB) **once per worker**, chosen by
 ``ship``:
 
-- ``"scatter"`` (default): the client sends it to every worker before the first chunk
+- ``"scatter"`` (default): the client sends its bytes to every worker before the first chunk
   (``Client.scatter(..., broadcast=True)``); the chunks refer to the worker's copy;
 - a directory every worker sees at the same path (a shared file system): the client writes
   each source there once (``<scenario>-<point>-<hash>.navsrc``, kept for later campaigns on
-  the same source) and each worker reads it at its first chunk and keeps it.
+  the same source) and each worker reads it at its first chunk.
 
-Either way the chunk protocol is the local one (same tasks, same per-run seeds), so the runs
-are bit-identical to an in-process campaign. What was shipped and the workers' peak memory
+Either way the source is encoded once, and each worker decodes it at its first chunk and keeps
+it (by the hash of its bytes). The chunk protocol is the local one (same tasks, same per-run
+seeds), so the runs are bit-identical to an in-process campaign. What was shipped and the workers' peak memory
 are reported (:class:`Transfer`, ``Campaign.transfer``, ``campaign.json``).
 """
 
 from __future__ import annotations
 
-import functools
 import hashlib
 import os
 import sys
@@ -46,8 +46,8 @@ class Transfer:
         Bytes of prepared sources each worker received or read, once (0 for a simulated
         scenario).
     ship_seconds : float
-        Wall time spent shipping them (s): the scatter, or writing the files plus the slowest
-        worker's first read.
+        Wall time spent shipping them (s): encoding and the scatter, or writing the files,
+        plus the slowest worker's first read and decode.
     workers : int
         Workers that ran chunks.
     peak_worker_rss : dict
@@ -98,29 +98,27 @@ def _worker() -> str:
         return f"pid {os.getpid()}"
 
 
-@functools.lru_cache(maxsize=8)
-def _read_source(path: str, mtime_ns: int, size: int) -> tuple[Any, float]:
-    """The prepared source in ``path`` (read once per worker process and file version), and
-    the seconds the read took."""
+#: Prepared sources decoded in this worker process, by the hash of their bytes.
+_DECODED: dict[str, Any] = {}
+
+
+def logged_chunk(key: str, source: bytes | str, seed: int, start: int, count: int, keep: tuple[int, ...]) -> tuple[dict[str, Any], str, int, float]:
+    """One chunk of a campaign on recorded logs, run on a worker: ``source`` is the prepared
+    source's bytes (the worker's scattered copy) or the path of its file, ``key`` their hash;
+    they are decoded at the worker's first chunk and kept. Returns the chunk, the worker's
+    address, its peak memory (bytes) and the seconds spent reading and decoding the source here
+    (0 when it was already decoded)."""
     from navfdi import _core
 
-    t = time.perf_counter()
-    src = _core.LoggedSource.from_bytes(Path(path).read_bytes())
-    return src, time.perf_counter() - t
-
-
-def logged_chunk(source: Any, seed: int, start: int, count: int, keep: tuple[int, ...]) -> tuple[dict[str, Any], str, int, float]:
-    """One chunk of a campaign on recorded logs, run on a worker: ``source`` is the worker's
-    copy of the prepared source (scattered) or the path of its file. Returns the chunk, the
-    worker's address, its peak memory (bytes) and the seconds spent reading the source here
-    (0 when it was already read)."""
     load = 0.0
-    if isinstance(source, str):
-        st = os.stat(source)
-        hits = _read_source.cache_info().hits
-        source, took = _read_source(source, st.st_mtime_ns, st.st_size)
-        load = 0.0 if _read_source.cache_info().hits > hits else took
-    chunk = source.run_chunk(seed, start, count, 1, list(keep))
+    if key not in _DECODED:
+        t = time.perf_counter()
+        blob = Path(source).read_bytes() if isinstance(source, str) else source
+        if len(_DECODED) >= 8:
+            _DECODED.pop(next(iter(_DECODED)))
+        _DECODED[key] = _core.LoggedSource.from_bytes(blob)
+        load = time.perf_counter() - t
+    chunk = _DECODED[key].run_chunk(seed, start, count, 1, list(keep))
     return chunk, _worker(), _peak_rss(), load
 
 
@@ -130,26 +128,28 @@ def scenario_chunk(chunk_fn: Any, *args: Any) -> tuple[dict[str, Any], str, int,
     return chunk_fn(*args), _worker(), _peak_rss(), 0.0
 
 
-def ship_sources(client: Any, name: str, prepared: list[Any], ship: str | os.PathLike[str]) -> tuple[list[Any], Transfer]:
-    """Ship each prepared source to the workers once; returns what the chunks take as their
-    source (scatter futures or file paths) and the transfer so far."""
+def ship_sources(client: Any, name: str, prepared: list[Any], ship: str | os.PathLike[str]) -> tuple[list[tuple[str, Any]], Transfer]:
+    """Ship each prepared source to the workers once, encoded once
+    (:meth:`navfdi._core.LoggedSource.to_bytes`); returns what the chunks take as their
+    source — ``(hash, scatter future of the bytes or file path)`` — and the transfer so far."""
     t = time.perf_counter()
     blobs = [p.to_bytes() for p in prepared]
+    keys = [hashlib.sha256(b).hexdigest()[:16] for b in blobs]
     size = sum(len(b) for b in blobs)
     if str(ship) == SHIP_SCATTER:
-        handles = [client.scatter(p, broadcast=True, hash=False) for p in prepared]
+        handles = [(k, client.scatter(b, broadcast=True, hash=False)) for k, b in zip(keys, blobs)]
         return handles, Transfer(SHIP_SCATTER, len(prepared), size, time.perf_counter() - t)
     folder = Path(ship)
     if not folder.is_dir():
         raise ValueError(f"ship = {str(ship)!r}: not a directory; give \"scatter\" or a directory every Dask worker sees at this path")
     paths = []
-    for i, blob in enumerate(blobs):
-        path = folder / f"{name}-{i}-{hashlib.sha256(blob).hexdigest()[:16]}.navsrc"
+    for i, (key, blob) in enumerate(zip(keys, blobs)):
+        path = folder / f"{name}-{i}-{key}.navsrc"
         if not (path.is_file() and path.stat().st_size == len(blob)):
             tmp = path.with_suffix(f".tmp{os.getpid()}")
             tmp.write_bytes(blob)
             tmp.replace(path)
-        paths.append(str(path.resolve()))
+        paths.append((key, str(path.resolve())))
     return paths, Transfer(str(folder.resolve()), len(prepared), size, time.perf_counter() - t)
 
 
@@ -163,7 +163,7 @@ def run_chunks(client: Any, tasks: list[tuple[int, int, int]], seed: int, keep: 
     def submit(p: int, s: int, c: int) -> Any:
         kept = tuple(k for k in keep if s <= k < s + c)
         if sources is not None:
-            return client.submit(logged_chunk, sources[p], int(seed), s, c, kept, pure=False)
+            return client.submit(logged_chunk, *sources[p], int(seed), s, c, kept, pure=False)
         return client.submit(scenario_chunk, chunk_fn, jsons[p], int(seed), s, c, 1, kept, pure=False)
 
     futures = {submit(p, s, c): (p, s, c) for p, s, c in tasks}
