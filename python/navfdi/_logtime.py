@@ -19,7 +19,7 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS"]
+__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps"]
 
 GPS_EPOCH = _dt.datetime(1980, 1, 6)
 _WEEK = 604800.0
@@ -29,6 +29,12 @@ LEAP_SECONDS = [(_dt.datetime(2006, 1, 1), 14), (_dt.datetime(2009, 1, 1), 15), 
 
 _WEEK_SOW = re.compile(r"^\s*(\d{1,5})\s*:\s*(\d+(?:\.\d*)?)\s*$")
 _ISO = re.compile(r"^\s*(\d{4}-\d{2}-\d{2})[T ](\d{2}:\d{2}:\d{2}(?:\.\d+)?)\s*(GPST|UTC)\s*$", re.IGNORECASE)
+
+
+def utc_to_gps(d: _dt.datetime) -> float:
+    """GPS seconds since 1980-01-06 of the UTC date-time ``d`` (the leap seconds of its date)."""
+    leap = next((n for since, n in reversed(LEAP_SECONDS) if d >= since), 13)
+    return (d - GPS_EPOCH).total_seconds() + leap
 
 
 def pos_time(tok0: str, tok1: str) -> float:
@@ -57,10 +63,7 @@ def gps_seconds(value: Any, field: str) -> float | None:
             d = _dt.datetime.fromisoformat(f"{m.group(1)}T{m.group(2)}")
         except ValueError:
             raise ScenarioError(f"{field} = {value!r}: not a date and time (YYYY-MM-DDTHH:MM:SS GPST|UTC)") from None
-        s = (d - GPS_EPOCH).total_seconds()
-        if m.group(3).upper() == "UTC":
-            s += next((n for since, n in reversed(LEAP_SECONDS) if d >= since), 13)
-        return s
+        return utc_to_gps(d) if m.group(3).upper() == "UTC" else (d - GPS_EPOCH).total_seconds()
     if re.match(r"^\s*\d{4}-\d{2}-\d{2}[T ]", value) or ":" in value:
         raise ScenarioError(f"{field} = {value!r}: a GPS time is 'WEEK:SECONDS' (e.g. \"2374:243500.0\") or "
                             "'YYYY-MM-DDTHH:MM:SS GPST' (or UTC)")

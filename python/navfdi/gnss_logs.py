@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from navfdi._errors import ScenarioError
-from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, LEAP_SECONDS
+from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, utc_to_gps
 from navfdi.logs import PosLog, read_pos
 
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
@@ -158,11 +158,6 @@ def _deg(v: str, hemi: str) -> float:
     return -out if hemi in ("S", "W") else out
 
 
-def _utc_to_gps(d: _dt.datetime) -> float:
-    leap = next((n for since, n in reversed(LEAP_SECONDS) if d >= since), 13)
-    return (d - GPS_EPOCH).total_seconds() + leap
-
-
 def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> PosLog:
     """NMEA 0183 ``GGA`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
     module's description."""
@@ -224,7 +219,7 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
         if day is not None and hms not in pending_day and prev_sec is not None and sec < prev_sec - 43200:
             d = d + _dt.timedelta(days=1)  # midnight rollover
         cur, prev_sec = d, sec
-        t.append(_utc_to_gps(_dt.datetime.combine(d, _dt.time()) + _dt.timedelta(seconds=sec)))
+        t.append(utc_to_gps(_dt.datetime.combine(d, _dt.time()) + _dt.timedelta(seconds=sec)))
     g = lambda k: np.array([rows[h].get(k, math.nan) for h in order])  # noqa: E731
     vel = np.column_stack([g("ve"), g("vn"), np.where(np.isfinite(g("ve")), 0.0, np.nan)])
     sd = np.column_stack([g("sde"), g("sdn"), g("sdu")])
@@ -285,7 +280,7 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
                 ds = [_dt.datetime.fromisoformat(v.replace("Z", "")) for v in vals]
             except ValueError:
                 raise ScenarioError(f"source.gnss.columns.time = {tc!r}: GPS seconds or ISO date-times") from None
-            t = np.array([_utc_to_gps(d) if scale == "utc" else (d - GPS_EPOCH).total_seconds() for d in ds])
+            t = np.array([utc_to_gps(d) if scale == "utc" else (d - GPS_EPOCH).total_seconds() for d in ds])
     else:
         raise ScenarioError("source.gnss.columns.time: a column name (GPS seconds or ISO date-time) or [week, seconds]")
     for k in ("lat", "lon"):

@@ -22,13 +22,12 @@ if TYPE_CHECKING:
     import pandas as pd
 
 from ._errors import ScenarioError
-from ._logtime import pos_time
+from ._logtime import GPS_EPOCH, pos_time
 from .frames import check_gravity
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors"]
 
 #: Start of GPS time, 1980-01-06 00:00:00 GPST.
-GPS_EPOCH = _dt.datetime(1980, 1, 6)
 _WEEK = 604800.0
 _G = 9.80665
 _GYRO_UNITS = {"rad/s": 1.0, "deg/s": np.pi / 180.0}
