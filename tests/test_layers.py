@@ -40,10 +40,10 @@ PY_LAYERS = [
     {"_terrain", "_fields", "_lc_schema", "_logtime"},
     {"frames"},
     {"scenario"},
-    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs"},
+    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs", "calibrate"},
     {"plots", "plots_logged"},
     {"runs", "montecarlo", "_dask"},
-    {"calibrate", "federated", "cli", "__init__", "__main__"},
+    {"federated", "cli", "__init__", "__main__"},
 ]
 
 

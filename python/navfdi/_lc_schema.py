@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from navfdi._errors import ScenarioError
@@ -105,9 +105,52 @@ def _mounting(t: Any, p: str) -> list[float]:
     return m
 
 
+#: ``[loosely_coupled]`` fields that may be ``"auto"``: estimated from the log before the run
+#: (:func:`navfdi.calibrate.resolve_auto`, the same estimates as ``navfdi calibrate``).
+AUTO_FIELDS = ("imu.gyro_noise", "imu.accel_noise", "boresight", "imu_time_offset")
+# What an "auto" field holds in the SI form until it is resolved (never run: an unresolved
+# scenario is refused by navfdi.logs.scored_source).
+_AUTO_PLACEHOLDER: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": "0 deg", "imu_time_offset": "0 s"}
+
+
+def auto_fields(raw: Mapping[str, Any]) -> list[str]:
+    """The :data:`AUTO_FIELDS` a user-form scenario ``raw`` sets to ``"auto"`` in
+    ``[loosely_coupled]`` (paths relative to it, e.g. ``"imu.gyro_noise"``)."""
+    lc = raw.get("loosely_coupled")
+    out = []
+    for f in AUTO_FIELDS:
+        t: Any = lc
+        *head, last = f.split(".")
+        for k in head:
+            t = t.get(k) if isinstance(t, Mapping) else None
+        if isinstance(t, Mapping) and t.get(last) == "auto":
+            out.append(f)
+    return out
+
+
+def _auto(t: Any, p: str) -> Any:
+    """``t`` with its ``"auto"`` fields replaced by placeholders (loosely coupled only)."""
+    if not isinstance(t, Mapping):
+        return t
+    found = auto_fields({"loosely_coupled": t})
+    if not found:
+        return t
+    if p != "loosely_coupled":
+        raise ScenarioError(f"{p}.{found[0]} = \"auto\": estimated from the log for [loosely_coupled] only (navfdi calibrate); give the value")
+    t = {**t, "imu": dict(t["imu"]) if isinstance(t.get("imu"), Mapping) else t.get("imu")}
+    for f in found:
+        if f.startswith("imu."):
+            t["imu"][f[4:]] = _AUTO_PLACEHOLDER[f]
+        else:
+            t[f] = _AUTO_PLACEHOLDER[f]
+    return t
+
+
 def _strapdown(t: Any, p: str) -> dict[str, Any]:
     """The strapdown INS fields of table ``t`` at field path ``p``: ``imu``, ``mounting``,
-    ``lever_arm``, ``imu_time_offset``, ``alignment`` (SI)."""
+    ``lever_arm``, ``imu_time_offset``, ``alignment`` (SI). ``"auto"`` fields (see
+    :data:`AUTO_FIELDS`) hold placeholders until resolved."""
+    t = _auto(t, p)
     imu = _need(t, "imu", p)
     _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau", "gyro_scale", "accel_scale"}, f"{p}.imu")
     al = _need(t, "alignment", p)

@@ -8,19 +8,31 @@ from its own files (``navfdi calibrate SCENARIO``).
   mean; the median over the intervals): density = σ / √rate, with its σ from the sample count; **gyro bias** as the mean rate
   at rest. A vibrating engine raises the noise above the datasheet's: that is the point, the
   filter needs the noise it will see.
+* **Boresight** (pitch and yaw of the IMU beyond its nominal axes): the filter runs without
+  its non-holonomic constraint (GNSS-aided only) and the direction of its velocity in the body
+  frame is the vehicle's forward axis as the IMU sees it: pitch = median atan2(−v_d, v_f), yaw
+  = median atan2(v_r, v_f) over epochs at speed (≥ :data:`MIN_SPEED`) without a turn (yaw
+  rate below 3 deg/s, where the IMU's lateral velocity from its lever arm to the rear axle is
+  small), once the heading σ has converged. Its σ is the filter's own attitude σ (the estimate
+  cannot be better than the heading it rests on) with the spread of the epochs. Roll is not
+  observable this way and is kept.
 * **IMU time offset**: the offset (± :data:`MAX_LAG` s) that makes the filter's own GNSS and
   constraint innovations smallest (their mean normalised square per degree of freedom,
   fault-free, without FDE), on a 0.05 s grid refined by a parabola; its σ from the
   curvature. Reference-free: no truth is used.
 
-It does not (yet) estimate the boresight (pitch and yaw misalignment) or a GNSS σ scale; the
-filter's own ``noise_scale`` estimates the latter during the run.
+It does not estimate a GNSS σ scale: the filter's own ``noise_scale`` does that during the run.
+Each estimate rests on the ones before it (noise, then boresight, then time offset). A
+scenario may leave any of ``imu.gyro_noise``, ``imu.accel_noise``, ``boresight`` and
+``imu_time_offset`` as ``"auto"``: :func:`resolve_auto` fills them before a run.
 """
 
 from __future__ import annotations
 
+import copy
 import math
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,39 +41,60 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["Calibration", "calibrate", "MIN_REST", "MAX_LAG"]
+__all__ = ["Calibration", "calibrate", "resolve_auto", "resolve_from_log", "write_calibrated", "MIN_REST", "MAX_LAG", "MIN_SPEED"]
 
 #: Shortest rest interval used (s).
 MIN_REST = 3.0
 #: Largest IMU time offset searched (s).
 MAX_LAG = 0.5
+#: Slowest forward speed at which the boresight is read (m/s).
+MIN_SPEED = 3.0
+#: Least time at speed without turning the boresight needs (s).
+MIN_STRAIGHT = 30.0
 
 
 @dataclass
 class Calibration:
     """What :func:`calibrate` estimated. Densities per IMU axis (x, y, z): ``gyro_noise``
     (deg/s/√Hz), ``accel_noise`` (mg/√Hz), each with ``…_sigma`` (same unit); ``gyro_bias``
-    (deg/h, per axis) with its σ; ``imu_time_offset`` (s) with its σ (None when the log has too
-    few turns); ``rest`` the rest intervals used ((start, end), s from the first GNSS epoch)."""
+    (deg/h, per axis) with its σ — all None when the log has no rest interval;
+    ``boresight`` (roll, pitch, yaw, deg: the scenario's roll, the estimated pitch and yaw,
+    the whole boresight on top of ``imu_axes``/``mounting``) with ``boresight_sigma`` (pitch
+    and yaw, deg), None when the log has too little driving at speed; ``imu_time_offset`` (s)
+    with its σ (None when the log has too few turns); ``rest`` the rest intervals used
+    ((start, end), s from the first GNSS epoch); ``straight`` the seconds of driving the
+    boresight was read from."""
 
-    gyro_noise: list[float]
-    gyro_noise_sigma: list[float]
-    accel_noise: list[float]
-    accel_noise_sigma: list[float]
-    gyro_bias: list[float]
-    gyro_bias_sigma: list[float]
+    gyro_noise: list[float] | None
+    gyro_noise_sigma: list[float] | None
+    accel_noise: list[float] | None
+    accel_noise_sigma: list[float] | None
+    gyro_bias: list[float] | None
+    gyro_bias_sigma: list[float] | None
     imu_time_offset: float | None
     imu_time_offset_sigma: float | None
     rest: list[tuple[float, float]] = field(default_factory=list)
+    boresight: list[float] | None = field(default_factory=lambda: None)
+    boresight_sigma: list[float] | None = field(default_factory=lambda: None)
+    straight: float = 0.0
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
         f3 = lambda v, s, u: ", ".join(f"{a:.4g} ± {b:.2g}" for a, b in zip(v, s)) + f" {u}"  # noqa: E731
-        out = [f"rest intervals: {len(self.rest)} ({sum(b - a for a, b in self.rest):.1f} s): "
-               + ", ".join(f"{a:.1f}–{b:.1f} s" for a, b in self.rest[:6]) + (" …" if len(self.rest) > 6 else ""),
-               f"gyro white noise (x, y, z): {f3(self.gyro_noise, self.gyro_noise_sigma, 'deg/s/sqrt(Hz)')}",
-               f"accel white noise (x, y, z): {f3(self.accel_noise, self.accel_noise_sigma, 'mg/sqrt(Hz)')}",
-               f"gyro bias at rest (x, y, z): {f3(self.gyro_bias, self.gyro_bias_sigma, 'deg/h')}"]
+        if self.gyro_noise is None or self.accel_noise is None or self.gyro_bias is None:
+            out = [f"rest intervals: none of {MIN_REST:g} s (speed below the static speed): IMU noise and gyro bias not estimated"]
+        else:
+            out = [f"rest intervals: {len(self.rest)} ({sum(b - a for a, b in self.rest):.1f} s): "
+                   + ", ".join(f"{a:.1f}–{b:.1f} s" for a, b in self.rest[:6]) + (" …" if len(self.rest) > 6 else ""),
+                   f"gyro white noise (x, y, z): {f3(self.gyro_noise, self.gyro_noise_sigma or [], 'deg/s/sqrt(Hz)')}",
+                   f"accel white noise (x, y, z): {f3(self.accel_noise, self.accel_noise_sigma or [], 'mg/sqrt(Hz)')}",
+                   f"gyro bias at rest (x, y, z): {f3(self.gyro_bias, self.gyro_bias_sigma or [], 'deg/h')}"]
+        if self.boresight is None or self.boresight_sigma is None:
+            out.append(f"boresight: not estimated (less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more without turning)")
+        else:
+            b, bs = self.boresight, self.boresight_sigma
+            out.append(f"boresight (roll kept, pitch, yaw): {b[0]:+.3f}, {b[1]:+.3f} ± {bs[0]:.3f}, {b[2]:+.3f} ± {bs[1]:.3f} deg "
+                       f"(from {self.straight:.0f} s of driving)")
         if self.imu_time_offset is None:
             out.append("IMU time offset: not estimated (too few turns while moving)")
         else:
@@ -70,10 +103,12 @@ class Calibration:
 
     def values(self) -> dict[str, Any]:
         """The scenario values it sets: ``{path: value with unit}``."""
-        v: dict[str, Any] = {
-            "loosely_coupled.imu.gyro_noise": [f"{x:.4g} deg/s/sqrt(Hz)" for x in self.gyro_noise],
-            "loosely_coupled.imu.accel_noise": [f"{x:.4g} mg/sqrt(Hz)" for x in self.accel_noise],
-        }
+        v: dict[str, Any] = {}
+        if self.gyro_noise is not None and self.accel_noise is not None:
+            v["loosely_coupled.imu.gyro_noise"] = [f"{x:.4g} deg/s/sqrt(Hz)" for x in self.gyro_noise]
+            v["loosely_coupled.imu.accel_noise"] = [f"{x:.4g} mg/sqrt(Hz)" for x in self.accel_noise]
+        if self.boresight is not None:
+            v["loosely_coupled.boresight"] = [f"{x:.4f} deg" for x in self.boresight]
         if self.imu_time_offset is not None:
             v["loosely_coupled.imu_time_offset"] = f"{self.imu_time_offset:.3f} s"
         return v
@@ -93,17 +128,84 @@ def _rest(t: np.ndarray, speed: np.ndarray, thr: np.ndarray) -> list[tuple[float
     return out
 
 
-def calibrate(scenario: Any) -> Calibration:
-    """Estimate a loosely coupled scenario's IMU noise, gyro bias and IMU time offset from its
-    own logs (see the module's description). Raises :class:`ScenarioError` when the log has no
-    rest interval of :data:`MIN_REST` s."""
-    from navfdi import logs
-    from navfdi.scenario import load_scenario
+def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration:
+    """Estimate a loosely coupled scenario's IMU noise, gyro bias, boresight (pitch, yaw) and
+    IMU time offset from its own logs (see the module's description). ``fields`` (paths in
+    ``[loosely_coupled]``, :data:`navfdi._lc_schema.AUTO_FIELDS`) limits the work to what is
+    asked (the others keep the scenario's values); None estimates everything the log allows.
+    Raises :class:`ScenarioError` when an asked field cannot be estimated from the log (the
+    noise needs a rest interval of :data:`MIN_REST` s; the boresight driving at speed), or
+    when the scenario is not a loosely coupled one on recorded logs."""
+    from navfdi._lc_schema import AUTO_FIELDS, auto_fields
+    from navfdi.scenario import from_dict, load_scenario
 
     sc = scenario if hasattr(scenario, "core") else load_scenario(scenario)
-    if "loosely_coupled" not in sc.core:
+    if "loosely_coupled" not in sc.core or "source" not in sc.raw:
         raise ScenarioError("calibrate: a loosely coupled scenario on recorded logs is needed")
+    asked = set(AUTO_FIELDS if fields is None else fields)
+    unknown = asked - set(AUTO_FIELDS)
+    if unknown:
+        raise ScenarioError(f"calibrate: cannot estimate {sorted(unknown)}; the fields are {list(AUTO_FIELDS)}")
+    required = set(auto_fields(sc.raw)) | (set() if fields is None else asked)
+    # The internal runs: fault-free, one configuration, every "auto" field a value.
+    raw = copy.deepcopy(dict(sc.raw))
+    raw.pop("faults", None)
+    raw.pop("variants", None)
+    lc = raw["loosely_coupled"]
+    lc["isolate"] = False
+    for f in auto_fields(raw):
+        if f.startswith("imu."):
+            lc["imu"][f[4:]] = _AUTO_START[f]
+        else:
+            lc[f] = _AUTO_START[f]
+    base = from_dict(raw, source=sc.source)
+    from navfdi import logs
+
     data = logs.load_source(sc.raw["source"], logs.scenario_folder(sc))
+    rest, noise = [], None
+    if asked & {"imu.gyro_noise", "imu.accel_noise"}:
+        rest = _rest_intervals(base, data)
+        if rest:
+            noise = _noise(data["imu_log"], float(data["t0"]), rest)
+            base = base.with_values({f"loosely_coupled.imu.{k}": [f"{x:.6g} {u}" for x in noise[k][0]]
+                                     for k, u in (("gyro_noise", "deg/s/sqrt(Hz)"), ("accel_noise", "mg/sqrt(Hz)"))})
+        elif required & {"imu.gyro_noise", "imu.accel_noise"}:
+            raise ScenarioError(f"calibrate: no rest interval of {MIN_REST:g} s in the GNSS log (speed below the static speed); "
+                                "the IMU noise needs the vehicle at rest: give loosely_coupled.imu.gyro_noise and accel_noise (the datasheet's)")
+    src = logs.logged_source(base)
+    bore = lag = lag_s = None
+    # The boresight read from a run with a wrong time offset is off (and the reverse): with
+    # both asked, a second round starts from the first's values.
+    for _ in range(2 if {"boresight", "imu_time_offset"} <= asked else 1):
+        if "boresight" in asked:
+            bore = _boresight_by_velocity(base, src)
+            if bore is None and "boresight" in required:
+                raise ScenarioError(f"calibrate: loosely_coupled.boresight: less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more "
+                                    "without turning in the log; give the boresight (roll, pitch, yaw) or \"0 deg\"")
+            if bore is not None:
+                base = base.with_values({"loosely_coupled.boresight": [f"{x:.6f} deg" for x in bore[0]]}, create=True)
+        if "imu_time_offset" in asked:
+            lag, lag_s = _offset_by_innovations(base, src)
+            if lag is None and "imu_time_offset" in required:
+                raise ScenarioError(f"calibrate: loosely_coupled.imu_time_offset: no minimum of the innovations within ±{MAX_LAG:g} s "
+                                    "of the scenario's value (too few turns while moving); give the offset")
+            if lag is not None:
+                base = base.with_values({"loosely_coupled.imu_time_offset": f"{lag:.6f} s"}, create=True)
+    cal = Calibration(None, None, None, None, None, None, lag, lag_s, rest)
+    if noise is not None:
+        (cal.gyro_noise, cal.gyro_noise_sigma), (cal.accel_noise, cal.accel_noise_sigma), (cal.gyro_bias, cal.gyro_bias_sigma) = (
+            noise["gyro_noise"], noise["accel_noise"], noise["gyro_bias"])
+    if bore is not None:
+        cal.boresight, cal.boresight_sigma, cal.straight = bore
+    return cal
+
+
+# What an "auto" field starts from in the calibration's own runs.
+_AUTO_START: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": ["0 deg", "0 deg", "0 deg"], "imu_time_offset": "0 s"}
+
+
+def _rest_intervals(sc: Any, data: dict[str, Any]) -> list[tuple[float, float]]:
+    """The GNSS rest intervals of at least :data:`MIN_REST` s that a still gyro confirms."""
     imu, pos, t0 = data["imu_log"], data["gnss_log"], float(data["t0"])
     lc = sc.core["loosely_coupled"]
     t = pos.t - t0
@@ -116,9 +218,13 @@ def calibrate(scenario: Any) -> Calibration:
         m = (ti >= a) & (ti <= b)
         if m.sum() > 20 and np.degrees(np.std(np.linalg.norm(imu.gyro[m], axis=1))) < 2.0:
             rest.append((a, b))
-    if not rest:
-        raise ScenarioError(f"calibrate: no rest interval of {MIN_REST:g} s in the GNSS log (speed below the static speed); "
-                            "the noise needs the vehicle at rest")
+    return rest
+
+
+def _noise(imu: Any, t0: float, rest: list[tuple[float, float]]) -> dict[str, tuple[list[float], list[float]]]:
+    """White noise densities (deg/s/√Hz, mg/√Hz) and gyro bias (deg/h) per axis from the rest
+    intervals, each with its σ."""
+    ti = imu.t - t0
     rate = 1.0 / float(np.median(np.diff(imu.t)))
     g_res, a_res, g_all = [], [], []
     for a, b in rest:
@@ -126,44 +232,92 @@ def calibrate(scenario: Any) -> Calibration:
         g_res.append(imu.gyro[m] - imu.gyro[m].mean(axis=0))
         a_res.append(imu.accel[m] - imu.accel[m].mean(axis=0))
         g_all.append(imu.gyro[m])
-    gr, ar, ga = np.vstack(g_res), np.vstack(a_res), np.vstack(g_all)
-    n = len(gr)
+    ga = np.vstack(g_all)
+    n = len(ga)
     # Per interval, then the quietest: a stop with the driver moving or a door shut is not
     # the sensor's noise (the filter's process noise covers motion).
     gsd = np.degrees(np.median([g.std(axis=0) for g in g_res], axis=0)) / math.sqrt(rate)
     asd = np.median([x.std(axis=0) for x in a_res], axis=0) / 9.80665e-3 / math.sqrt(rate)
     bias = np.degrees(ga.mean(axis=0)) * 3600.0
     # σ of a standard deviation from n samples (white): σ/√(2n); of a mean: σ/√n.
-    gsd_s, asd_s = gsd / math.sqrt(2 * n), asd / math.sqrt(2 * n)
-    bias_s = np.degrees(ga.std(axis=0)) * 3600.0 / math.sqrt(n)
-    noise = {"loosely_coupled.imu.gyro_noise": [f"{x:.6g} deg/s/sqrt(Hz)" for x in gsd],
-             "loosely_coupled.imu.accel_noise": [f"{x:.6g} mg/sqrt(Hz)" for x in asd]}
-    lag, lag_s = _offset_by_innovations(sc.with_values(noise))
-    return Calibration(list(map(float, gsd)), list(map(float, gsd_s)), list(map(float, asd)), list(map(float, asd_s)),
-                       list(map(float, bias)), list(map(float, bias_s)), lag, lag_s, rest)
+    as_list = lambda v: [float(x) for x in v]  # noqa: E731
+    return {"gyro_noise": (as_list(gsd), as_list(gsd / math.sqrt(2 * n))),
+            "accel_noise": (as_list(asd), as_list(asd / math.sqrt(2 * n))),
+            "gyro_bias": (as_list(bias), as_list(np.degrees(ga.std(axis=0)) * 3600.0 / math.sqrt(n)))}
 
 
-def _offset_by_innovations(sc: Any) -> tuple[float | None, float | None]:
-    """The IMU time offset that makes the filter's GNSS and constraint innovations smallest
-    (mean normalised innovation squared per degree of freedom, fault-free, without FDE):
-    a 0.05 s grid over ± :data:`MAX_LAG` s around the scenario's value, refined by a
-    parabola; its σ from the curvature of the misfit. Reference-free."""
-    from navfdi.runs import ScenarioRun, run_scenario
-
-    raw = dict(sc.raw)
-    raw.pop("faults", None)
-    raw.pop("variants", None)
-    raw["loosely_coupled"] = {**raw["loosely_coupled"], "isolate": False}
+def _boresight_by_velocity(sc: Any, src: Any) -> tuple[list[float], list[float], float] | None:
+    """The boresight (roll kept, pitch, yaw, deg), its σ (pitch, yaw, deg) and the seconds
+    used, from the direction of the GNSS-aided filter's velocity in the body frame (see the
+    module's description); None with less than :data:`MIN_STRAIGHT` s of driving."""
+    raw = copy.deepcopy(dict(sc.raw))
+    lc = raw["loosely_coupled"]
+    lc.pop("nhc", None)
+    lc.pop("zupt", None)
     from navfdi.scenario import from_dict
 
-    base = from_dict(raw, source=sc.source)
+    rec = src.run([from_dict(raw, source=sc.source).to_json()])[0]
+    cols = {c: rec["nav"][:, j] for j, c in enumerate(rec["nav_columns"])}
+    t = np.asarray(rec["t"], float)
+    r, p, y = cols["roll"], cols["pitch"], cols["yaw"]
+    vn, ve, vd = cols["vel_n"], cols["vel_e"], -cols["vel_u"]
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    vf = cp * cy * vn + cp * sy * ve - sp * vd
+    vr = (sr * sp * cy - cr * sy) * vn + (sr * sp * sy + cr * cy) * ve + sr * cp * vd
+    vdn = (cr * sp * cy + sr * sy) * vn + (cr * sp * sy - sr * cy) * ve + cr * cp * vd
+    sig = np.asarray(rec["sigma"], float)
+    s_yaw, s_level = sig[:, 2], np.hypot(sig[:, 0], sig[:, 1]) / math.sqrt(2.0)
+    rate = np.full(len(t), np.inf)
+    ok = np.isfinite(y)
+    if ok.sum() > 2:  # NaN before the alignment
+        rate[ok] = np.abs(np.gradient(np.unwrap(y[ok]), t[ok]))
+    moving = np.isfinite(vf) & np.isfinite(s_yaw) & (vf >= MIN_SPEED) & (rate <= math.radians(3.0))
+    if not moving.any():
+        return None
+    # After the heading has converged: its σ within twice its median at speed.
+    settled = moving & (s_yaw <= 2.0 * float(np.median(s_yaw[moving])))
+    first = t[np.argmax(settled)] if settled.any() else np.inf
+    use = settled & (t >= first)
+    dt = float(np.median(np.diff(t))) if len(t) > 1 else 1.0
+    span = float(use.sum()) * dt
+    if span < MIN_STRAIGHT:
+        return None
+    pitch = np.arctan2(-vdn[use], vf[use])
+    yaw = np.arctan2(vr[use], vf[use])
+    # The epochs' spread, taken as independent over 10 s, beside the filter's attitude σ.
+    n_eff = max(1.0, span / 10.0)
+
+    def est(a: np.ndarray, s: np.ndarray) -> tuple[float, float]:
+        med = float(np.median(a))
+        spread = 1.4826 * float(np.median(np.abs(a - med)))
+        return math.degrees(med), math.degrees(math.hypot(float(np.median(s)), spread / math.sqrt(n_eff)))
+
+    (pb, ps), (yb, ys) = est(pitch, s_level[use]), est(yaw, s_yaw[use])
+    given = sc.raw["loosely_coupled"].get("boresight")
+    roll0, pitch0, yaw0 = (math.degrees(v) for v in _given_boresight(given))
+    # Small angles: the residual boresight adds to the one the run had.
+    return [roll0, pitch0 + pb, yaw0 + yb], [ps, ys], span
+
+
+def _given_boresight(v: Any) -> list[float]:
+    """The scenario's ``boresight`` (rad), zeros when absent."""
+    from navfdi._lc_schema import _axes
+
+    return [0.0, 0.0, 0.0] if v is None else _axes(v, "angle", "loosely_coupled.boresight")
+
+
+def _offset_by_innovations(sc: Any, src: Any) -> tuple[float | None, float | None]:
+    """The IMU time offset that makes the filter's GNSS and constraint innovations smallest
+    (mean normalised innovation squared per degree of freedom, fault-free, without FDE):
+    a 0.05 s grid over ± :data:`MAX_LAG` s, refined by a
+    parabola; its σ from the curvature of the misfit. Reference-free."""
     lags = np.arange(-MAX_LAG, MAX_LAG + 1e-9, 0.05)
     misfit = []
-    for lag in lags:
-        run = run_scenario(base.with_values({"loosely_coupled.imu_time_offset": f"{lag:.4f} s"}), compare_isolation=False)
-        assert isinstance(run, ScenarioRun)  # no variants: one run
+    den = 0.0
+    recs = src.run([sc.with_values({"loosely_coupled.imu_time_offset": f"{lag:.4f} s"}, create=True).to_json() for lag in lags])
+    for rec in recs:
         num = den = 0.0
-        for s in run.record["subfilters"]:
+        for s in rec["subfilters"]:
             st, dof = np.asarray(s["statistic"], float), np.asarray(s["dof"], float)
             ok = np.isfinite(st) & (dof > 0)
             num += float(np.sum(np.minimum(st[ok], 100.0 * dof[ok])))
@@ -183,9 +337,35 @@ def _offset_by_innovations(sc: Any) -> tuple[float | None, float | None]:
     return best, sigma
 
 
+def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
+    """``sc`` with its ``"auto"`` ``[loosely_coupled]`` fields (:data:`navfdi._lc_schema.AUTO_FIELDS`)
+    replaced by their estimates from the log (:func:`calibrate`) and the estimates; ``(sc,
+    None)`` when it has none."""
+    from navfdi._lc_schema import auto_fields
+
+    auto = auto_fields(sc.raw)
+    if not auto:
+        return sc, None
+    cal = calibrate(sc, auto)
+    vals = {k: v for k, v in cal.values().items() if k.split(".", 1)[1] in auto}
+    return sc.with_values(vals, create=True), cal
+
+
+def resolve_from_log(sc: Any) -> tuple[Any, Calibration | None]:
+    """``sc`` with every value it asks to be estimated from its own log filled in — the
+    ``"auto"`` fields of ``[loosely_coupled]`` (:func:`resolve_auto`) and ``[tight.integrity]
+    range_errors = "overbound"`` (:func:`navfdi.logs.resolve_range_errors`) — and the
+    calibration that filled the former (None without)."""
+    from navfdi import logs
+
+    out, cal = resolve_auto(sc)
+    return logs.resolve_range_errors(out), cal
+
+
 def write_calibrated(source_toml: str | Path, cal: Calibration, out: str | Path) -> Path:
     """Write a copy of the scenario file ``source_toml`` with the calibrated values set (the
-    lines of ``gyro_noise``, ``accel_noise`` and ``imu_time_offset`` replaced, commented)."""
+    lines of ``gyro_noise``, ``accel_noise``, ``boresight`` and ``imu_time_offset`` replaced
+    or added, commented)."""
     text = Path(source_toml).read_text(encoding="utf-8")
     vals = cal.values()
 
@@ -197,8 +377,11 @@ def write_calibrated(source_toml: str | Path, cal: Calibration, out: str | Path)
             return pat.sub(line, text, count=1)
         return re.sub(rf"^\[{re.escape(section)}\]\s*$", lambda m: m.group(0) + "\n" + line, text, count=1, flags=re.MULTILINE)
 
-    text = put(text, "gyro_noise", vals["loosely_coupled.imu.gyro_noise"], "loosely_coupled.imu")
-    text = put(text, "accel_noise", vals["loosely_coupled.imu.accel_noise"], "loosely_coupled.imu")
+    if "loosely_coupled.imu.gyro_noise" in vals:
+        text = put(text, "gyro_noise", vals["loosely_coupled.imu.gyro_noise"], "loosely_coupled.imu")
+        text = put(text, "accel_noise", vals["loosely_coupled.imu.accel_noise"], "loosely_coupled.imu")
+    if "loosely_coupled.boresight" in vals:
+        text = put(text, "boresight", vals["loosely_coupled.boresight"], "loosely_coupled")
     if "loosely_coupled.imu_time_offset" in vals:
         text = put(text, "imu_time_offset", vals["loosely_coupled.imu_time_offset"], "loosely_coupled")
     out = Path(out)

@@ -120,7 +120,7 @@ def main(argv: list[str] | None = None) -> int:
     run.add_argument("--out", default=None, help="output directory for events.csv, timeseries.parquet, summary.json and figures")
     run.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     run.add_argument("--set", action="append", default=[], metavar="PATH=VALUE", help='override a scenario field, e.g. --set "faults[0].magnitude=30 m" or --set "sensors[0].rate=2 Hz" (repeatable; the --sweep syntax with one value)')
-    cal = sub.add_parser("calibrate", help="estimate a loosely coupled scenario's IMU noise, gyro bias and IMU time offset from its own logs")
+    cal = sub.add_parser("calibrate", help="estimate a loosely coupled scenario's IMU noise, gyro bias, boresight (pitch, yaw) and IMU time offset from its own logs")
     cal.add_argument("scenario", help="bundled scenario name or a TOML file")
     cal.add_argument("--out", default=None, metavar="FILE.toml", help="write the scenario with the calibrated values (a TOML file scenario)")
     sc = sub.add_parser("scenarios", help="list the bundled scenarios, show or export one as TOML")

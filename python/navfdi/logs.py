@@ -397,7 +397,12 @@ def scored_source(sc: Any) -> tuple[Any, str, float]:
     epochs, after their update: ``[source] reference_epochs``), and the GPS seconds of the
     run's time 0."""
     from . import _core
+    from ._lc_schema import auto_fields
 
+    auto = auto_fields(sc.raw)
+    if auto:
+        raise ScenarioError(f"loosely_coupled.{auto[0]} = \"auto\" is estimated before the run: navfdi.run_scenario and "
+                            "navfdi.montecarlo do it (navfdi.calibrate.resolve_auto), or write the values with navfdi calibrate --out")
     data = load_source(sc.raw["source"], scenario_folder(sc))
     for sec, table in (("loosely_coupled", sc.core.get("loosely_coupled")), ("tight.strapdown", (sc.core.get("tight") or {}).get("strapdown"))):
         if isinstance(table, Mapping) and "mounting" in table:

@@ -772,9 +772,9 @@ def montecarlo(
             raise ScenarioError(f"sweep {k}: no values")
     combos = [dict(zip(sweep_lists, combo)) for combo in itertools.product(*sweep_lists.values())] if sweep_lists else [{}]
     if "source" in base.raw:
-        from navfdi import logs
+        from navfdi.calibrate import resolve_from_log
 
-        base = logs.resolve_range_errors(base)
+        base, _ = resolve_from_log(base)
     variant_names = base.variant_names()
     variant_scenarios = base.variants()  # [("base", base)] without variants
     points = [({"variant": name} if variant_names else {}) | combo for name, _ in variant_scenarios for combo in combos]

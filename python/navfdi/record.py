@@ -67,6 +67,8 @@ class RunRecord:
     gps_t0 : float or None
         Runs on recorded logs: GPS seconds (GPST, since 1980-01-06) of time 0; None for
         simulated runs.
+    calibration : navfdi.calibrate.Calibration or None
+        Runs on recorded logs with ``"auto"`` fields: the estimates that filled them.
     """
 
     def __init__(self, scenario: Scenario, seed: int, record: dict[str, Any], baseline: dict[str, Any] | None, variant: str = "base"):
@@ -78,6 +80,7 @@ class RunRecord:
         self.t: np.ndarray = record["t"]
         self.scored_at = "held_out"
         self.gps_t0: float | None = None
+        self.calibration: Any = None
 
     def scored_label(self) -> str:
         """How the console and report name the scored reference epochs."""

@@ -331,7 +331,7 @@ class ScenarioRun(RunRecord):
         and when the alarm still raised at the window's end began (``lasting``); notes on
         their own lines. ``legend``: end with the columns' meaning (once per output)."""
         fmt = lambda v: "-" if v is None else f"{v:g}"  # noqa: E731
-        lines = []
+        lines = calibration_lines(self.calibration) if legend else []
         by_fault: dict[str, list[FaultMatch]] = {}
         for m in self.fault_table():
             by_fault.setdefault(m.fault_id, []).append(m)
@@ -657,7 +657,8 @@ class VariantRuns:
 
     def format_tables(self) -> str:
         """Per-variant fault tables and the error comparison, as printed by ``navfdi run``."""
-        parts = []
+        first_run = next(iter(self.runs.values()))
+        parts = ["\n".join(calibration_lines(first_run.calibration))] if first_run.calibration is not None else []
         seen_notes: set[str] = set()
         for name, r in self.runs.items():
             text = r.format_tables(legend=False)
@@ -815,12 +816,21 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
     return ScenarioRun(sc, int(seed), recs[0], recs[1] if compare_isolation else None)
 
 
+def calibration_lines(cal: Any) -> list[str]:
+    """The console lines of the values a run estimated from its log (``"auto"`` fields),
+    followed by a blank line; none without."""
+    if cal is None:
+        return []
+    return ["estimated from the log (\"auto\" fields; navfdi calibrate --out writes them):", *("  " + ln for ln in cal.lines()), ""]
+
+
 def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun | VariantRuns:
     """A scenario on recorded logs: its faults injected into the recorded measurements, every
     variant on the same ones (see :mod:`navfdi.logs`)."""
     from . import logs
+    from .calibrate import resolve_from_log
 
-    sc = logs.resolve_range_errors(sc)
+    sc, cal = resolve_from_log(sc)
     src, scored_at, gps_t0 = logs.scored_source(sc)
     if sc.variant_names():
         variants = sc.variants()
@@ -829,14 +839,14 @@ def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun
         _warn_frames(ScenarioRun(variants[0][1], seed, recs[0], None))
         out = VariantRuns(sc, seed, {name: ScenarioRun(v, seed, rec, None, name) for (name, v), rec in zip(variants, recs)})
         for r in out.runs.values():
-            r.scored_at, r.gps_t0 = scored_at, gps_t0
+            r.scored_at, r.gps_t0, r.calibration = scored_at, gps_t0, cal
         return out
     recs = src.run([sc.to_json()])
     _warn_frames(ScenarioRun(sc, seed, recs[0], None))
     base = src.run([sc.to_json()], isolation=False)[0] if compare_isolation else None
     _warn_never_applied(sc, recs[0])
     run = ScenarioRun(sc, seed, recs[0], base)
-    run.scored_at, run.gps_t0 = scored_at, gps_t0
+    run.scored_at, run.gps_t0, run.calibration = scored_at, gps_t0, cal
     return run
 
 
