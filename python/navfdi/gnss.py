@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navfdi import _core, _json
+from navfdi._gnss_geometry import enu_sigma
 from navfdi.scenario import NeverAppliedWarning
 
 if TYPE_CHECKING:
@@ -273,7 +274,9 @@ class GnssSolution:
     """Result of :func:`gnss_solve`.
 
     ``solution``: one row per epoch (``time`` GPST ISO 8601, ``gps_seconds``, ``x, y, z`` ECEF
-    m, ``lat, lon`` deg, ``height`` m, ``dof``, ``statistic``, ``threshold`` of the final test,
+    m, ``lat, lon`` deg, ``height`` m, ``sd_e, sd_n, sd_u`` m (σ of the position from the used
+    satellites' geometry and weights: :func:`navfdi._gnss_geometry.enu_sigma`), ``dof``,
+    ``statistic``, ``threshold`` of the final test,
     ``first_statistic``, ``first_threshold``, ``first_dof`` of the test on all satellites,
     ``excluded`` (space-separated names), ``status`` (``passed``, ``excluded``,
     ``unidentified``, ``no_solution``), ``used``, ``faulty`` (satellites with an injected
@@ -765,6 +768,10 @@ def gnss_solve(
     sats["epoch"] = sats["epoch"].astype("int64")
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
     sats["satellite"] = sats["satellite"].astype("category")
+    sd = enu_sigma(sats, len(sol))
+    at = sol.columns.get_loc("height") + 1
+    for j, c in enumerate(("sd_e", "sd_n", "sd_u")):
+        sol.insert(at + j, c, sd[:, j])
     config = {
         "obs": os.fspath(obs),
         "nav": os.fspath(nav),

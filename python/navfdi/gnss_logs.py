@@ -5,8 +5,15 @@
 
 * ``pos`` — an RTKLIB solution (``.pos``; :func:`navfdi.logs.read_pos`);
 * ``solution`` — ``navfdi gnss``'s own ``solution.csv`` (``gps_seconds``, ``lat``, ``lon``,
-  ``height``, ``vel_e/n/u``; epochs without a solution are left out; no σ: the sensors'
-  ``noise`` is used);
+  ``height``, ``sd_e/n/u`` when present, ``vel_e/n/u``; epochs without a solution are left
+  out; without σ columns the sensors' ``noise`` is used);
+* ``rinex`` — RINEX observation and navigation files, solved epoch by epoch by navfdi's own
+  single-point positioning with satellite FDE (:func:`navfdi.gnss.gnss_solve`) as the log is
+  read: ``obs``, ``nav`` (paths), ``systems`` (letters, default ``["G"]``),
+  ``elevation_mask`` (angle, default ``"10 deg"``), ``weighting`` (``elevation``, ``cn0``,
+  ``rtklib``), ``test`` (``global``, ``wtest``, ``both``, ``auto``). σ east, north, up from
+  the geometry and the solve's weights (:func:`navfdi._gnss_geometry.enu_sigma`), velocity from the
+  Doppler; the same as writing ``solution.csv`` with ``navfdi gnss`` and reading it;
 * ``nmea`` — NMEA 0183 sentences: ``GGA`` (position; the height above the ellipsoid is the
   altitude above mean sea level plus the geoid separation the sentence gives), ``RMC`` (date,
   speed and course → horizontal velocity), ``VTG`` (speed and course), ``GST`` (σ of latitude,
@@ -43,7 +50,9 @@ from navfdi.logs import PosLog, read_pos
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
 
 #: The formats ``[source] gnss`` accepts.
-FORMATS = ("pos", "solution", "nmea", "csv")
+FORMATS = ("pos", "solution", "nmea", "csv", "rinex")
+#: The keys of ``format = "rinex"`` beside ``format``.
+RINEX_KEYS = ("obs", "nav", "systems", "elevation_mask", "weighting", "test")
 
 
 def _text(path: Path) -> str:
@@ -76,6 +85,8 @@ def read_gnss(spec: Any, base: Path) -> PosLog:
     relative to ``base``. Raises :class:`ScenarioError` naming the file, line and field of bad
     input."""
     cfg: Mapping[str, Any] = spec if isinstance(spec, Mapping) else {"file": spec}
+    if cfg.get("format") == "rinex":
+        return read_rinex_solution(cfg, base)
     allowed = {"file", "format", "columns", "time_scale", "date", "undulation"}
     unknown = sorted(set(cfg) - allowed)
     if unknown:
@@ -125,10 +136,57 @@ def read_solution_csv(path: Path, text: str | None = None) -> PosLog:
     need = {"gps_seconds", "lat", "lon", "height"}
     if not need <= set(df.columns):
         raise ScenarioError(f"source.gnss: {path}: not a navfdi solution.csv (missing {', '.join(sorted(need - set(df.columns)))})")
+    return _solution_log(path, df)
+
+
+def _solution_log(path: Path | str, df: Any) -> PosLog:
+    """A :class:`PosLog` from ``navfdi gnss``'s solution table (a DataFrame)."""
+    import pandas as pd
+
     n = len(df)
-    vel = np.column_stack([df.get(c, pd.Series(np.nan, index=df.index)).to_numpy(float) for c in ("vel_e", "vel_n", "vel_u")])
-    nan3 = np.full((n, 3), np.nan)
-    return _log(path, df["gps_seconds"].to_numpy(float), df["lat"].to_numpy(float), df["lon"].to_numpy(float), df["height"].to_numpy(float), vel, nan3, nan3.copy())
+    three = lambda cols: np.column_stack([df.get(c, pd.Series(np.nan, index=df.index)).to_numpy(float) for c in cols])  # noqa: E731
+    vel = three(("vel_e", "vel_n", "vel_u"))
+    sd = three(("sd_e", "sd_n", "sd_u"))
+    return _log(Path(path), df["gps_seconds"].to_numpy(float), df["lat"].to_numpy(float), df["lon"].to_numpy(float), df["height"].to_numpy(float), vel, sd, np.full((n, 3), np.nan))
+
+
+def read_rinex_solution(cfg: Mapping[str, Any], base: Path) -> PosLog:
+    """``[source] gnss = { format = "rinex", obs = …, nav = …, … }``: the RINEX files solved
+    epoch by epoch (:func:`navfdi.gnss.gnss_solve`, with FDE), as a :class:`PosLog` (see the
+    module's description). Paths relative to ``base``."""
+    from navfdi._fields import _unit
+    from navfdi.gnss import gnss_solve
+
+    unknown = sorted(set(cfg) - {"format", *RINEX_KEYS})
+    if unknown:
+        raise ScenarioError(f"source.gnss: unknown key(s) {', '.join(unknown)} for format = \"rinex\" (allowed: {', '.join(RINEX_KEYS)})")
+    paths = []
+    for k in ("obs", "nav"):
+        f = cfg.get(k)
+        if not isinstance(f, str):
+            raise ScenarioError(f"source.gnss.{k}: the RINEX {'observation' if k == 'obs' else 'navigation'} file's path is required (format = \"rinex\")")
+        p = Path(f) if Path(f).is_absolute() else base / f
+        if not p.is_file():
+            raise ScenarioError(f"source.gnss.{k}: {p}: no such file")
+        paths.append(p)
+    systems = cfg.get("systems", ["G"])
+    if isinstance(systems, str):
+        systems = [systems]
+    if not isinstance(systems, list) or not systems or not all(isinstance(x, str) for x in systems):
+        raise ScenarioError(f"source.gnss.systems = {systems!r}: a list of system letters, e.g. [\"G\", \"E\"]")
+    mask = math.degrees(_unit(cfg.get("elevation_mask", "10 deg"), "angle", "source.gnss.elevation_mask"))
+    kw = {k: cfg[k] for k in ("weighting", "test") if k in cfg}
+    for k, v in kw.items():
+        if not isinstance(v, str):
+            raise ScenarioError(f"source.gnss.{k} = {v!r}: a name (see navfdi gnss --help)")
+    try:
+        sol = gnss_solve(paths[0], paths[1], systems=systems, mask_deg=mask, exclude=True, **kw)
+    except ValueError as e:
+        raise ScenarioError(f"source.gnss: {paths[0].name}: {e}") from None
+    solved = sol.solution[sol.solution["status"] != "no_solution"]
+    if not len(solved):
+        raise ScenarioError(f"source.gnss: {paths[0]}: no epoch solved (systems {systems}, mask {mask:g} deg)")
+    return _solution_log(paths[0], solved)
 
 
 def _nmea_fields(line: str, path: Path, i: int) -> list[str] | None:
