@@ -136,3 +136,22 @@ def test_a_log_without_rest_is_named() -> None:
     c = calibrate("comma_lc")
     assert c.gyro_noise is None and c.boresight is not None
     assert "IMU noise and gyro bias not estimated" in "\n".join(c.lines())
+
+
+def test_walk_tc_calibrated_noise_keeps_the_hand_tuned_accuracy(tmp_path: Path) -> None:
+    """walk_tc (a handheld receiver, never still): rest by the Doppler speed at both ends, the
+    white noise from first differences, written into [tight.strapdown.imu]; the fault-free
+    horizontal RMS about the reference's offset within 10 % of the hand-tuned scenario's."""
+    out = tmp_path / "cal.toml"
+    r = subprocess.run([sys.executable, "-m", "navfdi", "calibrate", "walk_tc", "--out", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "rest intervals: 2" in r.stdout and "not estimated for [tight.strapdown]" in r.stdout
+    sc = load_scenario(out)
+    hand_sc = load_scenario("walk_tc")
+    assert sc.core["tight"]["strapdown"]["imu"]["gyro_noise"] != hand_sc.core["tight"]["strapdown"]["imu"]["gyro_noise"]
+    zero = {"faults[0].magnitude": "0 m"}
+    hand = navfdi.run_scenario(hand_sc.with_values(zero)).runs["innovation"].errors()["hor_rel_rms"]
+    cal = navfdi.run_scenario(sc.with_values(zero)).runs["innovation"].errors()["hor_rel_rms"]
+    assert cal <= 1.1 * hand
+    with pytest.raises(ScenarioError, match=r"\[loosely_coupled\] scenarios only"):
+        calibrate("walk_tc", ["boresight"])

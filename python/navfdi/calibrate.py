@@ -63,7 +63,8 @@ class Calibration:
     and yaw, deg), None when the log has too little driving at speed; ``imu_time_offset`` (s)
     with its σ (None when the log has too few turns); ``rest`` the rest intervals used
     ((start, end), s from the first GNSS epoch); ``straight`` the seconds of driving the
-    boresight was read from."""
+    boresight was read from; ``section`` the scenario table the values belong to
+    (``loosely_coupled`` or ``tight.strapdown``)."""
 
     gyro_noise: list[float] | None
     gyro_noise_sigma: list[float] | None
@@ -77,6 +78,7 @@ class Calibration:
     boresight: list[float] | None = field(default_factory=lambda: None)
     boresight_sigma: list[float] | None = field(default_factory=lambda: None)
     straight: float = 0.0
+    section: str = "loosely_coupled"
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
@@ -89,6 +91,9 @@ class Calibration:
                    f"gyro white noise (x, y, z): {f3(self.gyro_noise, self.gyro_noise_sigma or [], 'deg/s/sqrt(Hz)')}",
                    f"accel white noise (x, y, z): {f3(self.accel_noise, self.accel_noise_sigma or [], 'mg/sqrt(Hz)')}",
                    f"gyro bias at rest (x, y, z): {f3(self.gyro_bias, self.gyro_bias_sigma or [], 'deg/h')}"]
+        if self.section != "loosely_coupled":
+            out.append(f"boresight and IMU time offset: not estimated for [{self.section}] (read through the loosely coupled filter's constraint and innovations)")
+            return out
         if self.boresight is None or self.boresight_sigma is None:
             out.append(f"boresight: not estimated (less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more without turning)")
         else:
@@ -105,8 +110,8 @@ class Calibration:
         """The scenario values it sets: ``{path: value with unit}``."""
         v: dict[str, Any] = {}
         if self.gyro_noise is not None and self.accel_noise is not None:
-            v["loosely_coupled.imu.gyro_noise"] = [f"{x:.4g} deg/s/sqrt(Hz)" for x in self.gyro_noise]
-            v["loosely_coupled.imu.accel_noise"] = [f"{x:.4g} mg/sqrt(Hz)" for x in self.accel_noise]
+            v[f"{self.section}.imu.gyro_noise"] = [f"{x:.4g} deg/s/sqrt(Hz)" for x in self.gyro_noise]
+            v[f"{self.section}.imu.accel_noise"] = [f"{x:.4g} mg/sqrt(Hz)" for x in self.accel_noise]
         if self.boresight is not None:
             v["loosely_coupled.boresight"] = [f"{x:.4f} deg" for x in self.boresight]
         if self.imu_time_offset is not None:
@@ -130,7 +135,8 @@ def _rest(t: np.ndarray, speed: np.ndarray, thr: np.ndarray) -> list[tuple[float
 
 def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration:
     """Estimate a loosely coupled scenario's IMU noise, gyro bias, boresight (pitch, yaw) and
-    IMU time offset from its own logs (see the module's description). ``fields`` (paths in
+    IMU time offset from its own logs (see the module's description); for a tight scenario
+    with ``[tight.strapdown]``, its IMU noise and gyro bias (rest found with the Doppler speed). ``fields`` (paths in
     ``[loosely_coupled]``, :data:`navfdi._lc_schema.AUTO_FIELDS`) limits the work to what is
     asked (the others keep the scenario's values); None estimates everything the log allows.
     Raises :class:`ScenarioError` when an asked field cannot be estimated from the log (the
@@ -140,8 +146,10 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     from navfdi.scenario import from_dict, load_scenario
 
     sc = scenario if hasattr(scenario, "core") else load_scenario(scenario)
+    if "source" in sc.raw and "strapdown" in (sc.core.get("tight") or {}):
+        return _calibrate_tight(sc, fields)
     if "loosely_coupled" not in sc.core or "source" not in sc.raw:
-        raise ScenarioError("calibrate: a loosely coupled scenario on recorded logs is needed")
+        raise ScenarioError("calibrate: a loosely coupled scenario, or a tight one with [tight.strapdown], on recorded logs is needed")
     asked = set(AUTO_FIELDS if fields is None else fields)
     unknown = asked - set(AUTO_FIELDS)
     if unknown:
@@ -164,7 +172,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     data = logs.load_source(sc.raw["source"], logs.scenario_folder(sc))
     rest, noise = [], None
     if asked & {"imu.gyro_noise", "imu.accel_noise"}:
-        rest = _rest_intervals(base, data)
+        rest = _rest_intervals(base.core["loosely_coupled"]["alignment"]["static_speed"], data)
         if rest:
             noise = _noise(data["imu_log"], float(data["t0"]), rest)
             base = base.with_values({f"loosely_coupled.imu.{k}": [f"{x:.6g} {u}" for x in noise[k][0]]
@@ -200,37 +208,79 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     return cal
 
 
+def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
+    """:func:`calibrate` for a tight scenario's ``[tight.strapdown]``: the IMU noise and gyro
+    bias from the rest intervals, found with the receiver's Doppler speed (the RINEX solved by
+    :func:`navfdi.gnss.gnss_solve` with the scenario's systems and mask); the white noise from
+    first differences, which the slow motion of a hand at rest leaves out. The boresight and
+    the time offset are the loosely coupled filter's (its constraint and innovations)."""
+    from navfdi import logs
+    from navfdi.gnss import gnss_solve
+    from navfdi.gnss_logs import _solution_log
+
+    noise_fields = {"imu.gyro_noise", "imu.accel_noise"}
+    if fields is not None and set(fields) - noise_fields:
+        raise ScenarioError(f"calibrate: [tight.strapdown] gets its IMU noise from the log; {sorted(set(fields) - noise_fields)} "
+                            "are estimated for [loosely_coupled] scenarios only")
+    data = logs.load_source(sc.raw["source"], logs.scenario_folder(sc))
+    obs, nav = data["rinex"]
+    sensor = next(x for x in sc.core["sensors"] if x["name"] == sc.core["tight"]["sensor"])
+    rs = sensor.get("ranges", {})
+    letters = {"gps": "G", "galileo": "E", "beidou": "C", "qzss": "J"}
+    systems = [letters[x] for x in rs.get("systems", ["gps"]) if x in letters]
+    sol = gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True).solution
+    pos = _solution_log(obs, sol[sol["status"] != "no_solution"])
+    t0 = float(pos.t[0])
+    # A handheld receiver is never still: intervals at rest by the Doppler speed with a hand's
+    # motion (below 20 deg/s of spread), the noise from first differences.
+    rest = _rest_intervals(sc.core["tight"]["strapdown"]["alignment"]["static_speed"], {**data, "gnss_log": pos, "t0": t0}, still_deg_s=20.0)
+    if not rest:
+        raise ScenarioError(f"calibrate: no rest interval of {MIN_REST:g} s in {Path(obs).name} (Doppler speed below the static speed); "
+                            "the IMU noise needs the receiver at rest: give tight.strapdown.imu.gyro_noise and accel_noise (the datasheet's)")
+    noise = _noise(data["imu_log"], t0, rest, differences=True)
+    cal = Calibration(*noise["gyro_noise"], *noise["accel_noise"], *noise["gyro_bias"], None, None, rest)
+    cal.section = "tight.strapdown"
+    return cal
+
+
 # What an "auto" field starts from in the calibration's own runs.
 _AUTO_START: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": ["0 deg", "0 deg", "0 deg"], "imu_time_offset": "0 s"}
 
 
-def _rest_intervals(sc: Any, data: dict[str, Any]) -> list[tuple[float, float]]:
-    """The GNSS rest intervals of at least :data:`MIN_REST` s that a still gyro confirms."""
+def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: float = 2.0) -> list[tuple[float, float]]:
+    """The GNSS rest intervals of at least :data:`MIN_REST` s (speed below ``static_speed``
+    m/s or 2.5× the receiver's velocity σ) that a still gyro confirms (the spread of its rate
+    below ``still_deg_s``)."""
     imu, pos, t0 = data["imu_log"], data["gnss_log"], float(data["t0"])
-    lc = sc.core["loosely_coupled"]
     t = pos.t - t0
     ti = imu.t - t0
     speed = np.hypot(pos.vel[:, 0], pos.vel[:, 1])
     sd_v = np.nan_to_num(np.nanmax(pos.sd_vel[:, :2], axis=1) if np.isfinite(pos.sd_vel).any() else np.zeros(len(t)), nan=0.0)
-    thr = np.maximum(lc["alignment"]["static_speed"], 2.5 * sd_v)
+    thr = np.maximum(static_speed, 2.5 * sd_v)
     rest = []
     for a, b in _rest(t, np.nan_to_num(speed, nan=np.inf), thr):
         m = (ti >= a) & (ti <= b)
-        if m.sum() > 20 and np.degrees(np.std(np.linalg.norm(imu.gyro[m], axis=1))) < 2.0:
+        if m.sum() > 20 and np.degrees(np.std(np.linalg.norm(imu.gyro[m], axis=1))) < still_deg_s:
             rest.append((a, b))
     return rest
 
 
-def _noise(imu: Any, t0: float, rest: list[tuple[float, float]]) -> dict[str, tuple[list[float], list[float]]]:
+def _noise(imu: Any, t0: float, rest: list[tuple[float, float]], differences: bool = False) -> dict[str, tuple[list[float], list[float]]]:
     """White noise densities (deg/s/√Hz, mg/√Hz) and gyro bias (deg/h) per axis from the rest
-    intervals, each with its σ."""
+    intervals, each with its σ. ``differences``: the noise from the samples' first differences
+    (σ = SD(Δx)/√2), which a slow motion (a hand holding the receiver) leaves out; else from
+    the samples about their mean."""
     ti = imu.t - t0
     rate = 1.0 / float(np.median(np.diff(imu.t)))
     g_res, a_res, g_all = [], [], []
     for a, b in rest:
         m = (ti >= a) & (ti <= b)
-        g_res.append(imu.gyro[m] - imu.gyro[m].mean(axis=0))
-        a_res.append(imu.accel[m] - imu.accel[m].mean(axis=0))
+        if differences:
+            g_res.append(np.diff(imu.gyro[m], axis=0) / math.sqrt(2.0))
+            a_res.append(np.diff(imu.accel[m], axis=0) / math.sqrt(2.0))
+        else:
+            g_res.append(imu.gyro[m] - imu.gyro[m].mean(axis=0))
+            a_res.append(imu.accel[m] - imu.accel[m].mean(axis=0))
         g_all.append(imu.gyro[m])
     ga = np.vstack(g_all)
     n = len(ga)
@@ -377,9 +427,10 @@ def write_calibrated(source_toml: str | Path, cal: Calibration, out: str | Path)
             return pat.sub(line, text, count=1)
         return re.sub(rf"^\[{re.escape(section)}\]\s*$", lambda m: m.group(0) + "\n" + line, text, count=1, flags=re.MULTILINE)
 
-    if "loosely_coupled.imu.gyro_noise" in vals:
-        text = put(text, "gyro_noise", vals["loosely_coupled.imu.gyro_noise"], "loosely_coupled.imu")
-        text = put(text, "accel_noise", vals["loosely_coupled.imu.accel_noise"], "loosely_coupled.imu")
+    sec = cal.section
+    if f"{sec}.imu.gyro_noise" in vals:
+        text = put(text, "gyro_noise", vals[f"{sec}.imu.gyro_noise"], f"{sec}.imu")
+        text = put(text, "accel_noise", vals[f"{sec}.imu.accel_noise"], f"{sec}.imu")
     if "loosely_coupled.boresight" in vals:
         text = put(text, "boresight", vals["loosely_coupled.boresight"], "loosely_coupled")
     if "loosely_coupled.imu_time_offset" in vals:
