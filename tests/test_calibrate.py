@@ -155,3 +155,13 @@ def test_walk_tc_calibrated_noise_keeps_the_hand_tuned_accuracy(tmp_path: Path) 
     assert cal <= 1.1 * hand
     with pytest.raises(ScenarioError, match=r"\[loosely_coupled\] scenarios only"):
         calibrate("walk_tc", ["boresight"])
+
+
+def test_gnss_sigma_scale_is_reported(tmp_path: Path) -> None:
+    """A receiver that reports σ 0.7 m for errors of σ 2 m: the calibrated filter's σ scale on
+    the positions is the ratio (2.86) within 20 %, and printed."""
+    log = simulate_log(tmp_path / "s", duration=300, seed=3, gnss_sigma=2.0, reported_sigma=0.7)
+    c = calibrate(str(log.scenario))
+    med, lo, hi = c.gnss_sigma_scale["gnss_pos"]
+    assert abs(med / (2.0 / 0.7) - 1) <= 0.2 and lo <= med <= hi
+    assert any(ln.startswith("gnss_pos: the receiver's σ × ") for ln in c.lines())

@@ -21,7 +21,8 @@ from its own files (``navfdi calibrate SCENARIO``).
   fault-free, without FDE), on a 0.05 s grid refined by a parabola; its σ from the
   curvature. Reference-free: no truth is used.
 
-It does not estimate a GNSS σ scale: the filter's own ``noise_scale`` does that during the run.
+* **GNSS σ scale**: reported, per GNSS channel, as the calibrated filter finds it from its
+  innovations (``noise_scale``, which estimates it in every run; not written).
 Each estimate rests on the ones before it (noise, then boresight, then time offset). A
 scenario may leave any of ``imu.gyro_noise``, ``imu.accel_noise``, ``boresight`` and
 ``imu_time_offset`` as ``"auto"``: :func:`resolve_auto` fills them before a run.
@@ -64,7 +65,9 @@ class Calibration:
     with its σ (None when the log has too few turns); ``rest`` the rest intervals used
     ((start, end), s from the first GNSS epoch); ``straight`` the seconds of driving the
     boresight was read from; ``section`` the scenario table the values belong to
-    (``loosely_coupled`` or ``tight.strapdown``)."""
+    (``loosely_coupled`` or ``tight.strapdown``); ``gnss_sigma_scale`` per GNSS channel the
+    factor on the receiver's σ the calibrated filter finds from its innovations (median, 10th
+    and 90th percentile; informative: ``noise_scale = "auto"`` estimates it in every run)."""
 
     gyro_noise: list[float] | None
     gyro_noise_sigma: list[float] | None
@@ -79,6 +82,7 @@ class Calibration:
     boresight_sigma: list[float] | None = field(default_factory=lambda: None)
     straight: float = 0.0
     section: str = "loosely_coupled"
+    gnss_sigma_scale: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
@@ -104,6 +108,12 @@ class Calibration:
             out.append("IMU time offset: not estimated (too few turns while moving)")
         else:
             out.append(f"IMU time offset: {self.imu_time_offset:+.3f} ± {self.imu_time_offset_sigma:.3f} s")
+        for name, (med, lo, hi) in self.gnss_sigma_scale.items():
+            if hi <= 1.0:
+                out.append(f"{name}: the receiver's σ covers the innovations (noise_scale stays at its floor, 1)")
+            else:
+                out.append(f"{name}: the receiver's σ × {med:.2f} (10-90 %: {lo:.2f}-{hi:.2f}) fits the innovations "
+                           "(noise_scale, estimated in every run)")
         return out
 
     def values(self) -> dict[str, Any]:
@@ -205,7 +215,23 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
             noise["gyro_noise"], noise["accel_noise"], noise["gyro_bias"])
     if bore is not None:
         cal.boresight, cal.boresight_sigma, cal.straight = bore
+    if fields is None:
+        cal.gnss_sigma_scale = _sigma_scales(base, src)
     return cal
+
+
+def _sigma_scales(sc: Any, src: Any) -> dict[str, tuple[float, float, float]]:
+    """Per GNSS channel, the factor the filter finds on the receiver's σ from its innovations
+    (``noise_scale``, estimated through the run): median and 10th-90th percentiles over the
+    epochs once it is estimated."""
+    rec = src.run([sc.to_json()])[0]
+    out = {}
+    for s_ in rec["subfilters"]:
+        v = np.asarray(s_.get("noise_scale", []), float)
+        v = v[np.isfinite(v)]
+        if len(v):
+            out[str(s_["sensor"])] = (float(np.median(v)), float(np.percentile(v, 10)), float(np.percentile(v, 90)))
+    return out
 
 
 def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
