@@ -755,3 +755,19 @@ def test_no_numeric_input_reaches_a_panic(name, fn, args):
             pass
         except BaseException as e:  # PanicException derives from BaseException
             pytest.fail(f"{name}: argument {i} = {bad!r} raised {type(e).__name__}: {e}")
+
+
+def test_pos_time_parses_and_refuses_like_the_calendar() -> None:
+    """The .pos time parser (day start cached, time of day by hand): the same GPS seconds as
+    the calendar, and every malformed or out-of-range field refused."""
+    import datetime as _dt
+
+    from navfdi._logtime import GPS_EPOCH, pos_time
+
+    for d, tod in (("2021/07/08", "01:02:03.250"), ("2024/02/29", "23:59:59.999"), ("2017/01/01", "00:00:00")):
+        want = (_dt.datetime.strptime(f"{d} {tod}", "%Y/%m/%d %H:%M:%S.%f" if "." in tod else "%Y/%m/%d %H:%M:%S") - GPS_EPOCH).total_seconds()
+        assert pos_time(d, tod) == pytest.approx(want, abs=1e-6)
+    for d, tod in (("2021/07/08", "24:00:00"), ("2021/07/08", "01:60:00"), ("2021/07/08", "1:2"), ("2021/07/08", "01:00:nan"),
+                   ("2021/07/08", "01:00:-1"), ("2021/13/08", "01:00:00"), ("2023/02/29", "01:00:00"), ("2021/07/08", "a1:00:00")):
+        with pytest.raises(ValueError):
+            pos_time(d, tod)

@@ -10,6 +10,7 @@ missing ``duration`` / ``dt`` become the log's span and median interval."""
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import re
 from collections.abc import Mapping
 from pathlib import Path
@@ -37,11 +38,23 @@ def utc_to_gps(d: _dt.datetime) -> float:
     return (d - GPS_EPOCH).total_seconds() + leap
 
 
+@functools.lru_cache(maxsize=64)
+def _day_start(date: str) -> float:
+    """GPS seconds of 00:00 GPST on ``yyyy/mm/dd`` (a log has few dates: cached)."""
+    return (_dt.datetime.strptime(date, "%Y/%m/%d") - GPS_EPOCH).total_seconds()
+
+
 def pos_time(tok0: str, tok1: str) -> float:
-    """GPS seconds of an RTKLIB ``.pos`` time: ``yyyy/mm/dd hh:mm:ss.sss`` or week and seconds."""
+    """GPS seconds of an RTKLIB ``.pos`` time: ``yyyy/mm/dd hh:mm:ss.sss`` or week and seconds.
+    Raises ValueError for anything else (a field out of its range included)."""
     if "/" in tok0:
-        d = _dt.datetime.strptime(f"{tok0} {tok1[:15]}", "%Y/%m/%d %H:%M:%S.%f" if "." in tok1 else "%Y/%m/%d %H:%M:%S")
-        return (d - GPS_EPOCH).total_seconds()
+        hms = tok1.split(":")
+        if len(hms) != 3 or not all(hms) or not (hms[0].isdigit() and hms[1].isdigit()):
+            raise ValueError(tok1)
+        h, m, sec = int(hms[0]), int(hms[1]), float(hms[2])
+        if not (h < 24 and m < 60 and 0.0 <= sec < 61.0) or not hms[2][0].isdigit():
+            raise ValueError(tok1)
+        return _day_start(tok0) + h * 3600.0 + m * 60.0 + sec
     return float(tok0) * _WEEK + float(tok1)
 
 
