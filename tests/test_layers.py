@@ -36,7 +36,7 @@ CORE_LAYERS = [
 ]
 
 PY_LAYERS = [
-    {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled"},
+    {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled", "_schema"},
     {"_terrain", "_fields", "_lc_schema", "_logtime", "_gnss_geometry"},
     {"frames"},
     {"scenario"},

@@ -20,7 +20,12 @@ def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
     return d[key]
 
 
-def _check_keys(d: Mapping[str, Any], allowed: set[str], path: str) -> None:
+def _check_keys(d: Mapping[str, Any], section: str, path: str) -> None:
+    """Refuse keys of table ``d`` (at field ``path``) that the schema's ``section``
+    (:data:`navfdi._schema.SECTIONS`) does not list."""
+    from navfdi._schema import keys
+
+    allowed = keys(section)
     if not isinstance(d, Mapping):
         raise ScenarioError(f"{path or 'scenario'} = {d!r}: expected a table")
     extra = sorted(str(k) for k in set(d) - allowed)
@@ -92,7 +97,7 @@ def _detectors(value: Any, p: str) -> list[dict[str, Any]]:
     dets = []
     for j, d in enumerate(_list(value, f"{p}.detectors")):
         dp = f"{p}.detectors[{j}]"
-        _check_keys(d, {"name", "kind", "pf", "pm", "variance", "min_samples"}, dp)
+        _check_keys(d, "detectors", dp)
         kind = _str(_need(d, "kind", dp), f"{dp}.kind")
         if kind not in ("chi2", "sprt", "joint", "state_chi2"):
             raise ScenarioError(f"{dp}.kind = {kind!r}: use chi2, sprt, joint or state_chi2")

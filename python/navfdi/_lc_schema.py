@@ -18,7 +18,7 @@ from navfdi._fields import _bool, _check_keys, _detectors, _list, _name, _need, 
 
 def _constraint(c: Any, p: str, dim: int) -> dict[str, Any]:
     zupt = dim == 3
-    _check_keys(c, {"noise", "detectors", "decision", "window", "threshold", "rate_threshold"}, p)
+    _check_keys(c, "constraint", p)
     noise = _need(c, "noise", p)
     noise = [noise] * dim if isinstance(noise, str) else _list(noise, f"{p}.noise")
     if len(noise) != dim:
@@ -152,9 +152,9 @@ def _strapdown(t: Any, p: str) -> dict[str, Any]:
     :data:`AUTO_FIELDS`) hold placeholders until resolved."""
     t = _auto(t, p)
     imu = _need(t, "imu", p)
-    _check_keys(imu, {"gyro_noise", "accel_noise", "gyro_bias", "accel_bias", "bias_tau", "gyro_scale", "accel_scale"}, f"{p}.imu")
+    _check_keys(imu, "strapdown.imu", f"{p}.imu")
     al = _need(t, "alignment", p)
-    _check_keys(al, {"speed", "heading", "static_speed", "gyro_bias", "sigma_level", "sigma_heading", "sigma_position", "sigma_velocity"}, f"{p}.alignment")
+    _check_keys(al, "strapdown.alignment", f"{p}.alignment")
     return {
         "imu": {
             "gyro_noise": _axes(_need(imu, "gyro_noise", f"{p}.imu"), "angular_rate_density", f"{p}.imu.gyro_noise"),
@@ -184,13 +184,13 @@ def _strapdown(t: Any, p: str) -> dict[str, Any]:
 def _tight_strapdown(t: Any) -> dict[str, Any]:
     """``[tight.strapdown]``: the strapdown INS of a tight filter on recorded logs."""
     p = "tight.strapdown"
-    _check_keys(t, {"imu", "mounting", "imu_axes", "boresight", "lever_arm", "imu_time_offset", "alignment"}, p)
+    _check_keys(t, "tight.strapdown", p)
     return _strapdown(t, p)
 
 
 def _loosely_coupled(lc: Any) -> dict[str, Any]:
     p = "loosely_coupled"
-    _check_keys(lc, {"imu", "mounting", "imu_axes", "boresight", "lever_arm", "imu_time_offset", "alignment", "sensors", "zupt", "nhc", "witness", "isolate_components", "accommodate", "isolate", "convergence", "noise_scale"}, p)
+    _check_keys(lc, "loosely_coupled", p)
     out: dict[str, Any] = {
         **_strapdown(lc, p),
         "sensors": [],
@@ -203,7 +203,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
     }
     for i, a in enumerate(_list(_need(lc, "sensors", p), f"{p}.sensors")):
         q = f"{p}.sensors[{i}]"
-        _check_keys(a, {"sensor", "detectors", "decision"}, q)
+        _check_keys(a, "centralized.sensors", q)
         out["sensors"].append({
             "sensor": _str(_need(a, "sensor", q), f"{q}.sensor"),
             "detectors": _detectors(a.get("detectors", []), q),
@@ -218,7 +218,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
 
 def _tight(t: Any) -> dict[str, Any]:
     """The ``[tight]`` table."""
-    _check_keys(t, {"sensor", "fde", "alpha", "k", "ls_test", "rates", "accel_psd", "strapdown", "integrity"}, "tight")
+    _check_keys(t, "tight", "tight")
     fde = _str(_need(t, "fde", "tight"), "tight.fde")
     if fde not in ("ls_precheck", "innovation", "gnss_filter", "separation", "none"):
         raise ScenarioError(f"tight.fde = {fde!r}: use ls_precheck, innovation, gnss_filter, separation or none")
@@ -249,7 +249,7 @@ def _tight_integrity(a: Any) -> dict[str, Any]:
     p = "tight.integrity"
     if not isinstance(a, dict):
         raise ScenarioError(f"{p}: expected a table, got {type(a).__name__}")
-    _check_keys(a, {*_INTEGRITY_KEYS, "range_errors"}, p)
+    _check_keys(a, "tight.integrity", p)
     return {key: _number(a[key], f"{p}.{key}") for key in _INTEGRITY_KEYS if key in a}
 
 
@@ -295,12 +295,7 @@ def apply_range_errors(raw: Any, core: dict[str, Any], logged: bool) -> None:
 def _ultra_tight(u: Any) -> dict[str, Any]:
     """The ``[ultra_tight]`` table (paper 004)."""
     p = "ultra_tight"
-    _check_keys(
-        u,
-        {"sensor", "satellites", "method", "pf", "cn0", "integration", "nav_input", "nav_window", "prefilter_window", "stage1_window",
-         "stage2_window", "stage_q", "stage_period", "stage_r0", "fading_b", "jerk_psd", "code_psd", "spacing", "exclude", "arm_after"},
-        p,
-    )
+    _check_keys(u, "ultra_tight", p)
     method = _str(_need(u, "method", p), f"{p}.method")
     if method not in ("m1", "m2", "m3"):
         raise ScenarioError(f"{p}.method = {method!r}: use m1 (navigation-filter AIME), m2 (prefilter AIME) or m3 (two-stage AIME)")

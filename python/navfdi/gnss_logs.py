@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from navfdi._errors import ScenarioError
+from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, utc_to_gps
 from navfdi.logs import PosLog, read_pos
 
@@ -51,8 +52,8 @@ __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORM
 
 #: The formats ``[source] gnss`` accepts.
 FORMATS = ("pos", "solution", "nmea", "csv", "rinex")
-#: The keys of ``format = "rinex"`` beside ``format``.
-RINEX_KEYS = ("obs", "nav", "systems", "elevation_mask", "weighting", "test")
+#: The keys of ``format = "rinex"`` beside ``format`` (:data:`navfdi._schema.SECTIONS`).
+RINEX_KEYS = tuple(k for k in SECTIONS["source.gnss.rinex"].keys if k != "format")
 
 
 def _text(path: Path) -> str:
@@ -87,7 +88,7 @@ def read_gnss(spec: Any, base: Path) -> PosLog:
     cfg: Mapping[str, Any] = spec if isinstance(spec, Mapping) else {"file": spec}
     if cfg.get("format") == "rinex":
         return read_rinex_solution(cfg, base)
-    allowed = {"file", "format", "columns", "time_scale", "date", "undulation"}
+    allowed = keys("source.gnss")
     unknown = sorted(set(cfg) - allowed)
     if unknown:
         raise ScenarioError(f"source.gnss: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")

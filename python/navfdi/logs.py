@@ -22,6 +22,7 @@ if TYPE_CHECKING:
     import pandas as pd
 
 from ._errors import ScenarioError
+from ._schema import SECTIONS as _SECTIONS
 from ._logtime import GPS_EPOCH, pos_time
 from .frames import check_gravity
 
@@ -125,8 +126,8 @@ def _open_text(path: Path) -> list[str]:
         raise ScenarioError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
 
 
-#: Keys of a scenario's ``[source.imu]`` table.
-IMU_KEYS = ("file", "week", "seconds", "time", "gyro", "accel", "gyro_unit", "accel_unit", "kind", "max_gap")
+#: The keys of ``[source.imu]`` (:data:`navfdi._schema.SECTIONS`).
+IMU_KEYS = tuple(_SECTIONS["source.imu"].keys)
 
 
 def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> float:

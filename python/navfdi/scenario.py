@@ -51,11 +51,11 @@ SENSOR_COMPONENTS: dict[str, list[tuple[str, str]]] = {
 
 def _terrain(t: Any) -> dict[str, Any]:
     """The ``[terrain]`` table: ``waves`` of amplitude, wavelength, heading, phase."""
-    _check_keys(t, {"waves"}, "terrain")
+    _check_keys(t, "terrain", "terrain")
     waves = []
     for i, w in enumerate(_list(_need(t, "waves", "terrain"), "terrain.waves")):
         p = f"terrain.waves[{i}]"
-        _check_keys(w, {"amplitude", "wavelength", "heading", "phase"}, p)
+        _check_keys(w, "terrain.waves", p)
         waves.append(
             {
                 "amplitude": _unit(_need(w, "amplitude", p), "length", f"{p}.amplitude"),
@@ -71,7 +71,7 @@ _CLOCK = {"bias": "length", "drift": "velocity", "bias_psd": "length2_per_time",
 
 def _ranges(r: Any, p: str) -> dict[str, Any]:
     """The ``ranges`` table of a ``gnss_ranges`` sensor at path ``p``."""
-    _check_keys(r, {"systems", "elevation_mask", "elevation_noise", "epoch", "clock", "cn0_reference"}, p)
+    _check_keys(r, "sensors.ranges", p)
     systems = []
     for j, sys_ in enumerate(_list(r.get("systems", ["gps"]), f"{p}.systems")):
         name = _str(sys_, f"{p}.systems[{j}]")
@@ -80,7 +80,7 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
         systems.append(name)
     en = _bool(r.get("elevation_noise", False), f"{p}.elevation_noise")
     clock = _need(r, "clock", p)
-    _check_keys(clock, set(_CLOCK), f"{p}.clock")
+    _check_keys(clock, "sensors.ranges.clock", f"{p}.clock")
     return {
         "systems": systems,
         "elevation_mask": _unit(_need(r, "elevation_mask", p), "angle", f"{p}.elevation_mask"),
@@ -102,7 +102,7 @@ def _waypoints(tr: Mapping[str, Any], duration: float) -> dict[str, Any]:
     at 1 m/s² (or less) ending on the last waypoint, then rest until the end of the run
     (``duration``, s). Local distances use
     the radii of curvature at the reference."""
-    _check_keys(tr, {"latitude", "longitude", "height", "waypoints", "speed", "turn_rate"}, "trajectory")
+    _check_keys(tr, "trajectory_waypoints", "trajectory")
     lat0 = _unit(_need(tr, "latitude", "trajectory"), "angle", "trajectory.latitude")
     lon0 = _unit(_need(tr, "longitude", "trajectory"), "angle", "trajectory.longitude")
     h0 = _unit(_need(tr, "height", "trajectory"), "length", "trajectory.height")
@@ -201,7 +201,7 @@ STATE_NAMES = ["att_e", "att_n", "att_u", "vel_e", "vel_n", "vel_u", "lat", "lon
 
 def _modes(m: Any) -> dict[str, Any]:
     """The ``[modes]`` table: gnss (sensor), target [east, north], radius, q1, q2, q3."""
-    _check_keys(m, {"gnss", "target", "radius", "q1", "q2", "q3"}, "modes")
+    _check_keys(m, "modes", "modes")
     target = _list(_need(m, "target", "modes"), "modes.target")
     if len(target) != 2:
         raise ScenarioError(f"modes.target = {target!r}: expected [east, north] with units")
@@ -217,7 +217,7 @@ def _modes(m: Any) -> dict[str, Any]:
 
 def _state_chi2(sc: Any) -> dict[str, Any]:
     """The ``[state_chi2]`` table: pf, reset_every, min_age (times), states (names)."""
-    _check_keys(sc, {"pf", "reset_every", "min_age", "states"}, "state_chi2")
+    _check_keys(sc, "state_chi2", "state_chi2")
     reset = _unit(_need(sc, "reset_every", "state_chi2"), "time", "state_chi2.reset_every")
     states = None
     if "states" in sc:
@@ -236,14 +236,14 @@ def _state_chi2(sc: Any) -> dict[str, Any]:
 
 
 def _centralized(c: Any) -> dict[str, Any]:
-    _check_keys(c, {"policy", "sensors", "fading", "fading_duration", "confirm", "altitude_fusion", "isolate"}, "centralized")
+    _check_keys(c, "centralized", "centralized")
     policy = _str(_need(c, "policy", "centralized"), "centralized.policy")
     if policy not in ("exclude", "latched", "fading"):
         raise ScenarioError(f"centralized.policy = {policy!r}: use exclude, latched or fading")
     sensors = []
     for i, cs in enumerate(_list(_need(c, "sensors", "centralized"), "centralized.sensors")):
         p = f"centralized.sensors[{i}]"
-        _check_keys(cs, {"sensor", "detectors", "decision"}, p)
+        _check_keys(cs, "centralized.sensors", p)
         dec = cs.get("decision")
         sensors.append(
             {
@@ -288,7 +288,7 @@ def _altitude_fusion(a: Any) -> dict[str, Any]:
     """``centralized.altitude_fusion``: sensors (names), samples (window N), estimate
     (``mean_square``, default, or ``variance`` as paper 003's eq. 35)."""
     p = "centralized.altitude_fusion"
-    _check_keys(a, {"sensors", "samples", "estimate"}, p)
+    _check_keys(a, "centralized.altitude_fusion", p)
     estimate = _str(a.get("estimate", "mean_square"), f"{p}.estimate")
     if estimate not in ("mean_square", "variance"):
         raise ScenarioError(f"{p}.estimate = {estimate!r}: use mean_square or variance")
@@ -357,7 +357,7 @@ def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise:
     choose from), ``shapes = [{kind, magnitude = [lo, hi]}, ...]`` and ``satellites``
     (names to choose from, a satellite fault on raw GNSS logs)."""
     q = f"{p}.draw"
-    _check_keys(d, {"start", "components", "shapes", "satellites"}, q)
+    _check_keys(d, "faults.draw", q)
     out: dict[str, Any] = {"start": None, "components": [], "shapes": [], "satellites": []}
     for j, sat in enumerate(_list(d.get("satellites", []), f"{q}.satellites")):
         out["satellites"].append(_str(sat, f"{q}.satellites[{j}]"))
@@ -371,7 +371,7 @@ def _draw(d: Any, p: str, comps: list[tuple[str, str]], names: list[str], noise:
     sets = out["components"] or [own]
     for j, sh in enumerate(_list(d.get("shapes", []), f"{q}.shapes")):
         sp = f"{q}.shapes[{j}]"
-        _check_keys(sh, {"kind", "magnitude"}, sp)
+        _check_keys(sh, "faults.draw.shapes", sp)
         kind = _str(_need(sh, "kind", sp), f"{sp}.kind")
         if kind not in ("step", "ramp", "quadratic"):
             raise ScenarioError(f"{sp}.kind = {kind!r}: use step, ramp or quadratic")
@@ -390,7 +390,7 @@ def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
     kinds: dict[str, str] = {}
     for i, s in enumerate(_list(_need(raw, "sensors", ""), "sensors")):
         p = f"sensors[{i}]"
-        _check_keys(s, {"name", "kind", "noise", "bias", "proportional_noise", "rate", "outages", "ranges"}, p)
+        _check_keys(s, "sensors", p)
         name = _name(_need(s, "name", p), f"{p}.name")
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in SENSOR_COMPONENTS:
@@ -427,7 +427,7 @@ def _sensors_and_faults(raw: Mapping[str, Any], core: dict[str, Any]) -> None:
     faults = []
     for i, f in enumerate(_list(raw.get("faults", []), "faults")):
         p = f"faults[{i}]"
-        _check_keys(f, {"id", "sensor", "components", "kind", "magnitude", "start", "end", "satellite", "draw"}, p)
+        _check_keys(f, "faults", p)
         sensor = _str(_need(f, "sensor", p), f"{p}.sensor")
         if sensor not in kinds:
             raise ScenarioError(f"{p}.sensor = {sensor!r}: not a sensor (known: {', '.join(repr(k) for k in kinds)})")
@@ -475,14 +475,14 @@ def convert_trajectory(tr: Any, duration: float) -> dict[str, Any]:
     segments cover less than the run (the last one is held)."""
     if isinstance(tr, Mapping) and "waypoints" in tr:
         tr = _waypoints(tr, duration)
-    _check_keys(tr, {"latitude", "longitude", "height", "heading", "speed", "segments"}, "trajectory")
+    _check_keys(tr, "trajectory", "trajectory")
     segs = []
     for i, s in enumerate(_list(_need(tr, "segments", "trajectory"), "trajectory.segments")):
         p = f"trajectory.segments[{i}]"
         kind = _str(_need(s, "kind", p), f"{p}.kind")
         if kind not in _SEGMENTS:
             raise ScenarioError(f"{p}.kind = {kind!r}: unknown segment (use one of: {', '.join(_SEGMENTS)})")
-        _check_keys(s, {"kind", *_SEGMENTS[kind]}, p)
+        _check_keys(s, f"segment.{kind}", p)
         seg: dict[str, Any] = {"kind": kind}
         for key, dim in _SEGMENTS[kind].items():
             seg[key] = _unit(_need(s, key, p), dim, f"{p}.{key}")
@@ -509,7 +509,7 @@ def convert_trajectory(tr: Any, duration: float) -> dict[str, Any]:
 
 def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     """User structure (with units) → core structure (SI)."""
-    _check_keys(raw, {"name", "description", "duration", "dt", "trajectory", "ins", "sensors", "faults", "architecture", "federated", "centralized", "tight", "ultra_tight", "loosely_coupled", "source", "terrain", "state_chi2", "modes", "variants"}, "")
+    _check_keys(raw, "", "")
     tight = raw.get("tight")
     logged_tight = raw.get("architecture") == "tight" and isinstance(tight, Mapping) and "strapdown" in tight
     logged = raw.get("architecture") == "loosely_coupled" or logged_tight
@@ -533,7 +533,7 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     if "modes" in raw:
         core["modes"] = _modes(raw["modes"])
     ins = _need(raw, "ins", "")
-    _check_keys(ins, set(_INS), "ins")
+    _check_keys(ins, "ins", "ins")
     core["ins"] = {k: _unit(_need(ins, k, "ins"), dim, f"ins.{k}") for k, dim in _INS.items()}
 
     _sensors_and_faults(raw, core)
@@ -556,14 +556,14 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         core["centralized"] = _centralized(_need(raw, "centralized", ""))
         return core
     fed = _need(raw, "federated", "")
-    _check_keys(fed, {"mode", "master_share", "subfilters", "isolated", "isolate"}, "federated")
+    _check_keys(fed, "federated", "federated")
     mode = _str(_need(fed, "mode", "federated"), "federated.mode")
     if mode not in ("reset", "no_reset"):
         raise ScenarioError(f"federated.mode = {mode!r}: use reset or no_reset")
     subs = []
     for i, sf in enumerate(_list(_need(fed, "subfilters", "federated"), "federated.subfilters")):
         p = f"federated.subfilters[{i}]"
-        _check_keys(sf, {"sensor", "share", "detectors", "isolation"}, p)
+        _check_keys(sf, "federated.subfilters", p)
         dets = _detectors(sf.get("detectors", []), p)
         iso = sf.get("isolation")
         subs.append(
@@ -718,7 +718,7 @@ def _variants(raw: Mapping[str, Any]) -> list[tuple[str, dict[str, Any]]]:
     out: list[tuple[str, dict[str, Any]]] = []
     for i, v in enumerate(_list(raw.get("variants", []), "variants")):
         p = f"variants[{i}]"
-        _check_keys(v, {"name", "set"}, p)
+        _check_keys(v, "variants", p)
         name = _name(_need(v, "name", p), f"{p}.name")
         if any(name == n for n, _ in out):
             raise ScenarioError(f"{p}.name = {name!r}: used by an earlier variant")
@@ -761,11 +761,11 @@ def _convert_logged(raw: Mapping[str, Any], core: dict[str, Any]) -> dict[str, A
             raise ScenarioError(f"{k}: not used by a {arch} scenario on recorded logs (remove it)")
     src = _need(raw, "source", "")
     if arch == "tight":
-        _check_keys(src, {"rinex_obs", "rinex_nav", "reference", "reference_quality", "imu"}, "source")
+        _check_keys(src, "source.tight", "source")
         for k in ("rinex_obs", "rinex_nav"):
             _need(src, k, "source")
     else:
-        _check_keys(src, {"gnss", "reference", "reference_quality", "reference_epochs", "imu"}, "source")
+        _check_keys(src, "source.loosely_coupled", "source")
     _sensors_and_faults(raw, core)
     core["architecture"] = arch
     _variants(raw)
