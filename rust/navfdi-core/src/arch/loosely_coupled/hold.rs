@@ -69,6 +69,10 @@ pub enum Comp {
         back: bool,
         /// Consecutive fixes whose raw innovation agreed.
         agree: u32,
+        /// Consecutive fixes since the jump back at which the receiver was consistent with its
+        /// velocity (the fault is over even if the INS, having followed part of it, still
+        /// disagrees).
+        quiet: u32,
     },
     /// A held ramp since `since` (s): its size `b` (innovation units, m) followed by the
     /// receiver's own displacement against its velocity, with variance `var` (m²).
@@ -86,6 +90,10 @@ pub enum Comp {
         fixes: u32,
         /// Consecutive fixes whose raw innovation agreed.
         agree: u32,
+        /// The receiver's ramp size was significant at some fix of the hold.
+        seen: bool,
+        /// Consecutive fixes, after `seen`, at which it was within its noise again.
+        quiet: u32,
     },
 }
 
@@ -227,6 +235,7 @@ impl PositionHold {
                             var: s[j],
                             back: false,
                             agree: 0,
+                            quiet: 0,
                         }
                     } else if let (true, Some((sum, var))) =
                         (converged, recv.and_then(|c| c.onset[j]))
@@ -242,6 +251,8 @@ impl PositionHold {
                             confirmed: leaves(j, -sum),
                             fixes: 0,
                             agree: 0,
+                            seen: sum * sum > AGREE_W2 * var,
+                            quiet: 0,
                         }
                     } else if flagged {
                         out[j] = Use::Out(TEST);
@@ -255,9 +266,22 @@ impl PositionHold {
                     var,
                     back,
                     agree,
+                    quiet,
                 } => {
+                    // The jump back: from the receiver's consistency, or where it has none at
+                    // this fix (moving off from rest, after a gap) from the innovation's change.
+                    let jump_back = |dd: f64| dd * b < 0.0 && dd.abs() > 0.5 * b.abs();
+                    let receiver_back = recv.is_some_and(|c| {
+                        c.e[j].abs() > RECEIVER_JUMP * c.sigma[j] && jump_back(-c.e[j])
+                    });
                     let back = back
-                        || delta(j).is_some_and(|(dd, _)| dd * b < 0.0 && dd.abs() > 0.5 * b.abs());
+                        || delta(j)
+                            .or_else(|| self.prev.map(|(pd, ps)| (d[j] - pd[j], s[j] + ps[j])))
+                            .is_some_and(|(dd, _)| jump_back(dd));
+                    let quiet = match recv {
+                        Some(c) if back && c.e[j].abs() <= 3.0 * c.sigma[j] => quiet + 1,
+                        _ => 0,
+                    };
                     // The held offset moves with the receiver's own inconsistency where it is
                     // significant (beyond 3σ_e: a fault that keeps growing after its jump — a
                     // ramp taken for a step — is followed, not let into the solution; its end
@@ -278,7 +302,15 @@ impl PositionHold {
                     } else {
                         AGREE
                     };
-                    if (back && w2(j) <= thr1) || w2(j) <= AGREE_W2 {
+                    if receiver_back || (back && quiet >= AGREE_LONG) {
+                        // The receiver jumped back to where its velocity says it is: the fault
+                        // is over, and what is left between the fix and the INS is the part of
+                        // it the INS followed (a ramp taken for a step) — the fix corrects it,
+                        // rather than being held as an offset of its own.
+                        // Without the receiver at the jump (from rest): once it has agreed with
+                        // its own velocity for [`AGREE_LONG`] fixes since.
+                        Comp::Normal
+                    } else if (back && w2(j) <= thr1) || w2(j) <= AGREE_W2 {
                         let agree = agree + 1;
                         if agree >= needed {
                             Comp::Normal
@@ -289,6 +321,7 @@ impl PositionHold {
                                 var,
                                 back,
                                 agree,
+                                quiet,
                             }
                         }
                     } else if (d[j] - b).powi(2) / (s[j] + var) <= thr1 {
@@ -302,6 +335,7 @@ impl PositionHold {
                             var,
                             back: false,
                             agree: 0,
+                            quiet: 0,
                         }
                     } else {
                         out[j] = Use::Out(STEP);
@@ -311,8 +345,9 @@ impl PositionHold {
                         Comp::Step {
                             b: if renew { d[j] } else { b },
                             var: if renew { s[j] } else { var },
-                            back: false,
+                            back: back && !renew,
                             agree: 0,
+                            quiet: if renew { 0 } else { quiet },
                         }
                     }
                 }
@@ -323,6 +358,8 @@ impl PositionHold {
                     confirmed,
                     fixes,
                     agree,
+                    seen,
+                    quiet,
                 } => {
                     // The ramp's size moves with the receiver's inconsistency (its end: a
                     // jump back to zero).
@@ -338,9 +375,19 @@ impl PositionHold {
                     // INS, for [`AGREE`] fixes.
                     let ok = w2(j) <= thr1 && b * b <= AGREE_W2 * var;
                     let agree = if ok { agree + 1 } else { 0 };
+                    // The receiver's ramp size back within its noise after it was significant,
+                    // for [`AGREE_LONG`] fixes with the receiver's consistency: the ramp is
+                    // over; an INS that still disagrees followed part of it.
+                    let small = recv.is_some() && b * b <= AGREE_W2 * var;
+                    let seen = seen || (recv.is_some() && !small);
+                    let quiet = if seen && small { quiet + 1 } else { 0 };
                     // The receiver jumped back to where its velocity says it is: the ramp
                     // ended, and the fix corrects what the filter followed before the hold.
-                    if (!confirmed && fixes >= PROBATION) || agree >= AGREE || returned(j) {
+                    if (!confirmed && fixes >= PROBATION)
+                        || agree >= AGREE
+                        || returned(j)
+                        || quiet >= AGREE_LONG
+                    {
                         Comp::Normal
                     } else {
                         out[j] = if confirmed
@@ -358,6 +405,8 @@ impl PositionHold {
                             confirmed,
                             fixes,
                             agree,
+                            seen,
+                            quiet,
                         }
                     }
                 }
@@ -412,6 +461,44 @@ mod tests {
             false,
             true,
         )[1]
+    }
+
+    /// A ramp taken for a step (its size followed by the receiver's inconsistency) that the
+    /// INS partly followed: when the receiver jumps back to where its velocity says it is, the
+    /// fix is used as measured at once (it corrects the INS), not held as a new offset equal
+    /// to the INS's error.
+    #[test]
+    fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
+        let mut h = PositionHold::default();
+        for k in 0..5 {
+            assert_eq!(
+                step_e(&mut h, k as f64, 0.1, false, Some((0.1, 0.0))),
+                Use::Raw
+            );
+        }
+        // The fix jumps by 5 m (a step to the receiver: e = 5 m against σ_e 1 m), then keeps
+        // moving 2 m per fix; the INS ends 3 m off by the ramp's end.
+        assert!(matches!(
+            step_e(&mut h, 5.0, -5.0, true, Some((5.0, 0.0))),
+            Use::Relative(..)
+        ));
+        let mut d = -5.0;
+        for k in 6..20 {
+            d -= 1.8;
+            assert!(
+                matches!(
+                    step_e(&mut h, k as f64, d, true, Some((2.0, 0.0))),
+                    Use::Relative(..) | Use::Out(STEP)
+                ),
+                "{k}"
+            );
+        }
+        // The receiver returns by the whole accumulated 33 m; the INS is 3 m off.
+        assert_eq!(
+            step_e(&mut h, 20.0, 3.0, true, Some((-33.0, 0.0))),
+            Use::Raw
+        );
+        assert_eq!(h.comps[1], Comp::Normal);
     }
 
     /// A 20 m step on north at σ 2 m: held from its first fix to its last (used as a relative
