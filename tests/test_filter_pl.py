@@ -91,6 +91,11 @@ def test_campaign_counts_hazardous_epochs_per_point(tmp_path):
     assert (t["vpl_ratio_mean"] < 0.5).all() and (t["hpl_ratio_mean"] < 0.5).all()
     assert "filter protection levels" in c.format_table()
     assert max(len(line) for line in c.format_table().splitlines()) <= 100
+    # Rates with their intervals, and the runs with a hazardous epoch (independent).
+    assert t.loc["separation", "hmi_runs"] == 0 and t.loc["separation", "hmi_runs_hi"] > 0
+    assert (t["mi_rate_v_lo"] <= t["mi_rate_v"]).all() and (t["mi_rate_v"] <= t["mi_rate_v_hi"]).all()
+    assert t.loc["none", "mi_rate_v_lo"] > 0
+    assert t.loc["none", "mi_rate_v"] == pytest.approx(t.loc["none", "misleading_v"] / t.loc["none", "epochs"])
     paths = c.write(tmp_path, figures=False)
     assert (tmp_path / "integrity.csv") in paths
 

@@ -372,12 +372,17 @@ class Campaign:
         ``alarm_epochs``, ``error_over_hpl_max``, ``error_over_vpl_max`` (the largest error /
         level over all runs: below 1 means no epoch came near), ``hpl_mean``, ``vpl_mean`` (m),
         ``hpl_ratio_mean``, ``vpl_ratio_mean`` (filter level / snapshot ARAIM level of the same
-        epoch's pseudoranges, mean over the epochs with both)."""
+        epoch's pseudoranges, mean over the epochs with both), ``mi_rate_h``, ``mi_rate_v``
+        with their 95 % Wilson bounds ``…_lo``, ``…_hi`` (per epoch: epochs of one run are
+        correlated, so these bounds are optimistic), and ``hmi_runs`` (runs with at least one
+        hazardously misleading epoch, horizontal or vertical) with ``hmi_runs_lo``,
+        ``hmi_runs_hi`` (Wilson over the runs, which are independent)."""
         import pandas as pd
 
         df = self.completed_runs()
         cols = [*self.sweep_columns, "runs", "epochs", "misleading_h", "misleading_v", "hazardous_h", "hazardous_v", "hmi_rate_h", "hmi_rate_v",
-                "alarm_epochs", "error_over_hpl_max", "error_over_vpl_max", "hpl_mean", "vpl_mean", "hpl_ratio_mean", "vpl_ratio_mean"]
+                "alarm_epochs", "error_over_hpl_max", "error_over_vpl_max", "hpl_mean", "vpl_mean", "hpl_ratio_mean", "vpl_ratio_mean",
+                "mi_rate_h", "mi_rate_h_lo", "mi_rate_h_hi", "mi_rate_v", "mi_rate_v_lo", "mi_rate_v_hi", "hmi_runs", "hmi_runs_lo", "hmi_runs_hi"]
         if "pl_epochs" not in df or not len(df):
             return pd.DataFrame(columns=cols)
         per_run = df.drop_duplicates(["point", "run"])
@@ -393,12 +398,18 @@ class Campaign:
                 "error_over_vpl_max": g["error_over_vpl_max"].max(),
             })
             ep = f["epochs"]
+            hmi_runs = int(((g["hmi_h_epochs"] + g["hmi_v_epochs"]) > 0).sum())
+            (mh_lo, mv_lo, r_lo), (mh_hi, mv_hi, r_hi) = wilson(np.array([f["misleading_h"], f["misleading_v"], hmi_runs]),
+                                                                np.array([ep, ep, len(g)]))
             rows.append({
                 **{c: self.points[int(point)][c] for c in self.sweep_columns},
                 "runs": len(g),
                 **f,
                 "hmi_rate_h": f["hazardous_h"] / ep if ep else math.nan,
                 "hmi_rate_v": f["hazardous_v"] / ep if ep else math.nan,
+                "mi_rate_h": f["misleading_h"] / ep if ep else math.nan, "mi_rate_h_lo": mh_lo, "mi_rate_h_hi": mh_hi,
+                "mi_rate_v": f["misleading_v"] / ep if ep else math.nan, "mi_rate_v_lo": mv_lo, "mi_rate_v_hi": mv_hi,
+                "hmi_runs": hmi_runs, "hmi_runs_lo": r_lo, "hmi_runs_hi": r_hi,
             })
         return pd.DataFrame(rows, columns=cols)
 
@@ -407,17 +418,19 @@ class Campaign:
         t = self.integrity_summary()
         if not len(t):
             return []
-        lines = ["filter protection levels (error > PL: misleading; without an alarm: hazardous):"]
-        lines.append(f"  {'point':<20} {'epochs':>8} {'MI h/v':>13} {'HMI h/v':>9} {'err/PL max':>11} {'PL h/v [m]':>11} {'/snapshot':>10}")
+        lines = ["filter protection levels (error > PL: misleading; without an alarm: hazardous; runs with a"]
+        lines.append("  hazardous epoch with their 95 % interval):")
+        lines.append(f"  {'point':<16} {'epochs':>8} {'MI h/v':>9} {'HMI h/v':>9} {'err/PL max':>11} {'PL h/v [m]':>10} {'/snapsh.':>9} {'HMI runs':>18}")
         for _, r in t.iterrows():
             name = ", ".join(str(r[c]) for c in self.sweep_columns) or "all"
-            name = name if len(name) <= 20 else name[:19] + "…"
+            name = name if len(name) <= 16 else name[:15] + "…"
             mi = f"{int(r['misleading_h'])}/{int(r['misleading_v'])}"
             hmi = f"{int(r['hazardous_h'])}/{int(r['hazardous_v'])}"
             worst = f"{r['error_over_hpl_max']:.2f}/{r['error_over_vpl_max']:.2f}"
             pl = f"{r['hpl_mean']:.1f}/{r['vpl_mean']:.1f}"
             ratio = f"{r['hpl_ratio_mean']:.2f}/{r['vpl_ratio_mean']:.2f}"
-            lines.append(f"  {name:<20} {int(r['epochs']):>8} {mi:>13} {hmi:>9} {worst:>11} {pl:>11} {ratio:>10}")
+            runs = f"{int(r['hmi_runs'])}/{int(r['runs'])} [{r['hmi_runs_lo']:.2f},{r['hmi_runs_hi']:.2f}]"
+            lines.append(f"  {name:<16} {int(r['epochs']):>8} {mi:>9} {hmi:>9} {worst:>11} {pl:>10} {ratio:>9} {runs:>18}")
         # On recorded logs (the only campaigns with a reference, "hor_rms"): alarms over half
         # the epochs are the model's, not the drawn fault's (in simulation a variant that
         # excludes nothing alarms for as long as its fault lasts).
