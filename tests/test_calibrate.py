@@ -139,11 +139,19 @@ def test_a_log_without_rest_is_named() -> None:
 
 
 def test_walk_tc_calibrated_noise_keeps_the_hand_tuned_accuracy(tmp_path: Path) -> None:
-    """walk_tc (a handheld receiver, never still): rest by the Doppler speed at both ends, the
-    white noise from first differences, written into [tight.strapdown.imu]; the fault-free
-    horizontal RMS about the reference's offset within 10 % of the hand-tuned scenario's."""
+    """walk_tc from its files and the IMU's axis names (a handheld receiver, never still): rest
+    by the Doppler speed at both ends, the white noise from first differences, written into
+    [tight.strapdown.imu]; the fault-free horizontal RMS about the reference's offset within
+    10 % of the hand-tuned scenario's."""
+    src = tmp_path / "axes.toml"
+    r = subprocess.run([sys.executable, "-m", "navfdi", "scenarios", "--export", "walk_tc", str(src)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    # The files and the IMU's axis names only: x left, y back, z up (the hand-given mounting
+    # 180°, 0°, −90°), noise from the log.
+    text = re.sub(r"^mounting = .*$", 'imu_axes = ["left", "back", "up"]', src.read_text(encoding="utf-8"), count=1, flags=re.M)
+    src.write_text(text, encoding="utf-8")
     out = tmp_path / "cal.toml"
-    r = subprocess.run([sys.executable, "-m", "navfdi", "calibrate", "walk_tc", "--out", str(out)], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "navfdi", "calibrate", str(src), "--out", str(out)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert "rest intervals: 2" in r.stdout and "not estimated for [tight.strapdown]" in r.stdout
     sc = load_scenario(out)
