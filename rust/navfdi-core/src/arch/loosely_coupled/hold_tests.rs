@@ -1,0 +1,292 @@
+//! Unit tests of the position hold ([`super::PositionHold`]).
+
+use super::*;
+
+fn v(x: f64) -> Vector3<f64> {
+    Vector3::new(0.0, x, 0.0)
+}
+
+const THR: f64 = 28.37; // χ²₁ at pf 1e-7
+
+fn step(h: &mut PositionHold, t: f64, d: f64, alarm: bool, ramp: bool) -> Use {
+    step_e(h, t, d, alarm, ramp.then_some((-1.0, -11.0)))
+}
+
+/// One fix: `recv` the receiver's `e` on north and, where the CUSUM fires, the sum since
+/// its onset (σ_e 1 m); None: no velocity channel.
+fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, f64)>) -> Use {
+    let s = Vector3::repeat(4.5);
+    let c = recv.map(|(e, sum)| Consistency {
+        e: Vector3::new(0.0, e, 0.0),
+        sigma: Vector3::repeat(1.0),
+        ramp: [false, sum != 0.0, false],
+        onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
+        window: Vector3::zeros(),
+    });
+    h.decide(
+        t,
+        &v(d),
+        &s,
+        alarm,
+        &[1],
+        THR,
+        c.as_ref(),
+        c.is_none(),
+        true,
+        false,
+        true,
+    )[1]
+}
+
+/// A ramp taken for a step (its size followed by the receiver's inconsistency) that the
+/// INS partly followed: when the receiver jumps back to where its velocity says it is, the
+/// fix is used as measured at once (it corrects the INS), not held as a new offset equal
+/// to the INS's error.
+#[test]
+fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
+    let mut h = PositionHold::default();
+    for k in 0..5 {
+        assert_eq!(
+            step_e(&mut h, k as f64, 0.1, false, Some((0.1, 0.0))),
+            Use::Raw
+        );
+    }
+    // The fix jumps by 5 m (a step to the receiver: e = 5 m against σ_e 1 m), then keeps
+    // moving 2 m per fix; the INS ends 3 m off by the ramp's end.
+    assert!(matches!(
+        step_e(&mut h, 5.0, -5.0, true, Some((5.0, 0.0))),
+        Use::Relative(..)
+    ));
+    let mut d = -5.0;
+    for k in 6..20 {
+        d -= 1.8;
+        assert!(
+            matches!(
+                step_e(&mut h, k as f64, d, true, Some((2.0, 0.0))),
+                Use::Relative(..) | Use::Out(STEP)
+            ),
+            "{k}"
+        );
+    }
+    // The receiver returns by the whole accumulated 33 m; the INS is 3 m off. Its fixes
+    // are used as measured while the receiver stays consistent, even though the test
+    // still alarms, until one agrees with the INS.
+    assert_eq!(
+        step_e(&mut h, 20.0, 3.0, true, Some((-33.0, 0.0))),
+        Use::Raw
+    );
+    assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
+    assert_eq!(step_e(&mut h, 21.0, 2.5, true, Some((0.1, 0.0))), Use::Raw);
+    assert_eq!(step_e(&mut h, 22.0, 0.2, false, Some((0.1, 0.0))), Use::Raw);
+    assert_eq!(h.comps[1], Comp::Normal);
+}
+
+/// A fault the filter followed unseen (no alarm during it): at its end the receiver
+/// returns; its fixes correct the INS though the test alarms at them, and a new jump
+/// while returning is tested again.
+#[test]
+fn a_return_is_used_until_the_ins_agrees() {
+    let mut h = PositionHold::default();
+    let mk = |e: f64, w: f64| Consistency {
+        e: Vector3::new(0.0, e, 0.0),
+        sigma: Vector3::repeat(0.7),
+        ramp: [false; 3],
+        onset: [None; 3],
+        window: Vector3::new(0.0, w, 0.0),
+    };
+    let s = Vector3::repeat(8.0);
+    let go = |h: &mut PositionHold, t: f64, d: f64, alarm: bool, c: Consistency| {
+        h.decide(
+            t,
+            &v(d),
+            &s,
+            alarm,
+            &[1],
+            THR,
+            Some(&c),
+            false,
+            true,
+            false,
+            true,
+        )[1]
+    };
+    // 27 m of drift, 25 m of it in the window: a return, not a new step.
+    assert_eq!(go(&mut h, 0.0, 16.5, true, mk(-26.7, 25.0)), Use::Raw);
+    assert!(matches!(h.comps[1], Comp::Return { .. }));
+    // The test still alarms (|d|² / s above 28.4): used as measured while returning.
+    for (k, d) in [(1.0, 16.3), (2.0, 15.8)] {
+        assert_eq!(go(&mut h, k, d, true, mk(0.2, -8.0)), Use::Raw, "{k}");
+    }
+    // A new jump of the receiver while returning: tested as any fix.
+    assert_eq!(go(&mut h, 3.0, 20.0, true, mk(15.0, -8.0)), Use::Out(TEST));
+    assert_eq!(h.comps[1], Comp::Normal);
+}
+
+/// A ramp's first increment on RTK fixes (σ_e 4 cm) beside a window of latency residuals
+/// the other way is not a return: the jump does not stand out of the window's own noise.
+#[test]
+fn a_small_jump_against_window_noise_is_not_a_return() {
+    let mut h = PositionHold::default();
+    let c = Consistency {
+        e: Vector3::new(0.0, 0.4, 0.0),
+        sigma: Vector3::repeat(0.04),
+        ramp: [false; 3],
+        onset: [None; 3],
+        window: Vector3::new(0.0, -0.8, 0.0),
+    };
+    let s = Vector3::repeat(0.003);
+    let u = h.decide(
+        0.0,
+        &v(-0.4),
+        &s,
+        true,
+        &[1],
+        THR,
+        Some(&c),
+        false,
+        true,
+        false,
+        true,
+    )[1];
+    assert!(matches!(h.comps[1], Comp::Step { .. }), "{:?}", h.comps[1]);
+    assert!(matches!(u, Use::Relative(..)));
+}
+
+/// A 20 m step on north at σ 2 m: held from its first fix to its last (used as a relative
+/// fix), re-admitted two fixes after it ends.
+#[test]
+fn steps_are_held_to_their_end() {
+    let mut h = PositionHold::default();
+    for k in 0..5 {
+        assert_eq!(step(&mut h, k as f64, 0.5, false, false), Use::Raw);
+    }
+    assert_eq!(
+        step(&mut h, 5.0, 20.0, true, false),
+        Use::Relative(20.0, 4.5)
+    );
+    for k in 6..30 {
+        // The raw fix stays 19.5 m off the INS: never re-admitted while it lasts.
+        assert_eq!(
+            step(&mut h, k as f64, 19.5, true, false),
+            Use::Relative(20.0, 4.5),
+            "{k}"
+        );
+    }
+    assert_eq!(step(&mut h, 30.0, 0.3, false, false), Use::Out(STEP));
+    assert_eq!(step(&mut h, 31.0, 0.3, false, false), Use::Raw);
+}
+
+/// An alarm that grew into the test (no jump) leaves that fix out and holds nothing; a
+/// ramp flagged by the sequential test is held, its size followed by the receiver's
+/// inconsistency (used as a relative fix once the fix leaves the INS), until the receiver
+/// jumps back and the fix agrees with the INS.
+#[test]
+fn ramps_are_held_until_the_receiver_returns() {
+    let mut h = PositionHold::default();
+    for k in 0..10 {
+        step(&mut h, k as f64, 0.0, false, false);
+    }
+    let mut d = 0.0;
+    for k in 10..20 {
+        d += 1.0;
+        let alarm = d * d / 4.5 > THR;
+        let u = step(&mut h, k as f64, d, alarm, false);
+        assert_eq!(u, if alarm { Use::Out(TEST) } else { Use::Raw }, "{k}");
+    }
+    // Flagged at the 11th fix of the ramp (fix 11 m off, receiver −11 m since onset).
+    d += 1.0;
+    assert_eq!(
+        step_e(&mut h, 20.0, d, true, Some((-1.0, -11.0))),
+        Use::Out(RAMP)
+    );
+    for k in 21..40 {
+        d += 1.0;
+        let u = step_e(&mut h, k as f64, d, true, Some((-1.0, 0.0)));
+        // b = 11 + (k − 20) follows the fix exactly: used relative to it.
+        assert_eq!(u, Use::Relative(d, 11.0 + (k - 20) as f64), "{k}");
+    }
+    // The ramp's end: the receiver jumps back by its size (b ≈ −1 m, σ 5.6 m: used
+    // relative to it); re-admitted on the second agreement.
+    assert_eq!(
+        step_e(&mut h, 40.0, 0.2, false, Some((31.0, 0.0))),
+        Use::Relative(-1.0, 31.0)
+    );
+    assert_eq!(step_e(&mut h, 41.0, 0.2, false, Some((0.0, 0.0))), Use::Raw);
+}
+
+/// A sequential-test alarm whose fix never leaves the INS is a false one: held for
+/// [`PROBATION`] fixes only.
+#[test]
+fn a_false_ramp_alarm_is_over_after_probation() {
+    let mut h = PositionHold::default();
+    assert_eq!(
+        step_e(&mut h, 0.0, 0.5, false, Some((0.3, -12.0))),
+        Use::Out(RAMP)
+    );
+    for k in 1..PROBATION {
+        assert_eq!(
+            step_e(&mut h, k as f64, 0.5, false, Some((0.3, 0.0))),
+            Use::Out(RAMP)
+        );
+    }
+    assert_eq!(step_e(&mut h, 9.0, 0.5, false, Some((0.3, 0.0))), Use::Raw);
+}
+
+/// A receiver jump that cancels its earlier drift (a ramp the filter followed, ending) is
+/// used as measured, not held as a new step.
+#[test]
+fn a_return_to_consistency_is_not_a_step() {
+    let mut h = PositionHold::default();
+    let s = Vector3::repeat(0.01);
+    let c = Consistency {
+        e: Vector3::new(0.0, 4.0, 0.0),
+        sigma: Vector3::repeat(0.05),
+        ramp: [false; 3],
+        onset: [None; 3],
+        window: Vector3::new(0.0, -3.9, 0.0),
+    };
+    let u = h.decide(
+        0.0,
+        &v(-4.0),
+        &s,
+        true,
+        &[1],
+        THR,
+        Some(&c),
+        false,
+        true,
+        false,
+        true,
+    );
+    assert_eq!(u[1], Use::Raw);
+    // The same jump without an earlier drift is a step.
+    let mut h = PositionHold::default();
+    let c = Consistency {
+        window: Vector3::zeros(),
+        ..c
+    };
+    let u = h.decide(
+        0.0,
+        &v(-4.0),
+        &s,
+        true,
+        &[1],
+        THR,
+        Some(&c),
+        false,
+        true,
+        false,
+        true,
+    );
+    assert_eq!(u[1], Use::Relative(-4.0, 0.01));
+}
+
+#[test]
+fn a_stale_fix_is_one_repeated_while_the_ins_moves() {
+    let mut h = PositionHold::default();
+    let f = Vector3::new(1.0, 2.0, 3.0);
+    assert!(!h.stale(&f, &Vector3::zeros()));
+    assert!(h.stale(&f, &Vector3::new(10.0, 0.0, 0.0)));
+    assert!(!h.stale(&f, &Vector3::new(0.1, 0.0, 0.0)));
+    assert!(!h.stale(&(f + Vector3::repeat(0.01)), &Vector3::new(20.0, 0.0, 0.0)));
+}
