@@ -9,6 +9,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from navfdi._errors import ScenarioError
+from navfdi._schema import keys
 from navfdi.units import UnitError, parse
 
 
@@ -23,8 +24,6 @@ def _need(d: Mapping[str, Any], key: str, path: str) -> Any:
 def _check_keys(d: Mapping[str, Any], section: str, path: str) -> None:
     """Refuse keys of table ``d`` (at field ``path``) that the schema's ``section``
     (:data:`navfdi._schema.SECTIONS`) does not list."""
-    from navfdi._schema import keys
-
     allowed = keys(section)
     if not isinstance(d, Mapping):
         raise ScenarioError(f"{path or 'scenario'} = {d!r}: expected a table")

@@ -152,7 +152,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     Raises :class:`ScenarioError` when an asked field cannot be estimated from the log (the
     noise needs a rest interval of :data:`MIN_REST` s; the boresight driving at speed), or
     when the scenario is not a loosely coupled one on recorded logs."""
-    from navfdi._lc_schema import AUTO_FIELDS, auto_fields
+    from navfdi._lc_schema import AUTO_FIELDS, _auto, auto_fields
     from navfdi.scenario import from_dict, load_scenario
 
     sc = scenario if hasattr(scenario, "core") else load_scenario(scenario)
@@ -169,13 +169,8 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     raw = copy.deepcopy(dict(sc.raw))
     raw.pop("faults", None)
     raw.pop("variants", None)
-    lc = raw["loosely_coupled"]
-    lc["isolate"] = False
-    for f in auto_fields(raw):
-        if f.startswith("imu."):
-            lc["imu"][f[4:]] = _AUTO_START[f]
-        else:
-            lc[f] = _AUTO_START[f]
+    # "auto" fields start from the schema's placeholders.
+    raw["loosely_coupled"] = {**_auto(raw["loosely_coupled"], "loosely_coupled"), "isolate": False}
     base = from_dict(raw, source=sc.source)
     from navfdi import logs
 
@@ -241,7 +236,6 @@ def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
     first differences, which the slow motion of a hand at rest leaves out. The boresight and
     the time offset are the loosely coupled filter's (its constraint and innovations)."""
     from navfdi import logs
-    from navfdi.gnss import gnss_solve
     from navfdi.gnss_logs import _solution_log
 
     noise_fields = {"imu.gyro_noise", "imu.accel_noise"}
@@ -249,12 +243,8 @@ def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
         raise ScenarioError(f"calibrate: [tight.strapdown] gets its IMU noise from the log; {sorted(set(fields) - noise_fields)} "
                             "are estimated for [loosely_coupled] scenarios only")
     data = logs.load_source(sc.raw["source"], logs.scenario_folder(sc))
-    obs, nav = data["rinex"]
-    sensor = next(x for x in sc.core["sensors"] if x["name"] == sc.core["tight"]["sensor"])
-    rs = sensor.get("ranges", {})
-    letters = {"gps": "G", "galileo": "E", "beidou": "C", "qzss": "J"}
-    systems = [letters[x] for x in rs.get("systems", ["gps"]) if x in letters]
-    sol = gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True).solution
+    obs, solved = logs.solve_rinex_source(sc)
+    sol = solved.solution
     pos = _solution_log(obs, sol[sol["status"] != "no_solution"])
     t0 = float(pos.t[0])
     # A handheld receiver is never still: intervals at rest by the Doppler speed with a hand's
@@ -264,13 +254,7 @@ def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
         raise ScenarioError(f"calibrate: no rest interval of {MIN_REST:g} s in {Path(obs).name} (Doppler speed below the static speed); "
                             "the IMU noise needs the receiver at rest: give tight.strapdown.imu.gyro_noise and accel_noise (the datasheet's)")
     noise = _noise(data["imu_log"], t0, rest, differences=True)
-    cal = Calibration(*noise["gyro_noise"], *noise["accel_noise"], *noise["gyro_bias"], None, None, rest)
-    cal.section = "tight.strapdown"
-    return cal
-
-
-# What an "auto" field starts from in the calibration's own runs.
-_AUTO_START: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": ["0 deg", "0 deg", "0 deg"], "imu_time_offset": "0 s"}
+    return Calibration(*noise["gyro_noise"], *noise["accel_noise"], *noise["gyro_bias"], None, None, rest, section="tight.strapdown")
 
 
 def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: float = 2.0) -> list[tuple[float, float]]:
@@ -330,17 +314,18 @@ def _boresight_by_velocity(sc: Any, src: Any) -> tuple[list[float], list[float],
     lc = raw["loosely_coupled"]
     lc.pop("nhc", None)
     lc.pop("zupt", None)
+    from navfdi._lc_schema import _rot
     from navfdi.scenario import from_dict
 
     rec = src.run([from_dict(raw, source=sc.source).to_json()])[0]
     cols = {c: rec["nav"][:, j] for j, c in enumerate(rec["nav_columns"])}
     t = np.asarray(rec["t"], float)
-    r, p, y = cols["roll"], cols["pitch"], cols["yaw"]
-    vn, ve, vd = cols["vel_n"], cols["vel_e"], -cols["vel_u"]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    vf = cp * cy * vn + cp * sy * ve - sp * vd
-    vr = (sr * sp * cy - cr * sy) * vn + (sr * sp * sy + cr * cy) * ve + sr * cp * vd
-    vdn = (cr * sp * cy + sr * sy) * vn + (cr * sp * sy - sr * cy) * ve + cr * cp * vd
+    y = cols["yaw"]
+    # The velocity in the body frame: v_b = C_b^nᵀ v_n with C_b^n = R_z(yaw) R_y(pitch) R_x(roll)
+    # (north-east-down), the rotation of the mounting convention.
+    v_n = np.column_stack([cols["vel_n"], cols["vel_e"], -cols["vel_u"]])
+    c_bn = np.array([_rot(a, b, c) for a, b, c in zip(cols["roll"], cols["pitch"], y)]).reshape(-1, 3, 3)
+    vf, vr, vdn = np.einsum("kji,kj->ik", c_bn, v_n)
     sig = np.asarray(rec["sigma"], float)
     s_yaw, s_level = sig[:, 2], np.hypot(sig[:, 0], sig[:, 1]) / math.sqrt(2.0)
     rate = np.full(len(t), np.inf)

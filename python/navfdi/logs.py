@@ -26,7 +26,7 @@ from ._schema import SECTIONS as _SECTIONS
 from ._logtime import GPS_EPOCH, pos_time
 from .frames import check_gravity
 
-__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors"]
+__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors", "solve_rinex_source"]
 
 #: Start of GPS time, 1980-01-06 00:00:00 GPST.
 _WEEK = 604800.0
@@ -539,14 +539,10 @@ def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], ma
     return max(1.0, -1.0 + 2.0 * total), np.asarray(rhos[: max(2, 2 * m)])
 
 
-def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
-    """The variance factor of ``[tight.integrity] range_errors = "overbound"`` for a tight
-    scenario on a recorded RINEX log: the log is solved epoch by epoch
-    (:func:`navfdi.gnss_solve`, the scenario's systems and elevation mask, with FDE) and the
-    integrated autocorrelation time (:func:`integrated_autocorrelation`, in the log's epochs)
-    of the used satellites' normalised residuals ``r/σ``, one arc per satellite, is the
-    factor. Returns it (≥ 1) and the details (``rho1``, ``lags`` summed, ``arcs``,
-    ``samples``). The reference positions are not used."""
+def solve_rinex_source(sc: Any) -> tuple[Path, Any]:
+    """A tight scenario's ``[source]`` RINEX observations solved epoch by epoch
+    (:func:`navfdi.gnss_solve`, with FDE) with the systems and elevation mask of its
+    ``[tight] sensor``: the observation file's path and the :class:`~navfdi.gnss.GnssSolution`."""
     from navfdi.gnss import gnss_solve
 
     data = sc.raw["source"]
@@ -558,7 +554,18 @@ def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
     letters = {"gps": "G", "galileo": "E", "beidou": "C", "qzss": "J"}
     rs = sensor.get("ranges", {})
     systems = [letters[s] for s in rs.get("systems", ["gps"]) if s in letters]
-    sol = gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True)
+    return obs, gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True)
+
+
+def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
+    """The variance factor of ``[tight.integrity] range_errors = "overbound"`` for a tight
+    scenario on a recorded RINEX log: the log is solved epoch by epoch
+    (:func:`navfdi.gnss_solve`, the scenario's systems and elevation mask, with FDE) and the
+    integrated autocorrelation time (:func:`integrated_autocorrelation`, in the log's epochs)
+    of the used satellites' normalised residuals ``r/σ``, one arc per satellite, is the
+    factor. Returns it (≥ 1) and the details (``rho1``, ``lags`` summed, ``arcs``,
+    ``samples``). The reference positions are not used."""
+    obs, sol = solve_rinex_source(sc)
     st = sol.satellites
     used = st[st["status"] == "used"]
     arcs = []

@@ -8,6 +8,36 @@ fn v(x: f64) -> Vector3<f64> {
 
 const THR: f64 = 28.37; // χ²₁ at pf 1e-7
 
+/// The receiver's consistency on north: `e`, σ_e and the window's sum of earlier `e` (m), no
+/// ramp flagged.
+fn north(e: f64, sigma: f64, window: f64) -> Consistency {
+    Consistency {
+        e: Vector3::new(0.0, e, 0.0),
+        sigma: Vector3::repeat(sigma),
+        ramp: [false; 3],
+        onset: [None; 3],
+        window: Vector3::new(0.0, window, 0.0),
+    }
+}
+
+/// One converged fix on north with innovation `d`, innovation variance `s` (every
+/// component) and the receiver's consistency `c`: the north component's use.
+fn decide_north(h: &mut PositionHold, t: f64, d: f64, s: f64, alarm: bool, c: &Consistency) -> Use {
+    h.decide(
+        t,
+        &v(d),
+        &Vector3::repeat(s),
+        alarm,
+        &[1],
+        THR,
+        Some(c),
+        false,
+        true,
+        false,
+        true,
+    )[1]
+}
+
 fn step(h: &mut PositionHold, t: f64, d: f64, alarm: bool, ramp: bool) -> Use {
     step_e(h, t, d, alarm, ramp.then_some((-1.0, -11.0)))
 }
@@ -87,28 +117,9 @@ fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
 #[test]
 fn a_return_is_used_until_the_ins_agrees() {
     let mut h = PositionHold::default();
-    let mk = |e: f64, w: f64| Consistency {
-        e: Vector3::new(0.0, e, 0.0),
-        sigma: Vector3::repeat(0.7),
-        ramp: [false; 3],
-        onset: [None; 3],
-        window: Vector3::new(0.0, w, 0.0),
-    };
-    let s = Vector3::repeat(8.0);
+    let mk = |e: f64, w: f64| north(e, 0.7, w);
     let go = |h: &mut PositionHold, t: f64, d: f64, alarm: bool, c: Consistency| {
-        h.decide(
-            t,
-            &v(d),
-            &s,
-            alarm,
-            &[1],
-            THR,
-            Some(&c),
-            false,
-            true,
-            false,
-            true,
-        )[1]
+        decide_north(h, t, d, 8.0, alarm, &c)
     };
     // 27 m of drift, 25 m of it in the window: a return, not a new step.
     assert_eq!(go(&mut h, 0.0, 16.5, true, mk(-26.7, 25.0)), Use::Raw);
@@ -127,27 +138,7 @@ fn a_return_is_used_until_the_ins_agrees() {
 #[test]
 fn a_small_jump_against_window_noise_is_not_a_return() {
     let mut h = PositionHold::default();
-    let c = Consistency {
-        e: Vector3::new(0.0, 0.4, 0.0),
-        sigma: Vector3::repeat(0.04),
-        ramp: [false; 3],
-        onset: [None; 3],
-        window: Vector3::new(0.0, -0.8, 0.0),
-    };
-    let s = Vector3::repeat(0.003);
-    let u = h.decide(
-        0.0,
-        &v(-0.4),
-        &s,
-        true,
-        &[1],
-        THR,
-        Some(&c),
-        false,
-        true,
-        false,
-        true,
-    )[1];
+    let u = decide_north(&mut h, 0.0, -0.4, 0.003, true, &north(0.4, 0.04, -0.8));
     assert!(matches!(h.comps[1], Comp::Step { .. }), "{:?}", h.comps[1]);
     assert!(matches!(u, Use::Relative(..)));
 }
@@ -237,48 +228,16 @@ fn a_false_ramp_alarm_is_over_after_probation() {
 #[test]
 fn a_return_to_consistency_is_not_a_step() {
     let mut h = PositionHold::default();
-    let s = Vector3::repeat(0.01);
-    let c = Consistency {
-        e: Vector3::new(0.0, 4.0, 0.0),
-        sigma: Vector3::repeat(0.05),
-        ramp: [false; 3],
-        onset: [None; 3],
-        window: Vector3::new(0.0, -3.9, 0.0),
-    };
-    let u = h.decide(
-        0.0,
-        &v(-4.0),
-        &s,
-        true,
-        &[1],
-        THR,
-        Some(&c),
-        false,
-        true,
-        false,
-        true,
+    assert_eq!(
+        decide_north(&mut h, 0.0, -4.0, 0.01, true, &north(4.0, 0.05, -3.9)),
+        Use::Raw
     );
-    assert_eq!(u[1], Use::Raw);
     // The same jump without an earlier drift is a step.
     let mut h = PositionHold::default();
-    let c = Consistency {
-        window: Vector3::zeros(),
-        ..c
-    };
-    let u = h.decide(
-        0.0,
-        &v(-4.0),
-        &s,
-        true,
-        &[1],
-        THR,
-        Some(&c),
-        false,
-        true,
-        false,
-        true,
+    assert_eq!(
+        decide_north(&mut h, 0.0, -4.0, 0.01, true, &north(4.0, 0.05, 0.0)),
+        Use::Relative(-4.0, 0.01)
     );
-    assert_eq!(u[1], Use::Relative(-4.0, 0.01));
 }
 
 #[test]
