@@ -236,7 +236,26 @@ def _tight(t: Any) -> dict[str, Any]:
         "accel_psd": _unit(t.get("accel_psd", "1 m^2/s^3"), "length2_per_time3", "tight.accel_psd"),
         "strapdown": None if "strapdown" not in t else _tight_strapdown(t["strapdown"]),
         "integrity": None if "integrity" not in t else _tight_integrity(t["integrity"]),
+        "range_states": _range_states(t.get("range_states", "white")),
     }
+
+
+def _range_states(v: Any) -> dict[str, float] | None:
+    """``[tight] range_states``: ``"white"`` (default: no states, None), ``"auto"`` (estimated
+    from the recorded log before the run, :func:`navfdi.logs.range_error_process`) or a table
+    ``{ fraction = share of the pseudorange variance in [0, 1), tau = correlation time }``.
+    ``"auto"`` is None in the core scenario until it is resolved; a run refuses it unresolved
+    (:func:`navfdi.logs.logged_source`)."""
+    p = "tight.range_states"
+    if v in ("white", "auto"):
+        return None
+    if not isinstance(v, dict):
+        raise ScenarioError(f"{p} = {v!r}: use 'white', 'auto' (estimated from the log's residuals) or a table {{ fraction = 0.6, tau = \"20 s\" }}")
+    _check_keys(v, "tight.range_states", p)
+    fraction = _number(_need(v, "fraction", p), f"{p}.fraction")
+    if not 0.0 <= fraction < 1.0:
+        raise ScenarioError(f"{p}.fraction = {fraction!r}: a share in [0, 1) of the pseudorange variance is required")
+    return {"fraction": fraction, "tau": _unit(_need(v, "tau", p), "time", f"{p}.tau")}
 
 
 _INTEGRITY_KEYS = ("p_sat", "p_hmi_vert", "p_hmi_hor", "p_fa_vert", "p_fa_hor", "tol_pl")
@@ -281,6 +300,10 @@ def apply_range_errors(raw: Any, core: dict[str, Any], logged: bool) -> None:
     f = range_error_factor(raw)
     if f is None:
         return
+    rs = raw.get("tight", {}).get("range_states", "white") if isinstance(raw.get("tight"), dict) else "white"
+    if rs != "white":
+        raise ScenarioError("tight.range_states and tight.integrity.range_errors both model the time correlation of the range errors: "
+                            "keep one (range_states carries it as filter states; range_errors inflates the white noise)")
     if f == "overbound":
         if not logged:
             raise ScenarioError(

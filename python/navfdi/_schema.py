@@ -230,6 +230,11 @@ SECTIONS: dict[str, Section] = {
         ("accel_psd", "m²/s³", "1 m^2/s^3", "simulation: the filter's acceleration noise density"),
         ("strapdown", "table", "—", "a strapdown INS on recorded IMU samples"),
         ("integrity", "table", "—", "filter protection levels"),
+        ("range_states", "\"white\", \"auto\" or a table", "white", "recorded logs: per-satellite Gauss-Markov range-error states (auto: estimated from the log's residuals)"),
+    ]),
+    "tight.range_states": _s("[tight.range_states]", "Time-correlated pseudorange errors as one first-order Gauss-Markov state per satellite in the strapdown tight filter and its sub-filters.", [
+        ("fraction", "number in [0, 1)", REQ, "share of each pseudorange's variance (the sensor's σ by elevation, squared) that is correlated; the rest stays white"),
+        ("tau", "time (s)", REQ, "correlation time"),
     ]),
     "tight.integrity": _s("[tight.integrity]", "Filter protection levels (solution separation, LPV-200 defaults).", [
         ("p_sat", "probability", "1e-5", "prior probability of a satellite fault per epoch"),

@@ -26,7 +26,7 @@ from ._schema import SECTIONS as _SECTIONS
 from ._logtime import GPS_EPOCH, pos_time
 from .frames import check_gravity
 
-__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "resolve_range_errors", "solve_rinex_source"]
+__all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "range_error_process", "resolve_range_errors", "solve_rinex_source"]
 
 #: Start of GPS time, 1980-01-06 00:00:00 GPST.
 _WEEK = 604800.0
@@ -401,6 +401,9 @@ def scored_source(sc: Any) -> tuple[Any, str, float]:
     from ._lc_schema import auto_fields
 
     auto = auto_fields(sc.raw)
+    if (sc.raw.get("tight") or {}).get("range_states") == "auto":
+        raise ScenarioError("tight.range_states = \"auto\" is estimated from the log before the run: navfdi.run_scenario and "
+                            "navfdi.montecarlo do it (navfdi.logs.resolve_range_errors), or give { fraction, tau }")
     if auto:
         raise ScenarioError(f"loosely_coupled.{auto[0]} = \"auto\" is estimated before the run: navfdi.run_scenario and "
                             "navfdi.montecarlo do it (navfdi.calibrate.resolve_auto), or write the values with navfdi calibrate --out")
@@ -579,13 +582,65 @@ def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
     return float(min(tau, 1e4)), {"rho1": float(rho[1]), "lags": int(len(rho) - 1), "arcs": len(arcs), "samples": int(sum(len(a[1]) for a in arcs))}
 
 
+def range_error_process(sc: Any, max_lag: int = 300) -> tuple[float, float, dict[str, Any]]:
+    """The first-order Gauss-Markov model of ``[tight] range_states = "auto"`` for a tight
+    scenario on a recorded RINEX log: the log is solved epoch by epoch
+    (:func:`solve_rinex_source`) and the autocorrelation ``ρ(L)`` of the used satellites'
+    normalised residuals ``r/σ`` (pooled over one arc per satellite,
+    :func:`integrated_autocorrelation`) is fitted by ``ρ(L) = a exp(−L Δt/τ)`` for ``L ≥ 1``
+    (least squares on ``ln ρ`` over the lags before ``ρ`` first falls below 0.05, at most
+    ``max_lag``): ``a`` is the correlated share of the variance (lag 0 holds the white rest),
+    ``τ`` the correlation time (s; ``Δt`` the log's median epoch interval). Returns
+    ``(fraction, tau, details)`` with ``fraction`` clipped to [0, 0.95] and ``tau`` to
+    [Δt, 3600 s]; a series with ``ρ(1) < 0.05`` is white (fraction 0). The reference positions
+    are not used; the residuals of a snapshot fit hold only the part of each satellite's error
+    that the position and clock do not absorb, so the fit describes that part."""
+    obs, sol = solve_rinex_source(sc)
+    st = sol.satellites
+    used = st[st["status"] == "used"]
+    arcs = []
+    for _, g in used.groupby("satellite", observed=True):
+        z = g["residual"].to_numpy(float) / g["sigma"].to_numpy(float)
+        arcs.append((g["epoch"].to_numpy(np.int64), z))
+    gps = sol.solution["gps_seconds"].to_numpy(float)
+    dt = float(np.median(np.diff(gps))) if len(gps) > 1 else math.nan
+    if not (dt > 0):
+        raise ScenarioError(f"tight.range_states = 'auto': {obs.name}: fewer than two epochs solved")
+    try:
+        _, rho = integrated_autocorrelation(arcs, max_lag=max_lag)
+    except ValueError as e:
+        raise ScenarioError(f"tight.range_states = 'auto': {obs.name}: {e}") from None
+    lags, vals = [], []
+    for lag in range(1, len(rho)):
+        r = float(rho[lag])
+        if not (r >= 0.05):
+            break
+        lags.append(lag)
+        vals.append(math.log(r))
+    details: dict[str, Any] = {"rho1": float(rho[1]), "lags": len(lags), "arcs": len(arcs), "dt": dt,
+                               "samples": int(sum(len(a[1]) for a in arcs))}
+    if not lags:
+        return 0.0, dt, details
+    if len(lags) == 1:
+        slope, icpt = math.log(0.05) - vals[0], vals[0] - (math.log(0.05) - vals[0])
+    else:
+        slope, icpt = (float(v) for v in np.polyfit(np.asarray(lags, float), np.asarray(vals), 1))
+    tau = dt * (-1.0 / slope) if slope < 0 else 3600.0
+    return float(min(max(math.exp(icpt), 0.0), 0.95)), float(min(max(tau, dt), 3600.0)), details
+
+
 def resolve_range_errors(sc: Any) -> Any:
     """``sc`` with ``[tight.integrity] range_errors = "overbound"`` replaced by its estimated
     variance factor (:func:`range_error_overbound`; the scenario's pseudorange noise is then
-    scaled by its square root), or ``sc`` itself."""
+    scaled by its square root) and ``[tight] range_states = "auto"`` by its estimated model
+    (:func:`range_error_process`), or ``sc`` itself."""
     from navfdi._lc_schema import range_error_factor
 
-    if range_error_factor(sc.raw) != "overbound":
-        return sc
-    f, _ = range_error_overbound(sc)
-    return sc.with_values({"tight.integrity.range_errors": round(f, 3)})
+    out = sc
+    if range_error_factor(sc.raw) == "overbound":
+        f, _ = range_error_overbound(sc)
+        out = out.with_values({"tight.integrity.range_errors": round(f, 3)})
+    if (sc.raw.get("tight") or {}).get("range_states") == "auto":
+        a, tau, _ = range_error_process(sc)
+        out = out.with_values({"tight.range_states": {"fraction": round(a, 4), "tau": f"{tau:.4g} s"}})
+    return out

@@ -177,14 +177,17 @@ class ScenarioRun(RunRecord):
             f"{i['hazardous_h']}/{i['hazardous_v']}; largest error/PL {i['error_over_hpl_max']:.2f}/{i['error_over_vpl_max']:.2f}",
         ] + self._range_error_lines() + ([
             f"  the separation test alarms at {i['alarm_rate_before_faults']:.0%} of the epochs before any fault (allocated "
-            f"{(self.scenario.core['tight'].get('integrity') or {}).get('p_fa_vert', 3.9e-6):g}): the filter's white-noise "
-            "model does not describe these errors (time-correlated on real receivers), so the levels are not usable here",
+            f"{(self.scenario.core['tight'].get('integrity') or {}).get('p_fa_vert', 3.9e-6):g}): the filter's "
+            + ("range-error" if (self.scenario.core.get("tight") or {}).get("range_states") else "white-noise") + " model does not describe these errors (time-correlated on real receivers), so the levels are not usable here",
         ] if i["alarm_rate_before_faults"] > 0.01 else [])
 
     def _range_error_lines(self) -> list[str]:
-        """The range-error overbound in force ([tight.integrity] range_errors), if any."""
+        """The range-error model in force — ``[tight] range_states`` or the overbound of
+        ``[tight.integrity] range_errors`` — if any."""
         from navfdi._lc_schema import range_error_factor
 
+        if rs := (self.scenario.core.get("tight") or {}).get("range_states"):
+            return [f"  range errors: Gauss-Markov range-error states per satellite, {rs['fraction']:.3g} of the variance correlated over {rs['tau']:.3g} s"]
         f = range_error_factor(self.scenario.raw)
         if not isinstance(f, float):
             return []

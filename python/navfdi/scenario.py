@@ -548,6 +548,9 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
     if arch == "tight":
         core["tight"] = _tight(_need(raw, "tight", ""))
         apply_range_errors(raw, core, logged=False)
+        if raw["tight"].get("range_states", "white") != "white":
+            raise ScenarioError("tight.range_states: range-error states are carried by the strapdown tight filter on recorded logs "
+                                "([tight.strapdown] and [source]); a simulated scenario's range errors are white")
         return core
     if arch == "ultra_tight":
         core["ultra_tight"] = _ultra_tight(_need(raw, "ultra_tight", ""))

@@ -40,6 +40,7 @@ use crate::gnss::ranges::RangeEpoch;
 use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
 use crate::gnss::C;
 use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
+use crate::ins::range_states::{self as rs, RangeStates};
 use crate::ins::strapdown::{skew, NavState};
 use crate::record::{IntegrityRecord, RunRecord, SatRecord, NAV_COLUMNS};
 use crate::spec::{FdePlacement, ScenarioSpec};
@@ -155,6 +156,16 @@ pub fn run_tight_ins(
         [clock.bias, clock.bias, clock.drift],
         (clock.bias_psd, clock.drift_psd),
     );
+    // With range-error states: satellites excluded at the previous epoch (stream indices),
+    // kept out while their own innovation disagrees.
+    let mut held: Vec<bool> = vec![false; s_count];
+    let mut gm = match &t.range_states {
+        Some(r) => {
+            kf.track_transition();
+            Some(RangeStates::new(s_count, r.fraction, r.tau, models.t[ka])?)
+        }
+        None => None,
+    };
     for _ in 0..ka {
         skip(&mut rec, &mut sat);
     }
@@ -186,7 +197,7 @@ pub fn run_tight_ins(
         let ep = &rp.epochs[k];
         if let Some(b) = bank.as_mut() {
             b.advance(&imu, tk);
-            b.sync_view(&s, &kf, &mech, &ep.sats, tk);
+            b.sync_view(&s, &kf, gm.as_ref(), &mech, &ep.sats, tk);
         }
         for &j in &ep.sats {
             sat.in_view[k * s_count + j] = true;
@@ -205,7 +216,7 @@ pub fn run_tight_ins(
         } else {
             None
         };
-        let Some(rows) = rows else {
+        let Some(mut rows) = rows else {
             record_untested(&mut rec, &mut sat);
             if let (Some(b), Some(ir)) = (bank.as_ref(), integ.as_mut()) {
                 // Coasting: the levels of the mechanised filter, nothing tested.
@@ -217,22 +228,37 @@ pub fn run_tight_ins(
         };
         let m = rows.idx.len();
         let r_diag: Vec<f64> = rows.sigma.iter().map(|x| x * x).collect();
+        let row_sats: Vec<usize> = (0..rows.res.len())
+            .map(|i| ep.sats[rows.idx[i % m]])
+            .collect();
+        if let Some(g) = gm.as_mut() {
+            g.propagate(&mut kf, tk, &row_sats[..m], &rows.sigma[..m]);
+            g.correct(&mut rows.res, &row_sats, m);
+        }
+        // The innovation covariance of the batch (for the w-test), with the range-error
+        // states when the filter has them.
+        let inn_cov = |kf: &ErrorFilter<N_CLOCK>| -> Result<DMatrix<f64>> {
+            match gm.as_ref() {
+                Some(g) => Ok(g.innovation_cov(kf, &rows.h, &r_diag, &row_sats, m)),
+                None => {
+                    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
+                    Ok(kf.innovation(&rows.res, &rows.h, &r)?.s)
+                }
+            }
+        };
         // The update row by row yields the global statistic without factoring the m × m
         // innovation covariance; only an epoch whose test fails under `innovation` (or whose
         // w are recorded) goes on to the batch innovation and the w-test.
-        let (p_seq, dx_seq, lambda) = kf
-            .sequential(&rows.res, &rows.h, &r_diag)
-            .map_err(|e| crate::run::at_time(k, tk, e))?;
+        let (pending, lambda) =
+            rs::sequential(&kf, gm.as_ref(), &rows.res, &rows.h, &r_diag, &row_sats, m)
+                .map_err(|e| crate::run::at_time(k, tk, e))?;
         let thr = cfg.threshold(rows.res.len())?;
         let out = match t.fde {
             FdePlacement::LsPrecheck => ls_precheck(&rows, &s, &kf, &lever, t.rates, &cfg)?,
             _ if lambda < thr || t.fde == FdePlacement::None => {
                 let w = if full {
-                    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
-                    let inn = kf
-                        .innovation(&rows.res, &rows.h, &r)
-                        .map_err(|e| crate::run::at_time(k, tk, e))?;
-                    innovation_fde(&inn.r, &inn.s, m, false, Some(lambda), true, &cfg)?.w
+                    let s_inn = inn_cov(&kf).map_err(|e| crate::run::at_time(k, tk, e))?;
+                    innovation_fde(&rows.res, &s_inn, m, false, Some(lambda), true, &cfg)?.w
                 } else {
                     vec![f64::NAN; m]
                 };
@@ -244,13 +270,16 @@ pub fn run_tight_ins(
                 }
             }
             _ => {
-                let r = DMatrix::from_diagonal(&DVector::from_column_slice(&r_diag));
-                let inn = kf
-                    .innovation(&rows.res, &rows.h, &r)
-                    .map_err(|e| crate::run::at_time(k, tk, e))?;
-                innovation_fde(&inn.r, &inn.s, m, true, Some(lambda), full, &cfg)?
+                let s_inn = inn_cov(&kf).map_err(|e| crate::run::at_time(k, tk, e))?;
+                innovation_fde(&rows.res, &s_inn, m, true, Some(lambda), full, &cfg)?
             }
         };
+        let mut out = out;
+        if let Some(g) = gm.as_ref() {
+            hold_excluded(
+                &mut out, &mut held, g, &kf, &rows, &r_diag, &row_sats, cfg.k,
+            );
+        }
         record_sat_fde(
             &mut rec,
             &mut sat,
@@ -262,8 +291,7 @@ pub fn run_tight_ins(
         let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
         let used = m - excluded.len();
         if excluded.is_empty() {
-            kf.p = p_seq;
-            kf.feedback(&mut s, &dx_seq);
+            rs::commit(&mut kf, gm.as_mut(), &mut s, pending)?;
         } else if used > 0 {
             let keep: Vec<usize> = (0..rows.res.len())
                 .filter(|i| !excluded.contains(&(i % m)))
@@ -271,11 +299,10 @@ pub fn run_tight_ins(
             let res = rows.res.select_rows(&keep);
             let h = rows.h.select_rows(&keep);
             let rk: Vec<f64> = keep.iter().map(|&i| r_diag[i]).collect();
-            let (p, dx, _) = kf
-                .sequential(&res, &h, &rk)
+            let ks: Vec<usize> = keep.iter().map(|&i| row_sats[i]).collect();
+            let (up, _) = rs::sequential(&kf, gm.as_ref(), &res, &h, &rk, &ks, used)
                 .map_err(|e| crate::run::at_time(k, tk, e))?;
-            kf.p = p;
-            kf.feedback(&mut s, &dx);
+            rs::commit(&mut kf, gm.as_mut(), &mut s, up)?;
         }
         if let (Some(b), Some(ir)) = (bank.as_mut(), integ.as_mut()) {
             // The sub-filters leave out what the filter left out, and their own satellite.
@@ -286,9 +313,10 @@ pub fn run_tight_ins(
                     let r = build_rows(sn, f, &lever, w, ep, z, &cols, t.rates)?;
                     let m = r.idx.len();
                     let sats = (0..r.res.len()).map(|i| ep.sats[r.idx[i % m]]).collect();
-                    Some((r.res, r.h, r.sigma, sats))
+                    Some((r.res, r.h, r.sigma, sats, m))
                 },
                 &gone,
+                tk,
             )
             .map_err(|e| crate::run::at_time(k, tk, e))?;
             let lv = b.levels(&s, &kf);
@@ -313,6 +341,40 @@ pub fn run_tight_ins(
     rec.sats = Some(sat);
     rec.restrict_faults_to_navigated(spec, models);
     Ok(rec)
+}
+
+/// With range-error states, a satellite the FDE excluded stays out at the next epochs while its
+/// pseudorange's own normalised innovation `|ν|/√s` exceeds the w-test's critical value `k`,
+/// whatever the global test says: re-admitted while its fault lasts — at an epoch whose σ
+/// spikes with a dip of the signal and hides it — its range-error state would take in part of
+/// the fault, and every later epoch would see less of it (the white filter forgets such an
+/// epoch; the state carries it over its correlation time). `held` (stream indices) is updated
+/// to this epoch's exclusions.
+#[allow(clippy::too_many_arguments)]
+fn hold_excluded(
+    out: &mut SatFde,
+    held: &mut [bool],
+    gm: &RangeStates,
+    kf: &ErrorFilter<N_CLOCK>,
+    rows: &Rows,
+    r_diag: &[f64],
+    row_sats: &[usize],
+    k: f64,
+) {
+    let m = rows.idx.len();
+    for j in 0..m {
+        let g = row_sats[j];
+        if held[g] && !out.excluded.contains(&j) && out.excluded.len() + 1 < m {
+            let s = gm.row_variance(kf, &rows.h, j, r_diag[j], g, true);
+            if (rows.res[j] / s.sqrt()).abs() > k {
+                out.excluded.push(j);
+            }
+        }
+    }
+    held.iter_mut().for_each(|h| *h = false);
+    for &j in &out.excluded {
+        held[row_sats[j]] = true;
+    }
 }
 
 /// An epoch without navigation (before the alignment, after the IMU log).

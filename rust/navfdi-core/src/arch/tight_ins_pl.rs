@@ -20,6 +20,7 @@ use super::inertial::{BodyImu, Mechaniser};
 use crate::error::Result;
 use crate::ins::earth;
 use crate::ins::error_filter::{ErrorFilter, N_CLOCK, R};
+use crate::ins::range_states::{self as rs, RangeStates};
 use crate::ins::strapdown::NavState;
 use crate::integrity::araim::Allocation;
 use crate::integrity::filter_ss::{separation_levels, SsEpoch, SsMode};
@@ -27,7 +28,8 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One epoch's rows at a navigator's state: residuals `ẑ − z`, the rows of `H`, their σ and the
 /// satellite (stream index) of each row.
-pub(super) type EpochRows = (DVector<f64>, DMatrix<f64>, Vec<f64>, Vec<usize>);
+/// The first `ranges` rows are pseudoranges (the rest range rates).
+pub(super) type EpochRows = (DVector<f64>, DMatrix<f64>, Vec<f64>, Vec<usize>, usize);
 
 /// How long (s) a sub-filter outlives its satellite's absence: a handheld receiver loses and
 /// regains satellites every few seconds, and a sub-filter reborn from the filter at each return
@@ -42,6 +44,8 @@ pub(super) const HOLD_ABSENT: f64 = 60.0;
 struct Sub {
     s: NavState,
     kf: ErrorFilter<N_CLOCK>,
+    /// Its own range-error states, when the filter has them.
+    gm: Option<RangeStates>,
     mech: Mechaniser,
     /// Last epoch time its satellite was in view (s).
     seen: f64,
@@ -85,6 +89,7 @@ impl StrapdownBank {
         &mut self,
         s: &NavState,
         kf: &ErrorFilter<N_CLOCK>,
+        gm: Option<&RangeStates>,
         mech: &Mechaniser,
         sats: &[usize],
         tk: f64,
@@ -97,6 +102,7 @@ impl StrapdownBank {
                         *sub = Some(Sub {
                             s: *s,
                             kf: kf.clone(),
+                            gm: gm.cloned(),
                             mech: mech.clone(),
                             seen: tk,
                         })
@@ -108,19 +114,27 @@ impl StrapdownBank {
         }
     }
 
-    /// Update each sub-filter with the epoch's rows at its own state (`rows_of(state, filter,
-    /// last angular rate)`), without its satellite and the satellites the filter excluded
-    /// (`excluded`, stream indices), and feed back.
+    /// Update each sub-filter at epoch time `tk` (s) with the epoch's rows at its own state
+    /// (`rows_of(state, filter, last angular rate)`), without its satellite and the satellites
+    /// the filter excluded (`excluded`, stream indices), and feed back; its range-error states
+    /// (if any) propagated to the epoch and predicting the pseudoranges as the filter's do.
     pub(super) fn update(
         &mut self,
         rows_of: impl Fn(&NavState, &ErrorFilter<N_CLOCK>, &Vector3<f64>) -> Option<EpochRows>,
         excluded: &[usize],
+        tk: f64,
     ) -> Result<()> {
         for (g, sub) in self.subs.iter_mut().enumerate() {
             let Some(sub) = sub.as_mut() else { continue };
-            let Some((res, h, sigma, sats)) = rows_of(&sub.s, &sub.kf, &sub.mech.w_last) else {
+            let Some((mut res, h, sigma, sats, ranges)) =
+                rows_of(&sub.s, &sub.kf, &sub.mech.w_last)
+            else {
                 continue;
             };
+            if let Some(gm) = sub.gm.as_mut() {
+                gm.propagate(&mut sub.kf, tk, &sats[..ranges], &sigma[..ranges]);
+                gm.correct(&mut res, &sats, ranges);
+            }
             let keep: Vec<usize> = (0..res.len())
                 .filter(|&i| sats[i] != g && !excluded.contains(&sats[i]))
                 .collect();
@@ -128,11 +142,18 @@ impl StrapdownBank {
                 continue;
             }
             let rk: Vec<f64> = keep.iter().map(|&i| sigma[i] * sigma[i]).collect();
-            let (p, dx, _) =
-                sub.kf
-                    .sequential(&res.select_rows(&keep), &h.select_rows(&keep), &rk)?;
-            sub.kf.p = p;
-            sub.kf.feedback(&mut sub.s, &dx);
+            let ks: Vec<usize> = keep.iter().map(|&i| sats[i]).collect();
+            let kr = keep.iter().filter(|&&i| i < ranges).count();
+            let (up, _) = rs::sequential(
+                &sub.kf,
+                sub.gm.as_ref(),
+                &res.select_rows(&keep),
+                &h.select_rows(&keep),
+                &rk,
+                &ks,
+                kr,
+            )?;
+            rs::commit(&mut sub.kf, sub.gm.as_mut(), &mut sub.s, up)?;
         }
         Ok(())
     }

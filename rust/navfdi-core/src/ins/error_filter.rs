@@ -91,6 +91,9 @@ pub struct ErrorFilter<const NS: usize = N> {
     /// White-noise spectral densities in body axes (`M diag(n²) Mᵀ`).
     q_gyro: Matrix3<f64>,
     q_acc: Matrix3<f64>,
+    /// Product of the transitions `Φ` since [`ErrorFilter::take_transition`] was last called
+    /// (None: not tracked; [`ErrorFilter::track_transition`]).
+    transition: Option<SMatrix<f64, NS, NS>>,
 }
 
 /// Outcome of one measurement's innovation, before (and whether) it updated the filter.
@@ -154,6 +157,24 @@ impl<const NS: usize> ErrorFilter<NS> {
             noise,
             q_gyro: sq(noise.gyro_noise),
             q_acc: sq(noise.accel_noise),
+            transition: None,
+        }
+    }
+
+    /// Keep the product of the transitions `Φ` of every [`ErrorFilter::propagate`] from now
+    /// on, for states carried outside the filter whose cross-covariance with the error state
+    /// must follow it ([`super::range_states`]).
+    pub fn track_transition(&mut self) {
+        self.transition = Some(SMatrix::identity());
+    }
+
+    /// The product of the transitions since the last call (or since
+    /// [`ErrorFilter::track_transition`]), restarting it from the identity; the identity when
+    /// transitions are not tracked.
+    pub fn take_transition(&mut self) -> SMatrix<f64, NS, NS> {
+        match self.transition.as_mut() {
+            Some(t) => std::mem::replace(t, SMatrix::identity()),
+            None => SMatrix::identity(),
         }
     }
 
@@ -255,6 +276,9 @@ impl<const NS: usize> ErrorFilter<NS> {
         let qa = c * self.q_gyro * c.transpose() * dt;
         let qbg = 2.0 * self.noise.gyro_bias.powi(2) / tau * dt;
         let qba = 2.0 * self.noise.accel_bias.powi(2) / tau * dt;
+        if let Some(t) = self.transition.as_mut() {
+            *t = phi * *t;
+        }
         let mut p = phi * self.p * phi.transpose();
         {
             let mut b = p.fixed_view_mut::<3, 3>(V, V);

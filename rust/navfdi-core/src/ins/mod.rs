@@ -5,10 +5,13 @@
 //!   continuous-time `F` along a truth trajectory, and the discretised `Φ` and `ΓQΓᵀ`.
 //! * [`strapdown`]: mechanisation of recorded IMU samples (attitude, velocity, position).
 //! * [`error_filter`]: the closed-loop 15-state error-state filter of that mechanisation.
+//! * [`range_states`]: per-satellite Gauss-Markov range-error states beside the tight
+//!   filter's error state.
 
 pub mod earth;
 pub mod error_filter;
 pub mod error_model;
+pub mod range_states;
 pub mod strapdown;
 
 pub use error_model::{ErrorModel, InsErrorParams, ACC, ATT, GYRO, N_STATES, POS, VEL};

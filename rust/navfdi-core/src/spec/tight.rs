@@ -62,6 +62,22 @@ pub struct TightSpec {
     /// Filter protection levels by solution separation (None: not computed).
     #[serde(default)]
     pub integrity: Option<FilterIntegritySpec>,
+    /// Per-satellite Gauss-Markov range-error states in the strapdown tight filter and its
+    /// sub-filters ([`crate::ins::range_states`]; None: white pseudorange errors).
+    #[serde(default)]
+    pub range_states: Option<RangeStatesSpec>,
+}
+
+/// The time-correlated part of the pseudorange errors, carried as one first-order
+/// Gauss-Markov state per satellite.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeStatesSpec {
+    /// Share of each pseudorange's variance (the sensor's σ by elevation, squared) that is
+    /// correlated, in [0, 1); the rest stays white.
+    pub fraction: f64,
+    /// Correlation time (s).
+    pub tau: f64,
 }
 
 /// Integrity allocation and fault prior of the filter protection levels
@@ -219,6 +235,29 @@ impl ScenarioSpec {
                 "tight.fde",
                 "separation needs a [tight.integrity] table (empty for the LPV-200 defaults)",
             ));
+        }
+        if let Some(r) = &t.range_states {
+            if t.strapdown.is_none() {
+                return Err(bad("tight.range_states", "range-error states are carried by the strapdown tight filter on recorded logs ([tight.strapdown]); simulated range errors are white"));
+            }
+            if !(0.0..1.0).contains(&r.fraction) {
+                return Err(bad(
+                    "tight.range_states.fraction",
+                    format!(
+                        "{}: a share in [0, 1) of the pseudorange variance is required",
+                        r.fraction
+                    ),
+                ));
+            }
+            if !(r.tau > 0.0 && r.tau <= 1e5) {
+                return Err(bad(
+                    "tight.range_states.tau",
+                    format!(
+                        "{} s: a correlation time in (0, 100000] s is required",
+                        r.tau
+                    ),
+                ));
+            }
         }
         if let Some(sd) = &t.strapdown {
             validate_strapdown(
