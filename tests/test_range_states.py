@@ -75,3 +75,17 @@ def test_one_correlation_model_at_a_time_and_only_on_recorded_logs():
     # "auto" unresolved never reaches the filter.
     with pytest.raises(ScenarioError, match="estimated from the log before the run"):
         logs.logged_source(load_scenario("walk_tc").with_values({"tight.range_states": "auto"}, create=True))
+
+
+def test_variants_asking_for_the_states_get_the_estimate_or_a_refusal():
+    """A variant that sets ``tight.range_states = "auto"`` runs with the log's estimate (not
+    silently white); one that hides "auto" inside a whole table is refused by name."""
+    sc = load_scenario("walk_tc").with_values({"faults": [], "variants": [{"name": "white", "set": {}}, {"name": "gm", "set": {"tight.range_states": "auto"}}]})
+    resolved = logs.resolve_range_errors(sc)
+    got = {n: v.core["tight"]["range_states"] for n, v in resolved.variants()}
+    a, tau, _ = logs.range_error_process(sc)
+    assert got["white"] is None
+    assert got["gm"]["fraction"] == pytest.approx(a, abs=1e-4) and got["gm"]["tau"] == pytest.approx(tau, rel=1e-3)
+    hidden = load_scenario("walk_tc").with_values({"variants": [{"name": "gm", "set": {"tight": {**sc.raw["tight"], "range_states": "auto"}}}]})
+    with pytest.raises(ScenarioError, match="variant 'gm'"):
+        logs.resolve_range_errors(hidden)

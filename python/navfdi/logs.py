@@ -633,14 +633,47 @@ def resolve_range_errors(sc: Any) -> Any:
     """``sc`` with ``[tight.integrity] range_errors = "overbound"`` replaced by its estimated
     variance factor (:func:`range_error_overbound`; the scenario's pseudorange noise is then
     scaled by its square root) and ``[tight] range_states = "auto"`` by its estimated model
-    (:func:`range_error_process`), or ``sc`` itself."""
+    (:func:`range_error_process`), in the scenario and in the ``[[variants]]`` that set them,
+    or ``sc`` itself. A variant left with either unresolved is refused by name."""
     from navfdi._lc_schema import range_error_factor
 
+    import copy
+
     out = sc
+    memo: dict[str, Any] = {}
+
+    def factor() -> float:
+        if "f" not in memo:
+            memo["f"] = round(range_error_overbound(sc)[0], 3)
+        return memo["f"]
+
+    def process() -> dict[str, Any]:
+        if "p" not in memo:
+            a, tau, _ = range_error_process(sc)
+            memo["p"] = {"fraction": round(a, 4), "tau": f"{tau:.4g} s"}
+        return memo["p"]
+
     if range_error_factor(sc.raw) == "overbound":
-        f, _ = range_error_overbound(sc)
-        out = out.with_values({"tight.integrity.range_errors": round(f, 3)})
+        out = out.with_values({"tight.integrity.range_errors": factor()})
     if (sc.raw.get("tight") or {}).get("range_states") == "auto":
-        a, tau, _ = range_error_process(sc)
-        out = out.with_values({"tight.range_states": {"fraction": round(a, 4), "tau": f"{tau:.4g} s"}})
+        out = out.with_values({"tight.range_states": process()})
+    # Variants that ask for them: the same estimates (one solve of the log).
+    vs = copy.deepcopy(out.raw.get("variants"))
+    if isinstance(vs, list):
+        changed = False
+        for v in vs:
+            sets = v.get("set") if isinstance(v, dict) else None
+            if not isinstance(sets, dict):
+                continue
+            if sets.get("tight.range_states") == "auto":
+                sets["tight.range_states"], changed = process(), True
+            if sets.get("tight.integrity.range_errors") == "overbound":
+                sets["tight.integrity.range_errors"], changed = factor(), True
+        if changed:
+            out = out.with_values({"variants": vs})
+        for name, v in out.variants():
+            t = v.raw.get("tight") or {}
+            if t.get("range_states") == "auto" or (t.get("integrity") or {}).get("range_errors") == "overbound":
+                raise ScenarioError(f"variant {name!r}: its range-error model (\"auto\" / \"overbound\") is estimated from the log only when the "
+                                    "variant sets tight.range_states or tight.integrity.range_errors by that path; set it so, or give the values")
     return out

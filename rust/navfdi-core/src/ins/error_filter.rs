@@ -107,6 +107,8 @@ pub struct Innovation {
     pub lambda: f64,
     /// Cholesky factor of `s`, reused by [`ErrorFilter::update`].
     chol: Cholesky<f64, nalgebra::Dyn>,
+    /// `H P` (m × NS), reused by [`ErrorFilter::update`].
+    hp: DMatrix<f64>,
 }
 
 impl Innovation {
@@ -320,8 +322,39 @@ impl<const NS: usize> ErrorFilter<NS> {
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<Innovation> {
-        let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
-        let s = h * &p * h.transpose() + r;
+        let m = h.nrows();
+        // H P (m × NS), then S = (H P) Hᵀ + R, in loops over the static covariance (no
+        // dynamic copy of P, no packing of these small products).
+        let mut hp = DMatrix::<f64>::zeros(m, NS);
+        if h.ncols() != NS || r.nrows() != m || r.ncols() != m || res.len() != m {
+            return Err(Error::Invalid(format!(
+                "strapdown aiding measurement: H {}×{}, R {}×{}, residual {} for {NS} states",
+                h.nrows(),
+                h.ncols(),
+                r.nrows(),
+                r.ncols(),
+                res.len()
+            )));
+        }
+        // Column-major slices: column k of H and column j of H P are contiguous.
+        let hs = h.as_slice();
+        for (j, hpc) in hp.as_mut_slice().chunks_exact_mut(m).enumerate() {
+            for (k, hc) in hs.chunks_exact(m).enumerate() {
+                let pkj = self.p[(k, j)];
+                for (o, x) in hpc.iter_mut().zip(hc) {
+                    *o += x * pkj;
+                }
+            }
+        }
+        let mut s = r.clone();
+        for (j, sc) in s.as_mut_slice().chunks_exact_mut(m).enumerate() {
+            for (k, hpc) in hp.as_slice().chunks_exact(m).enumerate() {
+                let hjk = hs[j + k * m];
+                for (o, x) in sc.iter_mut().zip(hpc) {
+                    *o += x * hjk;
+                }
+            }
+        }
         let chol = Cholesky::new(s.clone()).ok_or_else(|| Error::NotPositiveDefinite {
             name: "innovation covariance".into(),
             detail: "H P Hᵀ + R of a strapdown aiding measurement".into(),
@@ -332,29 +365,61 @@ impl<const NS: usize> ErrorFilter<NS> {
             s,
             lambda,
             chol,
+            hp,
         })
     }
 
     /// Update with an innovation `inn` of matrix `h` (Joseph form) and return the error-state
-    /// estimate to feed back ([`ErrorFilter::feedback`]).
+    /// estimate to feed back ([`ErrorFilter::feedback`]). The Joseph form
+    /// `(I − KH) P (I − KH)ᵀ + K R Kᵀ` is evaluated as `P − K(HP) − (K(HP))ᵀ + K S Kᵀ`
+    /// (`S = HPHᵀ + R`), every product of inner dimension m, without forming `I − KH`.
     pub fn update(
         &mut self,
         inn: &Innovation,
         h: &DMatrix<f64>,
         r: &DMatrix<f64>,
     ) -> Result<SVector<f64, NS>> {
-        let p = DMatrix::from_column_slice(NS, NS, self.p.as_slice());
-        // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ.
-        let k = inn.chol.solve(&(h * &p)).transpose();
-        let dx = &k * &inn.r;
-        let ikh = DMatrix::<f64>::identity(NS, NS) - &k * h;
-        let pn = &ikh * &p * ikh.transpose() + &k * r * k.transpose();
-        for j in 0..NS {
-            for i in 0..NS {
-                self.p[(i, j)] = 0.5 * (pn[(i, j)] + pn[(j, i)]);
+        let m = h.nrows();
+        if inn.hp.nrows() != m || r.nrows() != m {
+            return Err(Error::Invalid(format!(
+                "strapdown update: {m} rows of H against an innovation of {} and R of {}",
+                inn.hp.nrows(),
+                r.nrows()
+            )));
+        }
+        // K = P Hᵀ S⁻¹ (NS × m) by substitution on the contiguous columns of P Hᵀ with
+        // reciprocal pivots; K S Kᵀ = (K S) Kᵀ.
+        let mut k = inn.hp.transpose();
+        let mut inv = vec![0.0; m];
+        crate::kalman::gain_from_cholesky(inn.chol.l_dirty(), &mut k, &mut inv);
+        let ks = &k * &inn.s;
+        let mut dx = SVector::<f64, NS>::zeros();
+        for (a, kc) in k.as_slice().chunks_exact(NS).enumerate() {
+            for (o, x) in dx.iter_mut().zip(kc) {
+                *o += x * inn.r[a];
             }
         }
-        Ok(SVector::<f64, NS>::from_iterator(dx.iter().copied()))
+        let mut khp = SMatrix::<f64, NS, NS>::zeros();
+        let mut ksk = SMatrix::<f64, NS, NS>::zeros();
+        for j in 0..NS {
+            let mut kh = khp.column_mut(j);
+            for (a, kc) in k.as_slice().chunks_exact(NS).enumerate() {
+                let v = inn.hp[(a, j)];
+                for (o, x) in kh.iter_mut().zip(kc) {
+                    *o += x * v;
+                }
+            }
+            let mut kk = ksk.column_mut(j);
+            for (a, kc) in ks.as_slice().chunks_exact(NS).enumerate() {
+                let v = k[(j, a)];
+                for (o, x) in kk.iter_mut().zip(kc) {
+                    *o += x * v;
+                }
+            }
+        }
+        let pn = self.p - khp - khp.transpose() + ksk;
+        self.p = 0.5 * (pn + pn.transpose());
+        Ok(dx)
     }
 
     /// The update with the rows of `h` (m × NS) and residual `res` one at a time, for a
@@ -483,6 +548,60 @@ mod tests {
         // Symmetric and positive definite after 1000 steps.
         assert!((kf.p - kf.p.transpose()).norm() < 1e-12);
         assert!(kf.p.cholesky().is_some());
+    }
+
+    /// The update in loops over the static covariance equals the textbook Joseph form
+    /// `(I − KH) P (I − KH)ᵀ + K R Kᵀ` with `K = P Hᵀ S⁻¹`, computed densely, to rounding.
+    #[test]
+    fn update_is_the_joseph_form() {
+        let mut kf =
+            ErrorFilter::<N>::new(2.0, 0.2, Vector3::repeat(0.01), Vector3::zeros(), noise());
+        let st = NavState {
+            lat: 0.6,
+            lon: 0.1,
+            h: 50.0,
+            v: Vector3::new(8.0, -3.0, 0.2),
+            q: UnitQuaternion::from_euler_angles(0.02, -0.01, 1.1),
+        };
+        for _ in 0..50 {
+            kf.propagate(
+                &st,
+                &Vector3::new(0.3, 0.1, -9.8),
+                &Vector3::new(0.01, 0.0, 0.02),
+                0.01,
+            );
+        }
+        let m = 5;
+        let h = DMatrix::from_fn(m, N, |i, j| ((i * 7 + j * 3) % 11) as f64 / 11.0 - 0.4);
+        let r = DMatrix::from_fn(
+            m,
+            m,
+            |i, j| if i == j { 0.5 + i as f64 * 0.1 } else { 0.05 },
+        );
+        let res = DVector::from_fn(m, |i, _| (i as f64).sin());
+        let p = DMatrix::from_column_slice(N, N, kf.p.as_slice());
+        let s = &h * &p * h.transpose() + &r;
+        let k = &p * h.transpose() * s.clone().try_inverse().unwrap();
+        let ikh = DMatrix::<f64>::identity(N, N) - &k * &h;
+        let pj = &ikh * &p * ikh.transpose() + &k * &r * k.transpose();
+        let inn = kf.innovation(&res, &h, &r).unwrap();
+        assert!((&inn.s - &s).abs().max() < 1e-12 * s.abs().max());
+        let dx = kf.update(&inn, &h, &r).unwrap();
+        let dxj = &k * &res;
+        for i in 0..N {
+            assert!((dx[i] - dxj[i]).abs() < 1e-10 * dxj.abs().max(), "dx[{i}]");
+            for j in 0..N {
+                assert!(
+                    (kf.p[(i, j)] - pj[(i, j)]).abs() < 1e-10 * pj.abs().max(),
+                    "P[{i},{j}]"
+                );
+            }
+        }
+        // A mismatched innovation is refused, the filter untouched.
+        let before = kf.p;
+        let h2 = DMatrix::from_fn(2, N, |i, j| h[(i, j)]);
+        assert!(kf.update(&inn, &h2, &r).is_err());
+        assert_eq!(kf.p, before);
     }
 
     #[test]
