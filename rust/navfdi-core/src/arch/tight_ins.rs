@@ -234,6 +234,7 @@ pub fn run_tight_ins(
         if let Some(g) = gm.as_mut() {
             g.propagate(&mut kf, tk, &row_sats[..m], &rows.sigma[..m]);
             g.correct(&mut rows.res, &row_sats, m);
+            restart_returned(g, &kf, &mut rows, &r_diag, &row_sats, &held, cfg.k);
         }
         // The innovation covariance of the batch (for the w-test), with the range-error
         // states when the filter has them.
@@ -374,6 +375,37 @@ fn hold_excluded(
     held.iter_mut().for_each(|h| *h = false);
     for &j in &out.excluded {
         held[row_sats[j]] = true;
+    }
+}
+
+/// A held satellite (excluded at the previous epoch) whose pseudorange disagrees with its
+/// range-error state but agrees with no range error at all has returned: a slow fault (a
+/// ramp) that the state took in before it was excluded has ended, and the state still holds
+/// it. Its state restarts from its stationary variance (and its row's correction is removed),
+/// so the satellite is used again instead of being held until the state decays.
+fn restart_returned(
+    gm: &mut RangeStates,
+    kf: &ErrorFilter<N_CLOCK>,
+    rows: &mut Rows,
+    r_diag: &[f64],
+    row_sats: &[usize],
+    held: &[bool],
+    k: f64,
+) {
+    for j in 0..rows.idx.len() {
+        let g = row_sats[j];
+        if !held[g] {
+            continue;
+        }
+        let s = gm.row_variance(kf, &rows.h, j, r_diag[j], g, true);
+        let b = gm.bias(g);
+        let mut fresh = gm.clone();
+        fresh.restart(g);
+        let s0 = fresh.row_variance(kf, &rows.h, j, r_diag[j], g, true);
+        if (rows.res[j] / s.sqrt()).abs() > k && ((rows.res[j] - b) / s0.sqrt()).abs() <= k {
+            gm.restart(g);
+            rows.res[j] -= b;
+        }
     }
 }
 

@@ -136,6 +136,16 @@ impl RangeStates {
         }
     }
 
+    /// Restart satellite `g`'s state: no estimated error, its stationary variance, no
+    /// correlation with the rest.
+    pub fn restart(&mut self, g: usize) {
+        self.b[g] = 0.0;
+        self.c.column_mut(g).fill(0.0);
+        self.pbb.row_mut(g).fill(0.0);
+        self.pbb.column_mut(g).fill(0.0);
+        self.pbb[(g, g)] = self.var[g];
+    }
+
     /// Add the estimated range errors to the predictions of the first `ranges` rows of `res`
     /// (`ẑ − z`; pseudoranges of the satellites `row_sats`).
     pub fn correct(&self, res: &mut DVector<f64>, row_sats: &[usize], ranges: usize) {
@@ -492,6 +502,14 @@ mod tests {
         assert!((gm.bias(1) - 3.0 * (-1.0f64).exp()).abs() < 1e-12);
         let psi2 = (-2.0f64).exp();
         assert!((gm.pbb[(1, 1)] - (0.1 * psi2 + (1.0 - psi2) * 2.0)).abs() < 1e-12);
+        gm.c[(3, 1)] = 0.2;
+        gm.pbb[(0, 1)] = 0.05;
+        gm.restart(1);
+        assert_eq!(
+            (gm.bias(1), gm.c[(3, 1)], gm.pbb[(0, 1)], gm.pbb[(1, 0)]),
+            (0.0, 0.0, 0.0, 0.0)
+        );
+        assert!((gm.sigma(1) - 2.0f64.sqrt()).abs() < 1e-12);
         assert!(RangeStates::new(2, 1.0, 4.0, 0.0).is_err());
         assert!(RangeStates::new(2, 0.5, 0.0, 0.0).is_err());
         assert!(RangeStates::new(2, -0.1, 4.0, 0.0).is_err());
