@@ -240,15 +240,9 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// The tight update of a strapdown filter on recorded logs (target: ≤ 15 µs per
-/// epoch with FDE at 25 satellites): the 18-state error filter updated with 25 pseudoranges and
-/// 25 rates row by row (which yields the global statistic), the test, and the commit with the
-/// feedback into the state — `tight_ins_update_18x50`; the rows themselves (geometry, lever
-/// arm, Sagnac) are built before it in `arch::tight_ins` and are not in this figure.
-fn bench_tight_ins(c: &mut Criterion) {
-    use navfdi_core::ins::error_filter::{ErrorFilter, ImuNoise, CB, CD, N_CLOCK, PHI, R, V};
-    use navfdi_core::ins::strapdown::NavState;
-    let noise = ImuNoise {
+/// The IMU noise figures of the strapdown benchmarks (a consumer-grade IMU).
+fn bench_imu() -> navfdi_core::ins::error_filter::ImuNoise {
+    navfdi_core::ins::error_filter::ImuNoise {
         gyro_noise: [1e-3; 3],
         accel_noise: [5e-3; 3],
         gyro_bias: 1e-4,
@@ -256,7 +250,18 @@ fn bench_tight_ins(c: &mut Criterion) {
         bias_tau: 300.0,
         gyro_scale: 0.0,
         accel_scale: 0.0,
-    };
+    }
+}
+
+/// The tight update of a strapdown filter on recorded logs (target: ≤ 15 µs per
+/// epoch with FDE at 25 satellites): the 18-state error filter updated with 25 pseudoranges and
+/// 25 rates row by row (which yields the global statistic), the test, and the commit with the
+/// feedback into the state — `tight_ins_update_18x50`; the rows themselves (geometry, lever
+/// arm, Sagnac) are built before it in `arch::tight_ins` and are not in this figure.
+fn bench_tight_ins(c: &mut Criterion) {
+    use navfdi_core::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
+    use navfdi_core::ins::strapdown::NavState;
+    let noise = bench_imu();
     let mut kf =
         ErrorFilter::<N_CLOCK>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise)
             .with_clock([0.0; 3], [10.0, 10.0, 1.0], (0.1, 0.1));
@@ -324,17 +329,9 @@ fn bench_tight_ins(c: &mut Criterion) {
 /// (`strapdown_propagate_15`, `strapdown_update_15x6`) and the row-by-row update of the tight
 /// filter at the same size (`strapdown_sequential_15x6`).
 fn bench_strapdown_epoch(c: &mut Criterion) {
-    use navfdi_core::ins::error_filter::{ErrorFilter, ImuNoise, N, R, V};
+    use navfdi_core::ins::error_filter::{ErrorFilter, N, R, V};
     use navfdi_core::ins::strapdown::NavState;
-    let noise = ImuNoise {
-        gyro_noise: [1e-3; 3],
-        accel_noise: [5e-3; 3],
-        gyro_bias: 1e-4,
-        accel_bias: 1e-2,
-        bias_tau: 300.0,
-        gyro_scale: 0.0,
-        accel_scale: 0.0,
-    };
+    let noise = bench_imu();
     let kf = ErrorFilter::<N>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise);
     let st = NavState {
         lat: 0.53,

@@ -560,6 +560,19 @@ def solve_rinex_source(sc: Any) -> tuple[Path, Any]:
     return obs, gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True)
 
 
+def _residual_arcs(sc: Any) -> tuple[Path, Any, list[tuple[np.ndarray, np.ndarray]]]:
+    """The scenario's RINEX log solved (:func:`solve_rinex_source`) and its used satellites'
+    normalised residuals ``r/σ``, one ``(epoch indices, values)`` arc per satellite."""
+    obs, sol = solve_rinex_source(sc)
+    st = sol.satellites
+    used = st[st["status"] == "used"]
+    arcs = []
+    for _, g in used.groupby("satellite", observed=True):
+        z = g["residual"].to_numpy(float) / g["sigma"].to_numpy(float)
+        arcs.append((g["epoch"].to_numpy(np.int64), z))
+    return obs, sol, arcs
+
+
 def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
     """The variance factor of ``[tight.integrity] range_errors = "overbound"`` for a tight
     scenario on a recorded RINEX log: the log is solved epoch by epoch
@@ -568,13 +581,7 @@ def range_error_overbound(sc: Any) -> tuple[float, dict[str, Any]]:
     of the used satellites' normalised residuals ``r/σ``, one arc per satellite, is the
     factor. Returns it (≥ 1) and the details (``rho1``, ``lags`` summed, ``arcs``,
     ``samples``). The reference positions are not used."""
-    obs, sol = solve_rinex_source(sc)
-    st = sol.satellites
-    used = st[st["status"] == "used"]
-    arcs = []
-    for _, g in used.groupby("satellite", observed=True):
-        z = g["residual"].to_numpy(float) / g["sigma"].to_numpy(float)
-        arcs.append((g["epoch"].to_numpy(np.int64), z))
+    obs, sol, arcs = _residual_arcs(sc)
     try:
         tau, rho = integrated_autocorrelation(arcs)
     except ValueError as e:
@@ -595,13 +602,7 @@ def range_error_process(sc: Any, max_lag: int = 300) -> tuple[float, float, dict
     [Δt, 3600 s]; a series with ``ρ(1) < 0.05`` is white (fraction 0). The reference positions
     are not used; the residuals of a snapshot fit hold only the part of each satellite's error
     that the position and clock do not absorb, so the fit describes that part."""
-    obs, sol = solve_rinex_source(sc)
-    st = sol.satellites
-    used = st[st["status"] == "used"]
-    arcs = []
-    for _, g in used.groupby("satellite", observed=True):
-        z = g["residual"].to_numpy(float) / g["sigma"].to_numpy(float)
-        arcs.append((g["epoch"].to_numpy(np.int64), z))
+    obs, sol, arcs = _residual_arcs(sc)
     gps = sol.solution["gps_seconds"].to_numpy(float)
     dt = float(np.median(np.diff(gps))) if len(gps) > 1 else math.nan
     if not (dt > 0):
