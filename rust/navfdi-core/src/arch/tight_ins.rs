@@ -235,6 +235,9 @@ pub fn run_tight_ins(
             g.propagate(&mut kf, tk, &row_sats[..m], &rows.sigma[..m]);
             g.correct(&mut rows.res, &row_sats, m);
             restart_returned(g, &kf, &mut rows, &r_diag, &row_sats, &held, cfg.k);
+            if t.fde != FdePlacement::None {
+                flag_absorbed(g, &mut rows, &row_sats, &mut held, cfg.k);
+            }
         }
         // The innovation covariance of the batch (for the w-test), with the range-error
         // states when the filter has them.
@@ -405,6 +408,31 @@ fn restart_returned(
         if (rows.res[j] / s.sqrt()).abs() > k && ((rows.res[j] - b) / s0.sqrt()).abs() <= k {
             gm.restart(g);
             rows.res[j] -= b;
+        }
+    }
+}
+
+/// A satellite whose range-error estimate has grown beyond what its model allows
+/// (`|b̂| > k √(a σ̄² − P_bb)`, the estimate's own σ under the model) has taken in a slow fault
+/// (a ramp looks like a correlated error to the innovation test): its state restarts, its
+/// row's correction is removed, and it is marked held, so [`hold_excluded`] keeps it out while
+/// its pseudorange disagrees with no range error at all.
+fn flag_absorbed(
+    gm: &mut RangeStates,
+    rows: &mut Rows,
+    row_sats: &[usize],
+    held: &mut [bool],
+    k: f64,
+) {
+    for (j, &g) in row_sats.iter().enumerate().take(rows.idx.len()) {
+        if held[g] {
+            continue;
+        }
+        let (b, sd) = (gm.bias(g), gm.estimate_sigma(g));
+        if sd > 0.0 && b.abs() > k * sd {
+            gm.restart(g);
+            rows.res[j] -= b;
+            held[g] = true;
         }
     }
 }

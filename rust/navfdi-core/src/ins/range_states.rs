@@ -94,6 +94,12 @@ impl RangeStates {
         self.pbb[(g, g)].max(0.0).sqrt()
     }
 
+    /// σ of satellite `g`'s estimate `b̂` itself under the model (m): `√(a σ̄² − P_bb)`, the
+    /// stationary variance less what remains uncertain; 0 before its first epoch in view.
+    pub fn estimate_sigma(&self, g: usize) -> f64 {
+        (self.var[g] - self.pbb[(g, g)]).max(0.0).sqrt()
+    }
+
     /// Propagate to time `tk` (s) with the transitions `kf` kept since the last call, and set
     /// the stationary variance of the satellites `sats` (stream indices) in view from their
     /// white-model σ `sigma` (m): a satellite seen for the first time starts there.
