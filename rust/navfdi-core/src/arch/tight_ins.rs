@@ -402,9 +402,7 @@ fn restart_returned(
         }
         let s = gm.row_variance(kf, &rows.h, j, r_diag[j], g, true);
         let b = gm.bias(g);
-        let mut fresh = gm.clone();
-        fresh.restart(g);
-        let s0 = fresh.row_variance(kf, &rows.h, j, r_diag[j], g, true);
+        let s0 = gm.restarted_row_variance(kf, &rows.h, j, r_diag[j], g);
         if (rows.res[j] / s.sqrt()).abs() > k && ((rows.res[j] - b) / s0.sqrt()).abs() <= k {
             gm.restart(g);
             rows.res[j] -= b;

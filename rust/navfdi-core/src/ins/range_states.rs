@@ -221,18 +221,33 @@ impl RangeStates {
         range: bool,
     ) -> f64 {
         let hi = SVector::<f64, NX>::from_iterator(h.row(i).iter().copied());
-        let mut v = hi.dot(&(kf.p * hi));
+        let v = hi.dot(&(kf.p * hi));
         if range {
             let cg = SVector::<f64, NX>::from_iterator(self.c.column(g).iter().copied());
-            v += 2.0 * hi.dot(&cg) + self.pbb[(g, g)] + (1.0 - self.fraction) * r;
+            v + 2.0 * hi.dot(&cg) + self.pbb[(g, g)] + (1.0 - self.fraction) * r
         } else {
-            v += r;
+            v + r
         }
-        v
+    }
+
+    /// [`RangeStates::row_variance`] of pseudorange row `i` (satellite `g`) as it would be
+    /// after [`RangeStates::restart`]`(g)`: no correlation, the stationary variance.
+    pub fn restarted_row_variance(
+        &self,
+        kf: &ErrorFilter<NX>,
+        h: &DMatrix<f64>,
+        i: usize,
+        r: f64,
+        g: usize,
+    ) -> f64 {
+        let hi = SVector::<f64, NX>::from_iterator(h.row(i).iter().copied());
+        hi.dot(&(kf.p * hi)) + self.var[g] + (1.0 - self.fraction) * r
     }
 
     /// The sequential update of the rows `h` with residuals `res` (corrected) and white-model
-    /// variances `r_diag`, not committed, and the global statistic `Σ νᵢ²/sᵢ`.
+    /// variances `r_diag`, not committed, and the global statistic `Σ νᵢ²/sᵢ`: the scalar
+    /// row updates of [`crate::kalman::KalmanFilter::sequential_pending`] on the augmented
+    /// state (zero: the error state after each feedback) and covariance.
     pub fn sequential(
         &self,
         kf: &ErrorFilter<NX>,
@@ -243,48 +258,38 @@ impl RangeStates {
         ranges: usize,
     ) -> Result<(Pending, f64)> {
         let ha = self.rows(h, row_sats, ranges);
-        let na = ha.ncols();
-        let mut p = self.joint(kf);
-        let mut dx = DVector::zeros(na);
-        let mut lambda = 0.0;
-        for i in 0..res.len() {
-            let hi = ha.row(i).transpose();
-            let ph = &p * &hi;
-            let s = hi.dot(&ph) + self.white(i, ranges, r_diag[i]);
-            if !(s > 0.0 && s.is_finite()) {
-                return Err(Error::NotPositiveDefinite {
-                    name: "innovation variance".into(),
-                    detail: format!("row {i} of a tight update with range-error states: {s}"),
-                });
-            }
-            let nu = res[i] - hi.dot(&dx);
-            lambda += nu * nu / s;
-            let k = &ph / s;
-            dx += &k * nu;
-            p.ger(-1.0, &k, &ph, 1.0);
-        }
-        let p = 0.5 * (&p + p.transpose());
+        let white: Vec<f64> = r_diag
+            .iter()
+            .enumerate()
+            .map(|(i, &r)| self.white(i, ranges, r))
+            .collect();
+        let (dx, p, lambda) = crate::kalman::sequential_rows(
+            DVector::zeros(ha.ncols()),
+            self.joint(kf),
+            res,
+            &ha,
+            &white,
+            "a tight update with range-error states",
+        )?;
         Ok((Pending::Augmented(p, dx), lambda))
     }
 
-    /// Commit an update into the error filter, the state `s` and these states.
-    pub fn commit(&mut self, kf: &mut ErrorFilter<NX>, s: &mut NavState, up: Pending) {
-        match up {
-            Pending::White(p, dx) => {
-                kf.p = *p;
-                kf.feedback(s, &dx);
-            }
-            Pending::Augmented(p, dx) => {
-                let n = self.b.len();
-                kf.p =
-                    SMatrix::<f64, NX, NX>::from_iterator(p.view((0, 0), (NX, NX)).iter().copied());
-                self.c.copy_from(&p.view((0, NX), (NX, n)));
-                self.pbb.copy_from(&p.view((NX, NX), (n, n)));
-                let dxn = SVector::<f64, NX>::from_iterator(dx.rows(0, NX).iter().copied());
-                kf.feedback(s, &dxn);
-                self.b -= dx.rows(NX, n);
-            }
-        }
+    /// Commit an augmented update (covariance `p`, estimate `dx`) into the error filter, the
+    /// state `s` and these states.
+    fn commit(
+        &mut self,
+        kf: &mut ErrorFilter<NX>,
+        s: &mut NavState,
+        p: &DMatrix<f64>,
+        dx: &DVector<f64>,
+    ) {
+        let n = self.b.len();
+        kf.p = SMatrix::<f64, NX, NX>::from_iterator(p.view((0, 0), (NX, NX)).iter().copied());
+        self.c.copy_from(&p.view((0, NX), (NX, n)));
+        self.pbb.copy_from(&p.view((NX, NX), (n, n)));
+        let dxn = SVector::<f64, NX>::from_iterator(dx.rows(0, NX).iter().copied());
+        kf.feedback(s, &dxn);
+        self.b -= dx.rows(NX, n);
     }
 }
 
@@ -310,8 +315,8 @@ pub fn sequential(
     }
 }
 
-/// Commit `up` ([`sequential`]) into `kf`, `s` and `gm`; an augmented update needs the states
-/// it was computed with.
+/// Commit `up` ([`sequential`]) into `kf`, `s` and `gm`; an update must be committed with the
+/// states (or their absence) it was computed with.
 pub fn commit(
     kf: &mut ErrorFilter<NX>,
     gm: Option<&mut RangeStates>,
@@ -319,14 +324,15 @@ pub fn commit(
     up: Pending,
 ) -> Result<()> {
     match (gm, up) {
-        (Some(g), up) => g.commit(kf, s, up),
+        (Some(g), Pending::Augmented(p, dx)) => g.commit(kf, s, &p, &dx),
         (None, Pending::White(p, dx)) => {
             kf.p = *p;
             kf.feedback(s, &dx);
         }
-        (None, Pending::Augmented(..)) => {
+        _ => {
             return Err(Error::Invalid(
-                "an update with range-error states committed without them".into(),
+                "an update committed with other range-error states than it was computed with"
+                    .into(),
             ))
         }
     }
@@ -468,8 +474,8 @@ mod tests {
                 z_white.push(-z[j] / sig);
             }
             let r = vec![sig * sig; n_sat];
-            let (up, _) = gm.sequential(&kf, &res, &h, &r, &sats, n_sat).unwrap();
-            gm.commit(&mut kf, &mut s, up);
+            let (up, _) = sequential(&kf, Some(&gm), &res, &h, &r, &sats, n_sat).unwrap();
+            commit(&mut kf, Some(&mut gm), &mut s, up).unwrap();
             if k > 100 {
                 for (j, bj) in b.iter().enumerate() {
                     err2 += (gm.bias(j) - bj).powi(2);
@@ -510,7 +516,16 @@ mod tests {
         assert!((gm.pbb[(1, 1)] - (0.1 * psi2 + (1.0 - psi2) * 2.0)).abs() < 1e-12);
         gm.c[(3, 1)] = 0.2;
         gm.pbb[(0, 1)] = 0.05;
+        let h = DMatrix::from_fn(1, NX, |_, j| if j < 6 { 0.3 } else { 0.0 });
+        let before = gm.restarted_row_variance(&kf, &h, 0, 1.5, 1);
+        assert!(gm.row_variance(&kf, &h, 0, 1.5, 1, true) != before);
         gm.restart(1);
+        assert!((gm.row_variance(&kf, &h, 0, 1.5, 1, true) - before).abs() < 1e-12);
+        // An update is committed with the states it was computed with.
+        let res = DVector::from_element(1, 0.5);
+        let (up, _) = sequential(&kf, None, &res, &h, &[1.5], &[1], 1).unwrap();
+        let mut s = state();
+        assert!(commit(&mut kf, Some(&mut gm), &mut s, up).is_err());
         assert_eq!(
             (gm.bias(1), gm.c[(3, 1)], gm.pbb[(0, 1)], gm.pbb[(1, 0)]),
             (0.0, 0.0, 0.0, 0.0)

@@ -22,6 +22,7 @@ use crate::validate::{
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 mod sequential;
+pub(crate) use sequential::sequential_rows;
 pub use sequential::Sequential;
 
 /// Result of one measurement update.

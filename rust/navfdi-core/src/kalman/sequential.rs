@@ -103,6 +103,34 @@ impl KalmanFilter {
     }
 }
 
+/// The scalar row updates of [`KalmanFilter::sequential_pending`] on a state `x` and covariance
+/// `p` kept outside a [`KalmanFilter`] (the tight filter's augmented range-error states,
+/// [`crate::ins::range_states`]), with no validation of `p` beyond each row's innovation
+/// variance: the updated `(x, P)` (P symmetrised) and `Σ νᵢ²/sᵢ` over the rows (NaN
+/// components skipped). Fails with [`Error::NotPositiveDefinite`] naming `what` when a row's
+/// innovation variance is not positive.
+pub(crate) fn sequential_rows(
+    x: DVector<f64>,
+    p: DMatrix<f64>,
+    z: &DVector<f64>,
+    h: &DMatrix<f64>,
+    r_diag: &[f64],
+    what: &str,
+) -> Result<(DVector<f64>, DMatrix<f64>, f64)> {
+    let mut seq = Sequential::new(x.len());
+    seq.x = x;
+    seq.p = p;
+    let (stat, dof) =
+        scalar_rows(z, h, r_diag, &mut seq).map_err(|(i, s)| Error::NotPositiveDefinite {
+            name: "innovation variance".into(),
+            detail: format!("row {i} of {what}: {s}"),
+        })?;
+    if dof > 0 {
+        symmetrize(&mut seq.p);
+    }
+    Ok((seq.x, seq.p, stat))
+}
+
 /// The row loop of [`KalmanFilter::sequential_pending`] on `seq`'s copies of x and P:
 /// `(Σ νᵢ²/sᵢ, rows used)`, or the row and variance of a non-positive `sᵢ`. Runs the AVX2 +
 /// FMA build of the loop where the CPU has them (detected at run time), the baseline one
