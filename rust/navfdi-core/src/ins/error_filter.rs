@@ -485,10 +485,12 @@ impl<const NS: usize> ErrorFilter<NS> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn noise() -> ImuNoise {
+    /// The IMU noise figures of the error-filter unit tests (also used by the range-error
+    /// states' tests).
+    pub(crate) fn noise() -> ImuNoise {
         ImuNoise {
             gyro_noise: [1e-3; 3],
             accel_noise: [1e-3; 3],

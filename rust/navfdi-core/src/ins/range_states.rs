@@ -342,21 +342,13 @@ pub fn commit(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ins::error_filter::{ImuNoise, CB, R};
+    use crate::ins::error_filter::{CB, R};
     use nalgebra::{UnitQuaternion, Vector3};
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
     fn filter() -> ErrorFilter<NX> {
-        let noise = ImuNoise {
-            gyro_noise: [1e-3; 3],
-            accel_noise: [1e-3; 3],
-            gyro_bias: 1e-4,
-            accel_bias: 1e-3,
-            bias_tau: 3600.0,
-            gyro_scale: 0.0,
-            accel_scale: 0.0,
-        };
+        let noise = crate::ins::error_filter::tests::noise();
         let mut kf =
             ErrorFilter::<NX>::new(3.0, 0.3, Vector3::repeat(0.01), Vector3::zeros(), noise)
                 .with_clock([0.0; 3], [10.0, 10.0, 1.0], (0.1, 0.1));
