@@ -221,7 +221,7 @@ def test_range_errors_scale_the_pseudorange_noise_or_are_refused():
     sc = load_scenario("walk_tc").with_values({"tight.integrity": {"range_errors": 9.0}}, create=True)
     assert sc.core["sensors"][0]["noise"] == pytest.approx([2.1, 0.15])
     assert "range_errors" not in sc.core["tight"]["integrity"]
-    with pytest.raises(ScenarioError, match="simulated scenario's range errors are white"):
+    with pytest.raises(ScenarioError, match="simulated scenario's range errors are known"):
         load_scenario("shao2018_integrity").with_values({"tight.integrity.range_errors": "overbound"}, create=True)
     for bad in (0.5, "pink", True, 1e5):
         with pytest.raises(ScenarioError, match=r"tight\.integrity\.range_errors"):

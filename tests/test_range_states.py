@@ -67,10 +67,10 @@ def test_bad_settings_are_refused_by_name(value, message):
         load_scenario("walk_tc").with_values({"tight.range_states": value}, create=True)
 
 
-def test_one_correlation_model_at_a_time_and_only_on_recorded_logs():
+def test_one_correlation_model_at_a_time_and_only_in_the_strapdown_filter():
     with pytest.raises(ScenarioError, match="keep one"):
         load_scenario("walk_tc").with_values({"tight.integrity": {"range_errors": 4.0}, "tight.range_states": {"fraction": 0.5, "tau": "5 s"}}, create=True)
-    with pytest.raises(ScenarioError, match="recorded logs"):
+    with pytest.raises(ScenarioError, match="strapdown tight filter on IMU and range logs"):
         load_scenario("shao2018").with_values({"tight.range_states": "auto"}, create=True)
     # "auto" unresolved never reaches the filter.
     with pytest.raises(ScenarioError, match="estimated from the log before the run"):

@@ -167,3 +167,28 @@ def test_elevation_dependent_noise_and_changing_geometry():
     run = navfdi.run_scenario(navfdi.load_scenario(r), seed=0)
     n = run.record["satellites"]["in_view"].sum(axis=1)
     assert n.min() < n.max()
+
+
+def test_simulated_correlated_range_errors(raw):
+    """``[sensors.ranges] correlated``: a share of each pseudorange's variance drawn as a
+    first-order Gauss-Markov process per satellite. The white-noise filter cannot average it
+    out (its position error grows several-fold at the same σ); a zero share draws exactly
+    the white errors of a scenario without the key; bad values are named."""
+    bad(raw, r"sensors\[0\]\.ranges\.correlated\.fraction", **{"sensors/0/ranges/correlated": {"fraction": 1.0, "tau": "10 s"}})
+    bad(raw, r"sensors\[0\]\.ranges\.correlated.*tau", **{"sensors/0/ranges/correlated": {"fraction": 0.5}})
+    bad(raw, r"correlated.*tau.*correlation time", **{"sensors/0/ranges/correlated": {"fraction": 0.5, "tau": "0 s"}})
+    bad(raw, r"sensors\[0\]\.ranges\.correlated.*sigma", **{"sensors/0/ranges/correlated": {"fraction": 0.5, "tau": "10 s", "sigma": "1 m"}})
+    base = copy.deepcopy(raw)
+    base.pop("faults", None)
+
+    def run(correlated):
+        r = copy.deepcopy(base)
+        if correlated is not None:
+            r["sensors"][0]["ranges"]["correlated"] = correlated
+        return navfdi.run_scenario(navfdi.load_scenario(r), seed=2)
+
+    white, zero, slow = run(None), run({"fraction": 0.0, "tau": "60 s"}), run({"fraction": 0.8, "tau": "60 s"})
+    np.testing.assert_array_equal(white.record["error"], zero.record["error"])
+    e_white, e_slow = white.errors(), slow.errors()
+    for c in ("pos_e_rms", "pos_n_rms", "pos_u_rms"):
+        assert e_slow[c] > 3 * e_white[c], (c, e_white[c], e_slow[c])

@@ -308,7 +308,7 @@ def apply_range_errors(raw: Any, core: dict[str, Any], logged: bool) -> None:
         if not logged:
             raise ScenarioError(
                 "tight.integrity.range_errors = 'overbound': the factor is estimated from a recorded RINEX log's residuals; "
-                "a simulated scenario's range errors are white (give a variance factor, e.g. 4, to study one)")
+                "a simulated scenario's range errors are known from its [sensors.ranges] (white unless correlated is set): give a variance factor, e.g. 4, to study one")
         return
     name = core.get("tight", {}).get("sensor")
     for s in core.get("sensors", []):

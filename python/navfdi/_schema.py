@@ -134,6 +134,11 @@ SECTIONS: dict[str, Section] = {
         ("epoch", "time", "0 s", "simulation: the constellation's time at the run's start"),
         ("clock", "table", REQ, "receiver clock model"),
         ("cn0_reference", "carrier to noise (dB-Hz)", "—", "C/N0 at which the σ is the one given (recorded logs: scaled by the recorded C/N0)"),
+        ("correlated", "table", "—", "simulation: time-correlated pseudorange errors"),
+    ]),
+    "sensors.ranges.correlated": _s("[sensors.ranges.correlated]", "Simulation: a share of each pseudorange error drawn as a first-order Gauss-Markov process per satellite.", [
+        ("fraction", "number in [0, 1)", REQ, "share of each pseudorange's variance (σ by elevation, squared) that is correlated; the rest stays white"),
+        ("tau", "time (s)", REQ, "correlation time"),
     ]),
     "sensors.ranges.clock": _s("[sensors.ranges.clock]", "Receiver clock: initial σ and random-walk densities.", [
         ("bias", "length", REQ, "initial clock bias σ"),

@@ -88,7 +88,21 @@ def _ranges(r: Any, p: str) -> dict[str, Any]:
         "epoch": _unit(r.get("epoch", "0 s"), "time", f"{p}.epoch"),
         "clock": {k: _unit(_need(clock, k, f"{p}.clock"), dim, f"{p}.clock.{k}") for k, dim in _CLOCK.items()},
         "cn0_reference": None if "cn0_reference" not in r else _unit(r["cn0_reference"], "carrier_to_noise", f"{p}.cn0_reference"),
+        "correlated": None if "correlated" not in r else _correlated(r["correlated"], f"{p}.correlated"),
     }
+
+
+def _correlated(c: Any, p: str) -> dict[str, float]:
+    """A simulated ``gnss_ranges`` sensor's ``correlated`` table: ``fraction`` of each
+    pseudorange's variance (σ by elevation, squared) in [0, 1) that is a first-order
+    Gauss-Markov process per satellite, of correlation time ``tau``."""
+    if not isinstance(c, dict):
+        raise ScenarioError(f"{p} = {c!r}: expected a table {{ fraction = 0.5, tau = \"10 s\" }}")
+    _check_keys(c, "sensors.ranges.correlated", p)
+    fraction = _number(_need(c, "fraction", p), f"{p}.fraction")
+    if not 0.0 <= fraction < 1.0:
+        raise ScenarioError(f"{p}.fraction = {fraction!r}: a share in [0, 1) of the pseudorange variance is required")
+    return {"fraction": fraction, "tau": _unit(_need(c, "tau", p), "time", f"{p}.tau")}
 
 
 def _waypoints(tr: Mapping[str, Any], duration: float) -> dict[str, Any]:
@@ -549,8 +563,9 @@ def _convert(raw: Mapping[str, Any]) -> dict[str, Any]:
         core["tight"] = _tight(_need(raw, "tight", ""))
         apply_range_errors(raw, core, logged=False)
         if raw["tight"].get("range_states", "white") != "white":
-            raise ScenarioError("tight.range_states: range-error states are carried by the strapdown tight filter on recorded logs "
-                                "([tight.strapdown] and [source]); a simulated scenario's range errors are white")
+            raise ScenarioError("tight.range_states: range-error states are carried by the strapdown tight filter on IMU and range logs "
+                                "([tight.strapdown] and [source]); the simulated INS-error tight filter has none (correlated range errors "
+                                "drawn by its simulator, [sensors.ranges] correlated, meet its white-noise model)")
         return core
     if arch == "ultra_tight":
         core["ultra_tight"] = _ultra_tight(_need(raw, "ultra_tight", ""))

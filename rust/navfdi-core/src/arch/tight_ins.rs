@@ -34,11 +34,10 @@ use super::tight_ins_pl::StrapdownBank;
 use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::gnss::broadcast::{Sat, Sys};
-use crate::gnss::geodesy::{ecef_to_enu, lla_to_ecef};
+use crate::gnss::geodesy::{ecef_to_enu, lla_to_ecef, sagnac};
 use crate::gnss::innovation::{innovation_fde, snapshot_sat_fde, SatFde};
 use crate::gnss::ranges::RangeEpoch;
 use crate::gnss::snapshot::{FdeConfig, FdeStatus, PositionModel, RateModel};
-use crate::gnss::C;
 use crate::ins::error_filter::{ErrorFilter, CB, CD, N_CLOCK, PHI, R, V};
 use crate::ins::range_states::{self as rs, RangeStates};
 use crate::ins::strapdown::{skew, NavState};
@@ -46,9 +45,6 @@ use crate::record::{IntegrityRecord, RunRecord, SatRecord, NAV_COLUMNS};
 use crate::spec::{FdePlacement, ScenarioSpec};
 use crate::stream::Streams;
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
-
-/// Earth rotation rate of the Sagnac term (rad/s, WGS-84).
-const OMEGA_E: f64 = 7.292_115_146_7e-5;
 
 /// One epoch's rows: pseudoranges of `m` satellites, then (with rates) their range rates.
 struct Rows {
@@ -449,13 +445,6 @@ fn antenna_ecef(s: &NavState, lever: &Vector3<f64>) -> (Vector3<f64>, Matrix3<f6
     let enu = ecef_to_enu(a.lat, a.lon);
     let ned = Matrix3::new(0.0, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0) * enu;
     (lla_to_ecef(a.lat, a.lon, a.h), ned)
-}
-
-/// Satellite position rotated by the Earth's rotation over the signal's travel from it to
-/// `r` (the Sagnac correction as a position).
-fn sagnac(sat: &Vector3<f64>, r: &Vector3<f64>) -> Vector3<f64> {
-    let a = OMEGA_E * (sat - r).norm() / C;
-    Vector3::new(sat.x + a * sat.y, sat.y - a * sat.x, sat.z)
 }
 
 /// Per-system clock biases (m) and drift (m/s) from the observations `z` of epoch `ep` at the

@@ -55,6 +55,17 @@ pub fn elevation_azimuth(rx: &Vector3<f64>, lat: f64, lon: f64, sat: &Vector3<f6
     (d.z.atan2(horiz), d.x.atan2(d.y))
 }
 
+/// Earth rotation rate (rad/s, WGS-84).
+pub const OMEGA_E: f64 = 7.292_115_146_7e-5;
+
+/// Satellite ECEF position `sat` (m, at transmission) rotated by the Earth's rotation over the
+/// signal's travel from it to the receiver at `r` (the Sagnac correction as a position, to
+/// first order in the angle).
+pub fn sagnac(sat: &Vector3<f64>, r: &Vector3<f64>) -> Vector3<f64> {
+    let a = OMEGA_E * (sat - r).norm() / super::C;
+    Vector3::new(sat.x + a * sat.y, sat.y - a * sat.x, sat.z)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

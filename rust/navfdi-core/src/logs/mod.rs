@@ -13,7 +13,7 @@
 //! The reference is scored only at epochs where no GNSS measurement was an input.
 
 pub mod imu_csv;
-mod ranges;
+pub mod ranges;
 pub mod shipped;
 
 use crate::error::{Error, Result};

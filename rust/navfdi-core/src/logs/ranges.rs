@@ -34,16 +34,25 @@ use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{ImuSamples, Logged, Nominal};
 use nalgebra::{DMatrix, DVector, Vector3};
 
-/// One satellite's recorded observables at one epoch.
-struct Row {
-    sat: Sat,
-    rho: f64,
-    rate: f64,
-    pos: Vector3<f64>,
-    vel: Vector3<f64>,
-    el: f64,
+/// One satellite's observables at one epoch, as the tight filter takes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeRow {
+    /// The satellite.
+    pub sat: Sat,
+    /// Pseudorange (m) corrected for the satellite clock, group delay and modelled
+    /// atmosphere: the geometric range to `pos` after the Sagnac rotation, plus the receiver
+    /// clock bias and the range's error.
+    pub rho: f64,
+    /// Range rate (m/s, `−λ D` corrected for the satellite clock drift; NaN without Doppler).
+    pub rate: f64,
+    /// Satellite ECEF position at transmission (m).
+    pub pos: Vector3<f64>,
+    /// Satellite ECEF velocity (m/s).
+    pub vel: Vector3<f64>,
+    /// Elevation (rad).
+    pub el: f64,
     /// C/N0 (dB-Hz; NaN when not recorded).
-    cn0: f64,
+    pub cn0: f64,
 }
 
 impl LoggedSource {
@@ -59,32 +68,7 @@ impl LoggedSource {
         nav: &NavData,
         reference: Option<&GnssLog>,
     ) -> Result<Self> {
-        spec.validate()?;
-        check_imu(&imu)?;
-        let t = spec.tight()?;
-        if t.strapdown.is_none() {
-            return Err(Error::Invalid(
-                "tight.strapdown: missing; a tight scenario on recorded IMU and RINEX logs needs its strapdown INS".into(),
-            ));
-        }
-        if let Some(r) = reference {
-            r.check("reference log")?;
-        }
-        if spec
-            .sensors
-            .iter()
-            .any(|s| s.kind != SensorKind::GnssRanges)
-        {
-            return Err(Error::Invalid(
-                "sensors: a tight scenario on RINEX logs takes its gnss_ranges sensor only".into(),
-            ));
-        }
-        let si = spec.sensor_index(&t.sensor).unwrap_or(0);
-        let sen = &spec.sensors[si];
-        let rs = sen
-            .ranges
-            .as_ref()
-            .ok_or_else(|| Error::Invalid(format!("sensors[{si}].ranges: missing")))?;
+        let (_, rs) = tight_ranges_sensor(spec, &imu, reference)?;
         let Some(first) = obs.epochs.first() else {
             return Err(Error::Invalid("RINEX observations: no epochs".into()));
         };
@@ -136,7 +120,7 @@ impl LoggedSource {
         overlap(&imu, &times, "RINEX observations")?;
         let mut fixes = vec![[f64::NAN; 6]; epochs];
         let mut nominal = vec![origin; epochs];
-        let mut rows: Vec<Vec<Row>> = Vec::with_capacity(epochs);
+        let mut rows: Vec<Vec<RangeRow>> = Vec::with_capacity(epochs);
         let mut last = r0;
         for (k, ep) in obs.epochs.iter().enumerate() {
             if k > 0 && times[k] <= times[k - 1] {
@@ -213,7 +197,7 @@ impl LoggedSource {
                         })
                         .filter(|v| v.is_finite() && *v > 0.0)
                         .unwrap_or(f64::NAN);
-                    out.push(Row {
+                    out.push(RangeRow {
                         sat: o.sat,
                         rho: o.value + C * st.clock - C * eph.tgd - iono - tropo,
                         rate: doppler.map_or(f64::NAN, |d| -lambda * d + C * drift),
@@ -226,6 +210,47 @@ impl LoggedSource {
             }
             out.sort_by_key(|r| r.sat);
             rows.push(out);
+        }
+        Self::from_range_rows(spec, imu, times, rows, fixes, origin, nominal, reference)
+    }
+
+    /// Prepare the tight scenario `spec` from an IMU log and the satellites' observables per
+    /// epoch (`rows`, at `times` s on the IMU's scale, strictly increasing): the part of
+    /// [`LoggedSource::from_rinex`] after reading, shared with simulated range logs
+    /// ([`crate::sim::range_logs`]). `fixes`: per epoch the snapshot fix east, north, up (m
+    /// from `origin`) and velocity (m/s), NaN where there is none (the alignment uses them);
+    /// `nominal`: per epoch the point the rows were formed about; `reference` on the same
+    /// time scale, matched within 2 ms and scored at every matched epoch.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_range_rows(
+        spec: &ScenarioSpec,
+        imu: ImuSamples,
+        times: Vec<f64>,
+        mut rows: Vec<Vec<RangeRow>>,
+        fixes: Vec<[f64; 6]>,
+        origin: Nominal,
+        nominal: Vec<Nominal>,
+        reference: Option<&GnssLog>,
+    ) -> Result<Self> {
+        let (si, rs) = tight_ranges_sensor(spec, &imu, reference)?;
+        let sen = &spec.sensors[si];
+        let epochs = times.len();
+        if rows.len() != epochs || fixes.len() != epochs || nominal.len() != epochs {
+            return Err(Error::Invalid(format!(
+                "range logs: {epochs} epochs, but {} rows, {} fixes and {} nominal points",
+                rows.len(),
+                fixes.len(),
+                nominal.len()
+            )));
+        }
+        if let Some(k) = (1..epochs).find(|&k| !(times[k] > times[k - 1])) {
+            return Err(Error::Invalid(format!(
+                "range logs: epoch {k} is not after the one before it"
+            )));
+        }
+        overlap(&imu, &times, "range logs")?;
+        for r in &mut rows {
+            r.sort_by_key(|r| r.sat);
         }
         // Satellite names: every satellite in view at some epoch.
         let mut sats: Vec<Sat> = rows.iter().flatten().map(|r| r.sat).collect();
@@ -263,7 +288,7 @@ impl LoggedSource {
                 .any(|w| times[k] >= w[0] && times[k] < w[1]);
             let on = !out && grid[k] && !ep_rows.is_empty();
             let m = ep_rows.len();
-            let grow = |r: &Row| {
+            let grow = |r: &RangeRow| {
                 let el = if elevation_noise {
                     1.0 / r.el.sin().max(0.05)
                 } else {
@@ -324,4 +349,39 @@ impl LoggedSource {
         let models = logged_models(times, nominal, available, Some(ranges), logged);
         Ok(LoggedSource::assemble(models, z, enu))
     }
+}
+
+/// Check the tight scenario `spec` (strapdown, gnss_ranges sensor only), the IMU log and the
+/// reference; the ranges sensor's index and its satellites' settings.
+fn tight_ranges_sensor<'a>(
+    spec: &'a ScenarioSpec,
+    imu: &ImuSamples,
+    reference: Option<&GnssLog>,
+) -> Result<(usize, &'a crate::spec::RangesSpec)> {
+    spec.validate()?;
+    check_imu(imu)?;
+    let t = spec.tight()?;
+    if t.strapdown.is_none() {
+        return Err(Error::Invalid(
+                "tight.strapdown: missing; a tight scenario on recorded IMU and RINEX logs needs its strapdown INS".into(),
+            ));
+    }
+    if let Some(r) = reference {
+        r.check("reference log")?;
+    }
+    if spec
+        .sensors
+        .iter()
+        .any(|s| s.kind != SensorKind::GnssRanges)
+    {
+        return Err(Error::Invalid(
+            "sensors: a tight scenario on RINEX logs takes its gnss_ranges sensor only".into(),
+        ));
+    }
+    let si = spec.sensor_index(&t.sensor).unwrap_or(0);
+    let rs = spec.sensors[si]
+        .ranges
+        .as_ref()
+        .ok_or_else(|| Error::Invalid(format!("sensors[{si}].ranges: missing")))?;
+    Ok((si, rs))
 }

@@ -7,10 +7,12 @@
 //! each run's measurements and its reference (the true error state). The architectures
 //! ([`crate::arch`]) consume the result through [`noise::Simulated::streams`] and never import
 //! this module. [`logs`] simulates recorded-style logs (IMU samples, a GNSS solution) along a
-//! trajectory for the strapdown architecture's consistency check.
+//! trajectory for the strapdown architecture's consistency check, [`range_logs`] IMU samples
+//! and raw satellite observables for the strapdown tight filter's.
 
 pub mod logs;
 pub mod noise;
 pub mod prepare;
+pub mod range_logs;
 pub mod ranges;
 pub mod trajectory;

@@ -57,6 +57,46 @@ fn ins_position(prep: &Prepared, k: usize, x: &DVector<f64>, rx: &Vector3<f64>) 
 /// Stream offset of the per-run sensor offsets.
 const BIAS_STREAM: u64 = 0x00B1_A50F_F5E7;
 
+/// Stream offset of the correlated range errors.
+const RANGE_GM_STREAM: u64 = 0x6A55_C0EE_0E44;
+
+/// Unit-variance first-order Gauss-Markov processes, one per satellite of a constellation,
+/// drawn from their own ChaCha8 stream (so a run without them draws what it drew before):
+/// `g(t + Δt) = e^(−Δt/τ) g(t) + √(1 − e^(−2Δt/τ)) w`, started from the stationary law.
+#[derive(Debug, Clone)]
+pub struct UnitMarkov {
+    rng: ChaCha8Rng,
+    tau: f64,
+    t: f64,
+    /// The processes' values at the last time advanced to.
+    pub g: Vec<f64>,
+}
+
+impl UnitMarkov {
+    /// `n` processes of correlation time `tau` (s) at time `t0` (s), from `(seed, stream)`.
+    pub fn new(n: usize, tau: f64, t0: f64, seed: u64, stream: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        rng.set_stream(stream ^ RANGE_GM_STREAM);
+        let g = (0..n).map(|_| StandardNormal.sample(&mut rng)).collect();
+        UnitMarkov { rng, tau, t: t0, g }
+    }
+
+    /// Advance every process to time `t` (s; not before the last).
+    pub fn advance(&mut self, t: f64) {
+        let dt = (t - self.t).max(0.0);
+        self.t = t;
+        if dt == 0.0 {
+            return;
+        }
+        let phi = (-dt / self.tau).exp();
+        let q = (1.0 - phi * phi).sqrt();
+        for g in &mut self.g {
+            let w: f64 = StandardNormal.sample(&mut self.rng);
+            *g = phi * *g + q * w;
+        }
+    }
+}
+
 fn normals(rng: &mut ChaCha8Rng, n: usize) -> DVector<f64> {
     DVector::from_fn(n, |_, _| StandardNormal.sample(rng))
 }
@@ -91,6 +131,13 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
             })
             .collect()
     };
+    // Correlated pseudorange errors of the gnss_ranges sensor, where it asks for them.
+    let mut range_gm = prep.models.ranges.as_ref().and_then(|rp| {
+        let c = prep.spec.sensors[rp.sensor].ranges.as_ref()?.correlated?;
+        let t0 = prep.models.t.first().copied().unwrap_or(0.0);
+        let gm = UnitMarkov::new(rp.names.len(), c.tau, t0, seed, stream);
+        Some((gm, (1.0 - c.fraction).sqrt(), c.fraction.sqrt()))
+    });
     for k in 0..epochs {
         if k > 0 {
             let w = &prep.q_factor[k] * normals(&mut rng, n);
@@ -104,12 +151,19 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
                 let ep = &rp.epochs[k];
                 let m = ep.len();
                 ins.push(ins_position(prep, k, &x, &ep.rx));
+                if let Some((gm, _, _)) = range_gm.as_mut() {
+                    gm.advance(prep.models.t[k]);
+                }
                 if prep.models.available[si][k] && m > 0 {
                     let mut zk = &ep.h * &x;
                     let mut rk = DVector::zeros(2 * m);
                     for j in 0..m {
                         let sat = ep.sats[j];
-                        let e_r = ep.sigma[j] * v[2 * sat] + ep.fault[j];
+                        let unit = match &range_gm {
+                            Some((gm, white, slow)) => white * v[2 * sat] + slow * gm.g[sat],
+                            None => v[2 * sat],
+                        };
+                        let e_r = ep.sigma[j] * unit + ep.fault[j];
                         let e_d = ep.sigma_rate[j] * v[2 * sat + 1] + ep.fault[m + j];
                         zk[j] += e_r;
                         zk[m + j] += e_d;
@@ -155,5 +209,38 @@ pub fn simulate(prep: &Prepared, seed: u64, stream: u64) -> Simulated {
         },
         seed,
         stream,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::UnitMarkov;
+
+    /// Unit variance, lag correlation e^(−L Δt / τ), and the same draws for the same stream.
+    #[test]
+    fn unit_markov_has_its_variance_and_correlation() {
+        let (n, tau, dt) = (400, 5.0, 1.0);
+        let mut gm = UnitMarkov::new(n, tau, 0.0, 3, 7);
+        let mut again = UnitMarkov::new(n, tau, 0.0, 3, 7);
+        let (mut var, mut lag1, mut lag5, mut count) = (0.0, 0.0, 0.0, 0.0);
+        let mut hist: Vec<Vec<f64>> = Vec::new();
+        for k in 0..300 {
+            gm.advance(k as f64 * dt);
+            again.advance(k as f64 * dt);
+            assert_eq!(gm.g, again.g);
+            hist.push(gm.g.clone());
+            if k >= 5 {
+                for ((g, g1), g5) in hist[k].iter().zip(&hist[k - 1]).zip(&hist[k - 5]) {
+                    var += g * g;
+                    lag1 += g * g1;
+                    lag5 += g * g5;
+                }
+                count += n as f64;
+            }
+        }
+        let (var, r1, r5) = (var / count, lag1 / count, lag5 / count);
+        assert!((var - 1.0).abs() < 0.03, "variance {var}");
+        assert!((r1 - (-dt / tau).exp()).abs() < 0.03, "lag 1: {r1}");
+        assert!((r5 - (-5.0 * dt / tau).exp()).abs() < 0.03, "lag 5: {r5}");
     }
 }

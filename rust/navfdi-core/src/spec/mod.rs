@@ -28,7 +28,7 @@ pub use faults::{FaultKind, FaultSpec};
 pub use federated::{FederatedSpec, SubfilterSpec};
 pub use loosely_coupled::{AlignmentSpec, ConstraintSpec, LooselyCoupledSpec};
 pub use sensors::{ModesSpec, RangesSpec, SensorKind, SensorSpec};
-pub use tight::{FdePlacement, FilterIntegritySpec, TightSpec, TIGHT_DETECTOR};
+pub use tight::{FdePlacement, FilterIntegritySpec, RangeStatesSpec, TightSpec, TIGHT_DETECTOR};
 pub use trajectory::{SegmentSpec, TerrainSpec, TerrainWave, TrajectorySpec};
 pub use ultra_tight::{AimeMethod, NavInput, UltraTightSpec};
 

@@ -116,6 +116,11 @@ pub struct RangesSpec {
     /// and Brunner 1999), on top of the elevation growth. None: no C/N0 weighting.
     #[serde(default)]
     pub cn0_reference: Option<f64>,
+    /// Simulation only: the time-correlated part of the pseudorange errors, a first-order
+    /// Gauss-Markov process per satellite of variance `fraction · σ²` (σ the pseudorange σ
+    /// by elevation) and correlation time `tau` (s), the rest of σ² white. None: white.
+    #[serde(default)]
+    pub correlated: Option<super::tight::RangeStatesSpec>,
 }
 
 impl RangesSpec {
@@ -212,6 +217,15 @@ impl ScenarioSpec {
         }
         if !r.epoch.is_finite() {
             return Err(bad(format!("{p}.ranges.epoch"), "must be finite"));
+        }
+        if let Some(c) = &r.correlated {
+            if self.runs_on_logs() {
+                return Err(bad(
+                    format!("{p}.ranges.correlated"),
+                    "a simulation setting: a recorded log's range errors are what the receiver recorded (model them with [tight] range_states)",
+                ));
+            }
+            c.validate(&format!("{p}.ranges.correlated"))?;
         }
         positive(&format!("{p}.ranges.clock.bias"), r.clock.bias)?;
         positive(&format!("{p}.ranges.clock.drift"), r.clock.drift)?;

@@ -80,6 +80,31 @@ pub struct RangeStatesSpec {
     pub tau: f64,
 }
 
+impl RangeStatesSpec {
+    /// `fraction` in [0, 1) and `tau` in (0, 100 000] s, else an error naming `path`'s key.
+    pub(crate) fn validate(&self, path: &str) -> Result<()> {
+        if !(0.0..1.0).contains(&self.fraction) {
+            return Err(bad(
+                format!("{path}.fraction"),
+                format!(
+                    "{}: a share in [0, 1) of the pseudorange variance is required",
+                    self.fraction
+                ),
+            ));
+        }
+        if !(self.tau > 0.0 && self.tau <= 1e5) {
+            return Err(bad(
+                format!("{path}.tau"),
+                format!(
+                    "{} s: a correlation time in (0, 100000] s is required",
+                    self.tau
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Integrity allocation and fault prior of the filter protection levels
 /// ([`crate::integrity::filter_ss`]); the defaults are LPV-200's (ARAIM ADD) and the ADD's
 /// satellite prior.
@@ -238,26 +263,9 @@ impl ScenarioSpec {
         }
         if let Some(r) = &t.range_states {
             if t.strapdown.is_none() {
-                return Err(bad("tight.range_states", "range-error states are carried by the strapdown tight filter on recorded logs ([tight.strapdown]); simulated range errors are white"));
+                return Err(bad("tight.range_states", "range-error states are carried by the strapdown tight filter ([tight.strapdown], on recorded or simulated IMU and range logs); the simulated INS-error tight filter has none (its correlated range errors, [sensors.ranges] correlated, are left to its white model)"));
             }
-            if !(0.0..1.0).contains(&r.fraction) {
-                return Err(bad(
-                    "tight.range_states.fraction",
-                    format!(
-                        "{}: a share in [0, 1) of the pseudorange variance is required",
-                        r.fraction
-                    ),
-                ));
-            }
-            if !(r.tau > 0.0 && r.tau <= 1e5) {
-                return Err(bad(
-                    "tight.range_states.tau",
-                    format!(
-                        "{} s: a correlation time in (0, 100000] s is required",
-                        r.tau
-                    ),
-                ));
-            }
+            r.validate("tight.range_states")?;
         }
         if let Some(sd) = &t.strapdown {
             validate_strapdown(
