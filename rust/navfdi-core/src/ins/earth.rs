@@ -23,12 +23,15 @@ pub fn r_normal(lat: f64) -> f64 {
     A / (1.0 - E2 * s * s).sqrt()
 }
 
+/// Free-air gradient of normal gravity (m/s² per m of height; ≈ 2g/R).
+pub const FREE_AIR_GRADIENT: f64 = 3.086e-6;
+
 /// Magnitude of normal gravity at latitude `lat` (rad) and height `h` (m), in m/s²
 /// (Somigliana with a free-air correction).
 pub fn gravity(lat: f64, h: f64) -> f64 {
     let s2 = lat.sin().powi(2);
     let g0 = G_EQUATOR * (1.0 + 0.001_931_852_652_41 * s2) / (1.0 - E2 * s2).sqrt();
-    g0 - 3.086e-6 * h
+    g0 - FREE_AIR_GRADIENT * h
 }
 
 #[cfg(test)]

@@ -239,10 +239,12 @@ impl<const NS: usize> ErrorFilter<NS> {
         ));
         f.fixed_view_mut::<3, 3>(R, V)
             .copy_from(&Matrix3::identity());
-        // Velocity: δv' = −[(2ω_ie + ω_en)×] δv + [f_n×] φ + C δba, plus gravity's height term.
+        // Velocity: δv' = −[(2ω_ie + ω_en)×] δv + [f_n×] φ + C δba, plus gravity's height
+        // term: a state δr_D too low feels gravity stronger by the free-air gradient times δr_D
+        // (the mechanisation's own model), so δv_D' = +(∂g/∂d) δr_D.
         f.fixed_view_mut::<3, 3>(V, V)
             .copy_from(&(-skew(&(2.0 * w_ie + w_en))));
-        f[(V + 2, R + 2)] = -2.0 * earth::gravity(s.lat, s.h) / (earth::A);
+        f[(V + 2, R + 2)] = earth::FREE_AIR_GRADIENT;
         f.fixed_view_mut::<3, 3>(V, PHI).copy_from(&skew(&f_n));
         f.fixed_view_mut::<3, 3>(V, BA).copy_from(&c);
         // Attitude: φ' = −[ω_in×] φ − C δbg.
@@ -528,6 +530,57 @@ pub(crate) mod tests {
         let moved = (lat0 - s.lat) * (earth::r_meridian(0.7) + 10.0);
         assert!((moved - 3.0 * 100.0 / 100.01).abs() < 1e-4, "{moved}");
         assert!(kf.p[(0, 0)] < 0.0101);
+    }
+
+    /// The error model's transition predicts what the mechanisation does with an error: a
+    /// state started 5 m too low (δr_D = +5 m) and a true state at rest, both fed the truth's
+    /// IMU increments for 60 s, differ in down velocity by ∫ (2g/R) δr_D — gravity is
+    /// stronger below — as Φ δx(0) says (sign and size, to 2 %).
+    #[test]
+    fn vertical_channel_follows_the_mechanisation() {
+        use crate::ins::strapdown::{mechanise, Increment};
+        let lat = 0.7;
+        let truth0 = NavState {
+            lat,
+            lon: 0.3,
+            h: 100.0,
+            v: Vector3::zeros(),
+            q: UnitQuaternion::identity(),
+        };
+        let dt = 0.01;
+        let w_ie = Vector3::new(
+            earth::OMEGA_IE * lat.cos(),
+            0.0,
+            -earth::OMEGA_IE * lat.sin(),
+        );
+        let f = Vector3::new(0.0, 0.0, -earth::gravity(lat, 100.0));
+        let inc = Increment {
+            dtheta: w_ie * dt,
+            dvel: f * dt,
+            dt,
+        };
+        let (mut truth, mut est) = (truth0, truth0);
+        est.h -= 5.0;
+        let mut kf =
+            ErrorFilter::<N>::new(1.0, 0.1, Vector3::repeat(0.001), Vector3::zeros(), noise());
+        kf.track_transition();
+        let mut prev = Increment::zero(dt);
+        for _ in 0..6000 {
+            kf.propagate(&est, &f, &w_ie, dt);
+            mechanise(&mut truth, &prev, &inc);
+            mechanise(&mut est, &prev, &inc);
+            prev = inc;
+        }
+        let mut dx0 = SVector::<f64, N>::zeros();
+        dx0[R + 2] = 5.0;
+        let predicted = kf.take_transition() * dx0;
+        let dv_d = est.v.z - truth.v.z;
+        assert!(dv_d > 0.0, "the lower state falls faster: {dv_d}");
+        assert!(
+            (predicted[V + 2] - dv_d).abs() < 0.02 * dv_d.abs(),
+            "error model {} m/s, mechanisation {dv_d} m/s",
+            predicted[V + 2]
+        );
     }
 
     #[test]
