@@ -441,6 +441,7 @@ pub fn simulate_logs<'py>(
             "reported_vel" => n.reported_vel = f(&v)?,
             "time_lag" => n.time_lag = f(&v)?,
             "ground" => n.ground = v.extract::<bool>()?,
+            "bias_tau" => n.bias_tau = f(&v)?,
             "mounting" => n.mounting = v.extract::<[f64; 3]>()?,
             other => {
                 return Err(PyValueError::new_err(format!(

@@ -29,6 +29,9 @@ use rand_distr::{Distribution, StandardNormal};
 /// filter's forward-right-down body frame.
 pub const MOUNTING: [f64; 3] = [std::f64::consts::PI, 0.0, std::f64::consts::FRAC_PI_2];
 
+/// Stream offset of the Gauss-Markov biases' driving noise.
+const BIAS_DRIVE_STREAM: u64 = 0x0B1A_5D21_7E00;
+
 /// Errors of the simulated IMU and GNSS.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LogNoise {
@@ -82,6 +85,10 @@ pub struct LogNoise {
     pub time_lag: f64,
     /// A ground vehicle (no bank in turns) rather than an aircraft.
     pub ground: bool,
+    /// Correlation time (s) of the gyro and accelerometer biases: first-order Gauss-Markov
+    /// processes of stationary σ `gyro_bias`, `accel_bias` (the filters' bias model), driven
+    /// from their own random stream; 0: constant per run.
+    pub bias_tau: f64,
 }
 
 impl Default for LogNoise {
@@ -111,6 +118,7 @@ impl Default for LogNoise {
             mounting: MOUNTING,
             time_lag: 0.0,
             ground: false,
+            bias_tau: 0.0,
         }
     }
 }
@@ -174,6 +182,7 @@ pub fn simulate_logs(
         ("stale_duration", noise.stale_duration),
         ("reported_pos", noise.reported_pos),
         ("reported_vel", noise.reported_vel),
+        ("bias_tau", noise.bias_tau),
     ] {
         if !(v >= 0.0 && v.is_finite()) {
             return Err(Error::Invalid(format!(
@@ -210,7 +219,21 @@ pub fn simulate_logs(
             .transpose()
             * enu_ned;
     let mut imu = ImuSamples::default();
+    // Gauss-Markov biases: driven from their own stream, so constant biases draw as before.
+    let mut bias_rng = ChaCha8Rng::seed_from_u64(seed);
+    bias_rng.set_stream(run ^ BIAS_DRIVE_STREAM);
+    let bias_phi = if noise.bias_tau > 0.0 {
+        (-dt / noise.bias_tau).exp()
+    } else {
+        1.0
+    };
+    let bias_q = (1.0 - bias_phi * bias_phi).sqrt();
+    let (mut bg, mut ba) = (bg, ba);
     for e in &truth {
+        if bias_phi < 1.0 {
+            bg = bg * bias_phi + normal3(&mut bias_rng) * (noise.gyro_bias * bias_q);
+            ba = ba * bias_phi + normal3(&mut bias_rng) * (noise.accel_bias * bias_q);
+        }
         imu.t.push(e.t - noise.time_lag);
         let w = to_imu * e.w_b;
         let f = to_imu * e.f_b;

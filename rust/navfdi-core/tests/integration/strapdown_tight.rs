@@ -18,6 +18,8 @@ use navfdi_core::stream::Streams;
 const DURATION: f64 = 240.0;
 /// Pseudorange σ at zenith (m) and range-rate σ (m/s).
 const SIGMA: [f64; 2] = [1.0, 0.05];
+/// Correlation time of the IMU biases, simulated and in the filter (s).
+const BIAS_TAU: f64 = 3600.0;
 /// The simulated correlated share of the pseudorange variance and its correlation time (s).
 const CORRELATED: RangeStatesSpec = RangeStatesSpec {
     fraction: 0.6,
@@ -26,6 +28,7 @@ const CORRELATED: RangeStatesSpec = RangeStatesSpec {
 
 fn noise() -> LogNoise {
     LogNoise {
+        bias_tau: BIAS_TAU,
         gnss_dt: 1.0,
         gnss_pos: 1.0,
         gnss_vel: 0.05,
@@ -47,7 +50,7 @@ fn spec(states: Option<RangeStatesSpec>) -> ScenarioSpec {
         "sensor": "gnss", "fde": "none", "alpha": 1e-3, "rates": true,
         "strapdown": {
             "imu": {"gyro_noise": gn, "accel_noise": an,
-                    "gyro_bias": n.gyro_bias, "accel_bias": n.accel_bias, "bias_tau": 3600.0},
+                    "gyro_bias": n.gyro_bias, "accel_bias": n.accel_bias, "bias_tau": BIAS_TAU},
             "mounting": MOUNTING, "lever_arm": [0.0, 0.0, 0.0],
             "alignment": {"speed": 2.0, "static_speed": 0.3, "sigma_level": 0.5f64.to_radians(),
                           "sigma_heading": 2.0f64.to_radians(), "sigma_position": 3.0, "sigma_velocity": 0.2}
@@ -115,20 +118,21 @@ fn campaign(states: Option<RangeStatesSpec>, correlated: Option<RangeStatesSpec>
     anees(&per_run, 9.0, 150)
 }
 
-/// The filter's consistency without correlated errors (white errors, white model): the
-/// reference the range-error states are held to. It is conservative here (ANEES about 7.5,
-/// the vertical velocity error at about half its variance: the vertical accelerometer bias'
-/// σ dominates it), with or without range-error states.
+/// Over 20 runs: the filter with range-error states under correlated errors is consistent
+/// (ANEES inside its 99 % interval at ≥ 90 % of the epochs, time average within 1.5 of 9) and
+/// as consistent as the same filter with white errors and the white model (the reference: it
+/// is slightly conservative here, ANEES about 8 — the accelerometer bias' share, not traced
+/// further); the white model under the correlated errors is several times over-confident.
 #[test]
 fn range_error_states_keep_the_tight_filter_consistent_under_correlated_errors() {
     let (base, base_share) = campaign(None, None);
     assert!(
-        (6.5..=11.0).contains(&base) && base_share >= 0.7,
+        (7.0..=11.0).contains(&base) && base_share >= 0.85,
         "white errors, white model: ANEES {base:.2}, {base_share:.3} inside"
     );
     let (mean, share) = campaign(Some(CORRELATED), Some(CORRELATED));
     assert!(
-        (mean - base).abs() <= 0.1 * base && share >= 0.8,
+        share >= 0.9 && (mean - 9.0).abs() < 1.5 && (mean - base).abs() <= 0.1 * base,
         "correlated errors, range-error states: ANEES {mean:.2} ({share:.3} of the epochs inside its 99 % interval) against {base:.2} with white errors"
     );
     let (white, white_share) = campaign(None, Some(CORRELATED));
