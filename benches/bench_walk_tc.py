@@ -8,6 +8,11 @@
   read): ``LoggedSource.run`` with one variant, GIL released;
 * the tight update with FDE per GNSS epoch: the run minus the same run with every GNSS epoch
   removed (an outage over the whole walk: mechanisation and propagation only), per epoch;
+* the filter protection levels: the same run with ``[tight.integrity]`` (the bank of
+  sub-filters, one per satellite, the separation test and the levels), with white range
+  errors and with per-satellite range-error states (the walk's fitted a = 0.49, τ = 6.7 s),
+  per GNSS epoch and as a ratio to the plain tight epoch (whole run per epoch, and the GNSS
+  part: the run minus the INS-only run);
 * 200 Monte-Carlo runs of ``walk_tc`` (3 variants, faults drawn per run) on all cores.
 """
 
@@ -40,6 +45,13 @@ def main() -> None:
     used = np.asarray(rec["satellites"]["used"])
     n = int((used > 0).sum())
     print(f"tight update with FDE: ({full * 1e3:.1f} − {ins_only * 1e3:.1f}) ms / {n} epochs = {(full - ins_only) / n * 1e6:.1f} µs per epoch at {used[used > 0].mean():.1f} satellites (target 15 µs at 25)")
+    epochs = len(rec["t"])
+    for label, extra in (("white range errors", {}), ("range-error states", {"tight.range_states": {"fraction": 0.49, "tau": "6.7 s"}})):
+        pl = inn.with_values({"tight.integrity": {}, **extra}, create=True)
+        src_pl = logs.logged_source(pl)
+        t_pl = best(lambda: src_pl.run([pl.to_json()]), 5)
+        print(f"filter PL ({label}): {t_pl * 1e3:.1f} ms = {t_pl / epochs * 1e6:.0f} µs per epoch, {t_pl / full:.1f}x the plain tight run; "
+              f"GNSS part {(t_pl - ins_only) / n * 1e6:.0f} µs = {(t_pl - ins_only) / (full - ins_only):.1f}x the plain tight update (target 20x a plain tight epoch)")
     t = time.perf_counter()
     montecarlo("walk_tc", runs=200, seed=0, progress=False)
     print(f"200 Monte-Carlo runs x 3 variants: {time.perf_counter() - t:.1f} s")
