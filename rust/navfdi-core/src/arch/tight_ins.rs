@@ -18,11 +18,16 @@
 //! (the Galileo pseudoranges moved onto the GPS clock by the filter's inter-system bias; the
 //! Sagnac rotation applied to the satellite positions), global test and w-test exclusion,
 //! before the filter; `none` — every satellite updates the filter, the innovation test is
-//! recorded. With `rates`, a satellite without a Doppler at an epoch is left out of it.
+//! recorded; `separation` (with `[tight.integrity]`) — the bank's separation test: on an alarm
+//! the satellite whose sub-filter separates most, if that sub-filter's navigator explains the
+//! epoch (the other satellites agree with it, the named one does not), is excluded and the
+//! filter takes that navigator over; at most [`MAX_SEPARATION_OUT`] out at once, each back
+//! after [`crate::integrity::filter_ss::READMIT_EPOCHS`] epochs in a row of agreeing with the
+//! filter. With `rates`, a satellite without a Doppler at an epoch is left out of it.
 //!
 //! With `[tight.integrity]` a bank of strapdown sub-filters gives the filter's protection levels
-//! ([`super::tight_ins_pl`]; the test reports, the placement excludes), beside the snapshot
-//! ARAIM levels of the epoch's pseudoranges.
+//! ([`super::tight_ins_pl`]; the test reports and, under `separation`, excludes), beside the
+//! snapshot ARAIM levels of the epoch's pseudoranges.
 //!
 //! Alignment as the loosely coupled filter's ([`super::inertial::align`]) on the source's
 //! snapshot fixes; the clocks start from the alignment epoch's observations at the aligned
@@ -155,6 +160,10 @@ pub fn run_tight_ins(
     // With range-error states: satellites excluded at the previous epoch (stream indices),
     // kept out while their own innovation disagrees.
     let mut held: Vec<bool> = vec![false; s_count];
+    // Placement `separation`: satellites the bank excluded, and their epochs in a row since
+    // consistent with the filter (readmitted after READMIT_EPOCHS).
+    let mut sep_out: Vec<bool> = vec![false; s_count];
+    let mut sep_ok: Vec<u32> = vec![0; s_count];
     let mut gm = match &t.range_states {
         Some(r) => {
             kf.track_transition();
@@ -230,8 +239,10 @@ pub fn run_tight_ins(
         if let Some(g) = gm.as_mut() {
             g.propagate(&mut kf, tk, &row_sats[..m], &rows.sigma[..m]);
             g.correct(&mut rows.res, &row_sats, m);
-            restart_returned(g, &kf, &mut rows, &r_diag, &row_sats, &held, cfg.k);
-            if t.fde != FdePlacement::None {
+            // The innovation placements' rules for what a state took in; under `separation`
+            // the sub-filter without the satellite is the reference instead.
+            if !matches!(t.fde, FdePlacement::None | FdePlacement::Separation) {
+                restart_returned(g, &kf, &mut rows, &r_diag, &row_sats, &held, cfg.k);
                 flag_absorbed(g, &mut rows, &row_sats, &mut held, cfg.k);
             }
         }
@@ -253,8 +264,26 @@ pub fn run_tight_ins(
             rs::sequential(&kf, gm.as_ref(), &rows.res, &rows.h, &r_diag, &row_sats, m)
                 .map_err(|e| crate::run::at_time(k, tk, e))?;
         let thr = cfg.threshold(rows.res.len())?;
+        if t.fde == FdePlacement::Separation {
+            readmit(
+                &mut sep_out,
+                &mut sep_ok,
+                &kf,
+                gm.as_ref(),
+                &rows,
+                &r_diag,
+                &row_sats,
+                cfg.k,
+            );
+        }
         let out = match t.fde {
             FdePlacement::LsPrecheck => ls_precheck(&rows, &s, &kf, &lever, t.rates, &cfg)?,
+            FdePlacement::Separation => SatFde {
+                excluded: (0..m).filter(|&j| sep_out[row_sats[j]]).collect(),
+                status: FdeStatus::Passed,
+                first: (lambda, thr, rows.res.len()),
+                w: vec![f64::NAN; m],
+            },
             _ if lambda < thr || t.fde == FdePlacement::None => {
                 let w = if full {
                     let s_inn = inn_cov(&kf).map_err(|e| crate::run::at_time(k, tk, e))?;
@@ -275,21 +304,18 @@ pub fn run_tight_ins(
             }
         };
         let mut out = out;
-        if let Some(g) = gm.as_ref() {
+        if let (Some(g), false) = (gm.as_ref(), t.fde == FdePlacement::Separation) {
             hold_excluded(
                 &mut out, &mut held, g, &kf, &rows, &r_diag, &row_sats, cfg.k,
             );
         }
-        record_sat_fde(
-            &mut rec,
-            &mut sat,
-            k,
-            &out,
-            |j| ep.sats[rows.idx[j]],
-            t.fde == FdePlacement::None,
-        );
-        let excluded: &[usize] = if isolation { &out.excluded } else { &[] };
-        let used = m - excluded.len();
+        let excluded: Vec<usize> = if isolation {
+            out.excluded.clone()
+        } else {
+            Vec::new()
+        };
+        let excluded = excluded.as_slice();
+        let mut used = m - excluded.len();
         if excluded.is_empty() {
             rs::commit(&mut kf, gm.as_mut(), &mut s, pending)?;
         } else if used > 0 {
@@ -308,18 +334,39 @@ pub fn run_tight_ins(
             // The sub-filters leave out what the filter left out, and their own satellite.
             let gone: Vec<usize> = excluded.iter().map(|&j| ep.sats[rows.idx[j]]).collect();
             let z = &src.meas.z[si][k];
-            b.update(
-                |sn, f, w| {
-                    let r = build_rows(sn, f, &lever, w, ep, z, &cols, t.rates)?;
-                    let m = r.idx.len();
-                    let sats = (0..r.res.len()).map(|i| ep.sats[r.idx[i % m]]).collect();
-                    Some((r.res, r.h, r.sigma, sats, m))
-                },
-                &gone,
-                tk,
-            )
-            .map_err(|e| crate::run::at_time(k, tk, e))?;
-            let lv = b.levels(&s, &kf);
+            let rows_of = |sn: &NavState, f: &ErrorFilter<N_CLOCK>, w: &Vector3<f64>| {
+                let r = build_rows(sn, f, &lever, w, ep, z, &cols, t.rates)?;
+                let m = r.idx.len();
+                let sats = (0..r.res.len()).map(|i| ep.sats[r.idx[i % m]]).collect();
+                Some((r.res, r.h, r.sigma, sats, m))
+            };
+            b.update(rows_of, &gone, tk)
+                .map_err(|e| crate::run::at_time(k, tk, e))?;
+            let mut lv = b.levels(&s, &kf);
+            if t.fde == FdePlacement::Separation && lv.alarm {
+                // The satellite the bank names, if its sub-filter explains the epoch: the
+                // filter takes that sub-filter's navigator (isolation), or reports it. At most
+                // MAX_SEPARATION_OUT out at once: an alarm with that many out says the
+                // exclusions did not clear the fault, and excluding more from a filter that
+                // holds it only spreads it — the alarm stands instead.
+                let full = sep_out.iter().filter(|&&x| x).count() >= MAX_SEPARATION_OUT;
+                let named = b
+                    .identify(&s, &kf)
+                    .filter(|&g| !full && b.explains(g, rows_of, &gone, cfg.k));
+                match named.and_then(|g| (0..m).find(|&j| row_sats[j] == g).map(|j| (g, j))) {
+                    Some((g, j)) => {
+                        if isolation && b.exclude(g, &mut s, &mut kf, &mut gm, &mut mech) {
+                            sep_out[g] = true;
+                            sep_ok[g] = 0;
+                            used -= 1;
+                            lv = b.levels(&s, &kf);
+                        }
+                        out.excluded.push(j);
+                        out.status = FdeStatus::Excluded;
+                    }
+                    None => out.status = FdeStatus::Unidentified,
+                }
+            }
             let js: Vec<usize> = (0..m).filter(|j| !excluded.contains(j)).collect();
             let los: Vec<Vector3<f64>> = js.iter().map(|&j| rows.los[j]).collect();
             let systems: Vec<char> = js
@@ -331,6 +378,14 @@ pub fn run_tight_ins(
             let snap = snapshot_araim(&los, &systems, &sigma, s.lat, s.lon, p_sat, &alloc);
             ir.push(&lv, snap, lv.alarm);
         }
+        record_sat_fde(
+            &mut rec,
+            &mut sat,
+            k,
+            &out,
+            |j| ep.sats[rows.idx[j]],
+            t.fde == FdePlacement::None,
+        );
         rec.subs[0].fused.push(used > 0);
         sat.used.push(used as u32);
         rec.sources.push(u32::from(used > 0));
@@ -427,6 +482,54 @@ fn flag_absorbed(
             gm.restart(g);
             rows.res[j] -= b;
             held[g] = true;
+        }
+    }
+}
+
+/// Most satellites the separation placement keeps out at once. One (the single-fault modes
+/// the bank monitors) left a wrong first exclusion — a low satellite's natural error named
+/// before a slow ramp elsewhere — standing while the ramp went in (20 m errors in 3 of 100
+/// walk runs); unlimited, a fault named late spread into a cascade of exclusions (92 m in one
+/// run of 100); two had neither.
+const MAX_SEPARATION_OUT: usize = 2;
+
+/// Placement `separation`: each satellite the bank excluded (`out`, stream indices) that is in
+/// view counts the epochs in a row at which every row of it agrees with the filter before its
+/// update (normalised innovation within `k`); after
+/// [`crate::integrity::filter_ss::READMIT_EPOCHS`] it rejoins (the bank gives it a sub-filter
+/// again, a copy of the filter's navigator, as for any satellite without one).
+#[allow(clippy::too_many_arguments)]
+fn readmit(
+    out: &mut [bool],
+    consistent: &mut [u32],
+    kf: &ErrorFilter<N_CLOCK>,
+    gm: Option<&RangeStates>,
+    rows: &Rows,
+    r_diag: &[f64],
+    row_sats: &[usize],
+    k: f64,
+) {
+    let m = rows.idx.len();
+    for (j, &g) in row_sats.iter().enumerate().take(m) {
+        if !out[g] {
+            continue;
+        }
+        let agrees = (j..rows.res.len()).step_by(m).all(|i| {
+            let var = match gm {
+                Some(gm) => gm.row_variance(kf, &rows.h, i, r_diag[i], g, i < m),
+                None => {
+                    let hi = nalgebra::SVector::<f64, N_CLOCK>::from_iterator(
+                        rows.h.row(i).iter().copied(),
+                    );
+                    hi.dot(&(kf.p * hi)) + r_diag[i]
+                }
+            };
+            var > 0.0 && (rows.res[i] / var.sqrt()).abs() <= k
+        });
+        consistent[g] = if agrees { consistent[g] + 1 } else { 0 };
+        if consistent[g] >= crate::integrity::filter_ss::READMIT_EPOCHS {
+            out[g] = false;
+            consistent[g] = 0;
         }
     }
 }

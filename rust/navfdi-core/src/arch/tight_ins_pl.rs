@@ -12,9 +12,12 @@
 //! as `P_s − P₀` of the position error states, which holds to first order in the closed-loop
 //! filters' linearisation (the Kalman-filter identity is exact only for a linear filter on
 //! nested data: [`crate::integrity::filter_ss`]). The levels are the same equation's
-//! ([`crate::integrity::filter_ss::separation_levels`]). The test reports; the filter's own
-//! placement (`innovation`, `ls_precheck`, `none`) decides the exclusions, which the sub-filters
-//! follow.
+//! ([`crate::integrity::filter_ss::separation_levels`]). Under the filter's own placement
+//! (`innovation`, `ls_precheck`, `none`) the test reports and the sub-filters follow the
+//! filter's exclusions; under `separation` the bank names the satellite to exclude
+//! ([`StrapdownBank::identify`]), its sub-filter's navigator must pass its own check of the
+//! epoch ([`StrapdownBank::explains`]), and the filter then takes that navigator over
+//! ([`StrapdownBank::exclude`]).
 
 use super::inertial::{BodyImu, Mechaniser};
 use crate::error::Result;
@@ -23,7 +26,7 @@ use crate::ins::error_filter::{ErrorFilter, N_CLOCK, R};
 use crate::ins::range_states::{self as rs, RangeStates};
 use crate::ins::strapdown::NavState;
 use crate::integrity::araim::Allocation;
-use crate::integrity::filter_ss::{separation_levels, SsEpoch, SsMode};
+use crate::integrity::filter_ss::{separation_levels, SsEpoch, SsMode, AMBIGUITY};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One epoch's rows at a navigator's state: residuals `ẑ − z`, the rows of `H`, their σ and the
@@ -156,6 +159,118 @@ impl StrapdownBank {
             rs::commit(&mut sub.kf, sub.gm.as_mut(), &mut sub.s, up)?;
         }
         Ok(())
+    }
+
+    /// The satellite whose sub-filter separates most from the filter (`s`, `kf`) by the χ²
+    /// tail of its normalised position separation (east, north, up; covariance `P_s − P₀`),
+    /// if the runner-up is at least [`AMBIGUITY`] times less likely; None otherwise.
+    pub(super) fn identify(&self, s: &NavState, kf: &ErrorFilter<N_CLOCK>) -> Option<usize> {
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = (earth::r_normal(s.lat) + s.h) * s.lat.cos();
+        let mut scores: Vec<(f64, usize)> = Vec::new();
+        for (g, sub) in self.subs.iter().enumerate() {
+            let Some(sub) = sub else { continue };
+            // North, east, down separation, in the position error states' axes.
+            let d = nalgebra::Vector3::new(
+                (sub.s.lat - s.lat) * rm,
+                (sub.s.lon - s.lon) * rn,
+                -(sub.s.h - s.h),
+            );
+            let c = sub.kf.p.fixed_view::<3, 3>(R, R) - kf.p.fixed_view::<3, 3>(R, R);
+            let eig = (0.5 * (c + c.transpose())).symmetric_eigen();
+            let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+            if !(top > 0.0) {
+                continue;
+            }
+            let (mut m2, mut rank) = (0.0, 0usize);
+            for (j, &l) in eig.eigenvalues.iter().enumerate() {
+                if l > 1e-9 * top {
+                    let proj = eig.eigenvectors.column(j).dot(&d);
+                    m2 += proj * proj / l;
+                    rank += 1;
+                }
+            }
+            if rank == 0 {
+                continue;
+            }
+            let tail = crate::stats::chi2_sf(rank, m2);
+            scores.push((if tail > 0.0 { -tail.ln() } else { m2 }, g));
+        }
+        scores.sort_by(|a, b| b.0.total_cmp(&a.0));
+        match scores.as_slice() {
+            [] => None,
+            [(_, g)] => Some(*g),
+            [(a, g), (b, _), ..] => (a - b >= AMBIGUITY.ln()).then_some(*g),
+        }
+    }
+
+    /// Whether the sub-filter without satellite `g` explains the epoch: at its own state
+    /// (`rows_of` as in [`StrapdownBank::update`], after the update) every row of the other
+    /// satellites not in `excluded` agrees within `k` of its innovation σ, and a row of `g`
+    /// does not. False when `g` has no sub-filter or no rows.
+    pub(super) fn explains(
+        &self,
+        g: usize,
+        rows_of: impl Fn(&NavState, &ErrorFilter<N_CLOCK>, &Vector3<f64>) -> Option<EpochRows>,
+        excluded: &[usize],
+        k: f64,
+    ) -> bool {
+        let Some(sub) = self.subs.get(g).and_then(Option::as_ref) else {
+            return false;
+        };
+        let Some((mut res, h, sigma, sats, ranges)) = rows_of(&sub.s, &sub.kf, &sub.mech.w_last)
+        else {
+            return false;
+        };
+        if let Some(gm) = sub.gm.as_ref() {
+            gm.correct(&mut res, &sats, ranges);
+        }
+        let (mut others_agree, mut own_disagrees) = (true, false);
+        for i in 0..res.len() {
+            if excluded.contains(&sats[i]) {
+                continue;
+            }
+            let r = sigma[i] * sigma[i];
+            let var = match sub.gm.as_ref() {
+                Some(gm) => gm.row_variance(&sub.kf, &h, i, r, sats[i], i < ranges),
+                None => {
+                    let hi =
+                        nalgebra::SVector::<f64, N_CLOCK>::from_iterator(h.row(i).iter().copied());
+                    hi.dot(&(sub.kf.p * hi)) + r
+                }
+            };
+            let z = res[i] / var.max(f64::MIN_POSITIVE).sqrt();
+            if sats[i] == g {
+                own_disagrees |= z.abs() > k;
+            } else {
+                others_agree &= z.abs() <= k;
+            }
+        }
+        others_agree && own_disagrees
+    }
+
+    /// Exclude satellite `g`: the filter (`s`, `kf`, `gm`, `mech`) takes its sub-filter's
+    /// navigator, and the other sub-filters restart as copies of it. False (nothing changed)
+    /// when `g` has no sub-filter.
+    pub(super) fn exclude(
+        &mut self,
+        g: usize,
+        s: &mut NavState,
+        kf: &mut ErrorFilter<N_CLOCK>,
+        gm: &mut Option<RangeStates>,
+        mech: &mut Mechaniser,
+    ) -> bool {
+        let Some(sub) = self.subs.get_mut(g).and_then(Option::take) else {
+            return false;
+        };
+        (*s, *kf, *gm, *mech) = (sub.s, sub.kf, sub.gm, sub.mech);
+        for other in self.subs.iter_mut().flatten() {
+            other.s = *s;
+            other.kf = kf.clone();
+            other.gm = gm.clone();
+            other.mech = mech.clone();
+        }
+        true
     }
 
     /// The separation test and protection levels of the filter (`s`, `kf`, after its update).

@@ -279,9 +279,6 @@ impl ScenarioSpec {
             if sd.imu.scale_factors() {
                 return Err(bad("tight.strapdown.imu", "scale-factor states (gyro_scale, accel_scale) are not available in the tight filter yet (its 18 states are the 15 INS errors and the receiver clock); set them to 0"));
             }
-            if t.fde == FdePlacement::Separation {
-                return Err(bad("tight.fde", "separation is not available on recorded logs yet: tried on walk_tc (range_errors = overbound, 100 drawn faults) it excluded 71 % of the fault epochs against innovation's 41 %, but after each exclusion (the bank restarted from the excluded satellite's sub-filter) new alarms came within seconds and further, wrong satellites were excluded (identification 96 %, up to five out at once): 204 hazardously misleading epochs where the other placements leave none; use ls_precheck, innovation or none (the protection levels of [tight.integrity] are computed beside them)"));
-            }
             if t.fde == FdePlacement::GnssFilter {
                 return Err(bad("tight.fde", "gnss_filter is not available on recorded logs; use ls_precheck, innovation or none"));
             }
