@@ -252,6 +252,13 @@ def _range_states(v: Any) -> dict[str, float] | None:
     if not isinstance(v, dict):
         raise ScenarioError(f"{p} = {v!r}: use 'white', 'auto' (estimated from the log's residuals) or a table {{ fraction = 0.6, tau = \"20 s\" }}")
     _check_keys(v, "tight.range_states", p)
+    return gauss_markov_share(v, p)
+
+
+def gauss_markov_share(v: dict[str, Any], p: str) -> dict[str, float]:
+    """A ``{ fraction, tau }`` table at path ``p`` (its keys already checked): the share in
+    [0, 1) of each pseudorange's variance that is a first-order Gauss-Markov process, and its
+    correlation time (s)."""
     fraction = _number(_need(v, "fraction", p), f"{p}.fraction")
     if not 0.0 <= fraction < 1.0:
         raise ScenarioError(f"{p}.fraction = {fraction!r}: a share in [0, 1) of the pseudorange variance is required")

@@ -33,7 +33,7 @@ from navfdi._logtime import resolve_log_times
 from navfdi._terrain import check_terrain
 from navfdi.units import UNITS, UnitError, split
 from navfdi._fields import _bool, _check_keys, _count, _detectors, _list, _name, _need, _number, _str, _unit
-from navfdi._lc_schema import _loosely_coupled, _tight, _ultra_tight, apply_range_errors
+from navfdi._lc_schema import _loosely_coupled, _tight, _ultra_tight, apply_range_errors, gauss_markov_share
 
 
 #: Component names and dimensions per sensor kind (order = measurement order).
@@ -99,10 +99,7 @@ def _correlated(c: Any, p: str) -> dict[str, float]:
     if not isinstance(c, dict):
         raise ScenarioError(f"{p} = {c!r}: expected a table {{ fraction = 0.5, tau = \"10 s\" }}")
     _check_keys(c, "sensors.ranges.correlated", p)
-    fraction = _number(_need(c, "fraction", p), f"{p}.fraction")
-    if not 0.0 <= fraction < 1.0:
-        raise ScenarioError(f"{p}.fraction = {fraction!r}: a share in [0, 1) of the pseudorange variance is required")
-    return {"fraction": fraction, "tau": _unit(_need(c, "tau", p), "time", f"{p}.tau")}
+    return gauss_markov_share(c, p)
 
 
 def _waypoints(tr: Mapping[str, Any], duration: float) -> dict[str, Any]:

@@ -26,7 +26,9 @@ use crate::ins::error_filter::{ErrorFilter, N_CLOCK, R};
 use crate::ins::range_states::{self as rs, RangeStates};
 use crate::ins::strapdown::NavState;
 use crate::integrity::araim::Allocation;
-use crate::integrity::filter_ss::{separation_levels, SsEpoch, SsMode, AMBIGUITY};
+use crate::integrity::filter_ss::{
+    most_separated, separation_levels, separation_score, SsEpoch, SsMode,
+};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One epoch's rows at a navigator's state: residuals `ẑ − z`, the rows of `H`, their σ and the
@@ -163,45 +165,24 @@ impl StrapdownBank {
 
     /// The satellite whose sub-filter separates most from the filter (`s`, `kf`) by the χ²
     /// tail of its normalised position separation (east, north, up; covariance `P_s − P₀`),
-    /// if the runner-up is at least [`AMBIGUITY`] times less likely; None otherwise.
+    /// if the runner-up is at least [`crate::integrity::filter_ss::AMBIGUITY`] times less likely;
+    /// None otherwise.
     pub(super) fn identify(&self, s: &NavState, kf: &ErrorFilter<N_CLOCK>) -> Option<usize> {
         let rm = earth::r_meridian(s.lat) + s.h;
         let rn = (earth::r_normal(s.lat) + s.h) * s.lat.cos();
-        let mut scores: Vec<(f64, usize)> = Vec::new();
-        for (g, sub) in self.subs.iter().enumerate() {
-            let Some(sub) = sub else { continue };
+        let scores = self.subs.iter().enumerate().filter_map(|(g, sub)| {
+            let sub = sub.as_ref()?;
             // North, east, down separation, in the position error states' axes.
-            let d = nalgebra::Vector3::new(
+            let d = DVector::from_column_slice(&[
                 (sub.s.lat - s.lat) * rm,
                 (sub.s.lon - s.lon) * rn,
                 -(sub.s.h - s.h),
-            );
+            ]);
             let c = sub.kf.p.fixed_view::<3, 3>(R, R) - kf.p.fixed_view::<3, 3>(R, R);
-            let eig = (0.5 * (c + c.transpose())).symmetric_eigen();
-            let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-            if !(top > 0.0) {
-                continue;
-            }
-            let (mut m2, mut rank) = (0.0, 0usize);
-            for (j, &l) in eig.eigenvalues.iter().enumerate() {
-                if l > 1e-9 * top {
-                    let proj = eig.eigenvectors.column(j).dot(&d);
-                    m2 += proj * proj / l;
-                    rank += 1;
-                }
-            }
-            if rank == 0 {
-                continue;
-            }
-            let tail = crate::stats::chi2_sf(rank, m2);
-            scores.push((if tail > 0.0 { -tail.ln() } else { m2 }, g));
-        }
-        scores.sort_by(|a, b| b.0.total_cmp(&a.0));
-        match scores.as_slice() {
-            [] => None,
-            [(_, g)] => Some(*g),
-            [(a, g), (b, _), ..] => (a - b >= AMBIGUITY.ln()).then_some(*g),
-        }
+            let c = DMatrix::from_column_slice(3, 3, c.as_slice());
+            separation_score(&d, &c).map(|v| (v, g))
+        });
+        most_separated(scores.collect())
     }
 
     /// Whether the sub-filter without satellite `g` explains the epoch: at its own state

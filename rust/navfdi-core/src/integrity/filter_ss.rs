@@ -262,39 +262,11 @@ impl SeparationBank {
     /// validate).
     pub fn identify(&self, main: &KalmanFilter) -> Option<usize> {
         let (x0, p0) = (main.x(), main.p());
-        let mut scores: Vec<(f64, usize)> = Vec::new();
-        for (s, f) in self.subs.iter().enumerate() {
-            let Some(f) = f else { continue };
-            let d = f.x() - x0;
-            let c = f.p() - p0;
-            let c = (&c + c.transpose()) * 0.5;
-            let eig = c.symmetric_eigen();
-            let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
-            if !(top > 0.0) {
-                continue;
-            }
-            let (mut m2, mut rank) = (0.0, 0usize);
-            for (j, &l) in eig.eigenvalues.iter().enumerate() {
-                if l > 1e-9 * top {
-                    let proj = eig.eigenvectors.column(j).dot(&d);
-                    m2 += proj * proj / l;
-                    rank += 1;
-                }
-            }
-            if rank == 0 {
-                continue;
-            }
-            // log of the χ² tail: comparable across ranks, and finite far in the tail.
-            let tail = crate::stats::chi2_sf(rank, m2);
-            let score = if tail > 0.0 { -tail.ln() } else { m2 };
-            scores.push((score, s));
-        }
-        scores.sort_by(|a, b| b.0.total_cmp(&a.0));
-        match scores.as_slice() {
-            [] => None,
-            [(_, s)] => Some(*s),
-            [(a, s), (b, _), ..] => (a - b >= AMBIGUITY.ln()).then_some(*s),
-        }
+        let scores = self.subs.iter().enumerate().filter_map(|(s, f)| {
+            let f = f.as_ref()?;
+            separation_score(&(f.x() - x0), &(f.p() - p0)).map(|v| (v, s))
+        });
+        most_separated(scores.collect())
     }
 
     /// Exclude satellite `s`: `main` takes its sub-filter's state, the other sub-filters
@@ -349,6 +321,43 @@ impl SeparationBank {
             }
         }
         back
+    }
+}
+
+/// How far a sub-filter has separated: the log of the χ² tail of the separation `d` normalised
+/// by its covariance `c` (`P_s − P₀`, symmetrised; its rank the eigenvalues above 1e-9 of the
+/// largest) — comparable across ranks and finite far in the tail (`d' c⁻¹ d` where the tail
+/// underflows). None when `c` has no positive eigenvalue.
+pub fn separation_score(d: &DVector<f64>, c: &DMatrix<f64>) -> Option<f64> {
+    let c = (c + c.transpose()) * 0.5;
+    let eig = c.symmetric_eigen();
+    let top = eig.eigenvalues.iter().copied().fold(0.0, f64::max);
+    if !(top > 0.0) {
+        return None;
+    }
+    let (mut m2, mut rank) = (0.0, 0usize);
+    for (j, &l) in eig.eigenvalues.iter().enumerate() {
+        if l > 1e-9 * top {
+            let proj = eig.eigenvectors.column(j).dot(d);
+            m2 += proj * proj / l;
+            rank += 1;
+        }
+    }
+    if rank == 0 {
+        return None;
+    }
+    let tail = crate::stats::chi2_sf(rank, m2);
+    Some(if tail > 0.0 { -tail.ln() } else { m2 })
+}
+
+/// The satellite of the highest [`separation_score`] among `(score, satellite)`, if the
+/// runner-up is at least [`AMBIGUITY`] times less likely; None otherwise.
+pub fn most_separated(mut scores: Vec<(f64, usize)>) -> Option<usize> {
+    scores.sort_by(|a, b| b.0.total_cmp(&a.0));
+    match scores.as_slice() {
+        [] => None,
+        [(_, s)] => Some(*s),
+        [(a, s), (b, _), ..] => (a - b >= AMBIGUITY.ln()).then_some(*s),
     }
 }
 

@@ -78,6 +78,16 @@ fn nees_run(spec: &ScenarioSpec, run: u64, noise: &LogNoise) -> Vec<(f64, f64)> 
     let sim = simulate_logs(&trajectory(), DURATION, noise, 11, run).unwrap();
     let mut src = LoggedSource::new(spec, sim.imu, &sim.gnss, Some(&sim.reference)).unwrap();
     src.reference.attitude = sim.attitude;
+    let rec = run_source(spec, &src, run);
+    nees_of(&rec)
+}
+
+/// Run `spec` over the source's recorded measurements (its faults injected), stream `run`.
+pub(crate) fn run_source(
+    spec: &ScenarioSpec,
+    src: &LoggedSource,
+    run: u64,
+) -> navfdi_core::record::RunRecord {
     let meas = src.measurements(spec);
     let streams = Streams {
         models: &src.models,
@@ -86,7 +96,11 @@ fn nees_run(spec: &ScenarioSpec, run: u64, noise: &LogNoise) -> Vec<(f64, f64)> 
         seed: 0,
         stream: run,
     };
-    let rec = run_architecture(spec, &streams, true, true, &Cancel::new()).unwrap();
+    run_architecture(spec, &streams, true, true, &Cancel::new()).unwrap()
+}
+
+/// The record's NEES at every epoch where it exists (time, value).
+pub(crate) fn nees_of(rec: &navfdi_core::record::RunRecord) -> Vec<(f64, f64)> {
     let c = NAV_COLUMNS.len();
     let j = NAV_COLUMNS.iter().position(|n| *n == "nees").unwrap();
     rec.t

@@ -5,15 +5,11 @@
 //! velocity and attitude, 9 dof, inside its χ² interval over a Monte-Carlo), and the same
 //! filter with a white-noise model of the same σ is not.
 
-use super::strapdown::{anees, trajectory};
-use navfdi_core::arch::run_architecture;
-use navfdi_core::cancel::Cancel;
+use super::strapdown::{anees, nees_of, run_source, trajectory};
 use navfdi_core::logs::LoggedSource;
-use navfdi_core::record::NAV_COLUMNS;
 use navfdi_core::sim::logs::{LogNoise, MOUNTING};
 use navfdi_core::sim::range_logs::simulate_range_logs;
 use navfdi_core::spec::{RangeStatesSpec, RangesSpec, ScenarioSpec};
-use navfdi_core::stream::Streams;
 
 const DURATION: f64 = 240.0;
 /// Pseudorange σ at zenith (m) and range-rate σ (m/s).
@@ -75,8 +71,9 @@ fn simulated_ranges(correlated: Option<RangeStatesSpec>) -> RangesSpec {
     r
 }
 
-/// Per run, the NEES at every epoch where it exists (time, value).
-fn nees_run(spec: &ScenarioSpec, truth: &RangesSpec, run: u64) -> Vec<(f64, f64)> {
+/// The prepared source of one simulated run's range logs (the truth's attitude kept for the
+/// NEES).
+fn source(spec: &ScenarioSpec, truth: &RangesSpec, run: u64) -> LoggedSource {
     let sim = simulate_range_logs(&trajectory(), DURATION, &noise(), truth, SIGMA, 5, run).unwrap();
     let mut src = LoggedSource::from_range_rows(
         spec,
@@ -90,23 +87,12 @@ fn nees_run(spec: &ScenarioSpec, truth: &RangesSpec, run: u64) -> Vec<(f64, f64)
     )
     .unwrap();
     src.reference.attitude = sim.attitude;
-    let meas = src.measurements(spec);
-    let streams = Streams {
-        models: &src.models,
-        meas: &meas,
-        reference: Some(&src.reference),
-        seed: 0,
-        stream: run,
-    };
-    let rec = run_architecture(spec, &streams, true, true, &Cancel::new()).unwrap();
-    let c = NAV_COLUMNS.len();
-    let j = NAV_COLUMNS.iter().position(|n| *n == "nees").unwrap();
-    rec.t
-        .iter()
-        .enumerate()
-        .map(|(k, &t)| (t, rec.nav[k * c + j]))
-        .filter(|(_, v)| v.is_finite())
-        .collect()
+    src
+}
+
+/// Per run, the NEES at every epoch where it exists (time, value).
+fn nees_run(spec: &ScenarioSpec, truth: &RangesSpec, run: u64) -> Vec<(f64, f64)> {
+    nees_of(&run_source(spec, &source(spec, truth, run), run))
 }
 
 /// Time-averaged ANEES and the share of epochs inside its 99 % interval over 20 runs of the
@@ -170,28 +156,7 @@ fn separation_excludes_the_faulty_satellite_on_simulated_logs() {
                 "kind": "step", "magnitude": 12.0, "start": 120.0, "end": 180.0, "satellite": name}]);
         }
         let spec = ScenarioSpec::from_json(&json.to_string()).unwrap();
-        let sim =
-            simulate_range_logs(&trajectory(), DURATION, &noise(), &truth, SIGMA, 5, 3).unwrap();
-        let src = LoggedSource::from_range_rows(
-            &spec,
-            sim.imu,
-            sim.times,
-            sim.rows,
-            sim.fixes,
-            sim.origin,
-            sim.nominal,
-            Some(&sim.reference),
-        )
-        .unwrap();
-        let meas = src.measurements(&spec);
-        let streams = Streams {
-            models: &src.models,
-            meas: &meas,
-            reference: Some(&src.reference),
-            seed: 0,
-            stream: 3,
-        };
-        run_architecture(&spec, &streams, true, true, &Cancel::new()).unwrap()
+        run_source(&spec, &source(&spec, &truth, 3), 3)
     };
     let rec = run(true);
     let sats = rec.sats.as_ref().unwrap();
