@@ -130,8 +130,8 @@ fn range_error_states_keep_the_tight_filter_consistent_under_correlated_errors()
 
 /// Placement `separation` on simulated IMU and range logs (white errors): a 12 m step on one
 /// satellite in view throughout is excluded by the bank — that satellite and no other — at
-/// nearly every epoch of the step, the filter stays within metres of the truth, and the same
-/// fault-free run excludes nothing.
+/// nearly every epoch of the step and readmitted after it, the filter stays within metres of
+/// the truth, and the same fault-free run excludes nothing.
 #[test]
 fn separation_excludes_the_faulty_satellite_on_simulated_logs() {
     let truth = simulated_ranges(None);
@@ -182,6 +182,14 @@ fn separation_excludes_the_faulty_satellite_on_simulated_logs() {
         "{name} excluded at {excluded_in_fault} of {in_fault} fault epochs"
     );
     assert_eq!(others, 0, "other satellites excluded");
+    // Back once it has agreed with the filter for 10 epochs (1 Hz) after the step.
+    let back = rec
+        .t
+        .iter()
+        .enumerate()
+        .filter(|(_, &t)| t >= 195.0)
+        .all(|(k, _)| !sats.excluded[k * s_count + g]);
+    assert!(back, "{name} still excluded 15 s after its step ended");
     let worst = rec
         .error
         .chunks(9)
