@@ -515,15 +515,7 @@ fn readmit(
             continue;
         }
         let agrees = (j..rows.res.len()).step_by(m).all(|i| {
-            let var = match gm {
-                Some(gm) => gm.row_variance(kf, &rows.h, i, r_diag[i], g, i < m),
-                None => {
-                    let hi = nalgebra::SVector::<f64, N_CLOCK>::from_iterator(
-                        rows.h.row(i).iter().copied(),
-                    );
-                    hi.dot(&(kf.p * hi)) + r_diag[i]
-                }
-            };
+            let var = rs::row_variance(kf, gm, &rows.h, i, r_diag[i], g, i < m);
             var > 0.0 && (rows.res[i] / var.sqrt()).abs() <= k
         });
         consistent[g] = if agrees { consistent[g] + 1 } else { 0 };

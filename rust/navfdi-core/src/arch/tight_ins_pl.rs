@@ -212,14 +212,7 @@ impl StrapdownBank {
                 continue;
             }
             let r = sigma[i] * sigma[i];
-            let var = match sub.gm.as_ref() {
-                Some(gm) => gm.row_variance(&sub.kf, &h, i, r, sats[i], i < ranges),
-                None => {
-                    let hi =
-                        nalgebra::SVector::<f64, N_CLOCK>::from_iterator(h.row(i).iter().copied());
-                    hi.dot(&(sub.kf.p * hi)) + r
-                }
-            };
+            let var = rs::row_variance(&sub.kf, sub.gm.as_ref(), &h, i, r, sats[i], i < ranges);
             let z = res[i] / var.max(f64::MIN_POSITIVE).sqrt();
             if sats[i] == g {
                 own_disagrees |= z.abs() > k;

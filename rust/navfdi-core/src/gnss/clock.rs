@@ -17,3 +17,18 @@ pub struct ClockSpec {
     /// Spectral density of the drift noise (m²/s³).
     pub drift_psd: f64,
 }
+
+impl ClockSpec {
+    /// The clock's exact discrete model over `dt` s: transition `[[1, dt], [0, 1]]` and process
+    /// noise `[[q_b dt + q_d dt³/3, q_d dt²/2], [q_d dt²/2, q_d dt]]` of (bias, drift).
+    pub fn discrete(&self, dt: f64) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
+        let (sb, sd) = (self.bias_psd, self.drift_psd);
+        (
+            [[1.0, dt], [0.0, 1.0]],
+            [
+                [sb * dt + sd * dt.powi(3) / 3.0, sd * dt * dt / 2.0],
+                [sd * dt * dt / 2.0, sd * dt],
+            ],
+        )
+    }
+}

@@ -36,12 +36,13 @@ impl PvFilter {
             q[(3 + a, a)] = accel_psd * dt * dt / 2.0;
             q[(3 + a, 3 + a)] = accel_psd * dt;
         }
-        phi[(6, 7)] = dt;
-        let (sb, sd) = (clock.bias_psd, clock.drift_psd);
-        q[(6, 6)] = sb * dt + sd * dt.powi(3) / 3.0;
-        q[(6, 7)] = sd * dt * dt / 2.0;
-        q[(7, 6)] = sd * dt * dt / 2.0;
-        q[(7, 7)] = sd * dt;
+        let (phi_clk, q_clk) = clock.discrete(dt);
+        for a in 0..2 {
+            for b in 0..2 {
+                phi[(6 + a, 6 + b)] = phi_clk[a][b];
+                q[(6 + a, 6 + b)] = q_clk[a][b];
+            }
+        }
         PvFilter { kf: None, phi, q }
     }
 

@@ -424,6 +424,13 @@ impl<const NS: usize> ErrorFilter<NS> {
         Ok(dx)
     }
 
+    /// `h_i P h_iᵀ` (the state's share of the innovation variance) of row `i` of `h` (rows of
+    /// `NS` columns).
+    pub fn row_variance(&self, h: &DMatrix<f64>, i: usize) -> f64 {
+        let hi = SVector::<f64, NS>::from_iterator(h.row(i).iter().copied());
+        hi.dot(&(self.p * hi))
+    }
+
     /// The update with the rows of `h` (m × NS) and residual `res` one at a time, for a
     /// diagonal noise `r_diag` (m variances): the updated covariance (not committed), the
     /// error-state estimate and the global statistic `λ = Σ νᵢ²/sᵢ` of the sequential

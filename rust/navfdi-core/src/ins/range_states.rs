@@ -220,9 +220,9 @@ impl RangeStates {
         g: usize,
         range: bool,
     ) -> f64 {
-        let hi = SVector::<f64, NX>::from_iterator(h.row(i).iter().copied());
-        let v = hi.dot(&(kf.p * hi));
+        let v = kf.row_variance(h, i);
         if range {
+            let hi = SVector::<f64, NX>::from_iterator(h.row(i).iter().copied());
             let cg = SVector::<f64, NX>::from_iterator(self.c.column(g).iter().copied());
             v + 2.0 * hi.dot(&cg) + self.pbb[(g, g)] + (1.0 - self.fraction) * r
         } else {
@@ -240,8 +240,7 @@ impl RangeStates {
         r: f64,
         g: usize,
     ) -> f64 {
-        let hi = SVector::<f64, NX>::from_iterator(h.row(i).iter().copied());
-        hi.dot(&(kf.p * hi)) + self.var[g] + (1.0 - self.fraction) * r
+        kf.row_variance(h, i) + self.var[g] + (1.0 - self.fraction) * r
     }
 
     /// The sequential update of the rows `h` with residuals `res` (corrected) and white-model
@@ -290,6 +289,24 @@ impl RangeStates {
         let dxn = SVector::<f64, NX>::from_iterator(dx.rows(0, NX).iter().copied());
         kf.feedback(s, &dxn);
         self.b -= dx.rows(NX, n);
+    }
+}
+
+/// The innovation variance of row `i` of `h` (white-model variance `r`; a pseudorange of
+/// satellite `g` when `range`) with or without range-error states `gm`
+/// ([`RangeStates::row_variance`], or `h_i P h_iᵀ + r`).
+pub fn row_variance(
+    kf: &ErrorFilter<NX>,
+    gm: Option<&RangeStates>,
+    h: &DMatrix<f64>,
+    i: usize,
+    r: f64,
+    g: usize,
+    range: bool,
+) -> f64 {
+    match gm {
+        Some(gm) => gm.row_variance(kf, h, i, r, g, range),
+        None => kf.row_variance(h, i) + r,
     }
 }
 

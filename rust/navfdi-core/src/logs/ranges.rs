@@ -265,7 +265,7 @@ impl LoggedSource {
             for n in asked {
                 if !names.contains(n) {
                     return Err(Error::Invalid(format!(
-                        "faults[{i}].satellite: {n:?} is never in view in the RINEX log (above the mask, with an ephemeris); in view: {}",
+                        "faults[{i}].satellite: {n:?} is never in view in the log (above the mask, with an ephemeris); in view: {}",
                         names.join(", ")
                     )));
                 }

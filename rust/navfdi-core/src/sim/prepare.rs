@@ -161,12 +161,8 @@ impl Prepared {
             }
             m
         };
-        let (sb, sd) = clock.map_or((0.0, 0.0), |c| (c.bias_psd, c.drift_psd));
-        let phi_clk = [[1.0, dt], [0.0, 1.0]];
-        let q_clk = [
-            [sb * dt + sd * dt.powi(3) / 3.0, sd * dt * dt / 2.0],
-            [sd * dt * dt / 2.0, sd * dt],
-        ];
+        let (phi_clk, q_clk) =
+            clock.map_or(([[1.0, dt], [0.0, 1.0]], [[0.0; 2]; 2]), |c| c.discrete(dt));
         let mut phi = Vec::with_capacity(epochs);
         let mut q = Vec::with_capacity(epochs);
         let mut q_factor = Vec::with_capacity(epochs);

@@ -118,14 +118,10 @@ pub fn simulate_range_logs(
     for (k, &t) in times.iter().enumerate() {
         if k > 0 {
             let dt = t - times[k - 1];
-            let q = Matrix2::new(
-                ck.bias_psd * dt + ck.drift_psd * dt.powi(3) / 3.0,
-                ck.drift_psd * dt * dt / 2.0,
-                ck.drift_psd * dt * dt / 2.0,
-                ck.drift_psd * dt,
-            );
+            let (phi, q) = ck.discrete(dt);
+            let (phi, q) = (Matrix2::from(phi).transpose(), Matrix2::from(q));
             let l = q.cholesky().map_or(Matrix2::zeros(), |c| c.l());
-            clock = Matrix2::new(1.0, dt, 0.0, 1.0) * clock + l * Vector2::new(normal(), normal());
+            clock = phi * clock + l * Vector2::new(normal(), normal());
         }
         gm.advance(t);
         let p = sim.reference.pos[k];
