@@ -16,6 +16,7 @@
 
 mod checks;
 mod hold;
+mod window;
 
 use super::common::make_detector;
 use super::inertial::{align, record_nav, BodyImu, Mechaniser};

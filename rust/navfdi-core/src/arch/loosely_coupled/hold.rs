@@ -563,7 +563,10 @@ mod scale_tests {
 /// of rate × interval, which a two-sided Page CUSUM on `e / σ_e` accumulates (reference
 /// [`CUSUM_K`], threshold [`CUSUM_H`]; `σ_e` robust, from the median |e| of the last
 /// [`SCALE_WINDOW`] values while moving, above [`MOVING`]; the velocity's latency estimated
-/// and removed). Needs a velocity channel from the same receiver.
+/// and removed). Beside the CUSUM, a window test ([`super::window::DriftWindow`]) compares the
+/// sums of `e` over 15–60 s with their own measured spread: a receiver's time-correlated
+/// error makes those sums saturate where the CUSUM's random-walk model lets them grow, so
+/// slow ramps stand out sooner. Needs a velocity channel from the same receiver.
 #[derive(Debug, Clone, Default)]
 pub struct ReceiverConsistency {
     prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
@@ -578,6 +581,9 @@ pub struct ReceiverConsistency {
     hist: [std::collections::VecDeque<f64>; 3],
     /// The last [`HISTORY`] raw `e` and velocity changes, for the velocity's latency.
     pairs: std::collections::VecDeque<(Vector3<f64>, Vector3<f64>)>,
+    /// The window drift test per component (slow ramps against the measured noise of the
+    /// receiver's window sums).
+    windows: [super::window::DriftWindow; 3],
 }
 /// Fixes over which the receiver's displacement is compared with its velocity
 /// ([`Consistency::window`]).
@@ -605,10 +611,10 @@ pub struct Consistency {
     pub e: Vector3<f64>,
     /// Its robust σ per component (m).
     pub sigma: Vector3<f64>,
-    /// The CUSUM flags a ramp per component.
+    /// The CUSUM or the window test flags a ramp per component.
     pub ramp: [bool; 3],
-    /// Where the CUSUM flags a ramp: the receiver's displacement against its velocity since
-    /// the ramp's estimated onset (m; the fault's size at this fix) and its variance (m²).
+    /// Where a ramp is flagged: the receiver's displacement against its velocity since the
+    /// ramp's estimated onset (m; the fault's size at this fix) and its variance (m²).
     pub onset: [Option<(f64, f64)>; 3],
     /// The sum of `e` over the previous fixes (up to [`HISTORY`], this one excluded, m): a
     /// jump `e` that cancels it returns the receiver to where its velocity says it is.
@@ -635,10 +641,13 @@ impl ReceiverConsistency {
             self.acc_up = [(0.0, 0); 3];
             self.acc_down = [(0.0, 0); 3];
             self.hist.iter_mut().for_each(|h| h.clear());
+            self.windows.iter_mut().for_each(|w| w.restart());
             // The latency (`pairs`) and σ_e are the receiver's: kept across the gap.
             return None;
         }
         if v.xy().norm() < MOVING || v0.xy().norm() < MOVING {
+            // Window sums across a stop would span unmeasured time.
+            self.windows.iter_mut().for_each(|w| w.restart());
             return None;
         }
         // A receiver's velocity lags its position by some latency τ (≈ 0.13 s on drive_0708's
@@ -701,16 +710,24 @@ impl ReceiverConsistency {
                 };
                 self.acc_up[j] = acc(self.acc_up[j], self.up[j]);
                 self.acc_down[j] = acc(self.acc_down[j], self.down[j]);
+                let window = self.windows[j].add(t, e[j], sigma[j]);
                 let fired = if self.up[j] > CUSUM_H {
-                    Some(self.acc_up[j])
+                    Some((
+                        self.acc_up[j].0,
+                        f64::from(self.acc_up[j].1) * sigma[j] * sigma[j],
+                    ))
                 } else if self.down[j] > CUSUM_H {
-                    Some(self.acc_down[j])
+                    Some((
+                        self.acc_down[j].0,
+                        f64::from(self.acc_down[j].1) * sigma[j] * sigma[j],
+                    ))
                 } else {
-                    None
+                    window
                 };
-                if let Some((sum, n)) = fired {
+                if let Some(drift) = fired {
                     ramp[j] = true;
-                    onset[j] = Some((sum, f64::from(n) * sigma[j] * sigma[j]));
+                    onset[j] = Some(drift);
+                    self.windows[j].hold_off();
                     self.up[j] = 0.0;
                     self.down[j] = 0.0;
                     self.acc_up[j] = (0.0, 0);

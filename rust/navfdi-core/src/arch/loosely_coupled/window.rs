@@ -1,0 +1,314 @@
+//! A slow drift of a receiver's position against its own velocity, tested over windows whose
+//! noise is measured on the receiver's own record.
+//!
+//! The receiver consistency `e` (its displacement between fixes minus its velocity times the
+//! interval, per component, m) sums over a window to the drift of its position error against
+//! the integrated velocity. A Page CUSUM on `e / σ_e` treats that sum as a random walk whose
+//! variance grows with the window; a receiver's position error is not one: meter-level fixes
+//! carry a time-correlated (Gauss-Markov) error whose window sums saturate at twice its
+//! variance, so a slow ramp (0.3–1 m/s on σ 2 m fixes) that the random-walk model hides for a
+//! minute stands out of the real window noise much sooner.
+//!
+//! [`DriftWindow`] keeps the cumulative sum `P` of `e` (each `e` clipped at 4 σ_e, so one
+//! jump — a step, which is the step test's — moves it by 4 σ_e at most) and measures its
+//! structure function `σ_L² = E (P(t) − P(t − L))²` robustly (the median of `|P(t) − P(t −
+//! L)|` over the last [`STRUCTURE_HISTORY`] s, `/0.6745`, non-decreasing in `L`) at the lags
+//! [`LAGS`] (seconds, so one set fits 1–10 Hz receivers). A drift is flagged at the first fix
+//! where `|P(t) − P(t − L)| > WINDOW_Z σ_L` for a lag `L`; the lag with the largest ratio is
+//! its estimated onset. A lag speaks once the record spans [`SPAN_PER_LAG`] × `L` seconds
+//! beyond it (a structure function from fewer windows is too unsure to test at
+//! [`WINDOW_Z`]).
+
+use std::collections::VecDeque;
+
+/// Window lengths (s) the drift is tested over.
+pub const LAGS: [f64; 4] = [15.0, 30.0, 45.0, 60.0];
+/// Threshold of the window test (σ_L): two-sided 5.7e-7 per lag and fix for Gaussian sums;
+/// set for heavy-tailed real errors and a structure function measured from few windows.
+pub const WINDOW_Z: f64 = 5.0;
+/// Seconds of record the structure function is measured over.
+pub const STRUCTURE_HISTORY: f64 = 600.0;
+/// A lag `L` is tested once the record spans `SPAN_PER_LAG · L` seconds beyond it.
+pub const SPAN_PER_LAG: f64 = 6.0;
+/// Seconds between two measurements of the structure function.
+pub const REMEASURE: f64 = 10.0;
+/// Differences per lag a measurement uses at most (evenly spread over the record).
+const MEASURE_PAIRS: usize = 600;
+
+/// The window drift test of one position component; see the module's description.
+#[derive(Debug, Clone)]
+pub struct DriftWindow {
+    /// Per fix: time (s) and the cumulative sums of clipped `e` and raw `e` (m), oldest
+    /// first; the first sums are 0.
+    cum: VecDeque<(f64, f64, f64)>,
+    /// The test's windows start at this time or later (after a flag; s).
+    start: f64,
+    /// σ_L per lag of [`LAGS`] (m; NaN until measured).
+    sigma: [f64; LAGS.len()],
+    /// Time of the last measurement of the structure function (s).
+    measured: f64,
+}
+
+impl Default for DriftWindow {
+    fn default() -> Self {
+        DriftWindow {
+            cum: VecDeque::new(),
+            start: f64::NEG_INFINITY,
+            sigma: [f64::NAN; LAGS.len()],
+            measured: f64::NEG_INFINITY,
+        }
+    }
+}
+
+/// The median of `v` (reordered); NaN when empty.
+fn median_of(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mid = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
+
+impl DriftWindow {
+    /// Forget the record (a gap, a stop: sums across it mean nothing); the measured σ_L is the
+    /// receiver's and is kept.
+    pub fn restart(&mut self) {
+        self.cum.clear();
+        self.start = f64::NEG_INFINITY;
+    }
+
+    /// Start the test's windows at the newest fix (another test flagged it).
+    pub fn hold_off(&mut self) {
+        if let Some(&(t, _, _)) = self.cum.back() {
+            self.start = t;
+        }
+    }
+
+    /// The measured σ_L per lag of [`LAGS`] (m; NaN where not yet measured).
+    #[cfg(test)]
+    pub fn sigma(&self) -> [f64; LAGS.len()] {
+        self.sigma
+    }
+
+    /// The index of the last fix at or before `t` (s), if any.
+    fn at_or_before(&self, t: f64) -> Option<usize> {
+        self.cum.partition_point(|x| x.0 <= t + 1e-6).checked_sub(1)
+    }
+
+    /// Add the consistency `e` (m) of the fix at `t` (s, increasing) with its robust σ_e (m);
+    /// returns the drift since its estimated onset (raw `e` summed over the flagging window,
+    /// m) and that window's variance σ_L² (m²) when the test flags one. A flag starts the
+    /// test's windows afresh.
+    pub fn add(&mut self, t: f64, e: f64, sigma_e: f64) -> Option<(f64, f64)> {
+        if !(t.is_finite() && e.is_finite() && sigma_e.is_finite() && sigma_e > 0.0) {
+            return None;
+        }
+        if self.cum.back().is_some_and(|b| t <= b.0) {
+            return None;
+        }
+        if self.cum.is_empty() {
+            // The record's origin: the previous fix (the one `e` is measured from).
+            self.cum.push_back((f64::NEG_INFINITY, 0.0, 0.0));
+        }
+        let &(_, c, r) = self.cum.back()?;
+        let clip = 4.0 * sigma_e;
+        self.cum.push_back((t, c + e.clamp(-clip, clip), r + e));
+        while self.cum.len() > 2 && t - self.cum[1].0 > STRUCTURE_HISTORY {
+            self.cum.pop_front();
+        }
+        if t - self.measured >= REMEASURE {
+            self.measured = t;
+            self.measure();
+        }
+        self.test()
+    }
+
+    /// Measure σ_L at every lag the record spans long enough; keep the previous value
+    /// elsewhere.
+    fn measure(&mut self) {
+        let Some(first) = self.cum.iter().map(|x| x.0).find(|t| t.is_finite()) else {
+            return;
+        };
+        let last = self.cum.back().map_or(first, |x| x.0);
+        let mut diffs = Vec::with_capacity(MEASURE_PAIRS);
+        let mut floor = 0.0_f64;
+        for (l, &lag) in LAGS.iter().enumerate() {
+            if last - first - lag >= SPAN_PER_LAG * lag {
+                diffs.clear();
+                let begin = self.cum.partition_point(|x| x.0 < first + lag - 1e-6);
+                let stride = ((self.cum.len() - begin) / MEASURE_PAIRS).max(1);
+                for i in (begin..self.cum.len()).step_by(stride) {
+                    if let Some(j) = self.at_or_before(self.cum[i].0 - lag) {
+                        if self.cum[j].0.is_finite() {
+                            diffs.push((self.cum[i].1 - self.cum[j].1).abs());
+                        }
+                    }
+                }
+                let s = median_of(&mut diffs) / 0.674_489_75;
+                if s.is_finite() && s > 0.0 {
+                    self.sigma[l] = s;
+                }
+            }
+            // Longer windows are no quieter than shorter ones.
+            if self.sigma[l].is_finite() {
+                self.sigma[l] = self.sigma[l].max(floor);
+                floor = self.sigma[l];
+            }
+        }
+    }
+
+    /// The test at the newest fix.
+    fn test(&mut self) -> Option<(f64, f64)> {
+        let (t, last_c, last_r) = *self.cum.back()?;
+        let mut best: Option<(f64, usize, usize)> = None;
+        for (l, &lag) in LAGS.iter().enumerate() {
+            let s = self.sigma[l];
+            let Some(j) = self.at_or_before(t - lag) else {
+                continue;
+            };
+            // The window begins at fix j, not before the last flag (the record's origin has
+            // no time: a window from it is shorter than the lag, tested conservatively).
+            if !(s.is_finite() && self.cum[j].0 >= self.start) {
+                continue;
+            }
+            let z = (last_c - self.cum[j].1).abs() / s;
+            if z > WINDOW_Z && best.is_none_or(|(bz, _, _)| z > bz) {
+                best = Some((z, l, j));
+            }
+        }
+        let (_, l, j) = best?;
+        self.start = t;
+        Some((last_r - self.cum[j].2, self.sigma[l] * self.sigma[l]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+
+    /// `e` of a receiver whose position error is Gauss-Markov (σ `sg`, τ `tau` s) plus
+    /// white `sw`, at 1 Hz, with a ramp of `rate` m/s from `from` s.
+    fn receiver_e(
+        seed: u64,
+        fixes: usize,
+        sg: f64,
+        tau: f64,
+        sw: f64,
+        rate: f64,
+        from: usize,
+    ) -> Vec<f64> {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let phi = (-1.0 / tau).exp();
+        let mut g = 0.0;
+        let mut prev = 0.0;
+        let mut out = Vec::with_capacity(fixes);
+        for k in 0..fixes {
+            let a: f64 = StandardNormal.sample(&mut rng);
+            let b: f64 = StandardNormal.sample(&mut rng);
+            g = phi * g + sg * (1.0 - phi * phi).sqrt() * a;
+            let ramp = if k >= from {
+                rate * (k - from) as f64
+            } else {
+                0.0
+            };
+            let p = g + sw * b + ramp;
+            if k > 0 {
+                out.push(p - prev);
+            }
+            prev = p;
+        }
+        out
+    }
+
+    fn sigma_e(e: &[f64]) -> f64 {
+        let mut a: Vec<f64> = e.iter().map(|x| x.abs()).collect();
+        median_of(&mut a) / 0.674_489_75
+    }
+
+    #[test]
+    fn gauss_markov_errors_are_quiet_and_their_structure_saturates() {
+        // σ 2 m, τ 30 s, 0.3 m white: 20 records of 600 s at 1 Hz, no flag; σ_45 near
+        // √(2·4·(1 − e^{−1.5}) + 2·0.09) = 2.60 m, below the random walk's √45 σ_e (0.58 of it).
+        let mut flags = 0;
+        let mut s45 = Vec::new();
+        for seed in 0..20 {
+            let e = receiver_e(seed, 600, 2.0, 30.0, 0.3, 0.0, usize::MAX);
+            let se = sigma_e(&e);
+            let mut w = DriftWindow::default();
+            flags += e
+                .iter()
+                .enumerate()
+                .filter(|&(k, &x)| w.add(k as f64, x, se).is_some())
+                .count();
+            s45.push(w.sigma()[2]);
+            assert!(
+                w.sigma()[2] < 0.75 * 45f64.sqrt() * se,
+                "{:?} {se}",
+                w.sigma()
+            );
+        }
+        assert_eq!(flags, 0);
+        let m = median_of(&mut s45);
+        assert!((m / 2.60 - 1.0).abs() < 0.25, "{m}");
+    }
+
+    #[test]
+    fn a_slow_ramp_is_flagged_with_its_size() {
+        // 0.5 m/s on σ 2 m Gauss-Markov fixes from 400 s: flagged within 40 s, the
+        // drift's size within 3σ_L of the ramp's over the flagging window — and a CUSUM at
+        // k 0.5 σ_e sees a drift of about 0.7 σ_e per fix for about a minute first.
+        let (mut delays, mut cusum_delays) = (Vec::new(), Vec::new());
+        for seed in 100..120 {
+            let e = receiver_e(seed, 560, 2.0, 30.0, 0.3, 0.5, 400);
+            let se = sigma_e(&e[..390]);
+            let mut w = DriftWindow::default();
+            let mut hit = None;
+            let (mut up, mut cusum_hit) = (0.0_f64, None);
+            for (k, &x) in e.iter().enumerate() {
+                if let Some((d, var)) = w.add(k as f64, x, se) {
+                    assert!(k + 1 >= 400, "seed {seed}: flag at {k} before the ramp");
+                    hit.get_or_insert((k + 1 - 400, d, var));
+                }
+                // The receiver consistency's CUSUM on the same e (one side).
+                up = (up + (x / se).clamp(-4.0, 4.0) - super::super::hold::CUSUM_K).max(0.0);
+                if up > super::super::hold::CUSUM_H && k + 1 >= 400 {
+                    cusum_hit.get_or_insert((k + 1 - 400) as f64);
+                }
+            }
+            let (delay, d, var) = hit.expect("flagged");
+            assert!(d > 0.0 && d.abs() > 3.0 * var.sqrt() - 1e-9, "{d} {var}");
+            delays.push(delay as f64);
+            cusum_delays.push(cusum_hit.unwrap_or(f64::INFINITY));
+        }
+        let med = median_of(&mut delays);
+        let cusum = median_of(&mut cusum_delays);
+        assert!(
+            med <= 40.0 && cusum >= med + 10.0,
+            "{delays:?} {cusum_delays:?}"
+        );
+    }
+
+    #[test]
+    fn one_jump_is_not_a_drift_and_restart_forgets_the_record() {
+        let mut e = receiver_e(7, 500, 2.0, 30.0, 0.3, 0.0, usize::MAX);
+        let se = sigma_e(&e);
+        e[450] += 20.0;
+        let mut w = DriftWindow::default();
+        assert!(e
+            .iter()
+            .enumerate()
+            .all(|(k, &x)| w.add(k as f64, x, se).is_none()));
+        let s = w.sigma();
+        w.restart();
+        assert_eq!(w.sigma(), s);
+        assert!(
+            w.add(600.0, 1e3, se).is_none(),
+            "one jump after a restart, clipped"
+        );
+        assert!(w.add(601.0, f64::NAN, se).is_none() && w.add(602.0, 1.0, f64::NAN).is_none());
+        assert!(w.add(599.5, 1.0, se).is_none(), "time goes forward");
+    }
+}
