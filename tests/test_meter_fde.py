@@ -83,6 +83,30 @@ def test_meter_level_steps_are_held_out_from_first_to_last_epoch(meter_dir: Path
     assert np.nanmax(_hor(run.runs["no_fde"])[win]) > 0.4 * size
 
 
+@pytest.mark.parametrize("onset", [200.0, 300.0, 420.0])
+def test_meter_level_slow_ramp_is_caught_by_the_window_test(meter_dir: Path, onset: float) -> None:
+    """A 0.8 m/s north ramp over 40 s on σ 2 m Gauss-Markov fixes (about 1.2 σ_e per fix: the
+    receiver's CUSUM needs 23-31 s here and lets 7-11 m in at two of these onsets): left out
+    within 25 s of its onset, the error during it within 0.4x the filter's without FDE, and
+    nothing left out more than 5 s after its end. The window test, which compares the
+    receiver's drift over 15-60 s with the spread of its own record, catches it first."""
+    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp",
+          "magnitude": "0.8 m/s", "start": f"{onset} s", "end": f"{onset + 40.0} s"}]
+    run = _meter(meter_dir, f)
+    x = run.runs["fde"]
+    t = x.t
+    sub = _gnss_pos(x)
+    tested = np.asarray(sub["dof"]) > 0
+    out = np.asarray(sub["reason"]) > 0
+    hits = t[tested & out & (t >= onset) & (t < onset + 40.0)]
+    assert hits.size and hits[0] - onset <= 25.0, hits[:3]
+    win = (t >= onset) & (t < onset + 40.0)
+    fde, nofde = np.nanmax(_hor(x)[win]), np.nanmax(_hor(run.runs["no_fde"])[win])
+    assert fde <= 0.4 * nofde, (fde, nofde)
+    late = t[tested & out & (t >= onset + 45.0)]
+    assert late.size == 0, late[:5]
+
+
 def test_meter_level_fault_free_run_excludes_little(meter_clean) -> None:
     """Fault-free meter-level fixes: no more than 1 % of the tested fixes left out, and FDE's
     accuracy within 5 % of the filter without it."""
