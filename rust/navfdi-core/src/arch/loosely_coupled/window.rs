@@ -11,13 +11,15 @@
 //!
 //! [`DriftWindow`] keeps the cumulative sum `P` of `e` (each `e` clipped at 4 σ_e, so one
 //! jump — a step, which is the step test's — moves it by 4 σ_e at most) and measures its
-//! structure function `σ_L² = E (P(t) − P(t − L))²` robustly (the median of `|P(t) − P(t −
-//! L)|` over the last [`STRUCTURE_HISTORY`] s, `/0.6745`, non-decreasing in `L`) at the lags
-//! [`LAGS`] (seconds, so one set fits 1–10 Hz receivers). A drift is flagged at the first fix
-//! where `|P(t) − P(t − L)| > WINDOW_Z σ_L` for a lag `L`; the lag with the largest ratio is
-//! its estimated onset. A lag speaks once the record spans [`SPAN_PER_LAG`] × `L` seconds
-//! beyond it (a structure function from fewer windows is too unsure to test at
-//! [`WINDOW_Z`]).
+//! structure function `σ_L² = E (P(t) − P(t − L))²` robustly: the median of `|P(t) − P(t −
+//! L)|` over the last [`POOL`] windows of each length (one a second, pooled across stops and
+//! gaps, so a drive that stops every minute is measured too), `/0.6745`, non-decreasing in
+//! `L`, at the lags [`LAGS`] (seconds, so one set fits 1–10 Hz receivers). A drift is flagged
+//! at the first fix where `|P(t) − P(t − L)| > WINDOW_Z σ_L` for a lag `L`; the lag with the
+//! largest ratio is its estimated onset. A lag speaks once [`SPAN_PER_LAG`] × `L` seconds of
+//! its windows are pooled (a structure function from fewer windows is too unsure to test at
+//! [`WINDOW_Z`]); after a stop, windows reaching back to it are tested against the lag's σ_L
+//! (shorter than `L`: conservatively).
 
 use std::collections::VecDeque;
 
@@ -26,23 +28,28 @@ pub const LAGS: [f64; 4] = [15.0, 30.0, 45.0, 60.0];
 /// Threshold of the window test (σ_L): two-sided 5.7e-7 per lag and fix for Gaussian sums;
 /// set for heavy-tailed real errors and a structure function measured from few windows.
 pub const WINDOW_Z: f64 = 5.0;
-/// Seconds of record the structure function is measured over.
-pub const STRUCTURE_HISTORY: f64 = 600.0;
-/// A lag `L` is tested once the record spans `SPAN_PER_LAG · L` seconds beyond it.
+/// Window sums kept per lag for the structure function: one a second at most, the last
+/// [`POOL`] of them (600 s of driving at 1 Hz), across stops and gaps.
+pub const POOL: usize = 600;
+/// A lag `L` is tested once its pool holds `SPAN_PER_LAG · L` seconds' worth of sums (a
+/// structure function from fewer windows is too unsure to test at [`WINDOW_Z`]).
 pub const SPAN_PER_LAG: f64 = 6.0;
 /// Seconds between two measurements of the structure function.
 pub const REMEASURE: f64 = 10.0;
-/// Differences per lag a measurement uses at most (evenly spread over the record).
-const MEASURE_PAIRS: usize = 600;
 
 /// The window drift test of one position component; see the module's description.
 #[derive(Debug, Clone)]
 pub struct DriftWindow {
-    /// Per fix: time (s) and the cumulative sums of clipped `e` and raw `e` (m), oldest
-    /// first; the first sums are 0.
+    /// Per fix since the last stop or gap, the last [`LAGS`]' longest at least: time (s) and
+    /// the cumulative sums of clipped `e` and raw `e` (m), oldest first; the first sums are 0.
     cum: VecDeque<(f64, f64, f64)>,
     /// The test's windows start at this time or later (after a flag; s).
     start: f64,
+    /// Per lag: `|ΣE|` of clipped `e` over past windows of that length (m), and the time of
+    /// the newest (s).
+    pool: [(VecDeque<f64>, f64); LAGS.len()],
+    /// Seconds a pooled sum stands for: the fix interval, one second at least.
+    spacing: f64,
     /// σ_L per lag of [`LAGS`] (m; NaN until measured).
     sigma: [f64; LAGS.len()],
     /// Time of the last measurement of the structure function (s).
@@ -54,6 +61,8 @@ impl Default for DriftWindow {
         DriftWindow {
             cum: VecDeque::new(),
             start: f64::NEG_INFINITY,
+            pool: std::array::from_fn(|_| (VecDeque::new(), f64::NEG_INFINITY)),
+            spacing: 1.0,
             sigma: [f64::NAN; LAGS.len()],
             measured: f64::NEG_INFINITY,
         }
@@ -71,8 +80,8 @@ fn median_of(v: &mut [f64]) -> f64 {
 }
 
 impl DriftWindow {
-    /// Forget the record (a gap, a stop: sums across it mean nothing); the measured σ_L is the
-    /// receiver's and is kept.
+    /// Forget the record (a gap, a stop: sums across it mean nothing); the pooled sums and
+    /// the measured σ_L are the receiver's and are kept.
     pub fn restart(&mut self) {
         self.cum.clear();
         self.start = f64::NEG_INFINITY;
@@ -111,12 +120,18 @@ impl DriftWindow {
             // The record's origin: the previous fix (the one `e` is measured from).
             self.cum.push_back((f64::NEG_INFINITY, 0.0, 0.0));
         }
-        let &(_, c, r) = self.cum.back()?;
+        let &(prev, c, r) = self.cum.back()?;
+        if prev.is_finite() {
+            self.spacing = (t - prev).max(1.0);
+        }
         let clip = 4.0 * sigma_e;
         self.cum.push_back((t, c + e.clamp(-clip, clip), r + e));
-        while self.cum.len() > 2 && t - self.cum[1].0 > STRUCTURE_HISTORY {
+        // Keep one fix at or before the longest lag.
+        let longest = LAGS[LAGS.len() - 1];
+        while self.cum.len() > 2 && self.cum[1].0 <= t - longest {
             self.cum.pop_front();
         }
+        self.pool_windows(t);
         if t - self.measured >= REMEASURE {
             self.measured = t;
             self.measure();
@@ -124,27 +139,40 @@ impl DriftWindow {
         self.test()
     }
 
-    /// Measure σ_L at every lag the record spans long enough; keep the previous value
-    /// elsewhere.
-    fn measure(&mut self) {
-        let Some(first) = self.cum.iter().map(|x| x.0).find(|t| t.is_finite()) else {
+    /// Pool the sums of the windows of each lag that end at the newest fix (one a second at
+    /// most), when the record holds their start.
+    fn pool_windows(&mut self, t: f64) {
+        let Some(&(_, last, _)) = self.cum.back() else {
             return;
         };
-        let last = self.cum.back().map_or(first, |x| x.0);
-        let mut diffs = Vec::with_capacity(MEASURE_PAIRS);
+        for (l, &lag) in LAGS.iter().enumerate() {
+            if t - self.pool[l].1 < 1.0 {
+                continue;
+            }
+            let Some(j) = self.at_or_before(t - lag) else {
+                continue;
+            };
+            if !self.cum[j].0.is_finite() {
+                continue;
+            }
+            let (pool, newest) = &mut self.pool[l];
+            if pool.len() == POOL {
+                pool.pop_front();
+            }
+            pool.push_back((last - self.cum[j].1).abs());
+            *newest = t;
+        }
+    }
+
+    /// Measure σ_L at every lag whose pool is full enough; keep the previous value elsewhere.
+    fn measure(&mut self) {
+        let mut diffs = Vec::with_capacity(POOL);
         let mut floor = 0.0_f64;
         for (l, &lag) in LAGS.iter().enumerate() {
-            if last - first - lag >= SPAN_PER_LAG * lag {
+            let pool = &self.pool[l].0;
+            if pool.len() as f64 * self.spacing >= SPAN_PER_LAG * lag {
                 diffs.clear();
-                let begin = self.cum.partition_point(|x| x.0 < first + lag - 1e-6);
-                let stride = ((self.cum.len() - begin) / MEASURE_PAIRS).max(1);
-                for i in (begin..self.cum.len()).step_by(stride) {
-                    if let Some(j) = self.at_or_before(self.cum[i].0 - lag) {
-                        if self.cum[j].0.is_finite() {
-                            diffs.push((self.cum[i].1 - self.cum[j].1).abs());
-                        }
-                    }
-                }
+                diffs.extend(pool.iter().copied());
                 let s = median_of(&mut diffs) / 0.674_489_75;
                 if s.is_finite() && s > 0.0 {
                     self.sigma[l] = s;
@@ -310,5 +338,30 @@ mod tests {
         );
         assert!(w.add(601.0, f64::NAN, se).is_none() && w.add(602.0, 1.0, f64::NAN).is_none());
         assert!(w.add(599.5, 1.0, se).is_none(), "time goes forward");
+    }
+
+    #[test]
+    fn a_drive_that_stops_every_minute_is_measured_and_tested() {
+        // The record restarts every 50 s (a stop): the pools span the stops, σ_15 and σ_30
+        // are measured, and a 1 m/s ramp within one 50 s stretch is flagged.
+        let e = receiver_e(11, 900, 2.0, 30.0, 0.3, 1.0, 810);
+        let se = sigma_e(&e[..800]);
+        let mut w = DriftWindow::default();
+        let mut hit = None;
+        for (k, &x) in e.iter().enumerate() {
+            if k % 50 == 0 {
+                w.restart();
+            }
+            if w.add(k as f64, x, se).is_some() {
+                assert!(k + 1 >= 810, "flag at {k} before the ramp");
+                hit.get_or_insert(k + 1 - 810);
+            }
+        }
+        assert!(
+            w.sigma()[0].is_finite() && w.sigma()[1].is_finite(),
+            "{:?}",
+            w.sigma()
+        );
+        assert!(hit.is_some_and(|d| d <= 30), "{hit:?}");
     }
 }
