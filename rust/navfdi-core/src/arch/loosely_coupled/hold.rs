@@ -207,12 +207,25 @@ impl PositionHold {
         // a return. (A quarter of the jump instead of half lets more meter-level ramp ends
         // through, but takes 10 m steps on σ 2 m fixes for returns when the Gauss-Markov error
         // has drifted the other way over the window.)
+        // Or a slow drift the filter partly followed ended: before the jump the receiver had
+        // drifted beyond [`RETURN_Z`] σ of a window test's sums, the fix was off the INS
+        // prediction that way (|w| > 2: the INS lagging behind it), and the jump goes back
+        // across the INS — a fault's onset has the INS on the fix a moment before.
         let returned = |j: usize| {
             recv.is_some_and(|c| {
                 let (w, e) = (c.window[j], c.e[j]);
-                e.abs() > RECEIVER_JUMP * c.sigma[j]
-                    && e.abs() > c.sigma[j] * (HISTORY as f64).sqrt()
-                    && (w + e).abs() <= w.abs() - 0.5 * e.abs()
+                let window_back = e.abs() > c.sigma[j] * (HISTORY as f64).sqrt()
+                    && (w + e).abs() <= w.abs() - 0.5 * e.abs();
+                // The previous fix's innovation, fix − INS: the side it drifted to.
+                let lagging = self.prev.is_some_and(|(pd, ps)| {
+                    let off = -pd[j];
+                    off * e < 0.0
+                        && off * off > 4.0 * ps[j]
+                        && c.excursion[j]
+                            .iter()
+                            .any(|&(x, z)| z > RETURN_Z && x * off > 0.0)
+                });
+                e.abs() > RECEIVER_JUMP * c.sigma[j] && (window_back || lagging)
             })
         };
         // The fix has left the INS prediction the way the receiver's inconsistency `b` says
@@ -593,6 +606,10 @@ pub const HISTORY: usize = 120;
 /// by the INS, is a step ([`PositionHold::decide`]).
 pub const RECEIVER_JUMP: f64 = 8.0;
 
+/// A receiver drift beyond this many σ of a window test's sums, with the fix off the INS the
+/// same way, that a jump goes back across is the end of a slow fault ([`PositionHold::decide`]).
+pub const RETURN_Z: f64 = 3.0;
+
 /// Fixes (while moving) before the receiver's consistency speaks: its σ_e is their median.
 pub const RECEIVER_MIN: usize = 10;
 /// CUSUM reference value (σ_e per fix).
@@ -619,6 +636,10 @@ pub struct Consistency {
     /// The sum of `e` over the previous fixes (up to [`HISTORY`], this one excluded, m): a
     /// jump `e` that cancels it returns the receiver to where its velocity says it is.
     pub window: Vector3<f64>,
+    /// Per component, the receiver's drift before this fix over each of the window test's
+    /// lengths (m) and its size in σ of that window
+    /// ([`super::window::DriftWindow::excursions`]; zeros where not measured).
+    pub excursion: [[(f64, f64); super::window::LAGS.len()]; 3],
 }
 
 impl ReceiverConsistency {
@@ -670,8 +691,10 @@ impl ReceiverConsistency {
         let mut ramp = [false; 3];
         let mut onset = [None; 3];
         let mut window = Vector3::zeros();
+        let mut excursion = [[(0.0, 0.0); super::window::LAGS.len()]; 3];
         for j in 0..3 {
             window[j] = self.hist[j].iter().sum();
+            excursion[j] = self.windows[j].excursions();
             if self.hist[j].len() == HISTORY {
                 self.hist[j].pop_front();
             }
@@ -748,6 +771,7 @@ impl ReceiverConsistency {
             ramp,
             onset,
             window,
+            excursion,
         })
     }
 }

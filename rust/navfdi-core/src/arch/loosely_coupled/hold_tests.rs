@@ -17,6 +17,7 @@ fn north(e: f64, sigma: f64, window: f64) -> Consistency {
         ramp: [false; 3],
         onset: [None; 3],
         window: Vector3::new(0.0, window, 0.0),
+        excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
     }
 }
 
@@ -52,6 +53,7 @@ fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, 
         ramp: [false, sum != 0.0, false],
         onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
         window: Vector3::zeros(),
+        excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
     });
     h.decide(
         t,
@@ -131,6 +133,40 @@ fn a_return_is_used_until_the_ins_agrees() {
     // A new jump of the receiver while returning: tested as any fix.
     assert_eq!(go(&mut h, 3.0, 20.0, true, mk(15.0, -8.0)), Use::Out(TEST));
     assert_eq!(h.comps[1], Comp::Normal);
+}
+
+/// The end of a slow ramp the filter partly followed, traced on a σ 2 m Gauss-Markov drive
+/// (0.45 m/s from 300 s, not flagged): the fix 6.2 m ahead of the INS, the receiver 8.8 m
+/// (3.6 σ of its 30 s window sums) drifted that way, then a jump of −17.5 m back across the
+/// INS — a return (before, held as an 11.6 m step for the rest of the fault's window). The
+/// same jump with the INS on the fix a moment before, or without a significant drift, is a
+/// step.
+#[test]
+fn a_jump_back_across_a_lagging_ins_after_a_drift_is_a_return() {
+    let drifted = |e: f64| {
+        let mut c = north(e, 0.74, 9.8);
+        c.excursion[1][1] = (8.8, 3.6);
+        c
+    };
+    let run = |d_before: f64, c: Consistency| {
+        let mut h = PositionHold::default();
+        assert_eq!(
+            decide_north(&mut h, 339.0, d_before, 9.36, false, &north(1.1, 0.74, 9.8)),
+            Use::Raw
+        );
+        let u = decide_north(&mut h, 340.0, 11.57, 9.36, false, &c);
+        (u, h.comps[1])
+    };
+    let (u, comp) = run(-6.16, drifted(-17.46));
+    assert_eq!((u, comp), (Use::Raw, Comp::Return { fixes: 1 }));
+    // The INS on the fix before the jump: a step's onset.
+    let (_, comp) = run(-0.5, drifted(-17.46));
+    assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
+    // No significant drift of the receiver before it (2.5 σ): a step.
+    let mut weak = drifted(-17.46);
+    weak.excursion[1][1] = (6.0, 2.5);
+    let (_, comp) = run(-6.16, weak);
+    assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
 }
 
 /// A ramp's first increment on RTK fixes (σ_e 4 cm) beside a window of latency residuals

@@ -139,6 +139,23 @@ impl DriftWindow {
         self.test()
     }
 
+    /// The receiver's drift up to its latest fix over each window of [`LAGS`] (from a stop or
+    /// gap on: shorter, against the lag's σ_L): the raw drift (m) and its size in σ_L of
+    /// clipped `e`; zeros where the lag is not measured or the record is empty.
+    pub fn excursions(&self) -> [(f64, f64); LAGS.len()] {
+        let mut out = [(0.0, 0.0); LAGS.len()];
+        let Some(&(t, last_c, last_r)) = self.cum.back() else {
+            return out;
+        };
+        for (l, &lag) in LAGS.iter().enumerate() {
+            let s = self.sigma[l];
+            if let (Some(j), true) = (self.at_or_before(t - lag), s.is_finite()) {
+                out[l] = (last_r - self.cum[j].2, (last_c - self.cum[j].1).abs() / s);
+            }
+        }
+        out
+    }
+
     /// Pool the sums of the windows of each lag that end at the newest fix (one a second at
     /// most), when the record holds their start.
     fn pool_windows(&mut self, t: f64) {
