@@ -107,6 +107,26 @@ def test_meter_level_slow_ramp_is_caught_by_the_window_test(meter_dir: Path, ons
     assert late.size == 0, late[:5]
 
 
+def test_the_end_of_a_followed_slow_ramp_is_not_held_as_a_step(meter_dir: Path) -> None:
+    """A 0.45 m/s north ramp over 40 s from 300 s on σ 2 m Gauss-Markov fixes, too slow to be
+    flagged, which the filter partly follows (about 9 m): at its end the receiver jumps back
+    across the INS prediction. That is the fault ending, not a new step of the INS's own
+    error: nothing is left out after the end, and from 10 s after it the error is the filter's
+    without FDE (before, 11.6 m was held as a step for 20 s while that filter recovered)."""
+    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp",
+          "magnitude": "0.45 m/s", "start": "300 s", "end": "340 s"}]
+    run = _meter(meter_dir, f)
+    x = run.runs["fde"]
+    t = x.t
+    sub = _gnss_pos(x)
+    tested = np.asarray(sub["dof"]) > 0
+    out = np.asarray(sub["reason"]) > 0
+    assert not (tested & out & (t >= 340.0) & (t < 400.0)).any(), t[tested & out & (t >= 340.0)][:5]
+    after = (t >= 350.0) & (t < 400.0)
+    fde, nofde = _hor(x)[after], _hor(run.runs["no_fde"])[after]
+    assert np.nanmax(np.abs(fde - nofde)) < 0.5, np.nanmax(np.abs(fde - nofde))
+
+
 def test_meter_level_fault_free_run_excludes_little(meter_clean) -> None:
     """Fault-free meter-level fixes: no more than 1 % of the tested fixes left out, and FDE's
     accuracy within 5 % of the filter without it."""
