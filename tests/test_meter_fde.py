@@ -83,6 +83,16 @@ def test_meter_level_steps_are_held_out_from_first_to_last_epoch(meter_dir: Path
     assert np.nanmax(_hor(run.runs["no_fde"])[win]) > 0.4 * size
 
 
+def _north_ramp(folder: Path, rate: float, start: float, end: float) -> tuple[navfdi.ScenarioRun, np.ndarray, np.ndarray, np.ndarray]:
+    """The meter-level drive with a north ramp of `rate` m/s over [start, end) s: the run, the
+    FDE variant's epoch times (s), its tested and its left-out GNSS position epochs."""
+    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp",
+          "magnitude": f"{rate} m/s", "start": f"{start} s", "end": f"{end} s"}]
+    run = _meter(folder, f)
+    sub = _gnss_pos(run.runs["fde"])
+    return run, run.runs["fde"].t, np.asarray(sub["dof"]) > 0, np.asarray(sub["reason"]) > 0
+
+
 @pytest.mark.parametrize("onset", [200.0, 300.0, 420.0])
 def test_meter_level_slow_ramp_is_caught_by_the_window_test(meter_dir: Path, onset: float) -> None:
     """A 0.8 m/s north ramp over 40 s on σ 2 m Gauss-Markov fixes (about 1.2 σ_e per fix: the
@@ -90,14 +100,8 @@ def test_meter_level_slow_ramp_is_caught_by_the_window_test(meter_dir: Path, ons
     within 25 s of its onset, the error during it within 0.4x the filter's without FDE, and
     nothing left out more than 5 s after its end. The window test, which compares the
     receiver's drift over 15-60 s with the spread of its own record, catches it first."""
-    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp",
-          "magnitude": "0.8 m/s", "start": f"{onset} s", "end": f"{onset + 40.0} s"}]
-    run = _meter(meter_dir, f)
+    run, t, tested, out = _north_ramp(meter_dir, 0.8, onset, onset + 40.0)
     x = run.runs["fde"]
-    t = x.t
-    sub = _gnss_pos(x)
-    tested = np.asarray(sub["dof"]) > 0
-    out = np.asarray(sub["reason"]) > 0
     hits = t[tested & out & (t >= onset) & (t < onset + 40.0)]
     assert hits.size and hits[0] - onset <= 25.0, hits[:3]
     win = (t >= onset) & (t < onset + 40.0)
@@ -113,14 +117,8 @@ def test_the_end_of_a_followed_slow_ramp_is_not_held_as_a_step(meter_dir: Path) 
     across the INS prediction. That is the fault ending, not a new step of the INS's own
     error: nothing is left out after the end, and from 10 s after it the error is the filter's
     without FDE (before, 11.6 m was held as a step for 20 s while that filter recovered)."""
-    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp",
-          "magnitude": "0.45 m/s", "start": "300 s", "end": "340 s"}]
-    run = _meter(meter_dir, f)
+    run, t, tested, out = _north_ramp(meter_dir, 0.45, 300.0, 340.0)
     x = run.runs["fde"]
-    t = x.t
-    sub = _gnss_pos(x)
-    tested = np.asarray(sub["dof"]) > 0
-    out = np.asarray(sub["reason"]) > 0
     assert not (tested & out & (t >= 340.0) & (t < 400.0)).any(), t[tested & out & (t >= 340.0)][:5]
     after = (t >= 350.0) & (t < 400.0)
     fde, nofde = _hor(x)[after], _hor(run.runs["no_fde"])[after]
