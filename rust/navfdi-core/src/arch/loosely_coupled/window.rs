@@ -143,14 +143,25 @@ impl DriftWindow {
     /// gap on: shorter, against the lag's σ_L): the raw drift (m) and its size in σ_L of
     /// clipped `e`; zeros where the lag is not measured or the record is empty.
     pub fn excursions(&self) -> [(f64, f64); LAGS.len()] {
-        let mut out = [(0.0, 0.0); LAGS.len()];
+        self.drifts(f64::NEG_INFINITY)
+            .map(|d| d.unwrap_or((0.0, 0.0)))
+    }
+
+    /// Per lag of [`LAGS`] whose σ_L is measured, the window up to the newest fix that begins
+    /// at `since` (s) or later: the raw drift over it (m) and its size
+    /// in σ_L of clipped `e` (the record's origin has no time: a window from it is shorter
+    /// than the lag, sized conservatively).
+    fn drifts(&self, since: f64) -> [Option<(f64, f64)>; LAGS.len()] {
+        let mut out = [None; LAGS.len()];
         let Some(&(t, last_c, last_r)) = self.cum.back() else {
             return out;
         };
         for (l, &lag) in LAGS.iter().enumerate() {
             let s = self.sigma[l];
-            if let (Some(j), true) = (self.at_or_before(t - lag), s.is_finite()) {
-                out[l] = (last_r - self.cum[j].2, (last_c - self.cum[j].1).abs() / s);
+            if let Some(j) = self.at_or_before(t - lag) {
+                if s.is_finite() && self.cum[j].0 >= since {
+                    out[l] = Some((last_r - self.cum[j].2, (last_c - self.cum[j].1).abs() / s));
+                }
             }
         }
         out
@@ -203,28 +214,20 @@ impl DriftWindow {
         }
     }
 
-    /// The test at the newest fix.
+    /// The test at the newest fix: the windows since the last flag, the largest beyond
+    /// [`WINDOW_Z`].
     fn test(&mut self) -> Option<(f64, f64)> {
-        let (t, last_c, last_r) = *self.cum.back()?;
-        let mut best: Option<(f64, usize, usize)> = None;
-        for (l, &lag) in LAGS.iter().enumerate() {
-            let s = self.sigma[l];
-            let Some(j) = self.at_or_before(t - lag) else {
-                continue;
-            };
-            // The window begins at fix j, not before the last flag (the record's origin has
-            // no time: a window from it is shorter than the lag, tested conservatively).
-            if !(s.is_finite() && self.cum[j].0 >= self.start) {
-                continue;
-            }
-            let z = (last_c - self.cum[j].1).abs() / s;
-            if z > WINDOW_Z && best.is_none_or(|(bz, _, _)| z > bz) {
-                best = Some((z, l, j));
-            }
-        }
-        let (_, l, j) = best?;
+        let t = self.cum.back()?.0;
+        let (l, x) = self
+            .drifts(self.start)
+            .iter()
+            .enumerate()
+            .filter_map(|(l, d)| d.map(|(x, z)| (l, x, z)))
+            .filter(|&(_, _, z)| z > WINDOW_Z)
+            .max_by(|a, b| a.2.total_cmp(&b.2))
+            .map(|(l, x, _)| (l, x))?;
         self.start = t;
-        Some((last_r - self.cum[j].2, self.sigma[l] * self.sigma[l]))
+        Some((x, self.sigma[l] * self.sigma[l]))
     }
 }
 
