@@ -344,6 +344,8 @@ class GnssSolution:
 
             out["integrity"] = integrity_summary(self)
         out["noise_scale"] = self.config.get("noise_scale", 1.0)
+        if "noise_scale_auto" in self.config:
+            out["noise_scale_auto"] = dict(self.config["noise_scale_auto"])
         out["test"], out["power"] = self.config.get("test", "global"), self.config.get("power", 0.8)
         out["k0_median"] = float(np.nanmedian(sol["k0"])) if "k0" in sol and sol["k0"].notna().any() else math.nan
         out["alpha0_median"] = float(np.nanmedian(sol["alpha0"])) if "alpha0" in sol and sol["alpha0"].notna().any() else math.nan
@@ -449,7 +451,11 @@ class GnssSolution:
             f"(alpha0 {s['alpha0_median']:.1e} per satellite; medians); minimal detectable bias median {s['mdb_median']:.2f} m; "
             f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}; 1 when the sigma fit)")
         if self.config.get("noise_scale_estimated"):
-            lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto)")
+            a = self.config.get("noise_scale_auto", {})
+            detail = ""
+            if a:
+                detail = f": {a['method']} (whole file {a['whole_file']:.3f}, with the faults excluded {a['faults_excluded']:.3f} after {a['iterations']} solves)"
+            lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto){detail}")
         elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
             lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto') estimates a sigma factor from the file")
         for f in s["faults"]:
@@ -531,6 +537,53 @@ def estimate_noise_scale(solution: pd.DataFrame) -> float:
     t = solution.loc[ok, "first_statistic"].to_numpy(float)
     q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "first_dof"]])
     return float(np.sqrt(np.quantile(t / q, 0.9)))
+
+
+def _final_statistic_ratio(solution: pd.DataFrame) -> float:
+    """√ of the 90th percentile of ``statistic / χ²₀.₉(dof)`` over the epochs tested after
+    their exclusions (NaN with fewer than 20)."""
+    ok = (solution["dof"] > 0) & np.isfinite(solution["statistic"])
+    if ok.sum() < 20:
+        return math.nan
+    t = solution.loc[ok, "statistic"].to_numpy(float)
+    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "dof"]])
+    return float(np.sqrt(np.quantile(t / q, 0.9)))
+
+
+#: ``noise_scale="auto"`` takes the factor found with the faults excluded when the whole
+#: file's factor is more than this many times larger (see :func:`gnss_solve`).
+AUTO_NOISE_CONTAMINATION_RATIO = 2.0
+
+
+def _auto_noise_scale(obs: str | os.PathLike[str], nav: str | os.PathLike[str], common: dict[str, Any]) -> dict[str, Any]:
+    """``noise_scale="auto"``: the whole file's factor, and the factor found with the faults
+    excluded (a fixed point climbed from below), and which one is used. See
+    :func:`gnss_solve`."""
+    first = gnss_solve(obs, nav, exclude=False, **common)
+    whole = estimate_noise_scale(first.solution)
+    w = first.satellites["w"].to_numpy(float)
+    w = w[np.isfinite(w)]
+    # Start below both fixed points: the residuals' median absolute w (robust to faulty
+    # satellites unless the least-squares fit smears several over every residual), and never
+    # above the σ model as given.
+    s = min(1.4826 * float(np.median(np.abs(w))), 1.0) if w.size else 1.0
+    s = max(s, 1e-3)
+    robust, iterations = math.nan, 0
+    for iterations in range(1, 31):
+        r = _final_statistic_ratio(gnss_solve(obs, nav, exclude=True, noise_scale=s, **common).solution)
+        if not math.isfinite(r) or r <= 0:
+            break
+        s *= r
+        if abs(r - 1.0) < 0.01:
+            robust = s
+            break
+    if math.isfinite(robust) and whole > AUTO_NOISE_CONTAMINATION_RATIO * robust:
+        method = "faults excluded"
+        scale = robust
+    else:
+        method = "whole file"
+        scale = whole
+    return {"scale": scale, "whole_file": whole, "faults_excluded": robust, "iterations": iterations, "method": method}
 
 
 def gnss_solve(
@@ -617,10 +670,19 @@ def gnss_solve(
         Epochs solved per call into Rust (progress granularity).
     noise_scale : float or "auto"
         Factor on every system's σ (on top of ``noise_factors``). ``"auto"`` estimates it from
-        the file: a first pass without exclusion and without the injected faults, then the
-        90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global statistic against its
-        90 % quantile; 1 when the model fits, robust to up to 10 % faulty epochs) gives the
-        factor's square; the run is then solved with it (``config["noise_scale"]``).
+        the file, without the injected faults. The *whole file's* factor: a pass without
+        exclusion, then the 90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global
+        statistic against its 90 % quantile; 1 when the model fits) gives the factor's square.
+        It holds α on a receiver whose residuals are heavy-tailed but drowns real faults when
+        more than about 10 % of the epochs carry one (multipath on a phone). The factor *with
+        the faults excluded*: the same percentile of the statistic left after FDE's exclusions,
+        iterated (solve with the factor, rescale by the percentile) from below — the smaller of
+        the residuals' median-absolute-w scale and 1 — until it changes by < 1 %. The whole
+        file's factor is used unless it is more than ``AUTO_NOISE_CONTAMINATION_RATIO`` (2)
+        times the other (then the file's statistic is set by its faults, not by its noise:
+        on the bundled receivers the two differ by ≤ 1.3×). The run is then solved with it;
+        ``config["noise_scale"]`` holds the factor, ``config["noise_scale_auto"]`` both
+        estimates, the solves taken and the one used.
     doppler_noise : (a, b)
         Pseudorange-rate noise (m/s) of the Doppler velocity, ``σ² = a² + b²/sin² el``.
     test : str
@@ -657,10 +719,10 @@ def gnss_solve(
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
         common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
-        first = gnss_solve(obs, nav, exclude=False, **common)
-        scale = estimate_noise_scale(first.solution)
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=scale, **common)
+        auto = _auto_noise_scale(obs, nav, common)
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], **common)
         out.config["noise_scale_estimated"] = True
+        out.config["noise_scale_auto"] = auto
         return out
     if isinstance(noise_scale, bool) or not (isinstance(noise_scale, (int, float)) and 0 < noise_scale < 1e6):
         raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
