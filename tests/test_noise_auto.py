@@ -10,7 +10,7 @@ import pytest
 
 import navfdi
 from navfdi.cli import main
-from navfdi.gnss import estimate_noise_scale
+from navfdi._gnss_noise import AUTO_NOISE_CONTAMINATION_RATIO, estimate_noise_scale
 
 PKG = Path(navfdi.__file__).parent / "data" / "walk_0827"
 OBS, NAV = PKG / "gnss_1730.obs.gz", str(PKG / "gnss_1730.nav")
@@ -43,7 +43,7 @@ def test_auto_keeps_the_whole_file_factor_on_a_clean_receiver(weighting: str) ->
     assert a["scale"] == auto.config["noise_scale"] == estimate_noise_scale(plain.solution)
     # The iteration from below lands under the whole file's factor (heavier tails than a
     # Gaussian), within the ratio.
-    assert a["faults_excluded"] < a["whole_file"] <= navfdi.gnss.AUTO_NOISE_CONTAMINATION_RATIO * a["faults_excluded"]
+    assert a["faults_excluded"] < a["whole_file"] <= AUTO_NOISE_CONTAMINATION_RATIO * a["faults_excluded"]
     assert auto.summary()["false_exclusion_rate"] <= 0.02
 
 

@@ -28,6 +28,8 @@ import numpy as np
 
 from navfdi import _core, _json
 from navfdi._gnss_geometry import enu_sigma
+from navfdi._gnss_noise import auto_noise_scale
+from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
 if TYPE_CHECKING:
@@ -525,67 +527,6 @@ def _json_default(o: Any) -> Any:
     return str(o)
 
 
-def estimate_noise_scale(solution: pd.DataFrame) -> float:
-    """The σ factor that makes the global test fit a file (see :func:`gnss_solve`'s
-    ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
-    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs."""
-    import pandas as pd
-
-    ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
-    if ok.sum() < 20:
-        raise ValueError(f"noise_scale='auto': {int(ok.sum())} epochs could be tested; at least 20 are needed to estimate the noise")
-    t = solution.loc[ok, "first_statistic"].to_numpy(float)
-    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "first_dof"]])
-    return float(np.sqrt(np.quantile(t / q, 0.9)))
-
-
-def _final_statistic_ratio(solution: pd.DataFrame) -> float:
-    """√ of the 90th percentile of ``statistic / χ²₀.₉(dof)`` over the epochs tested after
-    their exclusions (NaN with fewer than 20)."""
-    ok = (solution["dof"] > 0) & np.isfinite(solution["statistic"])
-    if ok.sum() < 20:
-        return math.nan
-    t = solution.loc[ok, "statistic"].to_numpy(float)
-    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "dof"]])
-    return float(np.sqrt(np.quantile(t / q, 0.9)))
-
-
-#: ``noise_scale="auto"`` takes the factor found with the faults excluded when the whole
-#: file's factor is more than this many times larger (see :func:`gnss_solve`).
-AUTO_NOISE_CONTAMINATION_RATIO = 2.0
-
-
-def _auto_noise_scale(obs: str | os.PathLike[str], nav: str | os.PathLike[str], common: dict[str, Any]) -> dict[str, Any]:
-    """``noise_scale="auto"``: the whole file's factor, and the factor found with the faults
-    excluded (a fixed point climbed from below), and which one is used. See
-    :func:`gnss_solve`."""
-    first = gnss_solve(obs, nav, exclude=False, **common)
-    whole = estimate_noise_scale(first.solution)
-    w = first.satellites["w"].to_numpy(float)
-    w = w[np.isfinite(w)]
-    # Start below both fixed points: the residuals' median absolute w (robust to faulty
-    # satellites unless the least-squares fit smears several over every residual), and never
-    # above the σ model as given.
-    s = min(1.4826 * float(np.median(np.abs(w))), 1.0) if w.size else 1.0
-    s = max(s, 1e-3)
-    robust, iterations = math.nan, 0
-    for iterations in range(1, 31):
-        r = _final_statistic_ratio(gnss_solve(obs, nav, exclude=True, noise_scale=s, **common).solution)
-        if not math.isfinite(r) or r <= 0:
-            break
-        s *= r
-        if abs(r - 1.0) < 0.01:
-            robust = s
-            break
-    if math.isfinite(robust) and whole > AUTO_NOISE_CONTAMINATION_RATIO * robust:
-        method = "faults excluded"
-        scale = robust
-    else:
-        method = "whole file"
-        scale = whole
-    return {"scale": scale, "whole_file": whole, "faults_excluded": robust, "iterations": iterations, "method": method}
-
-
 def gnss_solve(
     obs: str | os.PathLike[str],
     nav: str | os.PathLike[str],
@@ -678,7 +619,8 @@ def gnss_solve(
         the faults excluded*: the same percentile of the statistic left after FDE's exclusions,
         iterated (solve with the factor, rescale by the percentile) from below — the smaller of
         the residuals' median-absolute-w scale and 1 — until it changes by < 1 %. The whole
-        file's factor is used unless it is more than ``AUTO_NOISE_CONTAMINATION_RATIO`` (2)
+        file's factor is used unless it is more than
+        :data:`navfdi._gnss_noise.AUTO_NOISE_CONTAMINATION_RATIO` (2)
         times the other (then the file's statistic is set by its faults, not by its noise:
         on the bundled receivers the two differ by ≤ 1.3×). The run is then solved with it;
         ``config["noise_scale"]`` holds the factor, ``config["noise_scale_auto"]`` both
@@ -719,7 +661,7 @@ def gnss_solve(
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
         common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
-        auto = _auto_noise_scale(obs, nav, common)
+        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, **common, **kw))
         out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], **common)
         out.config["noise_scale_estimated"] = True
         out.config["noise_scale_auto"] = auto
