@@ -9,12 +9,13 @@ from its own files (``navfdi calibrate SCENARIO``).
   at rest. A vibrating engine raises the noise above the datasheet's: that is the point, the
   filter needs the noise it will see.
 * **Boresight** (pitch and yaw of the IMU beyond its nominal axes): the filter runs without
-  its non-holonomic constraint (GNSS-aided only) and the direction of its velocity in the body
-  frame is the vehicle's forward axis as the IMU sees it: pitch = median atan2(−v_d, v_f), yaw
-  = median atan2(v_r, v_f) over epochs at speed (≥ :data:`MIN_SPEED`) without a turn (yaw
-  rate below 3 deg/s, where the IMU's lateral velocity from its lever arm to the rear axle is
-  small), once the heading σ has converged. Its σ is the filter's own attitude σ (the estimate
-  cannot be better than the heading it rests on) with the spread of the epochs. Roll is not
+  its non-holonomic constraint (GNSS-aided only) and the direction of its velocity in the
+  body frame is the vehicle's forward axis as the IMU sees it: pitch = median atan2(−v_d, v_f), yaw = median atan2(v_r, v_f) over epochs at speed
+  (≥ :data:`MIN_SPEED`) without a turn (yaw rate below 3 deg/s, where the IMU's lateral
+  velocity from its lever arm to the rear axle is small), once the heading σ has converged.
+  Its σ is the filter's own attitude σ with the spread of the epochs. The yaw is read a second
+  way that no heading enters — the direction of the specific force in the body frame
+  (:func:`_yaw_by_specific_force`) — and the two are combined by their variances. Roll is not
   observable this way and is kept.
 * **IMU time offset**: the offset (± :data:`MAX_LAG` s) that makes the filter's own GNSS and
   constraint innovations smallest (their mean normalised square per degree of freedom,
@@ -64,7 +65,9 @@ class Calibration:
     and yaw, deg), None when the log has too little driving at speed; ``imu_time_offset`` (s)
     with its σ (None when the log has too few turns); ``rest`` the rest intervals used
     ((start, end), s from the first GNSS epoch); ``straight`` the seconds of driving the
-    boresight was read from; ``section`` the scenario table the values belong to
+    boresight was read from; ``yaw_parts`` the yaw (deg) and its σ from each of the two
+    ways it is read (the velocity direction under the filter's heading, the body-frame specific
+    force), before they are combined; ``section`` the scenario table the values belong to
     (``loosely_coupled`` or ``tight.strapdown``); ``gnss_sigma_scale`` per GNSS channel the
     factor on the receiver's σ the calibrated filter finds from its innovations (median, 10th
     and 90th percentile; informative: ``noise_scale = "auto"`` estimates it in every run)."""
@@ -81,6 +84,7 @@ class Calibration:
     boresight: list[float] | None = field(default_factory=lambda: None)
     boresight_sigma: list[float] | None = field(default_factory=lambda: None)
     straight: float = 0.0
+    yaw_parts: dict[str, tuple[float, float]] = field(default_factory=dict)
     section: str = "loosely_coupled"
     gnss_sigma_scale: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
@@ -104,6 +108,8 @@ class Calibration:
             b, bs = self.boresight, self.boresight_sigma
             out.append(f"boresight (roll kept, pitch, yaw): {b[0]:+.3f}, {b[1]:+.3f} ± {bs[0]:.3f}, {b[2]:+.3f} ± {bs[1]:.3f} deg "
                        f"(from {self.straight:.0f} s of driving)")
+            if len(self.yaw_parts) > 1:
+                out.append("  yaw from " + ", from ".join(f"the {k} {v:+.3f} ± {e:.3f}" for k, (v, e) in self.yaw_parts.items()) + " deg (combined by their variances)")
         if self.imu_time_offset is None:
             out.append("IMU time offset: not estimated (too few turns while moving)")
         else:
@@ -191,7 +197,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     # both asked, a second round starts from the first's values.
     for _ in range(2 if {"boresight", "imu_time_offset"} <= asked else 1):
         if "boresight" in asked:
-            bore = _boresight_by_velocity(base, src)
+            bore = _boresight_by_velocity(base, src, data)
             if bore is None and "boresight" in required:
                 raise ScenarioError(f"calibrate: loosely_coupled.boresight: less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more "
                                     "without turning in the log; give the boresight (roll, pitch, yaw) or \"0 deg\"")
@@ -209,7 +215,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
         (cal.gyro_noise, cal.gyro_noise_sigma), (cal.accel_noise, cal.accel_noise_sigma), (cal.gyro_bias, cal.gyro_bias_sigma) = (
             noise["gyro_noise"], noise["accel_noise"], noise["gyro_bias"])
     if bore is not None:
-        cal.boresight, cal.boresight_sigma, cal.straight = bore
+        cal.boresight, cal.boresight_sigma, cal.straight, cal.yaw_parts = bore
     if fields is None:
         cal.gnss_sigma_scale = _sigma_scales(base, src)
     return cal
@@ -306,7 +312,7 @@ def _noise(imu: Any, t0: float, rest: list[tuple[float, float]], differences: bo
             "gyro_bias": (as_list(bias), as_list(np.degrees(ga.std(axis=0)) * 3600.0 / math.sqrt(n)))}
 
 
-def _boresight_by_velocity(sc: Any, src: Any) -> tuple[list[float], list[float], float] | None:
+def _boresight_by_velocity(sc: Any, src: Any, data: dict[str, Any]) -> tuple[list[float], list[float], float, dict[str, tuple[float, float]]] | None:
     """The boresight (roll kept, pitch, yaw, deg), its σ (pitch, yaw, deg) and the seconds
     used, from the direction of the GNSS-aided filter's velocity in the body frame (see the
     module's description); None with less than :data:`MIN_STRAIGHT` s of driving."""
@@ -354,10 +360,80 @@ def _boresight_by_velocity(sc: Any, src: Any) -> tuple[list[float], list[float],
         return math.degrees(med), math.degrees(math.hypot(float(np.median(s)), spread / math.sqrt(n_eff)))
 
     (pb, ps), (yb, ys) = est(pitch, s_level[use]), est(yaw, s_yaw[use])
+    # The yaw again from the specific force in the body frame (independent of the heading),
+    # the two combined by their variances.
+    speed = np.hypot(cols["vel_n"], cols["vel_e"])
+    lc_core = sc.core["loosely_coupled"]
+    by_force = _yaw_by_specific_force(data, lc_core["mounting"], float(lc_core["imu_time_offset"]), t, speed)
     given = sc.raw["loosely_coupled"].get("boresight")
     roll0, pitch0, yaw0 = (math.degrees(v) for v in _given_boresight(given))
+    parts = {"velocity direction": (yaw0 + yb, ys)}
+    if by_force is not None:
+        yf, yfs, _ = by_force
+        parts["specific force"] = (yaw0 + yf, yfs)
+        wv, wf = ys**-2, yfs**-2
+        yb, ys = (wv * yb + wf * yf) / (wv + wf), (wv + wf) ** -0.5
     # Small angles: the residual boresight adds to the one the run had.
-    return [roll0, pitch0 + pb, yaw0 + yb], [ps, ys], span
+    return [roll0, pitch0 + pb, yaw0 + yb], [ps, ys], span, parts
+
+
+#: Bins of the specific-force yaw (s), and the least number of them it needs.
+FORCE_BIN = 1.0
+FORCE_MIN_BINS = 30
+
+
+def _yaw_by_specific_force(data: dict[str, Any], mount: Sequence[float], offset: float, t_run: np.ndarray, speed: np.ndarray) -> tuple[float, float, int] | None:
+    """The yaw boresight left beyond the run's mounting (deg), its σ (deg) and the number of
+    1 s bins used, from the direction of the specific force in the body frame: a car's
+    horizontal acceleration is along its forward axis (dv/dt) plus the centripetal v·ω_z to
+    its right, so in the IMU's body frame, rotated by a yaw boresight ψ, the right-axis force
+    left after v·ω_z is tan ψ times the forward one. Over 1 s bins of the IMU at ≥
+    :data:`MIN_SPEED` m/s turning below 3 deg/s, each run of consecutive bins about its own
+    mean (road bank and roll out), the slope by least squares; its σ from the residuals,
+    inflated for their lag-1 correlation. No heading enters: the filter's heading error
+    (≈ 0.1° on a 10 deg/h IMU) does not reach it. None with fewer than
+    :data:`FORCE_MIN_BINS` bins. ``mount`` the run's mounting (rad), ``offset`` its IMU time
+    offset (s), ``t_run`` (s from the first GNSS epoch) and ``speed`` (m/s) the run's epochs."""
+    from navfdi._lc_schema import _rot
+
+    imu = data["imu_log"]
+    m = _rot(*mount).T
+    f = imu.accel @ m.T
+    wz = imu.gyro @ m.T[:, 2]
+    ti = imu.t - float(data["t0"]) + offset
+    ok = np.isfinite(speed)
+    if ok.sum() < 2 or len(ti) < 2:
+        return None
+    edges = np.arange(ti[0], ti[-1], FORCE_BIN)
+    b = np.digitize(ti, edges) - 1
+    n_bins = len(edges)
+    cnt = np.bincount(b, minlength=n_bins)[:n_bins].astype(float)
+    mean = lambda x: np.bincount(b, weights=x, minlength=n_bins)[:n_bins] / np.maximum(cnt, 1.0)  # noqa: E731
+    ff, fr, w = mean(f[:, 0]), mean(f[:, 1]), mean(wz)
+    v = np.interp(edges + 0.5 * FORCE_BIN, t_run[ok], speed[ok], left=np.nan, right=np.nan)
+    rate = len(ti) / max(ti[-1] - ti[0], 1e-9)
+    good = (cnt >= 0.5 * rate * FORCE_BIN) & (v >= MIN_SPEED) & (np.abs(w) <= math.radians(3.0))
+    y_all = fr - v * w
+    idx = np.flatnonzero(good)
+    if len(idx) < FORCE_MIN_BINS:
+        return None
+    run = np.cumsum(np.r_[1, np.diff(idx) > 1])
+    x, y, keep = ff[idx].copy(), y_all[idx].copy(), np.zeros(len(idx), bool)
+    for r in np.unique(run):
+        k = run == r
+        if k.sum() >= 5:
+            keep |= k
+            x[k] -= x[k].mean()
+            y[k] -= y[k].mean()
+    x, y = x[keep], y[keep]
+    sxx = float(np.sum(x * x))
+    if len(x) < FORCE_MIN_BINS or sxx <= 0.0:
+        return None
+    slope = float(np.sum(x * y)) / sxx
+    e = y - slope * x
+    rho = float(np.clip(np.sum(e[1:] * e[:-1]) / max(float(np.sum(e * e)), 1e-300), 0.0, 0.95))
+    se = math.sqrt(float(np.sum(e * e)) / (len(x) - 1) / sxx * (1 + rho) / (1 - rho))
+    return math.degrees(math.atan(slope)), math.degrees(se), int(len(x))
 
 
 def _given_boresight(v: Any) -> list[float]:
