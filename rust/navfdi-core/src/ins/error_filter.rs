@@ -281,9 +281,10 @@ impl<const NS: usize> ErrorFilter<NS> {
         let qbg = 2.0 * self.noise.gyro_bias.powi(2) / tau * dt;
         let qba = 2.0 * self.noise.accel_bias.powi(2) / tau * dt;
         if let Some(t) = self.transition.as_mut() {
-            *t = phi * *t;
+            *t = crate::linalg::left_block_sparse(&phi, t);
         }
-        let mut p = phi * self.p * phi.transpose();
+        // Ten of Φ's 25 3 × 3 blocks are non-zero at 15 states: the zero ones are skipped.
+        let mut p = crate::linalg::sandwich_block_sparse(&phi, &self.p);
         {
             let mut b = p.fixed_view_mut::<3, 3>(V, V);
             b += qv;
@@ -325,10 +326,7 @@ impl<const NS: usize> ErrorFilter<NS> {
         r: &DMatrix<f64>,
     ) -> Result<Innovation> {
         let m = h.nrows();
-        // H P (m × NS), then S = (H P) Hᵀ + R, in loops over the static covariance (no
-        // dynamic copy of P, no packing of these small products).
-        let mut hp = DMatrix::<f64>::zeros(m, NS);
-        if h.ncols() != NS || r.nrows() != m || r.ncols() != m || res.len() != m {
+        if m == 0 || h.ncols() != NS || r.nrows() != m || r.ncols() != m || res.len() != m {
             return Err(Error::Invalid(format!(
                 "strapdown aiding measurement: H {}×{}, R {}×{}, residual {} for {NS} states",
                 h.nrows(),
@@ -338,21 +336,41 @@ impl<const NS: usize> ErrorFilter<NS> {
                 res.len()
             )));
         }
-        // Column-major slices: column k of H and column j of H P are contiguous.
+        // H P (m × NS), then S = (H P) Hᵀ + R, in loops over the static covariance (no
+        // dynamic copy of P, no packing of these small products), skipping the columns of H
+        // that are zero (most of a position or velocity row's: their terms are exact zeros,
+        // so the sums are the same).
         let hs = h.as_slice();
-        for (j, hpc) in hp.as_mut_slice().chunks_exact_mut(m).enumerate() {
-            for (k, hc) in hs.chunks_exact(m).enumerate() {
-                let pkj = self.p[(k, j)];
-                for (o, x) in hpc.iter_mut().zip(hc) {
+        let mut cols = [0usize; NS];
+        let mut nc = 0;
+        for (k, hc) in hs.chunks_exact(m).enumerate() {
+            if hc.iter().any(|&x| x != 0.0) {
+                cols[nc] = k;
+                nc += 1;
+            }
+        }
+        let cols = &cols[..nc];
+        let ps = self.p.as_slice();
+        let mut hp = DMatrix::<f64>::zeros(m, NS);
+        // Column-major slices: column k of H, column j of H P and of P are contiguous.
+        for (hpc, pc) in hp
+            .as_mut_slice()
+            .chunks_exact_mut(m)
+            .zip(ps.chunks_exact(NS))
+        {
+            for &k in cols {
+                let pkj = pc[k];
+                for (o, x) in hpc.iter_mut().zip(&hs[k * m..(k + 1) * m]) {
                     *o += x * pkj;
                 }
             }
         }
         let mut s = r.clone();
+        let hps = hp.as_slice();
         for (j, sc) in s.as_mut_slice().chunks_exact_mut(m).enumerate() {
-            for (k, hpc) in hp.as_slice().chunks_exact(m).enumerate() {
+            for &k in cols {
                 let hjk = hs[j + k * m];
-                for (o, x) in sc.iter_mut().zip(hpc) {
+                for (o, x) in sc.iter_mut().zip(&hps[k * m..(k + 1) * m]) {
                     *o += x * hjk;
                 }
             }
@@ -394,26 +412,37 @@ impl<const NS: usize> ErrorFilter<NS> {
         let mut k = inn.hp.transpose();
         let mut inv = vec![0.0; m];
         crate::kalman::gain_from_cholesky(inn.chol.l_dirty(), &mut k, &mut inv);
-        let ks = &k * &inn.s;
+        // K S (NS × m), column by column.
+        let kv = k.as_slice();
+        let ss = inn.s.as_slice();
+        let mut ks = vec![0.0; NS * m];
+        for (kc, sc) in ks.chunks_exact_mut(NS).zip(ss.chunks_exact(m)) {
+            for (b, &sba) in sc.iter().enumerate() {
+                for (o, x) in kc.iter_mut().zip(&kv[b * NS..(b + 1) * NS]) {
+                    *o += x * sba;
+                }
+            }
+        }
         let mut dx = SVector::<f64, NS>::zeros();
-        for (a, kc) in k.as_slice().chunks_exact(NS).enumerate() {
+        for (a, kc) in kv.chunks_exact(NS).enumerate() {
             for (o, x) in dx.iter_mut().zip(kc) {
                 *o += x * inn.r[a];
             }
         }
+        let hps = inn.hp.as_slice();
         let mut khp = SMatrix::<f64, NS, NS>::zeros();
         let mut ksk = SMatrix::<f64, NS, NS>::zeros();
         for j in 0..NS {
             let mut kh = khp.column_mut(j);
-            for (a, kc) in k.as_slice().chunks_exact(NS).enumerate() {
-                let v = inn.hp[(a, j)];
+            for (a, kc) in kv.chunks_exact(NS).enumerate() {
+                let v = hps[a + j * m];
                 for (o, x) in kh.iter_mut().zip(kc) {
                     *o += x * v;
                 }
             }
             let mut kk = ksk.column_mut(j);
-            for (a, kc) in ks.as_slice().chunks_exact(NS).enumerate() {
-                let v = k[(j, a)];
+            for (a, kc) in ks.chunks_exact(NS).enumerate() {
+                let v = kv[j + a * NS];
                 for (o, x) in kk.iter_mut().zip(kc) {
                     *o += x * v;
                 }
