@@ -642,6 +642,31 @@ pub(crate) mod tests {
     }
 
     /// The update in loops over the static covariance equals the textbook Joseph form
+    /// A measurement without rows, or with a matrix of the wrong width, is an error naming
+    /// the shapes (not a panic).
+    #[test]
+    fn an_empty_or_misshapen_measurement_is_an_error() {
+        let kf = ErrorFilter::<N>::new(2.0, 0.2, Vector3::repeat(0.01), Vector3::zeros(), noise());
+        let empty = kf.innovation(
+            &DVector::zeros(0),
+            &DMatrix::zeros(0, N),
+            &DMatrix::zeros(0, 0),
+        );
+        assert!(
+            matches!(empty, Err(Error::Invalid(ref m)) if m.contains("H 0×15")),
+            "{empty:?}"
+        );
+        let narrow = kf.innovation(
+            &DVector::zeros(2),
+            &DMatrix::zeros(2, N - 1),
+            &DMatrix::identity(2, 2),
+        );
+        assert!(
+            matches!(narrow, Err(Error::Invalid(ref m)) if m.contains("H 2×14")),
+            "{narrow:?}"
+        );
+    }
+
     /// `(I − KH) P (I − KH)ᵀ + K R Kᵀ` with `K = P Hᵀ S⁻¹`, computed densely, to rounding.
     #[test]
     fn update_is_the_joseph_form() {
