@@ -83,3 +83,41 @@ def test_auto_on_the_command_line_prints_both_estimates(tmp_path: Path, capsys: 
     s = json.loads((tmp_path / "o" / "summary.json").read_text())["summary"]
     assert s["noise_scale_auto"]["method"] == "faults excluded"
     assert s["noise_scale"] == s["noise_scale_auto"]["scale"]
+
+
+def _without_cn0(dst: Path) -> Path:
+    """The walk's observation file with every GPS and Galileo C/N0 field (the fourth
+    observation: S1C, S1X) blanked."""
+    import gzip
+
+    out, header = [], True
+    for line in gzip.open(OBS, "rt").read().splitlines(keepends=True):
+        if header:
+            header = "END OF HEADER" not in line
+        elif line[:1] in "GE" and line[1:3].isdigit() and len(line) > 3 + 16 * 3:
+            body = line.rstrip("\n")
+            a, b = 3 + 16 * 3, min(3 + 16 * 4, len(body))
+            line = body[:a] + " " * (b - a) + body[b:] + "\n"
+        out.append(line)
+    dst.write_text("".join(out))
+    return dst
+
+
+def test_weighting_auto_takes_the_cn0_model_where_it_fits(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The walk (handheld u-blox): --weighting auto picks the C/N0 model (its statistic's
+    tails nearer a fitting model's), which with --noise auto holds α (no fault-free epoch with
+    an exclusion) with a smaller median MDB than the elevation model's; the same file with its
+    C/N0 blanked gets the elevation model (both models are the same there)."""
+    auto = navfdi.gnss_solve(str(OBS), NAV, systems="G,E", weighting="auto", noise_scale="auto")
+    wa = auto.config["weighting_auto"]
+    assert wa["chosen"] == "cn0" and wa["tail"]["cn0"] < wa["tail"]["elevation"]
+    elev = navfdi.gnss_solve(str(OBS), NAV, systems="G,E", weighting="elevation", noise_scale="auto").summary()
+    s = auto.summary()
+    assert s["false_exclusion_rate"] <= 0.01 < elev["false_exclusion_rate"]
+    assert s["mdb_median"] < elev["mdb_median"]
+    assert s["weighting_auto"]["chosen"] == "cn0"
+    plain = _without_cn0(tmp_path / "no_cn0.obs")
+    none = navfdi.gnss_solve(str(plain), NAV, systems="G,E", weighting="auto").config["weighting_auto"]
+    assert none["chosen"] == "elevation" and none["tail"]["cn0"] == none["tail"]["elevation"]
+    assert main(["gnss", str(OBS), NAV, "--systems", "G,E", "--weighting", "auto", "--out", str(tmp_path / "o")]) == 0
+    assert "weighting: cn0, chosen from the file (--weighting auto" in capsys.readouterr().out

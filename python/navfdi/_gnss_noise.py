@@ -78,3 +78,32 @@ def auto_noise_scale(solve: Callable[..., Any]) -> dict[str, Any]:
         method = "whole file"
         scale = whole
     return {"scale": scale, "whole_file": whole, "faults_excluded": robust, "iterations": iterations, "method": method}
+
+
+def tail_ratio(solution: pd.DataFrame) -> float:
+    """How far a file's global statistics are from the χ² of a fitting σ model, in shape only:
+    ``|log(f90 / f50)|`` with ``f_q = √(q-quantile of T / χ²_q(dof))`` over the epochs tested
+    without exclusion (0 for residuals that are Gaussian with any common scale; larger for
+    heavier or lighter tails than the model's). NaN with fewer than 20 tested epochs."""
+    ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
+    if ok.sum() < 20:
+        return math.nan
+    t = solution.loc[ok, "first_statistic"].to_numpy(float)
+    dof = solution.loc[ok, "first_dof"].to_numpy(int)
+    f = []
+    for q in (0.5, 0.9):
+        thr = np.array([_core.chi2_threshold(1.0 - q, int(d)) for d in dof])
+        f.append(float(np.sqrt(np.quantile(t / thr, q))))
+    return abs(math.log(f[1] / f[0])) if f[0] > 0 and f[1] > 0 else math.nan
+
+
+def auto_weighting(solve: Callable[..., Any]) -> dict[str, Any]:
+    """``weighting="auto"`` for a file that ``solve(weighting=…)`` solves without exclusion:
+    the elevation model and the C/N0 model (the elevation model scaled by the recorded C/N0)
+    each solved, the one whose statistic has the shape of a fitting model's
+    (:func:`tail_ratio` nearer 0) chosen; the elevation model on a tie — which is what a file
+    without C/N0 gives, both models being the same there. ``{"chosen", "tail"}`` with the
+    ratio per model."""
+    tail = {w: tail_ratio(solve(weighting=w).solution) for w in ("elevation", "cn0")}
+    cn0_better = math.isfinite(tail["cn0"]) and (not math.isfinite(tail["elevation"]) or tail["cn0"] < tail["elevation"] - 1e-9)
+    return {"chosen": "cn0" if cn0_better else "elevation", "tail": tail}

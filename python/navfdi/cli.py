@@ -147,7 +147,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--alpha", type=float, default=0.01, help="false-alarm probability of the global test (default 0.01)")
     gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
-    gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^((ref - C/N0)/10), for low-cost receivers)")
+    gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0", "auto"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^((ref - C/N0)/10), for low-cost receivers; auto: the one of elevation and cn0 whose fault-free statistics have the shape of a fitting model's)")
     gn.add_argument("--cn0-reference", type=float, default=45.0, metavar="DBHZ", help="C/N0 (dB-Hz) at which --weighting cn0 gives the elevation model (default 45)")
     gn.add_argument("--test", choices=["global", "wtest", "both", "auto"], default="global", help="what opens the exclusion loop: the global chi-square test (default), data snooping (the largest |w| against k0, alpha shared over the satellites: more powerful for one faulty satellite among many, less with few), both (each at alpha/2) or auto (per epoch the one of the two with the smaller minimal detectable bias)")
     gn.add_argument("--power", type=float, default=0.8, metavar="BETA0", help="power at which the minimal detectable biases are computed (default 0.8)")

@@ -348,6 +348,8 @@ class GnssSolution:
         out["noise_scale"] = self.config.get("noise_scale", 1.0)
         if "noise_scale_auto" in self.config:
             out["noise_scale_auto"] = dict(self.config["noise_scale_auto"])
+        if "weighting_auto" in self.config:
+            out["weighting_auto"] = dict(self.config["weighting_auto"])
         out["test"], out["power"] = self.config.get("test", "global"), self.config.get("power", 0.8)
         out["k0_median"] = float(np.nanmedian(sol["k0"])) if "k0" in sol and sol["k0"].notna().any() else math.nan
         out["alpha0_median"] = float(np.nanmedian(sol["alpha0"])) if "alpha0" in sol and sol["alpha0"].notna().any() else math.nan
@@ -452,6 +454,10 @@ class GnssSolution:
             f"test: {names.get(s['test'], s['test'])}; allocation alpha {s['alpha']:g}, power {s['power']:g} → w-test k0 {s['k0_median']:.2f} "
             f"(alpha0 {s['alpha0_median']:.1e} per satellite; medians); minimal detectable bias median {s['mdb_median']:.2f} m; "
             f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}; 1 when the sigma fit)")
+        if "weighting_auto" in self.config:
+            wa = self.config["weighting_auto"]
+            lines.append(f"weighting: {wa['chosen']}, chosen from the file (--weighting auto; the statistic's tail ratio "
+                         + ", ".join(f"{kk} {v:.3f}" for kk, v in wa["tail"].items()) + "; 0 for a model of the right shape)")
         if self.config.get("noise_scale_estimated"):
             a = self.config.get("noise_scale_auto", {})
             detail = ""
@@ -577,7 +583,10 @@ def gnss_solve(
         ``pntpos`` variance with these a, b (``weighting="rtklib"``), or for low-cost receivers
         and phones the elevation model times ``10^((cn0_reference − C/N0)/10)`` with the
         recorded C/N0 (``weighting="cn0"``; ``S1C`` beside ``C1C``, a satellite without one
-        keeps the elevation model).
+        keeps the elevation model), or ``weighting="auto"``: the one of ``"elevation"`` and
+        ``"cn0"`` whose fault-free global statistics have the shape of a fitting model's (the
+        90th- and 50th-percentile σ factors nearest each other; elevation on a tie, as on a
+        file without C/N0); ``config["weighting_auto"]`` holds the choice and both ratios.
     cn0_reference : float
         The C/N0 (dB-Hz) at which ``weighting="cn0"`` gives the elevation model (default 45).
     ionosphere, troposphere : bool
@@ -657,6 +666,14 @@ def gnss_solve(
 
         integrity = resolve_integrity(integrity)
         check_systems(integrity, systems)
+    if weighting == "auto":
+        from navfdi._gnss_noise import auto_weighting
+
+        pick: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, chunk=chunk, test=test, power=power)
+        chosen = auto_weighting(lambda **kw: gnss_solve(obs, nav, exclude=False, **pick, **kw))
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=chosen["chosen"], **pick, sprt=sprt, aime=aime, cusum=cusum, doppler_noise=doppler_noise)
+        out.config["weighting_auto"] = chosen
+        return out
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
