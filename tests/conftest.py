@@ -7,8 +7,11 @@ itself or in the children it starts. The Ctrl-C tests restore the disposition th
 
 from __future__ import annotations
 
+import importlib.util
 import signal
 from collections.abc import Callable, Iterator
+from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -32,3 +35,19 @@ def sigint_handled() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def _load_docs_script(name: str) -> ModuleType:
+    path = Path(__file__).resolve().parents[1] / "docs" / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.fixture
+def docs_script() -> Callable[[str], ModuleType]:
+    """Load a script of ``docs/scripts`` by name (without ``.py``) as a module: the tests use
+    the generators and checks the documented tables are made with."""
+    return _load_docs_script

@@ -232,23 +232,11 @@ def test_campaign_weak_signal_is_slower_for_every_method():
     assert weak.detection_probability < strong.detection_probability or weak.delay_mean > strong.delay_mean
 
 
-def _matched_script():
-    import importlib.util
-    from pathlib import Path
-
-    path = Path(__file__).resolve().parents[1] / "docs" / "scripts" / "liu2022_matched.py"
-    spec = importlib.util.spec_from_file_location("liu2022_matched", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def test_matched_rate_calibration_and_first_crossing():
+def test_matched_rate_calibration_and_first_crossing(docs_script):
     """docs/scripts/liu2022_matched.py: the calibrated threshold is exceeded by the requested
     fraction of armed channel-epochs (NaN = no test = no alarm), and the delay is read at the
     first crossing at or after the fault's start; then on one real run of each method."""
-    m = _matched_script()
+    m = docs_script("liu2022_matched")
     rng = np.random.default_rng(0)
     t = np.arange(250.0)
     free = []

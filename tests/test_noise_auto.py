@@ -4,7 +4,9 @@ observations, beside the same file clean."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -14,22 +16,6 @@ from navfdi._gnss_noise import AUTO_NOISE_CONTAMINATION_RATIO, estimate_noise_sc
 
 PKG = Path(navfdi.__file__).parent / "data" / "walk_0827"
 OBS, NAV = PKG / "gnss_1730.obs.gz", str(PKG / "gnss_1730.nav")
-
-
-def _script():
-    """docs/scripts/noise_auto_bursts.py (the burst generator and the table of docs/gnss_real.md)."""
-    import importlib.util
-
-    path = Path(__file__).resolve().parents[1] / "docs" / "scripts" / "noise_auto_bursts.py"
-    spec = importlib.util.spec_from_file_location("noise_auto_bursts", path)
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
-
-
-def _bursts(dst: Path, share: float, seed: int) -> Path:
-    return _script().bursts(dst, share, seed)
 
 
 @pytest.mark.parametrize("weighting", ["elevation", "cn0"])
@@ -48,11 +34,12 @@ def test_auto_keeps_the_whole_file_factor_on_a_clean_receiver(weighting: str) ->
 
 
 @pytest.mark.parametrize("weighting", ["elevation", "cn0"])
-def test_auto_finds_the_noise_under_multipath_bursts(tmp_path: Path, weighting: str) -> None:
+def test_auto_finds_the_noise_under_multipath_bursts(tmp_path: Path, weighting: str, docs_script: Callable[[str], ModuleType]) -> None:
     """Bursts on ~10 % of every satellite's epochs inflate the whole file's factor ~10×
     (nothing is ever excluded with it, a 20 m step drowns); with the faults excluded the
     factor is within 25 % of the clean file's, and the step is found again."""
-    obs = str(_bursts(tmp_path / "bursts.obs", 0.1, 0))
+    script = docs_script("noise_auto_bursts")
+    obs = str(script.bursts(tmp_path / "bursts.obs", 0.1, 0))
     clean = navfdi.gnss_solve(str(OBS), NAV, systems="G,E", weighting=weighting, noise_scale="auto").config["noise_scale"]
     auto = navfdi.gnss_solve(obs, NAV, systems="G,E", weighting=weighting, noise_scale="auto")
     a = auto.config["noise_scale_auto"]
@@ -61,20 +48,14 @@ def test_auto_finds_the_noise_under_multipath_bursts(tmp_path: Path, weighting: 
     assert 0.75 * clean < a["scale"] < 1.25 * clean
     assert "faults excluded" in auto.format_summary() and "whole file" in auto.format_summary()
     step = ["E26:step:20m:40s:100s"]
-    found = _excluded_share(navfdi.gnss_solve(obs, NAV, systems="G,E", weighting=weighting, noise_scale=a["scale"], faults=step))
-    drowned = _excluded_share(navfdi.gnss_solve(obs, NAV, systems="G,E", weighting=weighting, noise_scale=a["whole_file"], faults=step))
+    found = script.excluded_share(navfdi.gnss_solve(obs, NAV, systems="G,E", weighting=weighting, noise_scale=a["scale"], faults=step))
+    drowned = script.excluded_share(navfdi.gnss_solve(obs, NAV, systems="G,E", weighting=weighting, noise_scale=a["whole_file"], faults=step))
     assert drowned < 0.05
     assert found >= 0.8
 
 
-def _excluded_share(run: navfdi.GnssSolution) -> float:
-    """Share of the step's epochs (40–100 s) with E26 among the excluded satellites (other
-    satellites' bursts are excluded beside it: "alone" does not apply)."""
-    return _script().excluded_share(run)
-
-
-def test_auto_on_the_command_line_prints_both_estimates(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    obs = str(_bursts(tmp_path / "bursts.obs", 0.1, 0))
+def test_auto_on_the_command_line_prints_both_estimates(tmp_path: Path, capsys: pytest.CaptureFixture[str], docs_script: Callable[[str], ModuleType]) -> None:
+    obs = str(docs_script("noise_auto_bursts").bursts(tmp_path / "bursts.obs", 0.1, 0))
     assert main(["gnss", obs, NAV, "--systems", "G,E", "--noise", "auto", "--out", str(tmp_path / "o")]) == 0
     out = capsys.readouterr().out
     assert "estimated from the file (--noise auto): faults excluded (whole file" in out

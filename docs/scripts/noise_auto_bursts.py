@@ -15,6 +15,7 @@ import gzip
 import sys
 import tempfile
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +44,14 @@ def bursts(dst: Path, share: float, seed: int, obs: Path = OBS) -> Path:
                 windows.append((t, t + d, float(rng.choice([-1, 1]) * rng.uniform(10, 40))))
             t += d
         plan[s] = windows
+    return add_to_first_code(obs, dst, lambda sat, t: sum(v for a, b, v in plan.get(sat, ()) if a <= t < b))
+
+
+def add_to_first_code(src: Path, dst: Path, bias: Callable[[str, float], float]) -> Path:
+    """``src`` (RINEX 3, gzip) written to ``dst`` with ``bias(satellite, t)`` m added to each
+    satellite's first observation (its first code: C1C, C1X), ``t`` in s from the first epoch."""
     out, header, t0, t = [], True, None, 0.0
-    for line in lines:
+    for line in gzip.open(src, "rt").read().splitlines(keepends=True):
         if header:
             header = "END OF HEADER" not in line
         elif line.startswith(">"):
@@ -52,8 +59,8 @@ def bursts(dst: Path, share: float, seed: int, obs: Path = OBS) -> Path:
             sec = int(f[3]) * 3600 + int(f[4]) * 60 + float(f[5])
             t0 = sec if t0 is None else t0
             t = sec - t0
-        elif line[:3] in plan and line[3:17].strip():
-            add = sum(v for a, b, v in plan[line[:3]] if a <= t < b)
+        elif line[:1].isalpha() and line[1:3].isdigit() and line[3:17].strip():
+            add = bias(line[:3], t)
             if add:
                 line = f"{line[:3]}{float(line[3:17]) + add:14.3f}{line[17:]}"
         out.append(line)

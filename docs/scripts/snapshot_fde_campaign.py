@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from navfdi.gnss import gnss_solve
+from noise_auto_bursts import add_to_first_code  # same folder (run as a script)
 
 DATA = Path(__file__).resolve().parents[2] / "python" / "navfdi" / "data" / "walk_0827"
 OBS, NAV = DATA / "gnss_1730.obs.gz", DATA / "gnss_1730.nav"
@@ -48,20 +49,7 @@ out-outstat=residual
 
 def faulted_rinex(src: Path, dst: Path, sat: str, size: float) -> None:
     """``src`` with ``size`` m added to ``sat``'s first observation (C1C / C1X) over the window."""
-    lines = gzip.open(src, "rt").read().splitlines(keepends=True)
-    out, header, t_first, t = [], True, None, 0.0
-    for line in lines:
-        if header:
-            header = "END OF HEADER" not in line
-        elif line.startswith(">"):
-            f = line[1:].split()
-            sec = int(f[3]) * 3600 + int(f[4]) * 60 + float(f[5])
-            t_first = sec if t_first is None else t_first
-            t = sec - t_first
-        elif line.startswith(sat) and T0 <= t < T1 and line[3:17].strip():
-            line = f"{line[:3]}{float(line[3:17]) + size:14.3f}{line[17:]}"
-        out.append(line)
-    dst.write_text("".join(out))
+    add_to_first_code(src, dst, lambda s, t: size if s == sat and T0 <= t < T1 else 0.0)
 
 
 def rtklib_kept(obs: Path, work: Path) -> dict[float, set[str]]:
