@@ -186,7 +186,8 @@ def _jitter(text: str, fn) -> str:
 def test_time_tags_off_the_grid_drop_no_epoch(tmp_path, how):
     """±2 ms receiver jitter on walk_tc's observation time tags (was: 2 km wrong: epochs
     dropped off the 4 Hz grid), and an unsteered receiver clock drifting 5 µs/s (was: 189 m):
-    every epoch is still measured, and the solution stays within metres of the clean run."""
+    every epoch after the alignment is still measured (the alignment within one epoch of the
+    clean run's), and the solution stays within metres of the clean run."""
     from importlib import resources
 
     obs = Path(str(resources.files("navfdi") / "data" / "walk_0827" / "gnss_1730.obs.gz"))
@@ -194,9 +195,12 @@ def test_time_tags_off_the_grid_drop_no_epoch(tmp_path, how):
     fn = (lambda k: 0.002 if k % 2 else -0.002) if how == "jitter" else (lambda k: 5e-6 * 0.25 * k)
     clean = navfdi.run_scenario(_walk(tmp_path), compare_isolation=False).runs["innovation"]
     moved = navfdi.run_scenario(_walk(tmp_path, _jitter(text, fn)), compare_isolation=False).runs["innovation"]
-    n_clean = int((clean.record["satellites"]["status"] != 5).sum())
-    n_moved = int((moved.record["satellites"]["status"] != 5).sum())
-    assert n_moved == n_clean
+    # The only epochs without a measurement are those before the alignment (a leading run);
+    # the alignment, which reads the receiver's speed from the moved tags, within one epoch.
+    unmeasured = {name: np.flatnonzero(np.asarray(r.record["satellites"]["status"]) == 5) for name, r in (("clean", clean), ("moved", moved))}
+    for idx in unmeasured.values():
+        assert np.array_equal(idx, np.arange(len(idx)))
+    assert abs(len(unmeasured["moved"]) - len(unmeasured["clean"])) <= 1
     assert moved.errors()["hor_rel_rms"] < clean.errors()["hor_rel_rms"] + 2.0
 
 

@@ -8,7 +8,10 @@
 //! * when it fails, Baarda's w-test in its general (correlated) form
 //!   `w_i = e_iᵀD⁻¹V / sqrt(e_iᵀD⁻¹D_VD⁻¹e_i)`, which for a diagonal `D` is `v_i / σ_{v_i}`;
 //!   the observation with the largest `|w_i|` above `K` is excluded and everything is
-//!   recomputed, until the global test passes.
+//!   recomputed, until the global test passes. Two faults of one sign can make a healthy
+//!   observation's `|w|` the largest (swamping): when a second exclusion is needed, the pair
+//!   whose removal from the whole set leaves the smallest passing test ratio is taken instead
+//!   of the first exclusion and the next, if it is another pair (every pair is solved).
 //!
 //! What opens the loop is [`FdeConfig::test`] ([`Detection`]): the global test (above, the
 //! default), data snooping (the largest `|w_i|` of the n tested observations above `k0 =
@@ -90,6 +93,7 @@ pub fn fde<M: FdeModel>(
     let (cov, c) = cov.normalised();
     let cov = cov.as_ref();
     let mut active: Vec<usize> = (0..n).filter(|&i| usable[i]).collect();
+    let all = active.clone();
     let mut out = FdeOutcome::empty(n);
     // The all-observation solution, kept in case exclusion runs out of observations.
     let mut first_solution: Option<(DVector<f64>, Vec<f64>)> = None;
@@ -238,6 +242,31 @@ pub fn fde<M: FdeModel>(
                     out.excluded_w.clear();
                     return Ok(out);
                 }
+                // A second exclusion: the first may have been a healthy observation that two
+                // faults together made look worst (swamping). The pair of observations (of
+                // groups) whose removal from the whole set leaves the smallest test ratio,
+                // when it passes and is not the pair the loop is about to make, replaces it.
+                if out.excluded.len() == 1 && out.excluded_w[0].is_finite() {
+                    if let Some((a, b)) = best_pair(model, cov, c, &all, groups, cfg)? {
+                        let same = |x: usize, y: usize| match groups {
+                            Some(g) => g[x] == g[y],
+                            None => x == y,
+                        };
+                        let e = out.excluded[0];
+                        if !((same(a, e) && same(b, i)) || (same(a, i) && same(b, e))) {
+                            let w0 = first_solution.as_ref().map(|(_, w)| w.clone());
+                            let w_of = |x: usize| w0.as_ref().map_or(f64::NAN, |w| w[x].abs());
+                            out.excluded = vec![a, b];
+                            out.excluded_w = vec![w_of(a), w_of(b)];
+                            active = all
+                                .iter()
+                                .copied()
+                                .filter(|&o| !same(o, a) && !same(o, b))
+                                .collect();
+                            continue;
+                        }
+                    }
+                }
                 out.excluded.push(i);
                 out.excluded_w.push(test.w[j].abs());
                 match groups {
@@ -257,6 +286,56 @@ pub fn fde<M: FdeModel>(
             }
         }
     }
+}
+
+/// The two observations (one per group, each standing for its group) of `all` whose removal
+/// leaves the smallest global-test ratio (statistic / threshold; `c` the scale of the
+/// normalised covariance `cov`), when that ratio is below 1;
+/// None otherwise. Every pair of groups is solved: C(g, 2) least-squares solutions.
+fn best_pair<M: FdeModel>(
+    model: &mut M,
+    cov: &ObsCov,
+    c: f64,
+    all: &[usize],
+    groups: Option<&[usize]>,
+    cfg: &FdeConfig,
+) -> Result<Option<(usize, usize)>> {
+    let u = model.unknowns();
+    // One representative observation per group, in order.
+    let mut reps: Vec<usize> = Vec::new();
+    for &i in all {
+        if groups.is_none_or(|g| reps.iter().all(|&r| g[r] != g[i])) {
+            reps.push(i);
+        }
+    }
+    let same = |x: usize, y: usize| groups.map_or(x == y, |g| g[x] == g[y]);
+    let mut best: Option<((usize, usize), f64)> = None;
+    for (ai, &a) in reps.iter().enumerate() {
+        for &b in &reps[ai + 1..] {
+            let rest: Vec<usize> = all
+                .iter()
+                .copied()
+                .filter(|&o| !same(o, a) && !same(o, b))
+                .collect();
+            if rest.len() < u + 1 {
+                continue;
+            }
+            let Some(dinv) = cov.inverse_sub(&rest) else {
+                continue;
+            };
+            let Some((bm, l)) = model.solve(&rest, &dinv, cfg) else {
+                continue;
+            };
+            let Some(test) = ls_test(&bm, &l, &cov.sub(&rest), &dinv) else {
+                continue;
+            };
+            let ratio = test.statistic / c / c / cfg.threshold(rest.len() - u)?;
+            if ratio.is_finite() && best.is_none_or(|(_, r)| ratio < r) {
+                best = Some(((a, b), ratio));
+            }
+        }
+    }
+    Ok(best.filter(|(_, r)| *r < 1.0).map(|(p, _)| p))
 }
 
 /// The position in `active` of the observation (with its group) whose removal lets the rest
@@ -617,6 +696,45 @@ mod tests {
             .filter(|s| elevation_azimuth(&rx, lat, lon, s).0 > 10f64.to_radians())
             .collect();
         (rx, sats)
+    }
+
+    /// Two equal biases at once: every pair of satellites of a scene biased by 40 σ. Where the
+    /// largest |w| of the all-satellite solution is a healthy satellite (the two faults swamp
+    /// it), the loop's first exclusion is wrong; the pair check then finds the two.
+    #[test]
+    fn two_faults_are_excluded_together_even_when_they_swamp_a_healthy_satellite() {
+        let (rx, sats) = scene(3000.0);
+        let n = sats.len();
+        let cfg = FdeConfig::new(0.01, None).unwrap();
+        let blind = FdeConfig::new(0.01, Some(1e9)).unwrap();
+        let (mut swamped, mut exact, mut pairs) = (0, 0, 0);
+        for a in 0..n {
+            for b in a + 1..n {
+                let mut rho: Vec<f64> = sats.iter().map(|s| (s - rx).norm()).collect();
+                rho[a] += 40.0;
+                rho[b] += 40.0;
+                let cov = ObsCov::Sigma(vec![1.0; n]);
+                // K = 1e9: nothing is identified, w is the all-satellite solution's.
+                let all = snapshot_fde(&sats, &rho, &cov, &blind, None).unwrap();
+                let worst = (0..n)
+                    .max_by(|&i, &j| all.fde.w[i].abs().total_cmp(&all.fde.w[j].abs()))
+                    .unwrap();
+                let r = snapshot_fde(&sats, &rho, &cov, &cfg, None).unwrap();
+                let mut got = r.fde.excluded.clone();
+                got.sort_unstable();
+                pairs += 1;
+                exact += usize::from(got == vec![a, b]);
+                if worst != a && worst != b {
+                    swamped += 1;
+                    assert_eq!(got, vec![a, b], "pair {a}, {b} (largest |w| at {worst})");
+                }
+            }
+        }
+        assert!(
+            swamped > 0,
+            "no pair of this scene swamps a healthy satellite"
+        );
+        assert_eq!(exact, pairs, "{exact} of {pairs} pairs excluded exactly");
     }
 
     #[test]
