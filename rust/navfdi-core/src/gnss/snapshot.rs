@@ -300,7 +300,6 @@ fn best_pair<M: FdeModel>(
     groups: Option<&[usize]>,
     cfg: &FdeConfig,
 ) -> Result<Option<(usize, usize)>> {
-    let u = model.unknowns();
     // One representative observation per group, in order.
     let mut reps: Vec<usize> = Vec::new();
     for &i in all {
@@ -317,25 +316,41 @@ fn best_pair<M: FdeModel>(
                 .copied()
                 .filter(|&o| !same(o, a) && !same(o, b))
                 .collect();
-            if rest.len() < u + 1 {
-                continue;
-            }
-            let Some(dinv) = cov.inverse_sub(&rest) else {
-                continue;
-            };
-            let Some((bm, l)) = model.solve(&rest, &dinv, cfg) else {
-                continue;
-            };
-            let Some(test) = ls_test(&bm, &l, &cov.sub(&rest), &dinv) else {
-                continue;
-            };
-            let ratio = test.statistic / c / c / cfg.threshold(rest.len() - u)?;
-            if ratio.is_finite() && best.is_none_or(|(_, r)| ratio < r) {
-                best = Some(((a, b), ratio));
+            if let Some(ratio) = test_ratio(model, cov, c, &rest, cfg)? {
+                if best.is_none_or(|(_, r)| ratio < r) {
+                    best = Some(((a, b), ratio));
+                }
             }
         }
     }
     Ok(best.filter(|(_, r)| *r < 1.0).map(|(p, _)| p))
+}
+
+/// The global-test ratio (statistic / threshold; `c` the scale of the normalised covariance
+/// `cov`) of the observations `rest` solved alone; None when they are too few, singular or do
+/// not converge.
+fn test_ratio<M: FdeModel>(
+    model: &mut M,
+    cov: &ObsCov,
+    c: f64,
+    rest: &[usize],
+    cfg: &FdeConfig,
+) -> Result<Option<f64>> {
+    let u = model.unknowns();
+    if rest.len() < u + 1 {
+        return Ok(None);
+    }
+    let Some(dinv) = cov.inverse_sub(rest) else {
+        return Ok(None);
+    };
+    let Some((b, l)) = model.solve(rest, &dinv, cfg) else {
+        return Ok(None);
+    };
+    let Some(test) = ls_test(&b, &l, &cov.sub(rest), &dinv) else {
+        return Ok(None);
+    };
+    let ratio = test.statistic / c / c / cfg.threshold(rest.len() - u)?;
+    Ok(ratio.is_finite().then_some(ratio))
 }
 
 /// The position in `active` of the observation (with its group) whose removal lets the rest
@@ -348,28 +363,16 @@ fn leave_one_out<M: FdeModel>(
     groups: Option<&[usize]>,
     cfg: &FdeConfig,
 ) -> Result<Option<usize>> {
-    let u = model.unknowns();
     let mut best: Option<(usize, f64)> = None;
     for (j, &i) in active.iter().enumerate() {
         let rest: Vec<usize> = match groups {
             Some(g) => active.iter().copied().filter(|&a| g[a] != g[i]).collect(),
             None => active.iter().copied().filter(|&a| a != i).collect(),
         };
-        if rest.len() < u + 1 {
-            continue;
-        }
-        let Some(dinv) = cov.inverse_sub(&rest) else {
-            continue;
-        };
-        let Some((b, l)) = model.solve(&rest, &dinv, cfg) else {
-            continue;
-        };
-        let Some(test) = ls_test(&b, &l, &cov.sub(&rest), &dinv) else {
-            continue;
-        };
-        let ratio = test.statistic / cfg.threshold(rest.len() - u)?;
-        if ratio.is_finite() && best.is_none_or(|(_, r)| ratio < r) {
-            best = Some((j, ratio));
+        if let Some(ratio) = test_ratio(model, cov, 1.0, &rest, cfg)? {
+            if best.is_none_or(|(_, r)| ratio < r) {
+                best = Some((j, ratio));
+            }
         }
     }
     Ok(best.map(|(j, _)| j))
