@@ -17,27 +17,27 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
+def _factor(solution: pd.DataFrame, statistic: str, dof: str, tail: float) -> float | None:
+    """√ of the (1 − tail)-quantile over the tested epochs of ``solution[statistic]`` divided
+    by χ²(dof)'s threshold at ``tail``: the σ factor that puts that quantile of the statistic
+    on χ²'s; None with fewer than 20 tested epochs."""
+    ok = (solution[dof] > 0) & np.isfinite(solution[statistic])
+    if ok.sum() < 20:
+        return None
+    t = solution.loc[ok, statistic].to_numpy(float)
+    thr = np.array([_core.chi2_threshold(tail, int(d)) for d in solution.loc[ok, dof]])
+    return float(np.sqrt(np.quantile(t / thr, 1.0 - tail)))
+
+
 def estimate_noise_scale(solution: pd.DataFrame) -> float:
     """The σ factor that makes the global test fit a file (see :func:`navfdi.gnss.gnss_solve`'s
     ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
     ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs."""
-    ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
-    if ok.sum() < 20:
-        raise ValueError(f"noise_scale='auto': {int(ok.sum())} epochs could be tested; at least 20 are needed to estimate the noise")
-    t = solution.loc[ok, "first_statistic"].to_numpy(float)
-    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "first_dof"]])
-    return float(np.sqrt(np.quantile(t / q, 0.9)))
-
-
-def _final_statistic_ratio(solution: pd.DataFrame) -> float:
-    """√ of the 90th percentile of ``statistic / χ²₀.₉(dof)`` over the epochs tested after
-    their exclusions (NaN with fewer than 20)."""
-    ok = (solution["dof"] > 0) & np.isfinite(solution["statistic"])
-    if ok.sum() < 20:
-        return math.nan
-    t = solution.loc[ok, "statistic"].to_numpy(float)
-    q = np.array([_core.chi2_threshold(0.1, int(d)) for d in solution.loc[ok, "dof"]])
-    return float(np.sqrt(np.quantile(t / q, 0.9)))
+    f = _factor(solution, "first_statistic", "first_dof", 0.1)
+    if f is None:
+        n = int(((solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])).sum())
+        raise ValueError(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise")
+    return f
 
 
 #: ``noise_scale="auto"`` takes the factor found with the faults excluded when the whole
@@ -64,8 +64,9 @@ def auto_noise_scale(solve: Callable[..., Any]) -> dict[str, Any]:
     s = max(s, 1e-3)
     robust, iterations = math.nan, 0
     for iterations in range(1, 31):
-        r = _final_statistic_ratio(solve(exclude=True, noise_scale=s).solution)
-        if not math.isfinite(r) or r <= 0:
+        # The same percentile of the statistic left after the exclusions.
+        r = _factor(solve(exclude=True, noise_scale=s).solution, "statistic", "dof", 0.1)
+        if r is None or not r > 0:
             break
         s *= r
         if abs(r - 1.0) < 0.01:
@@ -85,16 +86,11 @@ def tail_ratio(solution: pd.DataFrame) -> float:
     ``|log(f90 / f50)|`` with ``f_q = √(q-quantile of T / χ²_q(dof))`` over the epochs tested
     without exclusion (0 for residuals that are Gaussian with any common scale; larger for
     heavier or lighter tails than the model's). NaN with fewer than 20 tested epochs."""
-    ok = (solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])
-    if ok.sum() < 20:
+    f50 = _factor(solution, "first_statistic", "first_dof", 0.5)
+    f90 = _factor(solution, "first_statistic", "first_dof", 0.1)
+    if f50 is None or f90 is None or not (f50 > 0 and f90 > 0):
         return math.nan
-    t = solution.loc[ok, "first_statistic"].to_numpy(float)
-    dof = solution.loc[ok, "first_dof"].to_numpy(int)
-    f = []
-    for q in (0.5, 0.9):
-        thr = np.array([_core.chi2_threshold(1.0 - q, int(d)) for d in dof])
-        f.append(float(np.sqrt(np.quantile(t / thr, q))))
-    return abs(math.log(f[1] / f[0])) if f[0] > 0 and f[1] > 0 else math.nan
+    return abs(math.log(f90 / f50))
 
 
 def auto_weighting(solve: Callable[..., Any]) -> dict[str, Any]:

@@ -10,9 +10,10 @@ from its own files (``navfdi calibrate SCENARIO``).
   filter needs the noise it will see.
 * **Boresight** (pitch and yaw of the IMU beyond its nominal axes): the filter runs without
   its non-holonomic constraint (GNSS-aided only) and the direction of its velocity in the
-  body frame is the vehicle's forward axis as the IMU sees it: pitch = median atan2(−v_d, v_f), yaw = median atan2(v_r, v_f) over epochs at speed
-  (≥ :data:`MIN_SPEED`) without a turn (yaw rate below 3 deg/s, where the IMU's lateral
-  velocity from its lever arm to the rear axle is small), once the heading σ has converged.
+  body frame is the vehicle's forward axis as the IMU sees it: pitch = median atan2(−v_d,
+  v_f), yaw = median atan2(v_r, v_f) over epochs at speed (≥ :data:`MIN_SPEED`) without a turn
+  (yaw rate below 3 deg/s, where the IMU's lateral velocity from its lever arm to the rear
+  axle is small), once the heading σ has converged.
   Its σ is the filter's own attitude σ with the spread of the epochs. The yaw is read a second
   way that no heading enters — the direction of the specific force in the body frame
   (:func:`_yaw_by_specific_force`) — and the two are combined by their variances. Roll is not
@@ -197,7 +198,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     # both asked, a second round starts from the first's values.
     for _ in range(2 if {"boresight", "imu_time_offset"} <= asked else 1):
         if "boresight" in asked:
-            bore = _boresight_by_velocity(base, src, data)
+            bore = _boresight_from_drive(base, src, data)
             if bore is None and "boresight" in required:
                 raise ScenarioError(f"calibrate: loosely_coupled.boresight: less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more "
                                     "without turning in the log; give the boresight (roll, pitch, yaw) or \"0 deg\"")
@@ -312,10 +313,12 @@ def _noise(imu: Any, t0: float, rest: list[tuple[float, float]], differences: bo
             "gyro_bias": (as_list(bias), as_list(np.degrees(ga.std(axis=0)) * 3600.0 / math.sqrt(n)))}
 
 
-def _boresight_by_velocity(sc: Any, src: Any, data: dict[str, Any]) -> tuple[list[float], list[float], float, dict[str, tuple[float, float]]] | None:
-    """The boresight (roll kept, pitch, yaw, deg), its σ (pitch, yaw, deg) and the seconds
-    used, from the direction of the GNSS-aided filter's velocity in the body frame (see the
-    module's description); None with less than :data:`MIN_STRAIGHT` s of driving."""
+def _boresight_from_drive(sc: Any, src: Any, data: dict[str, Any]) -> tuple[list[float], list[float], float, dict[str, tuple[float, float]]] | None:
+    """The boresight (roll kept, pitch, yaw, deg), its σ (pitch, yaw, deg), the seconds used
+    and the yaw with its σ from each way it is read: the direction of the GNSS-aided filter's
+    velocity in the body frame, and the IMU's specific force in the log ``data``
+    (:func:`_yaw_by_specific_force`), combined by their variances (see the module's
+    description); None with less than :data:`MIN_STRAIGHT` s of driving."""
     raw = copy.deepcopy(dict(sc.raw))
     lc = raw["loosely_coupled"]
     lc.pop("nhc", None)

@@ -28,7 +28,7 @@ import numpy as np
 
 from navfdi import _core, _json
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_noise import auto_noise_scale
+from navfdi._gnss_noise import auto_noise_scale, auto_weighting
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
@@ -666,20 +666,18 @@ def gnss_solve(
 
         integrity = resolve_integrity(integrity)
         check_systems(integrity, systems)
+    # The solver's settings other than what the "auto" passes below choose or leave out.
+    common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
     if weighting == "auto":
-        from navfdi._gnss_noise import auto_weighting
-
-        pick: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, chunk=chunk, test=test, power=power)
-        chosen = auto_weighting(lambda **kw: gnss_solve(obs, nav, exclude=False, **pick, **kw))
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=chosen["chosen"], **pick, sprt=sprt, aime=aime, cusum=cusum, doppler_noise=doppler_noise)
+        chosen = auto_weighting(lambda **kw: gnss_solve(obs, nav, exclude=False, **common, **kw))
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=chosen["chosen"], **common)
         out.config["weighting_auto"] = chosen
         return out
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-        common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, weighting=weighting, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
-        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, **common, **kw))
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], **common)
+        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, weighting=weighting, **common, **kw))
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], weighting=weighting, **common)
         out.config["noise_scale_estimated"] = True
         out.config["noise_scale_auto"] = auto
         return out

@@ -247,22 +247,18 @@ pub fn fde<M: FdeModel>(
                 // groups) whose removal from the whole set leaves the smallest test ratio,
                 // when it passes and is not the pair the loop is about to make, replaces it.
                 if out.excluded.len() == 1 && out.excluded_w[0].is_finite() {
-                    if let Some((a, b)) = best_pair(model, cov, c, &all, groups, cfg)? {
-                        let same = |x: usize, y: usize| match groups {
-                            Some(g) => g[x] == g[y],
-                            None => x == y,
-                        };
+                    if let Some((a, b, rest)) = best_pair(model, cov, c, &all, groups, cfg)? {
+                        let same = |x, y| same_group(groups, x, y);
                         let e = out.excluded[0];
                         if !((same(a, e) && same(b, i)) || (same(a, i) && same(b, e))) {
-                            let w0 = first_solution.as_ref().map(|(_, w)| w.clone());
-                            let w_of = |x: usize| w0.as_ref().map_or(f64::NAN, |w| w[x].abs());
-                            out.excluded = vec![a, b];
+                            let w_of = |x: usize| {
+                                first_solution
+                                    .as_ref()
+                                    .map_or(f64::NAN, |(_, w)| w[x].abs())
+                            };
                             out.excluded_w = vec![w_of(a), w_of(b)];
-                            active = all
-                                .iter()
-                                .copied()
-                                .filter(|&o| !same(o, a) && !same(o, b))
-                                .collect();
+                            out.excluded = vec![a, b];
+                            active = rest;
                             continue;
                         }
                     }
@@ -288,9 +284,15 @@ pub fn fde<M: FdeModel>(
     }
 }
 
+/// Whether observations `x` and `y` are one satellite's (the same observation without
+/// `groups`).
+fn same_group(groups: Option<&[usize]>, x: usize, y: usize) -> bool {
+    groups.map_or(x == y, |g| g[x] == g[y])
+}
+
 /// The two observations (one per group, each standing for its group) of `all` whose removal
 /// leaves the smallest global-test ratio (statistic / threshold; `c` the scale of the
-/// normalised covariance `cov`), when that ratio is below 1;
+/// normalised covariance `cov`), when that ratio is below 1, with the observations left;
 /// None otherwise. Every pair of groups is solved: C(g, 2) least-squares solutions.
 fn best_pair<M: FdeModel>(
     model: &mut M,
@@ -299,31 +301,32 @@ fn best_pair<M: FdeModel>(
     all: &[usize],
     groups: Option<&[usize]>,
     cfg: &FdeConfig,
-) -> Result<Option<(usize, usize)>> {
+) -> Result<Option<(usize, usize, Vec<usize>)>> {
     // One representative observation per group, in order.
     let mut reps: Vec<usize> = Vec::new();
     for &i in all {
-        if groups.is_none_or(|g| reps.iter().all(|&r| g[r] != g[i])) {
+        if !reps.iter().any(|&r| same_group(groups, r, i)) {
             reps.push(i);
         }
     }
-    let same = |x: usize, y: usize| groups.map_or(x == y, |g| g[x] == g[y]);
-    let mut best: Option<((usize, usize), f64)> = None;
+    let mut best: Option<(usize, usize, Vec<usize>, f64)> = None;
     for (ai, &a) in reps.iter().enumerate() {
         for &b in &reps[ai + 1..] {
             let rest: Vec<usize> = all
                 .iter()
                 .copied()
-                .filter(|&o| !same(o, a) && !same(o, b))
+                .filter(|&o| !same_group(groups, o, a) && !same_group(groups, o, b))
                 .collect();
             if let Some(ratio) = test_ratio(model, cov, c, &rest, cfg)? {
-                if best.is_none_or(|(_, r)| ratio < r) {
-                    best = Some(((a, b), ratio));
+                if best.as_ref().is_none_or(|x| ratio < x.3) {
+                    best = Some((a, b, rest, ratio));
                 }
             }
         }
     }
-    Ok(best.filter(|(_, r)| *r < 1.0).map(|(p, _)| p))
+    Ok(best
+        .filter(|x| x.3 < 1.0)
+        .map(|(a, b, rest, _)| (a, b, rest)))
 }
 
 /// The global-test ratio (statistic / threshold; `c` the scale of the normalised covariance
