@@ -1,6 +1,7 @@
 """Monte-Carlo of the loosely coupled filter's GNSS fault exclusion (docs/meter_fde.md): per
 data set (drive_lc's RTK fixes; a simulated car drive with meter-level fixes, σ 2 m
-Gauss-Markov τ 30 s + 0.3 m white, written by navfdi.simlog.simulate_log) and fault shape
+Gauss-Markov τ 30 s + 0.3 m white, written by navfdi.simlog.simulate_log; meter_pos: the same
+receiver writing positions only) and fault shape
 (steps 5-40 m for 60 s, ramps 0.1-2 m/s for 40 s), RUNS runs each drawing the onset (60 s to
 120 s before the end), the component (north or east) and the size. Per size bin: the share
 of runs excluded at the first fix after the onset, the median delay of the first exclusion
@@ -8,7 +9,7 @@ and the largest horizontal error before it,
 the share of fault fixes excluded, the largest horizontal error in the fault (with FDE and
 without), runs with an exclusion left standing more than 5 s after the end, and false
 exclusions per clean tested epoch (Wilson 95 % interval).
-Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter] [step|ramp]"""
+Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter|meter_pos] [step|ramp]"""
 
 from __future__ import annotations
 
@@ -27,7 +28,10 @@ from navfdi.simlog import simulate_log
 def _base(which: str, folder: str) -> navfdi.Scenario:
     if which == "drive":
         return load_scenario("drive_lc")
-    log = simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1)
+    if which not in ("meter", "meter_pos"):
+        raise SystemExit(f"data set {which!r}: drive, meter or meter_pos")
+    log = simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1,
+                       gnss_velocity=which == "meter")
     return load_scenario(str(log.scenario))
 
 

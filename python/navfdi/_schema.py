@@ -263,7 +263,7 @@ SECTIONS: dict[str, Section] = {
         ("sensors", "list of tables", REQ, "GNSS channels and their detectors (`[[loosely_coupled.sensors]]`, fields as centralized sensors)"),
         ("zupt", "table", "—", "zero-velocity updates at rest detected from the IMU"),
         ("nhc", "table", "—", "non-holonomic constraint (wheeled vehicles)"),
-        ("witness", "bool", "true", "a channel's alarm excludes it only when another channel of the epoch passes"),
+        ("witness", "bool", "true", "a channel's alarm excludes it only when another GNSS channel of the epoch passes (with one GNSS channel, e.g. positions only, the alarm acts)"),
         ("isolate_components", "bool", "true", "an alarming measurement keeps the components that pass"),
         ("accommodate", "bool", "true", "a held step is used as a relative fix"),
         ("isolate", "bool", "true", "false: detectors report but every measurement is used"),

@@ -70,14 +70,19 @@ class SimulatedLog:
     settings: dict[str, Any]
 
 
-def _pos_lines(table: np.ndarray, q: int) -> list[str]:
+def _pos_lines(table: np.ndarray, q: int, velocity: bool = True) -> list[str]:
+    """RTKLIB ``.pos`` lines of a solution table; without ``velocity`` the velocity columns
+    are left out, as ``rnx2rtkp`` writes by default."""
     week, sow0 = START
+    head = "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio"
     out = ["% program   : navfdi simulate_log",
-           "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)  sdne(m)  sdeu(m)  sdun(m) age(s)  ratio  vn(m/s)  ve(m/s)  vu(m/s)  sdvn  sdve  sdvu  sdvne  sdveu  sdvun"]
+           head + ("  vn(m/s)  ve(m/s)  vu(m/s)  sdvn  sdve  sdvu  sdvne  sdveu  sdvun" if velocity else "")]
     for r in table:
         t, lat, lon, h, ve, vn, vu, se, sn, su, sve, svn, svu = r
-        out.append(f"{week} {sow0 + t:.3f} {math.degrees(lat):.9f} {math.degrees(lon):.9f} {h:.4f} {q} 9 {sn:.4f} {se:.4f} {su:.4f} 0 0 0 0 0 "
-                   f"{vn:.5f} {ve:.5f} {vu:.5f} {svn:.5f} {sve:.5f} {svu:.5f} 0 0 0")
+        line = f"{week} {sow0 + t:.3f} {math.degrees(lat):.9f} {math.degrees(lon):.9f} {h:.4f} {q} 9 {sn:.4f} {se:.4f} {su:.4f} 0 0 0 0 0"
+        if velocity:
+            line += f" {vn:.5f} {ve:.5f} {vu:.5f} {svn:.5f} {sve:.5f} {svu:.5f} 0 0 0"
+        out.append(line)
     return out
 
 
@@ -101,6 +106,7 @@ def simulate_log(
     gnss_tau: float = 0.0,
     gnss_white: float = 0.0,
     gnss_velocity_sigma: float = 0.05,
+    gnss_velocity: bool = True,
     reported_sigma: float | None = None,
     burst_rate: float = 0.0,
     burst_size: float = 0.0,
@@ -146,6 +152,9 @@ def simulate_log(
         white noise σ (m).
     gnss_velocity_sigma : float
         Velocity noise σ (m/s per axis).
+    gnss_velocity : bool
+        The receiver writes velocities; False: ``gnss.pos`` has positions only (as
+        ``rnx2rtkp`` writes by default) and the scenario a ``gnss_position`` sensor only.
     reported_sigma : float, optional
         The position σ the receiver writes (default: the true total σ).
     burst_rate, burst_size, burst_duration : float
@@ -187,7 +196,7 @@ def simulate_log(
         f.write("gps_week,gps_sow_s,gyro_x_dps,gyro_y_dps,gyro_z_dps,acc_x_mps2,acc_y_mps2,acc_z_mps2\n")
         rows = np.column_stack([np.full(len(imu), week), sow0 + imu[:, 0], imu[:, 1:4] * deg, imu[:, 4:7]])
         np.savetxt(f, rows, fmt=["%d", "%.6f", "%.7f", "%.7f", "%.7f", "%.6f", "%.6f", "%.6f"], delimiter=",")
-    paths["gnss"].write_text("\n".join(_pos_lines(sim["gnss"], 5)) + "\n", encoding="utf-8")
+    paths["gnss"].write_text("\n".join(_pos_lines(sim["gnss"], 5, gnss_velocity)) + "\n", encoding="utf-8")
     paths["reference"].write_text("\n".join(_pos_lines(sim["reference"], 1)) + "\n", encoding="utf-8")
     err = sim["gnss_error"]
     with open(paths["truth"], "w", encoding="utf-8") as f:
@@ -202,6 +211,19 @@ def simulate_log(
     else:
         mline = "imu_axes = [" + ", ".join(f'"{a}"' for a in imu_axes) + "]"
     reported = reported_sigma or math.hypot(gnss_sigma, gnss_white)
+    vel_sensor = vel_channel = ""
+    if gnss_velocity:
+        vel_sensor = f"""[[sensors]]
+name = "gnss_vel"
+kind = "gnss_velocity"
+noise = "{gnss_velocity_sigma:g} m/s"
+rate = "1 Hz"
+"""
+        vel_channel = """[[loosely_coupled.sensors]]
+sensor = "gnss_vel"
+detectors = [{ name = "chi2", kind = "chi2", pf = 1e-4 }, { name = "exclude", kind = "chi2", pf = 1e-7 }]
+decision = "exclude"
+"""
     paths["scenario"].write_text(f"""# Simulated car drive (navfdi.simulate_log, seed {seed}, run {run}); truth.csv has the GNSS errors.
 name = "simulated_drive"
 description = "Loosely coupled INS/GNSS on simulated logs"
@@ -228,12 +250,7 @@ kind = "gnss_position"
 noise = "{reported:g} m"
 rate = "1 Hz"
 
-[[sensors]]
-name = "gnss_vel"
-kind = "gnss_velocity"
-noise = "{gnss_velocity_sigma:g} m/s"
-rate = "1 Hz"
-
+{vel_sensor}
 [loosely_coupled]
 {mline}
 lever_arm = ["0 m", "0 m", "0 m"]
@@ -258,11 +275,7 @@ sensor = "gnss_pos"
 detectors = [{{ name = "chi2", kind = "chi2", pf = 1e-4 }}, {{ name = "exclude", kind = "chi2", pf = 1e-5 }}]
 decision = "exclude"
 
-[[loosely_coupled.sensors]]
-sensor = "gnss_vel"
-detectors = [{{ name = "chi2", kind = "chi2", pf = 1e-4 }}, {{ name = "exclude", kind = "chi2", pf = 1e-7 }}]
-decision = "exclude"
-
+{vel_channel}
 [loosely_coupled.nhc]
 noise = "0.1 m/s"
 threshold = "1 m/s"

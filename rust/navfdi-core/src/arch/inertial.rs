@@ -66,6 +66,36 @@ pub struct Aligned {
     pub sig_att: Vector3<f64>,
 }
 
+/// Velocities from positions, for a log that has none: at each epoch `k` with a fix, the
+/// difference of the last fix at least `half` s before it and the first at least `half` s
+/// after it, `(p₊ − p₋)/(t₊ − t₋)` (east, north, up m/s), where neither is more than `half +
+/// interval` s away (None elsewhere: a gap); with its horizontal σ `√(σ₋² + σ₊²)/(t₊ − t₋)`
+/// from the positions' horizontal σ `sig_p` (m). Time-correlated position errors largely
+/// cancel in the difference, so the σ is an upper bound.
+pub fn velocity_from_positions(
+    t: &[f64],
+    pos: impl Fn(usize) -> Option<Vector3<f64>>,
+    sig_p: impl Fn(usize) -> f64,
+    half: f64,
+    interval: f64,
+) -> Vec<Option<(Vector3<f64>, f64)>> {
+    let fixes: Vec<(usize, Vector3<f64>)> = (0..t.len())
+        .filter_map(|k| pos(k).map(|p| (k, p)))
+        .collect();
+    let mut out = vec![None; t.len()];
+    for (i, &(k, _)) in fixes.iter().enumerate() {
+        let before = fixes[..i].iter().rev().find(|(a, _)| t[k] - t[*a] >= half);
+        let after = fixes[i + 1..].iter().find(|(b, _)| t[*b] - t[k] >= half);
+        if let (Some(&(a, pa)), Some(&(b, pb))) = (before, after) {
+            let span = t[b] - t[a];
+            if t[k] - t[a] <= half + interval && t[b] - t[k] <= half + interval && span > 0.0 {
+                out[k] = Some(((pb - pa) / span, sig_p(a).hypot(sig_p(b)) / span));
+            }
+        }
+    }
+    out
+}
+
 /// Align on record epochs `t` (s): `vel(k)`, `pos(k)` the GNSS velocity and position east,
 /// north, up (m/s; m from `origin`) at epoch k where measured; `sig_v` the velocity σ at the
 /// alignment epoch (m/s, given its index); `rest_by_sigma`: `sig_v` is the receiver's velocity
@@ -458,4 +488,38 @@ pub fn record_nav<const NS: usize>(
         sig[R],
         sig[R + 2],
     ]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::velocity_from_positions;
+    use nalgebra::Vector3;
+
+    #[test]
+    fn velocities_from_positions_difference_about_two_seconds_and_skip_gaps() {
+        // Fixes at 4 Hz on record epochs of 8 Hz, moving (3, −2, 0.5) m/s, with a gap of 3 s.
+        let t: Vec<f64> = (0..160).map(|k| f64::from(k) * 0.125).collect();
+        let v = Vector3::new(3.0, -2.0, 0.5);
+        let gap = |x: f64| (10.0..13.0).contains(&x);
+        let pos = |k: usize| (k.is_multiple_of(2) && !gap(t[k])).then(|| v * t[k]);
+        let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 0.25);
+        for (k, o) in out.iter().enumerate() {
+            let tk = t[k];
+            let inside = k.is_multiple_of(2)
+                && tk >= 1.0
+                && tk <= t[159] - 1.0
+                && !gap(tk)
+                && !(9.0 < tk && tk < 10.0 || (13.0..14.0).contains(&tk));
+            match o {
+                Some((dv, sig)) => {
+                    assert!(inside, "a velocity at {tk}");
+                    assert!((dv - v).norm() < 1e-9, "{dv} at {tk}");
+                    // Two fixes of σ 2 m, 2 s apart.
+                    assert!((sig - 8f64.sqrt() / 2.0).abs() < 1e-9, "{sig}");
+                }
+                None => assert!(!inside || (9.0..=10.0).contains(&tk), "none at {tk}"),
+            }
+        }
+        assert!(out.iter().filter(|o| o.is_some()).count() > 50);
+    }
 }

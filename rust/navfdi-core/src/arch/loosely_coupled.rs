@@ -19,7 +19,7 @@ mod hold;
 mod window;
 
 use super::common::make_detector;
-use super::inertial::{align, record_nav, BodyImu, Mechaniser};
+use super::inertial::{align, record_nav, velocity_from_positions, BodyImu, Mechaniser};
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
@@ -130,14 +130,14 @@ fn run<const NS: usize>(
     let mut aids = build_aids(spec)?;
     let pos_aid = aids.iter().position(|a| a.pos.is_some());
     let vel_aid = aids.iter().position(|a| a.vel.is_some());
-    let (Some(pos_aid), Some(vel_aid)) = (pos_aid, vel_aid) else {
+    let Some(pos_aid) = pos_aid else {
         return Err(Error::Invalid(
-            "loosely_coupled.sensors: the alignment needs GNSS positions and velocities (a gnss sensor, or a gnss_position and a gnss_velocity sensor)".into(),
+            "loosely_coupled.sensors: the alignment needs GNSS positions (a gnss or a gnss_position sensor)".into(),
         ));
     };
     let n_gnss = l.sensors.len();
-    // Without a velocity channel the receiver's own consistency is never measured: a jump of
-    // a position innovation against the INS then marks a step.
+    // Without a velocity channel the receiver's consistency compares its displacement with
+    // the INS's, and a jump of a position innovation against the INS also marks a step.
     let vel_aid_none = !aids.iter().take(n_gnss).any(|a| a.vel.is_some());
     let zupt_ch = l.zupt.as_ref().map(|_| n_gnss);
     let nhc_ch = l
@@ -156,21 +156,55 @@ fn run<const NS: usize>(
         let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
         v.iter().all(|x| x.is_finite()).then_some(v)
     };
+    // A log without velocities: the alignment takes them from the positions' differences
+    // over about 2 s, or two fix intervals if longer (velocity_from_positions).
+    let derived = match vel_aid {
+        Some(_) => None,
+        None => {
+            let aid = &aids[pos_aid];
+            let interval = aid.sensor.map_or(1.0, |si| 1.0 / spec.sensors[si].rate);
+            let sig_p = |k: usize| {
+                let rec = aid
+                    .sensor
+                    .and_then(|si| logged.sigma.get(si))
+                    .and_then(|s| s.get(k))
+                    .zip(aid.pos)
+                    .map(|(s, o)| s[o].max(s[o + 1]))
+                    .filter(|x| x.is_finite() && *x > 0.0);
+                rec.unwrap_or(0.0).max(aid.floor[0].max(aid.floor[1]))
+            };
+            Some(velocity_from_positions(
+                &models.t,
+                |k| measure(aid, k, aid.pos),
+                sig_p,
+                interval.max(1.0),
+                interval,
+            ))
+        }
+    };
     let aligned = align(
         &l.alignment,
         "loosely_coupled",
         &imu,
         &models.t,
         &logged.origin,
-        |k| measure(&aids[vel_aid], k, aids[vel_aid].vel),
+        |k| match (&derived, vel_aid) {
+            (Some(d), _) => d[k].map(|(v, _)| v),
+            (None, Some(va)) => measure(&aids[va], k, aids[va].vel),
+            (None, None) => None,
+        },
         |k| measure(&aids[pos_aid], k, aids[pos_aid].pos),
-        |k| {
-            logged
-                .sigma
-                .get(aids[vel_aid].sensor.unwrap_or(0))
-                .and_then(|s| s.get(k))
-                .and_then(|s| s.get(aids[vel_aid].vel.unwrap_or(0)).copied())
-                .unwrap_or(0.1)
+        |k| match (&derived, vel_aid) {
+            (Some(d), _) => d[k].map_or(0.1, |(_, s)| s),
+            (None, va) => va
+                .and_then(|va| {
+                    logged
+                        .sigma
+                        .get(aids[va].sensor.unwrap_or(0))
+                        .and_then(|s| s.get(k))
+                        .and_then(|s| s.get(aids[va].vel.unwrap_or(0)).copied())
+                })
+                .unwrap_or(0.1),
         },
         true,
     )?;
@@ -179,9 +213,16 @@ fn run<const NS: usize>(
     let q = s.q;
     // The INS point is the IMU's: move from the antenna by −C l.
     shift(&mut s, &-(q * lever));
+    // A velocity from positions is known to its own σ at best.
+    let sigma_velocity = derived
+        .as_ref()
+        .and_then(|d| d[ka])
+        .map_or(l.alignment.sigma_velocity, |(_, s)| {
+            l.alignment.sigma_velocity.max(s)
+        });
     let mut kf = ErrorFilter::<NS>::new(
         l.alignment.sigma_position,
-        l.alignment.sigma_velocity,
+        sigma_velocity,
         aligned.sig_att,
         aligned.bg0,
         l.imu,
@@ -202,7 +243,16 @@ fn run<const NS: usize>(
     let mut receivers: Vec<hold::ReceiverConsistency> =
         vec![hold::ReceiverConsistency::default(); aids.len()];
     for k in 0..ka {
-        receiver_epoch(&aids, n_gnss, models, src, k, &fix_interval, &mut receivers);
+        receiver_epoch(
+            &aids,
+            n_gnss,
+            models,
+            src,
+            k,
+            &fix_interval,
+            None,
+            &mut receivers,
+        );
     }
     let mut excluded_before = vec![false; aids.len()];
     // Per GNSS channel: the position hold (faults held to their end) and the time of its
@@ -278,7 +328,22 @@ fn run<const NS: usize>(
         });
         let mut tested: Vec<(usize, Meas, Outcome)> = Vec::new();
         let mut stale_epoch = false;
-        let recv = receiver_epoch(&aids, n_gnss, models, src, k, &fix_interval, &mut receivers);
+        // A receiver without velocities: its fixes' displacement is compared with the INS's
+        // (the antenna's velocity, east, north, up) instead.
+        let ins_vel = vel_aid_none.then(|| {
+            let v = s.v + s.q * w_last.cross(&lever);
+            Vector3::new(v.y, v.x, -v.z)
+        });
+        let recv = receiver_epoch(
+            &aids,
+            n_gnss,
+            models,
+            src,
+            k,
+            &fix_interval,
+            ins_vel,
+            &mut receivers,
+        );
         // At rest (or nearly) the receiver's consistency is not measured, and the INS, held
         // by the constraints, is at its best: a jump against it marks a step.
         let slow = s.v.xy().norm() < hold::MOVING;
@@ -332,7 +397,10 @@ fn run<const NS: usize>(
                 .and_then(|j| o.tests.get(j))
                 .is_some_and(|&(st, th, _)| st >= 16.0 * th)
         };
-        let witnessed = !l.witness || tested.iter().any(|(_, _, o)| !o.excluded);
+        // A witness is another GNSS channel of the epoch that passes; with one channel (a log
+        // of positions only, or one `gnss` sensor) there is none to ask, and the alarm acts.
+        let witnessed =
+            !l.witness || tested.len() < 2 || tested.iter().any(|(_, _, o)| !o.excluded);
         for (a, meas, mut o) in tested {
             let alarm = o.excluded;
             let gross = gross_of(&aids[a], &o);
@@ -487,9 +555,11 @@ fn run<const NS: usize>(
     Ok(rec)
 }
 
-/// Feed epoch `k`'s GNSS position fixes and the receiver's velocity to each position channel's
-/// [`hold::ReceiverConsistency`]; what each says (None without a velocity channel, a fix or
+/// Feed epoch `k`'s GNSS position fixes and the receiver's velocity (or, for a receiver that
+/// gives none, `ins_vel`: the INS antenna velocity east, north, up, m/s) to each position
+/// channel's [`hold::ReceiverConsistency`]; what each says (None without a velocity, a fix or
 /// enough history).
+#[allow(clippy::too_many_arguments)]
 fn receiver_epoch(
     aids: &[Aid],
     n_gnss: usize,
@@ -497,6 +567,7 @@ fn receiver_epoch(
     src: &Streams,
     k: usize,
     intervals: &[f64],
+    ins_vel: Option<Vector3<f64>>,
     receivers: &mut [hold::ReceiverConsistency],
 ) -> Vec<Option<hold::Consistency>> {
     let measured = |aid: &Aid, off: Option<usize>| -> Option<Vector3<f64>> {
@@ -508,11 +579,17 @@ fn receiver_epoch(
         let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
         v.iter().all(|x| x.is_finite()).then_some(v)
     };
-    let vel = aids.iter().take(n_gnss).find_map(|a| measured(a, a.vel));
+    let own = aids.iter().take(n_gnss).find_map(|a| measured(a, a.vel));
+    let vel = own.or(ins_vel);
     let mut out = vec![None; aids.len()];
     for (a, aid) in aids.iter().enumerate().take(n_gnss) {
         if let (Some(p), Some(v)) = (measured(aid, aid.pos), vel) {
-            out[a] = receivers[a].step(models.t[k], &p, &v, 2.5 * intervals[a]);
+            out[a] = receivers[a]
+                .step(models.t[k], &p, &v, 2.5 * intervals[a])
+                .map(|c| hold::Consistency {
+                    ins_referenced: own.is_none(),
+                    ..c
+                });
         }
     }
     out

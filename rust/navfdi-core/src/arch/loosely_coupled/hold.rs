@@ -214,8 +214,12 @@ impl PositionHold {
         let returned = |j: usize| {
             recv.is_some_and(|c| {
                 let (w, e) = (c.window[j], c.e[j]);
-                let window_back = e.abs() > c.sigma[j] * (HISTORY as f64).sqrt()
+                // Against the INS's displacement the window's sum holds the INS's own
+                // integrated velocity error: not a receiver position to return to.
+                let window_back = !c.ins_referenced
+                    && e.abs() > c.sigma[j] * (HISTORY as f64).sqrt()
                     && (w + e).abs() <= w.abs() - 0.5 * e.abs();
+
                 // The previous fix's innovation, fix − INS: the side it drifted to.
                 let lagging = self.prev.is_some_and(|(pd, ps)| {
                     let off = -pd[j];
@@ -640,6 +644,11 @@ pub struct Consistency {
     /// lengths (m) and its size in σ of that window
     /// ([`super::window::DriftWindow::excursions`]; zeros where not measured).
     pub excursion: [[(f64, f64); super::window::LAGS.len()]; 3],
+    /// `e` compares the fixes with the INS's displacement (a receiver without velocities),
+    /// not with the receiver's own velocity: after a fault the filter followed, the INS has
+    /// followed it too, and the window's sums say nothing of where the receiver should be
+    /// (no return is read from them).
+    pub ins_referenced: bool,
 }
 
 impl ReceiverConsistency {
@@ -772,6 +781,7 @@ impl ReceiverConsistency {
             onset,
             window,
             excursion,
+            ins_referenced: false,
         })
     }
 }

@@ -18,6 +18,7 @@ fn north(e: f64, sigma: f64, window: f64) -> Consistency {
         onset: [None; 3],
         window: Vector3::new(0.0, window, 0.0),
         excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+        ins_referenced: false,
     }
 }
 
@@ -54,6 +55,7 @@ fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, 
         onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
         window: Vector3::zeros(),
         excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+        ins_referenced: false,
     });
     h.decide(
         t,

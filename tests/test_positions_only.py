@@ -1,0 +1,103 @@
+"""A GNSS log of positions only (RTKLIB's ``rnx2rtkp`` writes no velocity by default; NMEA
+``GGA`` without ``RMC``): the loosely coupled filter aligns on velocities differenced from the
+positions, compares the fixes' displacement with the INS's for the receiver consistency, and
+holds steps out from their first fix to their last, as with a receiver that gives velocities."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import navfdi
+from navfdi.scenario import ScenarioError, from_dict, load_scenario
+from navfdi.simlog import simulate_log
+
+
+@cache
+def _log(folder: str, velocity: bool) -> Path:
+    return simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3,
+                        gnss_velocity_sigma=0.1, gnss_velocity=velocity).scenario
+
+
+def _run(folder: Path, velocity: bool, faults: list[dict] | None = None) -> navfdi.ScenarioRun:
+    path = _log(str(folder / ("vel" if velocity else "pos")), velocity)
+    raw = dict(load_scenario(str(path)).raw)
+    if faults:
+        raw["faults"] = faults
+    return navfdi.run_scenario(from_dict(raw, source=str(path)))
+
+
+def _hor(run: navfdi.RunRecordView) -> np.ndarray:
+    e = run.record["error"]
+    return np.hypot(e[:, 6], e[:, 7])
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("positions_only")
+
+
+@pytest.fixture(scope="module")
+def clean(folder: Path) -> navfdi.ScenarioRun:
+    return _run(folder, False)
+
+
+def test_a_log_without_velocities_is_read_and_navigated(folder: Path, clean: navfdi.ScenarioRun) -> None:
+    """The simulated receiver's ``.pos`` without velocity columns: the scenario has a
+    ``gnss_position`` sensor only; the filter aligns (in the first minute, on differenced
+    velocities), converges and navigates within 1.5x the error of the same log with velocities,
+    excluding no fault-free fix."""
+    text = (folder / "pos" / "gnss.pos").read_text(encoding="utf-8").splitlines()
+    assert "vn(m/s)" not in text[1] and len(text[2].split()) == 15
+    x = clean.runs["fde"]
+    assert np.isfinite(x.record["converged_at"]) and x.record["converged_at"] < 120.0
+    nav_from = x.t[np.isfinite(_hor(x))][0]
+    assert nav_from < 60.0
+    rms = float(np.sqrt(np.nanmean(_hor(x) ** 2)))
+    with_vel = _run(folder, True).runs["fde"]
+    rms_vel = float(np.sqrt(np.nanmean(_hor(with_vel) ** 2)))
+    assert rms <= 1.5 * rms_vel, (rms, rms_vel)
+    counts = x.exclusion_counts()["gnss_pos"]
+    assert counts["tested"] > 500 and counts["test"] + counts["step"] + counts["ramp"] + counts["stale"] == 0
+
+
+@pytest.mark.parametrize("size", [10.0, 20.0, 40.0])
+@pytest.mark.parametrize("onset", [200.0, 331.5, 480.0])
+def test_steps_are_held_out_without_receiver_velocities(folder: Path, clean: navfdi.ScenarioRun, size: float, onset: float) -> None:
+    """σ 2 m Gauss-Markov fixes at 1 Hz, positions only: a 10-40 m north step is excluded at
+    the first fix after its onset and every fix while it lasts, released within 5 s of its end,
+    and the error during it stays within 3x the fault-free RMS. (Before, such a log could not
+    be run; with its one GNSS channel counted as needing a witness, no alarm would have acted.)"""
+    dur = 60.0
+    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step",
+          "magnitude": f"{size} m", "start": f"{onset} s", "end": f"{onset + dur} s"}]
+    run = _run(folder, False, f)
+    clean_rms = float(np.sqrt(np.nanmean(_hor(clean.runs["fde"]) ** 2)))
+    x = run.runs["fde"]
+    t = x.t
+    sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
+    tested = np.asarray(sub["dof"]) > 0
+    out = np.asarray(sub["reason"]) > 0
+    during = tested & (t >= onset) & (t < onset + dur)
+    assert during.sum() >= 59
+    assert out[during].all(), t[during & ~out]
+    assert t[during][0] - onset <= 1.0
+    late = t[tested & (t >= onset + dur) & out]
+    assert late.size == 0 or late.max() - (onset + dur) <= 5.0, late
+    hor = _hor(x)
+    win = (t >= onset) & (t < onset + dur) & np.isfinite(hor)
+    assert hor[win].max() <= 3.0 * clean_rms, (hor[win].max(), clean_rms)
+    assert np.nanmax(_hor(run.runs["no_fde"])[win]) > 0.4 * size
+
+
+def test_a_velocity_sensor_on_a_log_without_velocities_is_named(folder: Path) -> None:
+    """A ``gnss_velocity`` sensor over a log without velocity columns is refused by name (not
+    navigated on NaN)."""
+    path = _log(str(folder / "pos"), False)
+    raw = dict(load_scenario(str(path)).raw)
+    raw["sensors"] = [*raw["sensors"], {"name": "gnss_vel", "kind": "gnss_velocity", "noise": "0.1 m/s", "rate": "1 Hz"}]
+    with pytest.raises(ScenarioError, match=r"gnss_vel.*no velocity"):
+        navfdi.run_scenario(from_dict(raw, source=str(path)))
