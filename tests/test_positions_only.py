@@ -101,3 +101,45 @@ def test_a_velocity_sensor_on_a_log_without_velocities_is_named(folder: Path) ->
     raw["sensors"] = [*raw["sensors"], {"name": "gnss_vel", "kind": "gnss_velocity", "noise": "0.1 m/s", "rate": "1 Hz"}]
     with pytest.raises(ScenarioError, match=r"gnss_vel.*no velocity"):
         navfdi.run_scenario(from_dict(raw, source=str(path)))
+
+
+def _nmea(body: str) -> str:
+    cs = 0
+    for ch in body:
+        cs ^= ord(ch)
+    return f"${body}*{cs:02X}"
+
+
+def test_nmea_gga_without_rmc_runs_as_the_positions_only_pos(folder: Path, clean: navfdi.ScenarioRun) -> None:
+    """A receiver's NMEA with ``GGA`` and ``GST`` only (no ``RMC``: no velocity, the date given
+    in the table): the same positions and σ as the positions-only ``.pos``, so the same run
+    (horizontal RMS within 2 %)."""
+    import datetime as dt
+    import math
+
+    from navfdi._logtime import GPS_EPOCH
+    from navfdi.logs import read_pos
+
+    path = _log(str(folder / "pos"), False)
+    p = read_pos(path.parent / "gnss.pos")
+    und = 12.5
+    lines = []
+    for k in range(len(p.t)):
+        utc = GPS_EPOCH + dt.timedelta(seconds=float(p.t[k]) - 18.0)
+        hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
+        la, lo = p.lat[k], p.lon[k]
+        lat = f"{int(abs(la)):02d}{(abs(la) - int(abs(la))) * 60:010.7f}"
+        lon = f"{int(abs(lo)):03d}{(abs(lo) - int(abs(lo))) * 60:010.7f}"
+        ns, ew = ("N" if la >= 0 else "S"), ("E" if lo >= 0 else "W")
+        lines.append(_nmea(f"GPGGA,{hms},{lat},{ns},{lon},{ew},1,9,0.8,{p.height[k] - und:.4f},M,{und:.4f},M,,"))
+        lines.append(_nmea(f"GPGST,{hms},1.0,0.5,0.4,30.0,{p.sd_pos[k, 1]:.4f},{p.sd_pos[k, 0]:.4f},{p.sd_pos[k, 2]:.4f}"))
+    nm = path.parent / "receiver.nmea"
+    nm.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    date = (GPS_EPOCH + dt.timedelta(seconds=float(p.t[0]) - 18.0)).date().isoformat()
+    raw = dict(load_scenario(str(path)).raw)
+    raw["source"] = {**raw["source"], "gnss": {"file": nm.name, "date": date}}
+    del raw["duration"], raw["dt"]  # taken from the log
+    e = navfdi.run_scenario(from_dict(raw, source=str(path))).runs["fde"].errors()
+    base = clean.runs["fde"].errors()
+    assert e["scored"] > 0.9 * base["scored"]
+    assert math.isfinite(e["hor_rms"]) and abs(e["hor_rms"] - base["hor_rms"]) <= 0.02 * base["hor_rms"]
