@@ -13,6 +13,11 @@ message. Two checks catch it:
   of its velocity; a median difference above :data:`HEADING_TOLERANCE_DEG` at speed means
   the forward axis is wrong. GNSS velocities left out at more than
   :data:`VELOCITY_EXCLUSION_SHARE` of their tests point the same way.
+
+A third check is of the logs' time lines (before the run, an error): a vehicle's turns are in
+both logs — the IMU's rotation rate and the GNSS course's rate of change — and must line up in
+time. A GNSS log in UTC read as GPS time (18 s apart since 2017), or a time-zone mix-up, runs
+and gives hundreds of metres of error (:func:`check_time_lines`).
 """
 
 from __future__ import annotations
@@ -26,7 +31,8 @@ import numpy as np
 from navfdi._errors import ScenarioError, ScenarioWarning
 from navfdi._lc_schema import _rot
 
-__all__ = ["FrameWarning", "check_gravity", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG", "VELOCITY_EXCLUSION_SHARE"]
+__all__ = ["FrameWarning", "check_gravity", "check_time_lines", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG",
+           "VELOCITY_EXCLUSION_SHARE", "TIME_LAG_TOLERANCE_S"]
 
 #: Largest angle (deg) between the body-frame median specific force and the body's up axis.
 GRAVITY_TOLERANCE_DEG = 30.0
@@ -83,6 +89,126 @@ def check_gravity(accel: np.ndarray, mounting: Sequence[float], field: str) -> N
         f"{put}: the levelled attitude would be {angle:.0f}° off. Name that axis 'up' in "
         f"{field}.imu_axes (imu_axes[{k}] = \"{'up' if sign == '+' else 'down'}\"), with the two others where they point "
         "(a right-handed set; body frame forward-right-down)")
+
+
+#: Largest lag (s) between the IMU's and the GNSS log's turns that :func:`check_time_lines`
+#: lets through (receivers' latencies and IMU time stamps are tenths of a second).
+TIME_LAG_TOLERANCE_S = 1.5
+#: Lags searched (s, both ways).
+_MAX_LAG_S = 40.0
+
+
+def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.ndarray, lat: np.ndarray,
+                  lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The GNSS epochs (s) at speed, the course's rate there (rad/s, magnitude; velocity, or
+    the positions' differences without one) and the IMU's rotation-rate magnitude (rad/s)
+    averaged over 2 s windows (the course's span) on the IMU's time line; None without enough of either."""
+    t = np.asarray(t, float)
+    if len(t) < 30 or len(imu_t) < 100:
+        return None
+    ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
+    if not np.isfinite(ve).mean() > 0.5:
+        # No velocities: the positions' differences over about 2 s (one fix's noise would
+        # swamp a course over a fraction of a second).
+        r = 6_371_000.0
+        n = np.radians(np.asarray(lat, float)) * r
+        e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
+        m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
+        ve, vn = np.full(len(t), np.nan), np.full(len(t), np.nan)
+        span = t[2 * m:] - t[:-2 * m]
+        ve[m:-m] = (e[2 * m:] - e[:-2 * m]) / span
+        vn[m:-m] = (n[2 * m:] - n[:-2 * m]) / span
+    fin = np.isfinite(ve) & np.isfinite(vn)
+    if fin.sum() < 30:
+        return None
+    t, ve, vn = t[fin], ve[fin], vn[fin]
+    course = np.unwrap(np.arctan2(ve, vn))
+    # Its rate over about 2 s as well (a noisy course differenced over one fix interval
+    # swamps the turns).
+    m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
+    if len(t) <= 2 * m + 30:
+        return None
+    rate = np.full(len(t), np.nan)
+    rate[m:-m] = np.abs(course[2 * m:] - course[:-2 * m]) / (t[2 * m:] - t[:-2 * m])
+    ok = np.isfinite(rate) & (np.hypot(ve, vn) > 3.0)
+    if ok.sum() < 30:
+        return None
+    w = np.linalg.norm(np.asarray(gyro, float), axis=1)
+    dt = float(np.median(np.diff(imu_t)))
+    k = max(1, int(round(2.0 / dt))) if dt > 0 else 1
+    smooth = np.convolve(w, np.ones(k) / k, mode="same")
+    return t[ok], rate[ok], smooth
+
+
+def _corr(a: np.ndarray, b: np.ndarray) -> float:
+    a, b = a - a.mean(), b - b.mean()
+    d = float(np.sqrt((a * a).sum() * (b * b).sum()))
+    return float((a * b).sum() / d) if d > 0 else math.nan
+
+
+def check_time_lines(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: float, field: str) -> None:
+    """Refuse GNSS and IMU logs whose time lines are seconds apart.
+
+    The lag that best lines up the GNSS course's rate of change with the IMU's
+    rotation-rate magnitude (1 s averages; correlated at the GNSS epochs at speed over
+    ±40 s in 0.1 s steps) must be within :data:`TIME_LAG_TOLERANCE_S`. Said only where the
+    evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at > 3 m/s),
+    the best lag's correlation ≥ 0.4, and at least 0.1 above the correlation with no lag. A
+    straight road or a walk says nothing and passes.
+
+    Parameters
+    ----------
+    imu_t : ndarray, shape (N,)
+        IMU sample times, GPS seconds (as read, before the time offset).
+    gyro : ndarray, shape (N, 3)
+        Angular rate in the IMU's axes (rad/s); only its magnitude is used, so the mounting
+        does not enter.
+    gnss : PosLog
+        The GNSS log (``t`` GPS seconds, ``vel`` east/north/up m/s or NaN, ``lat``/``lon`` deg).
+    time_offset : float
+        The scenario's IMU time offset (s), added to the IMU's times.
+    field : str
+        The scenario section for the message.
+
+    Raises
+    ------
+    ScenarioError
+        With the lag found (s), the correlations, and what an 18 s or whole-hour lag means.
+    """
+    imu_t = np.asarray(imu_t, float) + float(time_offset)
+    sig = _turn_signals(imu_t, gyro, gnss.t, gnss.vel, gnss.lat, gnss.lon)
+    if sig is None:
+        return
+    tg, rate, w = sig
+    if not np.std(rate) >= math.radians(1.0):
+        return
+    lags = np.arange(-_MAX_LAG_S, _MAX_LAG_S + 1e-9, 0.1)
+    r = np.full(len(lags), math.nan)
+    for i, lag in enumerate(lags):
+        # The IMU's rate at the GNSS epoch's time plus the lag (inside the IMU log only).
+        at = tg + lag
+        inside = (at >= imu_t[0]) & (at <= imu_t[-1])
+        if inside.sum() >= 30:
+            r[i] = _corr(rate[inside], np.interp(at[inside], imu_t, w))
+    if not np.isfinite(r).any():
+        return
+    best = int(np.nanargmax(r))
+    lag, r_best = float(lags[best]), float(r[best])
+    r0 = float(r[int(np.argmin(np.abs(lags)))])
+    if abs(lag) <= TIME_LAG_TOLERANCE_S or not (r_best >= 0.4 and (not math.isfinite(r0) or r_best - r0 >= 0.1)):
+        return
+    hint = ""
+    if abs(abs(lag) - 18.0) <= 1.0:
+        hint = " 18 s is GPS − UTC (the leap seconds since 2017): one log is likely in UTC and read as GPS time (a CSV's time_scale = \"utc\")."
+    elif abs(abs(lag) - 19.0) <= 1.0:
+        hint = " 19 s is TAI − GPS: one log is likely in TAI."
+    # The GNSS epoch stamped tg turns with the IMU stamped tg + lag: the GNSS stamps are −lag
+    # after the IMU's, and an IMU offset of −lag (added to its times) lines them up.
+    raise ScenarioError(
+        f"the GNSS log {gnss.path} and the IMU log: the vehicle's turns are stamped {abs(lag):.1f} s later in the "
+        f"{'GNSS' if lag < 0 else 'IMU'} log than in the {'IMU' if lag < 0 else 'GNSS'} log (the GNSS course's rate against the "
+        f"IMU's rotation rate: correlation {r_best:.2f} at that lag, {r0:.2f} at none).{hint} Fix the time stamps, or if the "
+        f"IMU's clock really is offset, set {field}.imu_time_offset = \"{-lag:+.1f} s\" (added to the IMU's times)")
 
 
 def frame_warnings(run: Any, consistency: dict[str, Any]) -> list[str]:

@@ -1,0 +1,63 @@
+"""Logs whose time lines disagree by seconds (a GNSS log in UTC read as GPS time: 18 s) are
+refused before the run with the lag found, instead of running to hundreds of metres of error;
+logs that agree, a real IMU offset set in the scenario, and logs without turns pass."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import navfdi
+from navfdi.frames import check_time_lines
+from navfdi.logs import read_pos
+from navfdi.scenario import ScenarioError, from_dict, load_scenario
+from navfdi.simlog import CAR_DRIVE, simulate_log
+
+
+def _shifted(folder: Path, shift: float, velocity: bool = True) -> Path:
+    """A simulated car drive whose IMU time stamps are `shift` s early (the GNSS's, and the
+    reference's, `shift` s later than the IMU's)."""
+    log = simulate_log(folder, duration=600, seed=2, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity=velocity)
+    lines = log.imu.read_text(encoding="utf-8").splitlines()
+    out = [lines[0]]
+    for ln in lines[1:]:
+        f = ln.split(",")
+        f[1] = f"{float(f[1]) - shift:.6f}"
+        out.append(",".join(f))
+    log.imu.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return log.scenario
+
+
+@pytest.mark.parametrize("velocity", [True, False])
+def test_a_gnss_log_in_utc_is_refused_with_the_leap_seconds_named(tmp_path: Path, velocity: bool) -> None:
+    path = _shifted(tmp_path, 18.0, velocity)
+    with pytest.raises(ScenarioError, match=r"stamped 18\.\d s later in the GNSS log.*GPS − UTC.*imu_time_offset = \"\+18\.\d s\""):
+        navfdi.run_scenario(load_scenario(str(path)))
+
+
+def test_a_few_seconds_are_refused_and_the_offset_set_in_the_scenario_runs(tmp_path: Path) -> None:
+    """3 s late GNSS stamps: refused, the message giving the offset; with that offset set
+    (the IMU's clock taken as 3 s behind) the run is as accurate as the unshifted log's."""
+    path = _shifted(tmp_path / "a", 3.0)
+    with pytest.raises(ScenarioError, match=r"stamped 3\.\d s later in the GNSS log.*imu_time_offset = \"\+3\.\d s\""):
+        navfdi.run_scenario(load_scenario(str(path)))
+    raw = dict(load_scenario(str(path)).raw)
+    raw["loosely_coupled"] = {**raw["loosely_coupled"], "imu_time_offset": "3 s"}
+    e = navfdi.run_scenario(from_dict(raw, source=str(path))).runs["fde"].errors()
+    ok = navfdi.run_scenario(load_scenario(str(_shifted(tmp_path / "b", 0.0)))).runs["fde"].errors()
+    assert e["hor_rms"] < 1.5 * ok["hor_rms"] + 0.2, (e, ok)
+
+
+def test_logs_in_line_or_without_turns_pass(tmp_path: Path) -> None:
+    """The check says nothing where it cannot tell: a drive's logs in line (within a receiver
+    latency), and a straight drive with the GNSS shifted by 18 s (no turns to line up)."""
+    log = simulate_log(tmp_path / "a", duration=300, seed=2, gnss_sigma=1.0)
+    imu = np.loadtxt(log.imu, delimiter=",", skiprows=1)
+    gnss = read_pos(log.gnss)
+    check_time_lines(imu[:, 1] + 0.3, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
+    straight = {**{k: v for k, v in CAR_DRIVE.items() if k != "segments"}, "speed": "15 m/s", "segments": [{"duration": "300 s", "kind": "level"}]}
+    log2 = simulate_log(tmp_path / "b", duration=300, seed=2, gnss_sigma=1.0, trajectory=straight)
+    imu2 = np.loadtxt(log2.imu, delimiter=",", skiprows=1)
+    check_time_lines(imu2[:, 1] - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")
