@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import navfdi
-from navfdi.frames import check_time_lines
+from navfdi.frames import check_turns
 from navfdi.logs import read_pos
 from navfdi.scenario import ScenarioError, from_dict, load_scenario
 from navfdi.simlog import CAR_DRIVE, simulate_log
@@ -56,8 +56,30 @@ def test_logs_in_line_or_without_turns_pass(tmp_path: Path) -> None:
     log = simulate_log(tmp_path / "a", duration=300, seed=2, gnss_sigma=1.0)
     imu = np.loadtxt(log.imu, delimiter=",", skiprows=1)
     gnss = read_pos(log.gnss)
-    check_time_lines(imu[:, 1] + 0.3, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
+    check_turns(imu[:, 1] + 0.3, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
     straight = {**{k: v for k, v in CAR_DRIVE.items() if k != "segments"}, "speed": "15 m/s", "segments": [{"duration": "300 s", "kind": "level"}]}
     log2 = simulate_log(tmp_path / "b", duration=300, seed=2, gnss_sigma=1.0, trajectory=straight)
     imu2 = np.loadtxt(log2.imu, delimiter=",", skiprows=1)
-    check_time_lines(imu2[:, 1] - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")
+    check_turns(imu2[:, 1] - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")
+
+
+@pytest.mark.parametrize(("unit", "factor"), [("rad/s", "180/π"), ("deg/s", "π/180")])
+def test_a_gyro_unit_read_wrong_is_refused_by_the_size_of_the_turns(tmp_path: Path, unit: str, factor: str) -> None:
+    """Gyro columns in deg/s declared rad/s (the turns 57x the course's), or in rad/s declared
+    deg/s (a 57th): refused before the run naming the unit; before, the first ran to 32 m of
+    horizontal RMS with no message."""
+    log = simulate_log(tmp_path, duration=300, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3)
+    raw = dict(load_scenario(str(log.scenario)).raw)
+    if unit == "deg/s":
+        # Rewrite the file's rates in rad/s, keeping the scenario's "deg/s".
+        lines = log.imu.read_text(encoding="utf-8").splitlines()
+        out = [lines[0]]
+        for ln in lines[1:]:
+            f = ln.split(",")
+            f[2:5] = [f"{float(v) * np.pi / 180.0:.9f}" for v in f[2:5]]
+            out.append(",".join(f))
+        log.imu.write_text("\n".join(out) + "\n", encoding="utf-8")
+    else:
+        raw["source"] = {**raw["source"], "imu": {**raw["source"]["imu"], "gyro_unit": unit}}
+    with pytest.raises(ScenarioError, match=rf"rotation rate is .* times the GNSS course's rate.*{factor} is in that range.*gyro_unit = \"{'deg/s' if unit == 'rad/s' else 'rad/s'}\""):
+        navfdi.run_scenario(from_dict(raw, source=str(log.scenario)))

@@ -17,7 +17,8 @@ message. Two checks catch it:
 A third check is of the logs' time lines (before the run, an error): a vehicle's turns are in
 both logs — the IMU's rotation rate and the GNSS course's rate of change — and must line up in
 time. A GNSS log in UTC read as GPS time (18 s apart since 2017), or a time-zone mix-up, runs
-and gives hundreds of metres of error (:func:`check_time_lines`).
+and gives hundreds of metres of error; so does a gyro unit read wrong, which makes the IMU's
+turns 57 times the course's or a 57th of it (:func:`check_turns`).
 """
 
 from __future__ import annotations
@@ -31,8 +32,8 @@ import numpy as np
 from navfdi._errors import ScenarioError, ScenarioWarning
 from navfdi._lc_schema import _rot
 
-__all__ = ["FrameWarning", "check_gravity", "check_time_lines", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG",
-           "VELOCITY_EXCLUSION_SHARE", "TIME_LAG_TOLERANCE_S"]
+__all__ = ["FrameWarning", "check_gravity", "check_turns", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG",
+           "VELOCITY_EXCLUSION_SHARE", "TIME_LAG_TOLERANCE_S", "TURN_RATE_RATIO"]
 
 #: Largest angle (deg) between the body-frame median specific force and the body's up axis.
 GRAVITY_TOLERANCE_DEG = 30.0
@@ -91,9 +92,12 @@ def check_gravity(accel: np.ndarray, mounting: Sequence[float], field: str) -> N
         "(a right-handed set; body frame forward-right-down)")
 
 
-#: Largest lag (s) between the IMU's and the GNSS log's turns that :func:`check_time_lines`
+#: Largest lag (s) between the IMU's and the GNSS log's turns that :func:`check_turns`
 #: lets through (receivers' latencies and IMU time stamps are tenths of a second).
 TIME_LAG_TOLERANCE_S = 1.5
+#: Largest factor between the IMU's rotation rate and the GNSS course's rate in turns that
+#: :func:`check_turns` lets through (a gyro unit read wrong is 57.3 off).
+TURN_RATE_RATIO = 2.0
 #: Lags searched (s, both ways).
 _MAX_LAG_S = 40.0
 
@@ -146,15 +150,19 @@ def _corr(a: np.ndarray, b: np.ndarray) -> float:
     return float((a * b).sum() / d) if d > 0 else math.nan
 
 
-def check_time_lines(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: float, field: str) -> None:
-    """Refuse GNSS and IMU logs whose time lines are seconds apart.
+def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: float, field: str) -> None:
+    """Refuse GNSS and IMU logs whose turns disagree: in time (time lines seconds apart) or in
+    size (the gyro's unit).
 
     The lag that best lines up the GNSS course's rate of change with the IMU's
-    rotation-rate magnitude (1 s averages; correlated at the GNSS epochs at speed over
-    ±40 s in 0.1 s steps) must be within :data:`TIME_LAG_TOLERANCE_S`. Said only where the
-    evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at > 3 m/s),
-    the best lag's correlation ≥ 0.4, and at least 0.1 above the correlation with no lag. A
-    straight road or a walk says nothing and passes.
+    rotation-rate magnitude (2 s averages; correlated at the GNSS epochs at speed over
+    ±40 s in 0.1 s steps) must be within :data:`TIME_LAG_TOLERANCE_S`; at that lag, the IMU's
+    rate per unit of the course's (1 for a ground vehicle, whose turns are its course's) must
+    not be off 1 by more than :data:`TURN_RATE_RATIO`: refused when the least-squares slopes
+    both ways (the noisy course's rate bends one down, the other up) are both beyond it. Said only where
+    the evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at
+    > 3 m/s) and the best lag's correlation is ≥ 0.4 (for a lag, also 0.1 above the
+    correlation with no lag). A straight road or a walk says nothing and passes.
 
     Parameters
     ----------
@@ -173,7 +181,8 @@ def check_time_lines(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset
     Raises
     ------
     ScenarioError
-        With the lag found (s), the correlations, and what an 18 s or whole-hour lag means.
+        With the lag found (s), the correlations and what an 18 s lag means; or with the
+        ratio of the rates and the gyro unit it points to.
     """
     imu_t = np.asarray(imu_t, float) + float(time_offset)
     sig = _turn_signals(imu_t, gyro, gnss.t, gnss.vel, gnss.lat, gnss.lon)
@@ -195,7 +204,10 @@ def check_time_lines(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset
     best = int(np.nanargmax(r))
     lag, r_best = float(lags[best]), float(r[best])
     r0 = float(r[int(np.argmin(np.abs(lags)))])
-    if abs(lag) <= TIME_LAG_TOLERANCE_S or not (r_best >= 0.4 and (not math.isfinite(r0) or r_best - r0 >= 0.1)):
+    if not r_best >= 0.4:
+        return
+    if abs(lag) <= TIME_LAG_TOLERANCE_S or not (not math.isfinite(r0) or r_best - r0 >= 0.1):
+        _check_turn_size(tg, rate, imu_t, w, lag, field)
         return
     hint = ""
     if abs(abs(lag) - 18.0) <= 1.0:
@@ -209,6 +221,35 @@ def check_time_lines(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset
         f"{'GNSS' if lag < 0 else 'IMU'} log than in the {'IMU' if lag < 0 else 'GNSS'} log (the GNSS course's rate against the "
         f"IMU's rotation rate: correlation {r_best:.2f} at that lag, {r0:.2f} at none).{hint} Fix the time stamps, or if the "
         f"IMU's clock really is offset, set {field}.imu_time_offset = \"{-lag:+.1f} s\" (added to the IMU's times)")
+
+
+def _check_turn_size(tg: np.ndarray, rate: np.ndarray, imu_t: np.ndarray, w: np.ndarray, lag: float, field: str) -> None:
+    """The IMU's rotation-rate magnitude ``w`` against the course's ``rate`` (rad/s) at the
+    GNSS epochs ``tg`` shifted by ``lag`` (s): refused when their slope is off 1 by more than
+    :data:`TURN_RATE_RATIO` (see :func:`check_turns`)."""
+    at = tg + lag
+    inside = (at >= imu_t[0]) & (at <= imu_t[-1])
+    x, y = rate[inside], np.interp(at[inside], imu_t, w)
+    x0, y0 = x - x.mean(), y - y.mean()
+    sxx, syy, sxy = float((x0 * x0).sum()), float((y0 * y0).sum()), float((x0 * y0).sum())
+    if len(x) < 30 or not (sxx > 0 and sxy > 0):
+        return
+    # The course's rate is the noisy one (a receiver's velocity, or positions differenced):
+    # regressed on it the slope is pulled toward 0, regressed the other way it is pushed up.
+    # The true ratio lies between the two; refuse only when both are off the same way.
+    lo, hi = sxy / sxx, syy / sxy
+    if lo <= TURN_RATE_RATIO and hi >= 1.0 / TURN_RATE_RATIO:
+        return
+    deg = math.degrees(1.0)
+    hint = ""
+    if lo / 2.0 <= deg <= 2.0 * hi:
+        hint = " 180/π is in that range: the gyro columns are likely in deg/s read as rad/s (source.imu.gyro_unit = \"deg/s\")."
+    elif lo / 2.0 <= 1.0 / deg <= 2.0 * hi:
+        hint = " π/180 is in that range: the gyro columns are likely in rad/s read as deg/s (source.imu.gyro_unit = \"rad/s\")."
+    raise ScenarioError(
+        f"source.imu: in the vehicle's turns the IMU's rotation rate is {lo:.3g}–{hi:.3g} times the GNSS course's rate "
+        f"(least squares both ways over {len(x)} epochs at speed, the logs lined up at {lag:+.1f} s); a ground vehicle "
+        f"turns with its course, so the ratio should be near 1.{hint} Check the gyro unit and columns ({field} is not the cause)")
 
 
 def frame_warnings(run: Any, consistency: dict[str, Any]) -> list[str]:

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 from ._errors import ScenarioError
 from ._schema import SECTIONS as _SECTIONS
 from ._logtime import GPS_EPOCH, pos_time
-from .frames import check_gravity, check_time_lines
+from .frames import check_gravity, check_turns
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "range_error_process", "resolve_range_errors", "solve_rinex_source"]
 
@@ -412,7 +412,7 @@ def scored_source(sc: Any) -> tuple[Any, str, float]:
         if isinstance(table, Mapping) and "mounting" in table:
             check_gravity(data["imu_log"].accel, table["mounting"], sec)
         if isinstance(table, Mapping) and data.get("gnss_log") is not None:
-            check_time_lines(data["imu_log"].t, data["imu_log"].gyro, data["gnss_log"], float(table.get("imu_time_offset", 0.0)), sec)
+            check_turns(data["imu_log"].t, data["imu_log"].gyro, data["gnss_log"], float(table.get("imu_time_offset", 0.0)), sec)
     try:
         if data["rinex"] is not None:
             src = _core.LoggedSource(sc.to_json(), data["imu"], None, data["reference"], data["rinex"])
