@@ -438,12 +438,13 @@ def _pos_with(tmp_path, column, value):
     return p, k + 1
 
 
-@pytest.mark.parametrize("column, value", [("height(m)", "1e20"), ("sdn(m)", "1e300"), ("ve(m/s)", "-3e5"), ("latitude(deg)", "91.0"), ("sde(m)", "-1")])
+@pytest.mark.parametrize("column, value", [("height(m)", "1e20"), ("sdn(m)", "1e300"), ("ve(m/s)", "-3e5"), ("latitude(deg)", "91.0"), ("sde(m)", "-1"), ("latitude(deg)", "nan")])
 def test_implausible_pos_values_are_refused_with_line_and_column(tmp_path, column, value):
     from navfdi.logs import read_pos
 
     p, line = _pos_with(tmp_path, column, value)
-    with pytest.raises(navfdi.ScenarioError, match=rf"line {line}, column '{re_escape(column)}'"):
+    what = "not a number" if value == "nan" else "is outside"
+    with pytest.raises(navfdi.ScenarioError, match=rf"line {line}, column '{re_escape(column)}': .*{what}"):
         read_pos(p)
 
 

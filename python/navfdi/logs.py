@@ -300,7 +300,8 @@ def _check_pos_values(path: Path, fields: Sequence[str], values: np.ndarray, lin
         bad = ~((v >= lim[0]) & (v <= lim[1]))
         if bad.any():
             k = int(np.argmax(bad))
-            raise ScenarioError(f"{path}, line {line_of[k]}, column {name!r}: {v[k]!r} is outside [{lim[0]:g}, {lim[1]:g}], what a receiver on or near the Earth reports")
+            what = "not a number" if not np.isfinite(v[k]) else f"{float(v[k])!r} is outside [{lim[0]:g}, {lim[1]:g}], what a receiver on or near the Earth reports"
+            raise ScenarioError(f"{path}, line {line_of[k]}, column {name!r}: {what}")
 
 
 def _isfloat(x: str) -> bool:
