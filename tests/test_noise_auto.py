@@ -102,3 +102,27 @@ def test_weighting_auto_takes_the_cn0_model_where_it_fits(tmp_path: Path, capsys
     assert none["chosen"] == "elevation" and none["tail"]["cn0"] == none["tail"]["elevation"]
     assert main(["gnss", str(OBS), NAV, "--systems", "G,E", "--weighting", "auto", "--out", str(tmp_path / "o")]) == 0
     assert "weighting: cn0, chosen from the file (--weighting auto" in capsys.readouterr().out
+
+
+def test_the_clean_w_spread_is_reported_per_system(capsys: pytest.CaptureFixture[str]) -> None:
+    """The bundled static receiver's Galileo and GPS residuals differ in spread: the summary
+    gives the robust clean-w SD per system (GPS's within 5 % of what its satellites' own w
+    give) and, where they differ by more than 1.5x, the --noise-factor that models it; the
+    summary line says so."""
+    import numpy as np
+
+    from navfdi._gnss_noise import robust_sd
+
+    root = Path(__file__).parent / "data" / "rinex"
+    sol = navfdi.gnss_solve(str(root / "rover.obs.gz"), str(root / "base.nav"), systems="G,E", noise_scale="auto")
+    s = sol.summary()
+    by = s["clean_w_sd_robust_by_system"]
+    assert set(by) == {"E", "G"}
+    sats = sol.satellites
+    clean_epochs = np.flatnonzero((sol.solution["faulty"] == "").to_numpy())
+    g = sats[sats["epoch"].isin(clean_epochs) & (sats["status"] == "used") & sats["satellite"].str.startswith("G")]["w"].to_numpy(float)
+    assert by["G"] == pytest.approx(robust_sd(g[np.isfinite(g)]), rel=1e-12)
+    assert max(by.values()) > 1.5 * min(by.values())
+    main(["gnss", str(root / "rover.obs.gz"), str(root / "base.nav"), "--systems", "G,E", "--noise", "auto"])
+    out = capsys.readouterr().out.replace("\n  ", " ")
+    assert "per system E" in out and "the systems differ; --noise-factor G=" in out, out

@@ -103,3 +103,21 @@ def auto_weighting(solve: Callable[..., Any]) -> dict[str, Any]:
     tail = {w: tail_ratio(solve(weighting=w).solution) for w in ("elevation", "cn0")}
     cn0_better = math.isfinite(tail["cn0"]) and (not math.isfinite(tail["elevation"]) or tail["cn0"] < tail["elevation"] - 1e-9)
     return {"chosen": "cn0" if cn0_better else "elevation", "tail": tail}
+
+
+def robust_sd(w: np.ndarray) -> float:
+    """1.4826 × the median absolute deviation of ``w`` (NaN with fewer than two values)."""
+    return float(1.4826 * np.median(np.abs(w - np.median(w)))) if w.size > 1 else math.nan
+
+
+def by_system_text(s: dict[str, Any]) -> str:
+    """``"; per system G 0.94, E 1.70"`` for the summary line (empty with one system), with the
+    ``--noise-factor`` that evens the systems out when they differ by more than 1.5×."""
+    by = {k: v for k, v in s.get("clean_w_sd_robust_by_system", {}).items() if math.isfinite(v) and v > 0}
+    if len(by) < 2:
+        return ""
+    text = "; per system " + ", ".join(f"{k} {v:.2f}" for k, v in by.items())
+    lo = min(by.values())
+    if max(by.values()) > 1.5 * lo:
+        text += " — the systems differ; --noise-factor " + " ".join(f"{k}={v / lo:.2g}" for k, v in by.items() if v > 1.5 * lo) + " models that"
+    return text

@@ -28,7 +28,7 @@ import numpy as np
 
 from navfdi import _core, _json
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_noise import auto_noise_scale, auto_weighting
+from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, robust_sd
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
@@ -359,7 +359,14 @@ class GnssSolution:
         mdb = sats.loc[clean, "mdb"].to_numpy(float) if "mdb" in sats else np.array([])
         out["mdb_median"] = float(np.nanmedian(mdb)) if np.isfinite(mdb).any() else math.nan
         out["clean_w_sd"] = float(np.std(w)) if w.size > 1 else math.nan
-        out["clean_w_sd_robust"] = float(1.4826 * np.median(np.abs(w - np.median(w)))) if w.size > 1 else math.nan
+        out["clean_w_sd_robust"] = robust_sd(w)
+        # Per system: a receiver whose systems differ in noise shows it here (a factor per
+        # system, --noise-factor, evens them out).
+        letters = sats.loc[clean, "satellite"].astype(str).str[0].to_numpy()
+        wall = sats.loc[clean, "w"].to_numpy(float)
+        out["clean_w_sd_robust_by_system"] = {
+            str(g): robust_sd(wall[(letters == g) & np.isfinite(wall)])
+            for g in sorted(set(letters)) if ((letters == g) & np.isfinite(wall)).sum() >= 30}
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
@@ -453,7 +460,7 @@ class GnssSolution:
         lines.append(
             f"test: {names.get(s['test'], s['test'])}; allocation alpha {s['alpha']:g}, power {s['power']:g} → w-test k0 {s['k0_median']:.2f} "
             f"(alpha0 {s['alpha0_median']:.1e} per satellite; medians); minimal detectable bias median {s['mdb_median']:.2f} m; "
-            f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}; 1 when the sigma fit)")
+            f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}{by_system_text(s)}; 1 when the sigma fit)")
         if "weighting_auto" in self.config:
             wa = self.config["weighting_auto"]
             lines.append(f"weighting: {wa['chosen']}, chosen from the file (--weighting auto; the statistic's tail ratio "
