@@ -238,7 +238,7 @@ class ScenarioRun(RunRecord):
         an interval nor count; fault columns empty where no fault matches); the state
         chi-square test (``[state_chi2]``) as subfilter ``navigation``, detector
         ``state_chi2``, matched to every fault; the loosely coupled filter's exclusion
-        intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``:
+        intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``, ``receiver``:
         the tested epochs at which the channel, or some of its components, was left out for
         that reason). Returns a pandas DataFrame."""
         import pandas as pd
@@ -410,7 +410,7 @@ class ScenarioRun(RunRecord):
         also ``gps_week`` and ``gps_sow``, GPST, beside it); per sub-filter ``{sub}.statistic``,
         ``{sub}.isolated``, ``{sub}.fused`` (loosely coupled GNSS channels also
         ``{sub}.excluded``: why the measurement or some of its components were left out —
-        ``test``, ``step``, ``stale``, ``ramp``, empty when used as measured — and
+        ``test``, ``step``, ``stale``, ``ramp``, ``receiver``, empty when used as measured — and
         ``{sub}.noise_scale``, the σ scale its tests used) and per detector ``{sub}.{det}.statistic``,
         ``.threshold``, ``.alarm``; ``{sub}.mdb.{component}`` (minimal detectable bias, in the
         component's unit; centralized architecture); master ``error.{col}``, ``sigma.{col}`` and, without
@@ -527,7 +527,7 @@ class ScenarioRun(RunRecord):
 
     def exclusion_counts(self) -> dict[str, dict[str, int]]:
         """Per loosely coupled GNSS channel, the tested epochs left out (wholly or in some
-        components) per reason (``test``, ``step``, ``stale``, ``ramp``) and ``tested``, the
+        components) per reason (``test``, ``step``, ``stale``, ``ramp``, ``receiver``) and ``tested``, the
         epochs it was tested at. Empty for other architectures."""
         out: dict[str, dict[str, int]] = {}
         for s in self.record["subfilters"]:

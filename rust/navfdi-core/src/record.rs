@@ -61,7 +61,7 @@ pub struct SubRecord {
 /// step (used as a relative fix while its offset explains it, or left out); a stale fix (the
 /// receiver's last fix repeated while the INS moved); a slow ramp flagged by the sequential
 /// test, held until the fix meets the INS again.
-pub const EXCLUSION_REASONS: [&str; 5] = ["", "test", "step", "stale", "ramp"];
+pub const EXCLUSION_REASONS: [&str; 6] = ["", "test", "step", "stale", "ramp", "receiver"];
 
 impl SubRecord {
     /// An epoch without a test: NaN statistics, not isolated, nothing fused.

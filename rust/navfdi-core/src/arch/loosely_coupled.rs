@@ -14,6 +14,7 @@
 //! `alignment.speed`; heading from that velocity's course (or given); position and velocity
 //! from that epoch's fix. Epochs before it are recorded as NaN.
 
+mod blame;
 mod checks;
 mod hold;
 mod window;
@@ -264,6 +265,8 @@ fn run<const NS: usize>(
         .map(|_| hold::NoiseScale::new(l.noise_scale, 1.0, 10.0))
         .collect();
 
+    // Velocity components left out for the receiver's own inconsistency.
+    let mut blame = blame::VelocityBlame::default();
     for k in ka..epochs {
         if k % 256 == 0 {
             cancel.check()?;
@@ -334,7 +337,7 @@ fn run<const NS: usize>(
             let v = s.v + s.q * w_last.cross(&lever);
             Vector3::new(v.y, v.x, -v.z)
         });
-        let recv = receiver_epoch(
+        let mut recv = receiver_epoch(
             &aids,
             n_gnss,
             models,
@@ -401,6 +404,47 @@ fn run<const NS: usize>(
         // of positions only, or one `gnss` sensor) there is none to ask, and the alarm acts.
         let witnessed =
             !l.witness || tested.len() < 2 || tested.iter().any(|(_, _, o)| !o.excluded);
+        // One receiver is one source: where its displacement contradicts its velocity and the
+        // INS sides with the displacement, the velocity is left out (and what its error put
+        // into the consistency's sequential tests forgotten), not the position held.
+        let mut blamed = [false; 3];
+        if isolation && stale_epoch {
+            blame.reset();
+        } else if isolation {
+            let pos_ch = (0..n_gnss).find(|&a| recv[a].is_some_and(|c| !c.ins_referenced));
+            // A channel's innovation (INS − fix) and its variances over three components.
+            let inn = |o: &Outcome, off: usize| {
+                let (r, sv) = o.inn.as_ref()?;
+                Some((
+                    Vector3::new(r[off], r[off + 1], r[off + 2]),
+                    Vector3::new(
+                        sv[(off, off)],
+                        sv[(off + 1, off + 1)],
+                        sv[(off + 2, off + 2)],
+                    ),
+                ))
+            };
+            let vel_inn = tested.iter().find_map(|(a, _, o)| inn(o, aids[*a].vel?));
+            let pos_inn = pos_ch.and_then(|pa| {
+                tested
+                    .iter()
+                    .find(|(a, _, _)| *a == pa)
+                    .and_then(|(a, _, o)| inn(o, aids[*a].pos?))
+            });
+            if let (Some(pa), Some((dv, s_dv)), Some((dp, s_dp))) = (pos_ch, vel_inn, pos_inn) {
+                if let Some(c) = recv[pa].as_mut() {
+                    let wp2 = dp.component_mul(&dp).component_div(&s_dp);
+                    blamed = blame.step(c, &dv, &s_dv, &wp2, fix_interval[pa]);
+                    for j in (0..3).filter(|&j| blamed[j]) {
+                        receivers[pa].forget(j);
+                        holds[pa].release_drift(j);
+                        c.e[j] = 0.0;
+                        c.ramp[j] = false;
+                        c.onset[j] = None;
+                    }
+                }
+            }
+        }
         for (a, meas, mut o) in tested {
             let alarm = o.excluded;
             let gross = gross_of(&aids[a], &o);
@@ -483,6 +527,14 @@ fn run<const NS: usize>(
                 reason = hold::TEST;
             } else if o.excluded {
                 reason = hold::TEST;
+            }
+            if let (Some(vo), true) = (aids[a].vel, blamed.iter().any(|&b| b)) {
+                if !o.excluded {
+                    keep.retain(|&i| !(i >= vo && i < vo + 3 && blamed[i - vo]));
+                    o.excluded = keep.is_empty();
+                    o.partial = !o.excluded;
+                    reason = reason.max(hold::RECEIVER);
+                }
             }
             if o.excluded && reason == 0 {
                 reason = hold::TEST;

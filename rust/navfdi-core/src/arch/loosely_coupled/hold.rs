@@ -36,6 +36,9 @@ pub const STEP: u8 = 2;
 pub const STALE: u8 = 3;
 /// A ramp flagged by the sequential test on the innovations, held.
 pub const RAMP: u8 = 4;
+/// A velocity component the receiver's own displacement contradicts, as the INS does
+/// ([`super::blame::VelocityBlame`]).
+pub const RECEIVER: u8 = 5;
 
 /// Consecutive agreeing fixes before a held component is used as measured again.
 pub const AGREE: u32 = 2;
@@ -465,6 +468,14 @@ impl PositionHold {
     pub fn gap(&mut self) {
         self.prev = None;
     }
+
+    /// Use component `j` as measured again if it is held as a ramp: the drift the receiver's
+    /// consistency showed was its velocity's ([`super::blame::VelocityBlame`]).
+    pub fn release_drift(&mut self, j: usize) {
+        if matches!(self.comps[j], Comp::Drift { .. }) {
+            self.comps[j] = Comp::Normal;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -652,6 +663,17 @@ pub struct Consistency {
 }
 
 impl ReceiverConsistency {
+    /// Forget component `j`'s sequential tests (CUSUM and window sums): its `e` measured a
+    /// faulty velocity ([`super::blame::VelocityBlame`]), not a drift of the position.
+    pub fn forget(&mut self, j: usize) {
+        self.up[j] = 0.0;
+        self.down[j] = 0.0;
+        self.acc_up[j] = (0.0, 0);
+        self.acc_down[j] = (0.0, 0);
+        self.hist[j].clear();
+        self.windows[j].restart();
+    }
+
     /// Feed the fix `p` (east, north, up, m) and velocity `v` (m/s) at time `t` (s); None for
     /// the first fixes (until `σ_e` is estimated) or after a gap of more than `max_gap` s
     /// (the CUSUM restarts).

@@ -1,6 +1,7 @@
 //! Unit tests of the position hold ([`super::PositionHold`]).
 
 use super::*;
+use crate::arch::loosely_coupled::blame::VelocityBlame;
 
 fn v(x: f64) -> Vector3<f64> {
     Vector3::new(0.0, x, 0.0)
@@ -286,4 +287,53 @@ fn a_stale_fix_is_one_repeated_while_the_ins_moves() {
     assert!(h.stale(&f, &Vector3::new(10.0, 0.0, 0.0)));
     assert!(!h.stale(&f, &Vector3::new(0.1, 0.0, 0.0)));
     assert!(!h.stale(&(f + Vector3::repeat(0.01)), &Vector3::new(20.0, 0.0, 0.0)));
+}
+
+/// A faulty velocity (the receiver's displacement off by −δv·Δt per fix, its velocity's
+/// innovation −δv) is blamed from the second fix and while it lasts; a position ramp (the
+/// velocity's innovation near 0) and a one-fix blip of the velocity's noise are not.
+#[test]
+fn a_velocity_is_blamed_where_its_innovation_says_what_the_receiver_does() {
+    let s_dv = Vector3::repeat(0.01); // σ 0.1 m/s
+    let quiet = Vector3::repeat(1.0);
+    // Velocity 0.5 m/s north too large: e = −0.5 m, dv = −0.5 m/s (5σ).
+    let mut b = VelocityBlame::default();
+    let c = north(-0.5, 0.02, 0.0);
+    assert_eq!(b.step(&c, &v(-0.5), &s_dv, &quiet, 1.0), [false; 3]);
+    for _ in 0..10 {
+        assert_eq!(
+            b.step(&c, &v(-0.5), &s_dv, &quiet, 1.0),
+            [false, true, false]
+        );
+    }
+    // It ends: the receiver consistent again.
+    assert_eq!(
+        b.step(&north(0.0, 0.02, 0.0), &v(-0.05), &s_dv, &quiet, 1.0),
+        [false; 3]
+    );
+    // A position ramp of 0.5 m/s: e = +0.5 m, the velocity right (dv 0.02).
+    let mut b = VelocityBlame::default();
+    let ramp = north(0.5, 0.02, 0.0);
+    for _ in 0..10 {
+        assert_eq!(b.step(&ramp, &v(0.02), &s_dv, &quiet, 1.0), [false; 3]);
+    }
+    // Its start meeting one large velocity-noise value: not blamed (one fix), nor later when
+    // the filter, following the ramp, has the INS velocity on the ramp's rate.
+    let mut b = VelocityBlame::default();
+    assert_eq!(b.step(&ramp, &v(0.4), &s_dv, &quiet, 1.0), [false; 3]);
+    for _ in 0..3 {
+        assert_eq!(b.step(&ramp, &v(0.02), &s_dv, &quiet, 1.0), [false; 3]);
+    }
+    for _ in 0..5 {
+        assert_eq!(b.step(&ramp, &v(0.45), &s_dv, &quiet, 1.0), [false; 3]);
+    }
+    // Against the INS (a receiver without velocities) nothing is blamed.
+    let mut b = VelocityBlame::default();
+    let ins = Consistency {
+        ins_referenced: true,
+        ..north(-0.5, 0.02, 0.0)
+    };
+    for _ in 0..3 {
+        assert_eq!(b.step(&ins, &v(-0.5), &s_dv, &quiet, 1.0), [false; 3]);
+    }
 }
