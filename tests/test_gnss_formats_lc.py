@@ -5,7 +5,6 @@ same positions as an RTKLIB .pos, so each run matches the .pos run."""
 from __future__ import annotations
 
 import datetime as dt
-import math
 from pathlib import Path
 
 import numpy as np
@@ -18,17 +17,12 @@ from navfdi.logs import read_pos
 from navfdi.scenario import ScenarioError, from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
+from loglib import nmea, nmea_lines
+
 
 @pytest.fixture(scope="module")
 def log(tmp_path_factory: pytest.TempPathFactory):
     return simulate_log(tmp_path_factory.mktemp("fmt"), duration=240, seed=5, gnss_rate=1.0, gnss_sigma=1.0)
-
-
-def _nmea(body: str) -> str:
-    cs = 0
-    for ch in body:
-        cs ^= ord(ch)
-    return f"${body}*{cs:02X}"
 
 
 def _write_formats(log) -> dict[str, Path]:
@@ -50,19 +44,7 @@ def _write_formats(log) -> dict[str, Path]:
             f.write(f"{utc.isoformat()},{p.lat[k]:.10f},{p.lon[k]:.10f},{p.height[k] - und:.4f},{p.sd_pos[k, 0]:.4f},{p.sd_pos[k, 1]:.4f},{p.sd_pos[k, 2]:.4f}\n")
     # NMEA: GGA (MSL altitude + geoid separation), RMC (date, speed, course), GST (σ).
     nm = folder / "receiver.nmea"
-    lines = []
-    for k in range(len(p.t)):
-        utc = GPS_EPOCH + dt.timedelta(seconds=float(p.t[k]) - 18.0)
-        hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
-        la, lo = p.lat[k], p.lon[k]
-        lat = f"{int(abs(la)):02d}{(abs(la) - int(abs(la))) * 60:010.7f}"
-        lon = f"{int(abs(lo)):03d}{(abs(lo) - int(abs(lo))) * 60:010.7f}"
-        ns, ew = ("N" if la >= 0 else "S"), ("E" if lo >= 0 else "W")
-        lines.append(_nmea(f"GNGGA,{hms},{lat},{ns},{lon},{ew},1,12,0.8,{p.height[k] - und:.4f},M,{und:.4f},M,,"))
-        sp = math.hypot(p.vel[k, 0], p.vel[k, 1]) / 0.514444
-        cog = math.degrees(math.atan2(p.vel[k, 0], p.vel[k, 1])) % 360
-        lines.append(_nmea(f"GNRMC,{hms},A,{lat},{ns},{lon},{ew},{sp:.4f},{cog:.3f},{utc.strftime('%d%m%y')},,,A"))
-        lines.append(_nmea(f"GNGST,{hms},1.0,0.5,0.4,30.0,{p.sd_pos[k, 1]:.4f},{p.sd_pos[k, 0]:.4f},{p.sd_pos[k, 2]:.4f}"))
+    lines = nmea_lines(p, und)
     nm.write_text("\n".join(lines) + "\n")
     return {"solution": sol, "csv": csvp, "nmea": nm}
 
@@ -102,7 +84,7 @@ def test_bad_gnss_logs_are_named(log, tmp_path: Path) -> None:
     with pytest.raises(ScenarioError, match="line 1: NMEA checksum"):
         read_gnss(str(bad), Path("."))
     nodate = tmp_path / "nodate.nmea"
-    nodate.write_text(_nmea("GNGGA,120000.00,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n")
+    nodate.write_text(nmea("GNGGA,120000.00,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,") + "\n")
     with pytest.raises(ScenarioError, match='date = "YYYY-MM-DD"'):
         read_gnss(str(nodate), Path("."))
     assert read_gnss({"file": str(nodate), "date": "2025-07-08"}, Path(".")).height[0] == pytest.approx(545.4 + 46.9)

@@ -1,7 +1,8 @@
 """A GNSS log of positions only (RTKLIB's ``rnx2rtkp`` writes no velocity by default; NMEA
 ``GGA`` without ``RMC``): the loosely coupled filter aligns on velocities differenced from the
 positions, compares the fixes' displacement with the INS's for the receiver consistency, and
-holds steps out from their first fix to their last, as with a receiver that gives velocities."""
+holds steps out from their first fix to their last, as with a receiver that gives velocities
+(tests/test_meter_fde.py, ``positions_only``)."""
 
 from __future__ import annotations
 
@@ -15,6 +16,8 @@ import navfdi
 from navfdi.scenario import ScenarioError, from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
+from loglib import horizontal_error, nmea_lines, run_log
+
 
 @cache
 def _log(folder: str, velocity: bool) -> Path:
@@ -23,16 +26,10 @@ def _log(folder: str, velocity: bool) -> Path:
 
 
 def _run(folder: Path, velocity: bool, faults: list[dict] | None = None) -> navfdi.ScenarioRun:
-    path = _log(str(folder / ("vel" if velocity else "pos")), velocity)
-    raw = dict(load_scenario(str(path)).raw)
-    if faults:
-        raw["faults"] = faults
-    return navfdi.run_scenario(from_dict(raw, source=str(path)))
+    return run_log(_log(str(folder / ("vel" if velocity else "pos")), velocity), faults)
 
 
-def _hor(run: navfdi.RunRecordView) -> np.ndarray:
-    e = run.record["error"]
-    return np.hypot(e[:, 6], e[:, 7])
+_hor = horizontal_error
 
 
 @pytest.fixture(scope="module")
@@ -64,35 +61,6 @@ def test_a_log_without_velocities_is_read_and_navigated(folder: Path, clean: nav
     assert counts["tested"] > 500 and counts["test"] + counts["step"] + counts["ramp"] + counts["stale"] == 0
 
 
-@pytest.mark.parametrize("size", [10.0, 20.0, 40.0])
-@pytest.mark.parametrize("onset", [200.0, 331.5, 480.0])
-def test_steps_are_held_out_without_receiver_velocities(folder: Path, clean: navfdi.ScenarioRun, size: float, onset: float) -> None:
-    """σ 2 m Gauss-Markov fixes at 1 Hz, positions only: a 10-40 m north step is excluded at
-    the first fix after its onset and every fix while it lasts, released within 5 s of its end,
-    and the error during it stays within 3x the fault-free RMS. (Before, such a log could not
-    be run; with its one GNSS channel counted as needing a witness, no alarm would have acted.)"""
-    dur = 60.0
-    f = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step",
-          "magnitude": f"{size} m", "start": f"{onset} s", "end": f"{onset + dur} s"}]
-    run = _run(folder, False, f)
-    clean_rms = float(np.sqrt(np.nanmean(_hor(clean.runs["fde"]) ** 2)))
-    x = run.runs["fde"]
-    t = x.t
-    sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
-    tested = np.asarray(sub["dof"]) > 0
-    out = np.asarray(sub["reason"]) > 0
-    during = tested & (t >= onset) & (t < onset + dur)
-    assert during.sum() >= 59
-    assert out[during].all(), t[during & ~out]
-    assert t[during][0] - onset <= 1.0
-    late = t[tested & (t >= onset + dur) & out]
-    assert late.size == 0 or late.max() - (onset + dur) <= 5.0, late
-    hor = _hor(x)
-    win = (t >= onset) & (t < onset + dur) & np.isfinite(hor)
-    assert hor[win].max() <= 3.0 * clean_rms, (hor[win].max(), clean_rms)
-    assert np.nanmax(_hor(run.runs["no_fde"])[win]) > 0.4 * size
-
-
 def test_a_velocity_sensor_on_a_log_without_velocities_is_named(folder: Path) -> None:
     """A ``gnss_velocity`` sensor over a log without velocity columns is refused by name (not
     navigated on NaN)."""
@@ -101,13 +69,6 @@ def test_a_velocity_sensor_on_a_log_without_velocities_is_named(folder: Path) ->
     raw["sensors"] = [*raw["sensors"], {"name": "gnss_vel", "kind": "gnss_velocity", "noise": "0.1 m/s", "rate": "1 Hz"}]
     with pytest.raises(ScenarioError, match=r"gnss_vel.*no velocity"):
         navfdi.run_scenario(from_dict(raw, source=str(path)))
-
-
-def _nmea(body: str) -> str:
-    cs = 0
-    for ch in body:
-        cs ^= ord(ch)
-    return f"${body}*{cs:02X}"
 
 
 def test_nmea_gga_without_rmc_runs_as_the_positions_only_pos(folder: Path, clean: navfdi.ScenarioRun) -> None:
@@ -122,17 +83,7 @@ def test_nmea_gga_without_rmc_runs_as_the_positions_only_pos(folder: Path, clean
 
     path = _log(str(folder / "pos"), False)
     p = read_pos(path.parent / "gnss.pos")
-    und = 12.5
-    lines = []
-    for k in range(len(p.t)):
-        utc = GPS_EPOCH + dt.timedelta(seconds=float(p.t[k]) - 18.0)
-        hms = utc.strftime("%H%M%S.") + f"{utc.microsecond // 10000:02d}"
-        la, lo = p.lat[k], p.lon[k]
-        lat = f"{int(abs(la)):02d}{(abs(la) - int(abs(la))) * 60:010.7f}"
-        lon = f"{int(abs(lo)):03d}{(abs(lo) - int(abs(lo))) * 60:010.7f}"
-        ns, ew = ("N" if la >= 0 else "S"), ("E" if lo >= 0 else "W")
-        lines.append(_nmea(f"GPGGA,{hms},{lat},{ns},{lon},{ew},1,9,0.8,{p.height[k] - und:.4f},M,{und:.4f},M,,"))
-        lines.append(_nmea(f"GPGST,{hms},1.0,0.5,0.4,30.0,{p.sd_pos[k, 1]:.4f},{p.sd_pos[k, 0]:.4f},{p.sd_pos[k, 2]:.4f}"))
+    lines = nmea_lines(p, 12.5, rmc=False)
     nm = path.parent / "receiver.nmea"
     nm.write_text("\n".join(lines) + "\n", encoding="utf-8")
     date = (GPS_EPOCH + dt.timedelta(seconds=float(p.t[0]) - 18.0)).date().isoformat()
