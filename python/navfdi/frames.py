@@ -138,16 +138,14 @@ def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.nd
     if ok.sum() < 30:
         return None
     w = np.linalg.norm(np.asarray(gyro, float), axis=1)
-    dt = float(np.median(np.diff(imu_t)))
+    dt = float(imu_t[-1] - imu_t[0]) / max(len(imu_t) - 1, 1)
     k = max(1, int(round(2.0 / dt))) if dt > 0 else 1
-    smooth = np.convolve(w, np.ones(k) / k, mode="same")
+    # A centred moving mean of k samples (cumulative sums: one pass).
+    c = np.concatenate([[0.0], np.cumsum(w)])
+    lo = np.clip(np.arange(len(w)) - k // 2, 0, len(w))
+    hi = np.clip(lo + k, 0, len(w))
+    smooth = (c[hi] - c[lo]) / np.maximum(hi - lo, 1)
     return t[ok], rate[ok], smooth
-
-
-def _corr(a: np.ndarray, b: np.ndarray) -> float:
-    a, b = a - a.mean(), b - b.mean()
-    d = float(np.sqrt((a * a).sum() * (b * b).sum()))
-    return float((a * b).sum() / d) if d > 0 else math.nan
 
 
 def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: float, field: str) -> None:
@@ -156,7 +154,8 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
 
     The lag that best lines up the GNSS course's rate of change with the IMU's
     rotation-rate magnitude (2 s averages; correlated at the GNSS epochs at speed over
-    ±40 s in 0.1 s steps) must be within :data:`TIME_LAG_TOLERANCE_S`; at that lag, the IMU's
+    ±40 s in 0.5 s steps, then refined in 0.1 s steps) must be within
+    :data:`TIME_LAG_TOLERANCE_S`; at that lag, the IMU's
     rate per unit of the course's (1 for a ground vehicle, whose turns are its course's) must
     not be off 1 by more than :data:`TURN_RATE_RATIO`: refused when the least-squares slopes
     both ways (the noisy course's rate bends one down, the other up) are both beyond it. Said only where
@@ -191,19 +190,38 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     tg, rate, w = sig
     if not np.std(rate) >= math.radians(1.0):
         return
-    lags = np.arange(-_MAX_LAG_S, _MAX_LAG_S + 1e-9, 0.1)
-    r = np.full(len(lags), math.nan)
-    for i, lag in enumerate(lags):
-        # The IMU's rate at the GNSS epoch's time plus the lag (inside the IMU log only).
-        at = tg + lag
-        inside = (at >= imu_t[0]) & (at <= imu_t[-1])
-        if inside.sum() >= 30:
-            r[i] = _corr(rate[inside], np.interp(at[inside], imu_t, w))
-    if not np.isfinite(r).any():
+    # The IMU's rate on a 0.1 s grid once; each lag (a row) reads it at the GNSS epochs' times
+    # plus the lag, inside the IMU log only (the mask), and is correlated with the course's.
+    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
+    if len(grid) < 2:
         return
-    best = int(np.nanargmax(r))
-    lag, r_best = float(lags[best]), float(r[best])
-    r0 = float(r[int(np.argmin(np.abs(lags)))])
+    wg = np.interp(grid, imu_t, w)
+
+    def corr_at(lags: np.ndarray) -> np.ndarray:
+        idx = np.rint((tg[None, :] + lags[:, None] - grid[0]) / 0.1).astype(np.int64)
+        m = ((idx >= 0) & (idx < len(grid))).astype(float)
+        y = wg[np.clip(idx, 0, len(grid) - 1)] * m
+        x = rate[None, :] * m
+        n = m.sum(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mx, my = x.sum(axis=1) / n, y.sum(axis=1) / n
+            sxy = (x * y).sum(axis=1) - n * mx * my
+            sxx = (x * x).sum(axis=1) - n * mx * mx
+            syy = (y * y).sum(axis=1) - n * my * my
+            return np.where((n >= 30) & (sxx > 0) & (syy > 0), sxy / np.sqrt(sxx * syy), np.nan)
+
+    # ±40 s in 0.5 s steps, then ±0.5 s about the best in 0.1 s steps.
+    coarse = np.arange(-_MAX_LAG_S, _MAX_LAG_S + 1e-9, 0.5)
+    rc = corr_at(coarse)
+    if not np.isfinite(rc).any():
+        return
+    fine = float(coarse[int(np.nanargmax(rc))]) + np.arange(-0.5, 0.5 + 1e-9, 0.1)
+    rf = corr_at(fine)
+    if not np.isfinite(rf).any():
+        return
+    best = int(np.nanargmax(rf))
+    lag, r_best = float(np.round(fine[best], 1)), float(rf[best])
+    r0 = float(corr_at(np.zeros(1))[0])
     if not r_best >= 0.4:
         return
     if abs(lag) <= TIME_LAG_TOLERANCE_S or not (not math.isfinite(r0) or r_best - r0 >= 0.1):
