@@ -102,6 +102,16 @@ TURN_RATE_RATIO = 2.0
 _MAX_LAG_S = 40.0
 
 
+def _over_two_seconds(x: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """The rate of ``x`` at times ``t`` (s) from the samples about 1 s either side, or one
+    sample when they are further apart; NaN at the ends."""
+    m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
+    out = np.full(len(t), np.nan)
+    if len(t) > 2 * m:
+        out[m:-m] = (x[2 * m:] - x[:-2 * m]) / (t[2 * m:] - t[:-2 * m])
+    return out
+
+
 def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.ndarray, lat: np.ndarray,
                   lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The GNSS epochs (s) at speed, the course's rate there (rad/s, magnitude; velocity, or
@@ -117,23 +127,14 @@ def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.nd
         r = 6_371_000.0
         n = np.radians(np.asarray(lat, float)) * r
         e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
-        m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
-        ve, vn = np.full(len(t), np.nan), np.full(len(t), np.nan)
-        span = t[2 * m:] - t[:-2 * m]
-        ve[m:-m] = (e[2 * m:] - e[:-2 * m]) / span
-        vn[m:-m] = (n[2 * m:] - n[:-2 * m]) / span
+        ve, vn = _over_two_seconds(e, t), _over_two_seconds(n, t)
     fin = np.isfinite(ve) & np.isfinite(vn)
     if fin.sum() < 30:
         return None
     t, ve, vn = t[fin], ve[fin], vn[fin]
-    course = np.unwrap(np.arctan2(ve, vn))
     # Its rate over about 2 s as well (a noisy course differenced over one fix interval
     # swamps the turns).
-    m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
-    if len(t) <= 2 * m + 30:
-        return None
-    rate = np.full(len(t), np.nan)
-    rate[m:-m] = np.abs(course[2 * m:] - course[:-2 * m]) / (t[2 * m:] - t[:-2 * m])
+    rate = np.abs(_over_two_seconds(np.unwrap(np.arctan2(ve, vn)), t))
     ok = np.isfinite(rate) & (np.hypot(ve, vn) > 3.0)
     if ok.sum() < 30:
         return None

@@ -362,11 +362,10 @@ class GnssSolution:
         out["clean_w_sd_robust"] = robust_sd(w)
         # Per system: a receiver whose systems differ in noise shows it here (a factor per
         # system, --noise-factor, evens them out).
-        letters = sats.loc[clean, "satellite"].astype(str).str[0].to_numpy()
-        wall = sats.loc[clean, "w"].to_numpy(float)
+        cw = sats.loc[clean, ["satellite", "w"]].dropna()
         out["clean_w_sd_robust_by_system"] = {
-            str(g): robust_sd(wall[(letters == g) & np.isfinite(wall)])
-            for g in sorted(set(letters)) if ((letters == g) & np.isfinite(wall)).sum() >= 30}
+            str(g): robust_sd(v.to_numpy(float))
+            for g, v in cw.groupby(cw["satellite"].astype(str).str[0])["w"] if len(v) >= 30}
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}

@@ -412,18 +412,7 @@ fn run<const NS: usize>(
             blame.reset();
         } else if isolation {
             let pos_ch = (0..n_gnss).find(|&a| recv[a].is_some_and(|c| !c.ins_referenced));
-            // A channel's innovation (INS − fix) and its variances over three components.
-            let inn = |o: &Outcome, off: usize| {
-                let (r, sv) = o.inn.as_ref()?;
-                Some((
-                    Vector3::new(r[off], r[off + 1], r[off + 2]),
-                    Vector3::new(
-                        sv[(off, off)],
-                        sv[(off + 1, off + 1)],
-                        sv[(off + 2, off + 2)],
-                    ),
-                ))
-            };
+            let inn = |o: &Outcome, off: usize| o.inn.as_ref().map(|(r, sv)| three(r, sv, off));
             let vel_inn = tested.iter().find_map(|(a, _, o)| inn(o, aids[*a].vel?));
             let pos_inn = pos_ch.and_then(|pa| {
                 tested
@@ -463,12 +452,7 @@ fn run<const NS: usize>(
                     .inn
                     .clone()
                     .unwrap_or_else(|| (meas.res.clone(), meas.r.clone()));
-                let d = Vector3::new(r[off], r[off + 1], r[off + 2]);
-                let sd = Vector3::new(
-                    sv[(off, off)],
-                    sv[(off + 1, off + 1)],
-                    sv[(off + 2, off + 2)],
-                );
+                let (d, sd) = three(&r, &sv, off);
                 let thr1 =
                     crate::stats::chi2_threshold(aids[a].decision_pf, 1).unwrap_or(f64::INFINITY);
                 let isolated: Vec<usize> = if alarm && l.isolate_components {
@@ -645,6 +629,19 @@ fn receiver_epoch(
         }
     }
     out
+}
+
+/// Three components from `off` of an innovation `r` and the diagonal of its covariance `sv`
+/// (east, north, up of a position or velocity).
+fn three(r: &DVector<f64>, sv: &DMatrix<f64>, off: usize) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        Vector3::new(r[off], r[off + 1], r[off + 2]),
+        Vector3::new(
+            sv[(off, off)],
+            sv[(off + 1, off + 1)],
+            sv[(off + 2, off + 2)],
+        ),
+    )
 }
 
 fn diag(sig: &[f64]) -> DMatrix<f64> {
