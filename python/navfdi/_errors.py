@@ -30,3 +30,11 @@ class PartialLogWarning(ScenarioWarning):
     """A recorded log that covers only part of another (an IMU log that starts after or ends
     before the GNSS log): the run processes their overlap only, the message gives both spans,
     and a fault outside the processed span is never applied (not missed)."""
+
+
+class LeftOutFixesWarning(ScenarioWarning):
+    """GNSS log epochs that are not GNSS measurements and are left out as the log is read: a
+    position the receiver estimated without satellites (NMEA ``GGA`` quality 6, dead
+    reckoning), entered by hand (7) or simulated (8), or a fix from fewer than four
+    satellites (no 3-D solution: held or extrapolated). The message gives how many, why and
+    the first one's GPS time."""

@@ -336,7 +336,7 @@ SECTIONS: dict[str, Section] = {
     "source.gnss": _s("[source.gnss]", "A GNSS solution log (`gnss = \"file\"` is `{ file = \"file\" }`).", [
         ("file", "path", REQ, "the log (format told from the file when not given)"),
         ("format", "pos, solution, nmea, csv, rinex", "from the file", "RTKLIB .pos, navfdi solution.csv, NMEA 0183, any CSV, or RINEX files solved as read"),
-        ("columns", "table", "— (csv: required)", "csv: time, lat, lon, height or height_msl, sd, vel, sd_vel column names"),
+        ("columns", "table", "— (csv: required)", "csv: time, lat, lon, height or height_msl, sd, vel, sd_vel, satellites column names"),
         ("time_scale", "gpst, utc", "gpst", "csv: the ISO time column's scale"),
         ("date", "YYYY-MM-DD", "from RMC", "nmea: the UTC date when no RMC sentence gives it"),
         ("undulation", "number (m)", "—", "csv with height_msl: geoid height added"),

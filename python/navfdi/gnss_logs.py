@@ -5,7 +5,7 @@
 
 * ``pos`` — an RTKLIB solution (``.pos``; :func:`navfdi.logs.read_pos`);
 * ``solution`` — ``navfdi gnss``'s own ``solution.csv`` (``gps_seconds``, ``lat``, ``lon``,
-  ``height``, ``sd_e/n/u`` when present, ``vel_e/n/u``; epochs without a solution are left
+  ``height``, ``sd_e/n/u`` when present, ``vel_e/n/u``, ``used``; epochs without a solution are left
   out; without σ columns the sensors' ``noise`` is used);
 * ``rinex`` — RINEX observation and navigation files, solved epoch by epoch by navfdi's own
   single-point positioning with satellite FDE (:func:`navfdi.gnss.gnss_solve`) as the log is
@@ -24,7 +24,12 @@
   ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
   ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
   ``undulation`` m), optional ``sd`` (three columns σ east, north, up, m), ``vel`` (three
-  columns east, north, up, m/s), ``sd_vel``.
+  columns east, north, up, m/s), ``sd_vel``, ``satellites`` (the count the receiver used).
+
+Every format: fixes from fewer than four satellites (where the log gives the count: ``.pos``
+``ns``, ``GGA``, ``solution.csv``'s ``used``, a CSV's ``satellites``) are left out, and so are
+``GGA`` fixes of quality 6–8 (dead reckoning, manual, simulator), each with a
+:class:`~navfdi.LeftOutFixesWarning` saying how many and from when.
 
 Without a ``format`` it is told from the file: ``.pos`` / ``.pos.gz``, a CSV whose header has
 ``gps_seconds`` and ``lat`` (``solution``), lines that start with ``$`` (``nmea``).
@@ -84,7 +89,43 @@ def _guess(path: Path, text: str) -> str:
 def read_gnss(spec: Any, base: Path) -> PosLog:
     """Read ``[source] gnss`` (a path, or a table with ``file``, ``format`` and its options)
     relative to ``base``. Raises :class:`ScenarioError` naming the file, line and field of bad
-    input."""
+    input. Fixes the log says were solved from fewer than four satellites are left out
+    (:func:`three_d_fixes`)."""
+    return three_d_fixes(_read_gnss(spec, base))
+
+
+#: Fewest satellites of a 3-D fix (three coordinates and the receiver clock).
+MIN_SATELLITES = 4
+
+
+def three_d_fixes(pos: PosLog) -> PosLog:
+    """``pos`` without the epochs whose satellite count (``ns``) is below
+    :data:`MIN_SATELLITES`: no 3-D solution (a receiver holding its height or extrapolating its
+    last fix writes such epochs), said in a :class:`~navfdi.LeftOutFixesWarning`; epochs with no
+    count (NaN, or 0 as converters write) are kept. Refuses a log with nothing left."""
+    if pos.ns is None:
+        return pos
+    # A count of 0 is no count: tools that write other solutions as RTKLIB's .pos fill 0.
+    few = np.isfinite(pos.ns) & (pos.ns > 0) & (pos.ns < MIN_SATELLITES)
+    if not few.any():
+        return pos
+    if few.all():
+        raise ScenarioError(f"source.gnss: {pos.path}: every fix is from fewer than {MIN_SATELLITES} satellites (no 3-D solution)")
+    _left_out(pos.path, pos.t[few], f"from fewer than {MIN_SATELLITES} satellites (no 3-D solution: a held height or an extrapolated fix)")
+    return pos.select(~few)
+
+
+def _left_out(path: str | Path, t: np.ndarray, why: str) -> None:
+    """A :class:`~navfdi.LeftOutFixesWarning`: ``len(t)`` fixes of ``path`` left out, ``why``."""
+    import warnings
+
+    from navfdi._errors import LeftOutFixesWarning
+
+    first = (GPS_EPOCH + _dt.timedelta(seconds=float(t[0]))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
+    warnings.warn(f"source.gnss: {path}: {len(t)} fix(es) {why} left out (the first at {first} GPST)", LeftOutFixesWarning, stacklevel=2)
+
+
+def _read_gnss(spec: Any, base: Path) -> PosLog:
     cfg: Mapping[str, Any] = spec if isinstance(spec, Mapping) else {"file": spec}
     if cfg.get("format") == "rinex":
         return read_rinex_solution(cfg, base)
@@ -112,7 +153,8 @@ def read_gnss(spec: Any, base: Path) -> PosLog:
     return read_gnss_csv(path, text, cfg)
 
 
-def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndarray, vel: np.ndarray, sd: np.ndarray, sd_vel: np.ndarray, q: np.ndarray | None = None) -> PosLog:
+def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndarray, vel: np.ndarray, sd: np.ndarray, sd_vel: np.ndarray,
+         q: np.ndarray | None = None, ns: np.ndarray | None = None) -> PosLog:
     ok = np.isfinite(t) & np.isfinite(lat) & np.isfinite(lon) & np.isfinite(h)
     if not ok.any():
         raise ScenarioError(f"source.gnss: {path}: no epoch with a position")
@@ -125,7 +167,7 @@ def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndar
     if (np.abs(lat[sel]) > 90).any() or (np.abs(lon[sel]) > 360).any() or (np.abs(h[sel]) > 1e5).any():
         raise ScenarioError(f"source.gnss: {path}: latitude, longitude or height out of range (degrees and metres expected)")
     qq = np.full(len(sel), 5.0) if q is None else q[sel]
-    return PosLog(tt, lat[sel], lon[sel], h[sel], qq, vel[sel], sd[sel], sd_vel[sel], str(path))
+    return PosLog(tt, lat[sel], lon[sel], h[sel], qq, vel[sel], sd[sel], sd_vel[sel], str(path), None if ns is None else ns[sel])
 
 
 def read_solution_csv(path: Path, text: str | None = None) -> PosLog:
@@ -148,7 +190,9 @@ def _solution_log(path: Path | str, df: Any) -> PosLog:
     three = lambda cols: np.column_stack([df.get(c, pd.Series(np.nan, index=df.index)).to_numpy(float) for c in cols])  # noqa: E731
     vel = three(("vel_e", "vel_n", "vel_u"))
     sd = three(("sd_e", "sd_n", "sd_u"))
-    return _log(Path(path), df["gps_seconds"].to_numpy(float), df["lat"].to_numpy(float), df["lon"].to_numpy(float), df["height"].to_numpy(float), vel, sd, np.full((n, 3), np.nan))
+    ns = df["used"].to_numpy(float) if "used" in df else None
+    return _log(Path(path), df["gps_seconds"].to_numpy(float), df["lat"].to_numpy(float), df["lon"].to_numpy(float), df["height"].to_numpy(float), vel, sd,
+                np.full((n, 3), np.nan), ns=ns)
 
 
 def read_rinex_solution(cfg: Mapping[str, Any], base: Path) -> PosLog:
@@ -217,9 +261,19 @@ def _deg(v: str, hemi: str) -> float:
     return -out if hemi in ("S", "W") else out
 
 
+#: GGA fix quality → RTKLIB's solution quality (:attr:`navfdi.logs.PosLog.q`: 1 fixed, 2 float,
+#: 3 SBAS, 4 DGPS, 5 single): GPS SPS and PPS → 5, DGPS → 4, RTK fixed → 1, RTK float → 2, SBAS
+#: (NMEA 4.1's 9) → 3.
+GGA_QUALITY = {1: 5, 2: 4, 3: 5, 4: 1, 5: 2, 9: 3}
+#: GGA fix qualities that are not GNSS measurements: left out as the log is read.
+GGA_NOT_MEASURED = {6: "estimated, dead reckoning", 7: "manual input", 8: "simulator"}
+
+
 def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> PosLog:
     """NMEA 0183 ``GGA`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
-    module's description."""
+    module's description. The GGA quality is turned into RTKLIB's (:data:`GGA_QUALITY`); fixes
+    of qualities 6–8 (:data:`GGA_NOT_MEASURED`) are left out with a
+    :class:`~navfdi.LeftOutFixesWarning`; the satellite count is read into ``ns``."""
     text = text if text is not None else _text(path)
     day: _dt.date | None = None
     if date is not None:
@@ -247,7 +301,12 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
                 r = row(f[1])
                 r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
                 r["h"] = float(f[9]) + (float(f[11]) if f[11] else 0.0)
-                r["q"] = float(f[6])
+                code = int(f[6])
+                if code not in GGA_QUALITY and code not in GGA_NOT_MEASURED:
+                    raise ScenarioError(f"source.gnss: {path}, line {i}: GGA fix quality {code} is none of NMEA 0183's (0–9)")
+                r["q"] = float(GGA_QUALITY.get(code, -code))
+                if f[7]:
+                    r["ns"] = float(f[7])
             elif kind == "RMC" and len(f) >= 10 and f[1] and f[2] == "A":
                 r = row(f[1])
                 pending_day[f[1]] = _dt.datetime.strptime(f[9], "%d%m%y").date()
@@ -263,6 +322,8 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
             elif kind == "GST" and len(f) >= 9 and f[1] and f[6] and f[7] and f[8]:
                 r = row(f[1])
                 r["sdn"], r["sde"], r["sdu"] = float(f[6]), float(f[7]), float(f[8].split("*")[0])
+        except ScenarioError:
+            raise
         except (ValueError, IndexError):
             raise ScenarioError(f"source.gnss: {path}, line {i}: malformed {kind} sentence: {ln.strip()[:80]!r}") from None
     if not order:
@@ -282,7 +343,16 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
     g = lambda k: np.array([rows[h].get(k, math.nan) for h in order])  # noqa: E731
     vel = np.column_stack([g("ve"), g("vn"), np.where(np.isfinite(g("ve")), 0.0, np.nan)])
     sd = np.column_stack([g("sde"), g("sdn"), g("sdu")])
-    return _log(path, np.array(t), g("lat"), g("lon"), g("h"), vel, sd, np.full_like(sd, np.nan), g("q"))
+    q, tt = g("q"), np.array(t)
+    # GGA qualities with no GNSS solution behind them (estimated, manual, simulated).
+    for code, name in GGA_NOT_MEASURED.items():
+        hit = q == -code
+        if hit.any():
+            _left_out(path, tt[hit], f"of GGA quality {code} ({name}: not a GNSS measurement)")
+    lat = np.where(q > 0, g("lat"), np.nan)  # no position: dropped by _log
+    if not np.isfinite(lat).any() and (q < 0).any():
+        raise ScenarioError(f"source.gnss: {path}: no GGA fix of a GNSS quality (every one is {', '.join(sorted({GGA_NOT_MEASURED.get(-int(x), '?') for x in q[q < 0]}))})")
+    return _log(path, tt, lat, g("lon"), g("h"), vel, sd, np.full_like(sd, np.nan), q, g("ns"))
 
 
 def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
@@ -290,7 +360,7 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
     cols = cfg.get("columns")
     if not isinstance(cols, Mapping):
         raise ScenarioError("source.gnss.columns: a table mapping time, lat, lon, height (and optionally sd, vel, sd_vel) to the file's column names")
-    allowed = {"time", "lat", "lon", "height", "height_msl", "sd", "vel", "sd_vel"}
+    allowed = {"time", "lat", "lon", "height", "height_msl", "sd", "vel", "sd_vel", "satellites"}
     unknown = sorted(set(cols) - allowed)
     if unknown:
         raise ScenarioError(f"source.gnss.columns: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
@@ -354,7 +424,11 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
         h = num(cols["height_msl"], "height_msl") + float(und)
     else:
         raise ScenarioError("source.gnss.columns: height (above the ellipsoid) or height_msl with source.gnss.undulation")
-    return _log(path, t, num(cols["lat"], "lat"), num(cols["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"))
+    sats = cols.get("satellites")
+    if sats is not None and not isinstance(sats, str):
+        raise ScenarioError("source.gnss.columns.satellites: a column name (the satellites the receiver used)")
+    ns = None if sats is None else num(sats, "satellites")
+    return _log(path, t, num(cols["lat"], "lat"), num(cols["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"), ns=ns)
 
 
 EPOCH_READERS.append(lambda spec, base: read_gnss(spec, base).t)

@@ -51,7 +51,8 @@ class PosLog:
     """A GNSS solution: ``t`` (M,) GPS seconds since the GPS epoch, ``lat``, ``lon`` (M,) in
     degrees, ``height`` (M,) m, ``q`` (M,) solution quality (1 fix, 2 float, 5 single, …),
     ``vel`` (M, 3) east, north, up m/s (NaN without velocity columns), ``sd_pos`` (M, 3) and
-    ``sd_vel`` (M, 3) σ east, north, up (m, m/s)."""
+    ``sd_vel`` (M, 3) σ east, north, up (m, m/s), ``ns`` (M,) satellites the receiver used
+    (NaN where the format does not say; None: not read)."""
 
     t: np.ndarray
     lat: np.ndarray
@@ -62,6 +63,7 @@ class PosLog:
     sd_pos: np.ndarray
     sd_vel: np.ndarray
     path: str
+    ns: np.ndarray | None = None
 
     def rows(self, t0: float) -> np.ndarray:
         """(M, 13) rows for :class:`navfdi._core.LoggedSource`: time from ``t0`` (s), latitude,
@@ -74,7 +76,8 @@ class PosLog:
     def select(self, mask: np.ndarray) -> PosLog:
         """The epochs where ``mask`` (M,) is true."""
         return PosLog(self.t[mask], self.lat[mask], self.lon[mask], self.height[mask], self.q[mask],
-                      self.vel[mask], self.sd_pos[mask], self.sd_vel[mask], self.path)
+                      self.vel[mask], self.sd_pos[mask], self.sd_vel[mask], self.path,
+                      None if self.ns is None else self.ns[mask])
 
 
 #: Largest ratio of decompressed to compressed size accepted for a ``.gz`` log (the core's
@@ -273,7 +276,7 @@ def read_pos(path: str | Path) -> PosLog:
     # RTKLIB names the height "height(m)"; an ellipsoidal height may be labelled "ellh(m)".
     height = get("height") if any(k.split("(")[0] == "height" for k in col) else get("ellh")
     return PosLog(times, get("latitude"), get("longitude"), height, get("Q", 0), vel,
-                  np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path))
+                  np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path), get("ns"))
 
 
 def _pos_limit(name: str) -> tuple[float, float] | None:
