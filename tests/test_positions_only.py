@@ -94,3 +94,21 @@ def test_nmea_gga_without_rmc_runs_as_the_positions_only_pos(folder: Path, clean
     base = clean.runs["fde"].errors()
     assert e["scored"] > 0.9 * base["scored"]
     assert math.isfinite(e["hor_rms"]) and abs(e["hor_rms"] - base["hor_rms"]) <= 0.02 * base["hor_rms"]
+
+
+def test_a_ramp_the_filter_followed_is_not_held_after_its_end(folder: Path) -> None:
+    """A 0.5 m/s north ramp over 40 s on fixes without velocities is followed (as without FDE:
+    nothing tells it from the receiver's correlated error), and where it ends the fixes jump
+    back across the INS the updates had pulled north: the end of a followed fault, used to
+    correct the filter — not a step held for the rest of the run, which kept 19 m of error to
+    the end and left every later fix out."""
+    ramp = [{"id": "r", "sensor": "gnss_pos", "kind": "ramp", "components": ["pos_n"], "magnitude": "0.5 m/s",
+             "start": "300 s", "end": "340 s"}]
+    runs = _run(folder, False, ramp).runs
+    x, y = runs["fde"], runs["no_fde"]
+    sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
+    tested = np.asarray(sub["dof"]) > 0
+    out = (np.asarray(sub["reason"]) > 0) & tested
+    assert not out[x.t >= 345.0].any()
+    late = x.t >= 440.0
+    assert np.nanmax(_hor(x)[late]) <= 1.2 * np.nanmax(_hor(y)[late]) + 0.5

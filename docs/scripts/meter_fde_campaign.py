@@ -7,7 +7,8 @@ receiver writing positions only) and fault shape
 of runs excluded at the first fix after the onset, the median delay of the first exclusion
 and the largest horizontal error before it,
 the share of fault fixes excluded, the largest horizontal error in the fault (with FDE and
-without), runs with an exclusion left standing more than 5 s after the end, and false
+without), runs with an exclusion left standing more than 5 s after the end, the largest error 20-60 s
+after the end (with FDE and without), and false
 exclusions per clean tested epoch (Wilson 95 % interval).
 Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter|meter_pos] [step|ramp]"""
 
@@ -48,6 +49,9 @@ def _one(base: navfdi.Scenario, fault: dict) -> dict[str, float]:
         hor = np.hypot(e[:, 6], e[:, 7])
         win = (t >= a) & (t < b) & np.isfinite(hor)
         out[f"{v}.err"] = float(hor[win].max()) if win.any() else float("nan")
+        # What the fault left behind: the largest error 20-60 s after its end.
+        aft = (t >= b + 20.0) & (t < b + 60.0) & np.isfinite(hor)
+        out[f"{v}.after"] = float(hor[aft].max()) if aft.any() else float("nan")
     x = runs["fde"]
     t = x.t
     sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
@@ -90,8 +94,8 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step") -> None:
     wall = time.perf_counter() - t0
     print(f"{which} / {kind}: {runs} runs (2 variants each) in {wall:.0f} s")
     edges = [5, 10, 20, 40] if kind == "step" else [0.1, 0.3, 0.6, 1.0, 2.0]
-    print(f"| {kind} [{unit}] | runs | excluded at first fix | median delay [s] | max error before it (median / 95 %) [m] | fixes excluded | max error FDE (median / 95 %) [m] | no FDE (median) [m] | excluded > 5 s after end |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print(f"| {kind} [{unit}] | runs | excluded at first fix | median delay [s] | max error before it (median / 95 %) [m] | fixes excluded | max error FDE (median / 95 %) [m] | no FDE (median) [m] | excluded > 5 s after end | max error 20-60 s after end, FDE (median / 95 %) / no FDE (median) [m] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for a, b in zip(edges[:-1], edges[1:]):
         sel = [r for s, r in rows if a <= s < b + 1e-9]
         if not sel:
@@ -101,7 +105,8 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step") -> None:
         med = f"{np.nanmedian(d):.1f}" if np.isfinite(d).any() else "-"
         print(f"| {a:g}-{b:g} | {len(sel)} | {g('first_fix_excluded').mean():.2f} | {med} | "
               f"{np.nanmedian(g('pre')):.2f} / {np.nanpercentile(g('pre'), 95):.2f} | {np.nanmean(g('share')):.2f} | "
-              f"{np.nanmedian(g('fde.err')):.2f} / {np.nanpercentile(g('fde.err'), 95):.2f} | {np.nanmedian(g('no_fde.err')):.2f} | {g('late').mean():.2f} |")
+              f"{np.nanmedian(g('fde.err')):.2f} / {np.nanpercentile(g('fde.err'), 95):.2f} | {np.nanmedian(g('no_fde.err')):.2f} | {g('late').mean():.2f} | "
+              f"{np.nanmedian(g('fde.after')):.2f} / {np.nanpercentile(g('fde.after'), 95):.2f} / {np.nanmedian(g('no_fde.after')):.2f} |")
     fa = np.array([[r["false"], r["clean"]] for _, r in rows])
     k, n = fa[:, 0].sum(), fa[:, 1].sum()
     lo95, hi95 = wilson(np.array([k]), np.array([n]))

@@ -17,6 +17,7 @@
 mod blame;
 mod checks;
 mod hold;
+mod pull;
 mod window;
 
 use super::common::make_detector;
@@ -333,10 +334,7 @@ fn run<const NS: usize>(
         let mut stale_epoch = false;
         // A receiver without velocities: its fixes' displacement is compared with the INS's
         // (the antenna's velocity, east, north, up) instead.
-        let ins_vel = vel_aid_none.then(|| {
-            let v = s.v + s.q * w_last.cross(&lever);
-            Vector3::new(v.y, v.x, -v.z)
-        });
+        let ins_vel = vel_aid_none.then(|| enu(&(s.v + s.q * w_last.cross(&lever))));
         let mut recv = receiver_epoch(
             &aids,
             n_gnss,
@@ -434,6 +432,7 @@ fn run<const NS: usize>(
                 }
             }
         }
+        let had_gnss = !tested.is_empty();
         for (a, meas, mut o) in tested {
             let alarm = o.excluded;
             let gross = gross_of(&aids[a], &o);
@@ -550,6 +549,18 @@ fn run<const NS: usize>(
                 update(&mut kf, &mut s, &rows(&fresh, &keep)).map_err(at)?;
             }
             outcomes[a] = o;
+        }
+        if had_gnss {
+            // How far the GNSS updates moved the INS antenna this epoch.
+            let after = antenna(&s, &lever);
+            let moved = logged.origin.to_enu(&Nominal {
+                lat: after.lat,
+                lon: after.lon,
+                h: after.h,
+            }) - ant_enu;
+            for h in holds.iter_mut() {
+                h.pull.add(tk, &moved);
+            }
         }
         // Record.
         let mut fused = 0;
@@ -773,6 +784,11 @@ fn test<const NS: usize>(
 }
 
 /// Update the filter with a measurement and feed the correction back into the state.
+/// A north, east, down vector as east, north, up.
+fn enu(v: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(v.y, v.x, -v.z)
+}
+
 fn update<const NS: usize>(kf: &mut ErrorFilter<NS>, s: &mut NavState, meas: &Meas) -> Result<()> {
     let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
     let dx = kf.update(&inn, &meas.h, &meas.r)?;

@@ -129,6 +129,8 @@ pub struct PositionHold {
     prev: Option<(Vector3<f64>, Vector3<f64>)>,
     /// The previous fix (east, north, up, m) and the INS position then (same frame).
     last_fix: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// How far the GNSS updates moved the INS lately (a receiver without velocities).
+    pub pull: super::pull::PullHistory,
 }
 
 impl Default for PositionHold {
@@ -137,6 +139,7 @@ impl Default for PositionHold {
             comps: [Comp::Normal; 3],
             prev: None,
             last_fix: None,
+            pull: Default::default(),
         }
     }
 }
@@ -256,7 +259,13 @@ impl PositionHold {
                         });
                     let flagged =
                         (alarm && (converged || gross) && isolated.contains(&j)) || receiver_step;
-                    if returned(j) {
+                    // Without the receiver's velocity, a jump back across an INS the
+                    // updates had pulled the other way is the end of a fault it followed.
+                    let pulled_back = recv.is_some_and(|c| c.ins_referenced)
+                        && flagged
+                        && jump
+                        && self.pull.back(j, d[j], s[j]);
+                    if returned(j) || pulled_back {
                         // Used as measured: it corrects the filter.
                         Comp::Return { fixes: 1 }
                     } else if flagged && jump {
