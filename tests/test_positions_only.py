@@ -112,3 +112,13 @@ def test_a_ramp_the_filter_followed_is_not_held_after_its_end(folder: Path) -> N
     assert not out[x.t >= 345.0].any()
     late = x.t >= 440.0
     assert np.nanmax(_hor(x)[late]) <= 1.2 * np.nanmax(_hor(y)[late]) + 0.5
+
+
+def test_the_console_says_what_positions_only_cannot_do(folder: Path, clean: navfdi.ScenarioRun) -> None:
+    """Under the exclusion counts of a positions-only channel with FDE on, the console says
+    that slow drifts are followed; not for the variant without FDE, nor where the receiver
+    gives velocities."""
+    text = clean.runs["fde"].format_tables()
+    assert "gnss_pos: positions without the receiver's velocity" in text
+    assert "positions without" not in clean.runs["no_fde"].format_tables()
+    assert "positions without" not in _run(folder, True).runs["fde"].format_tables()

@@ -358,3 +358,21 @@ def _ultra_tight(u: Any) -> dict[str, Any]:
         "exclude": _bool(u.get("exclude", True), f"{p}.exclude"),
         "arm_after": _unit(u.get("arm_after", "30 s"), "time", f"{p}.arm_after"),
     }
+
+
+#: The console's note under a channel of positions only (:func:`positions_only_channels`).
+POSITIONS_ONLY = ("positions without the receiver's velocity: steps are held out; a slow drift is followed as without FDE "
+                  "and its end may be held as a step — give the receiver's velocities where drifts matter "
+                  "(docs/meter_fde.md, logs of positions only)")
+
+
+def positions_only_channels(raw: Mapping[str, Any]) -> set[str]:
+    """The loosely coupled GNSS channels of scenario ``raw`` (its TOML as a dict) when every
+    one is a ``gnss_position`` sensor (a log of positions only: no receiver velocity) and FDE
+    is on (``isolate`` not false); else an empty set."""
+    lc = raw.get("loosely_coupled")
+    if not isinstance(lc, Mapping) or lc.get("isolate") is False:
+        return set()
+    names = {str(x.get("sensor")) for x in lc.get("sensors", []) if isinstance(x, Mapping)}
+    kinds = {str(x.get("name")): x.get("kind") for x in raw.get("sensors", []) if isinstance(x, Mapping)}
+    return names if names and all(kinds.get(n) == "gnss_position" for n in names) else set()

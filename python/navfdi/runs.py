@@ -27,6 +27,7 @@ import numpy as np
 from navfdi import _core, _json
 from navfdi._intervals import AlarmInterval, alarm_intervals, match_events, tested_epochs, window_alarm
 from navfdi._text import fit
+from navfdi._lc_schema import POSITIONS_ONLY, positions_only_channels
 from navfdi.consistency import consistency, format_consistency, no_reference_line
 from navfdi._timeseries import timeseries_columns
 from navfdi.frames import FrameWarning, frame_warnings
@@ -42,7 +43,6 @@ FAULT_TABLE_LEGEND = [
 
 #: Note of a fault that never reached a measurement (left out of the detection figures).
 NEVER_APPLIED = "never applied: no measurement of its sensor (or satellite) in its window"
-
 
 
 @dataclass(frozen=True)
@@ -367,6 +367,7 @@ class ScenarioRun(RunRecord):
             for sen, c in self.exclusion_counts().items():
                 why = ", ".join(f"{n} {c[n]}" for n in c if n != "tested" and c[n])
                 lines.append(f"{sen}: left out (wholly or in part) at {sum(v for n, v in c.items() if n != 'tested')} of {c['tested']} tested epochs" + (f" ({why})" if why else ""))
+                lines += [f"  {sen}: {POSITIONS_ONLY}"] if sen in positions_only_channels(self.scenario.raw) else []
             e = self.errors()
         if "nav" in self.record and not e["scored"]:
             lines.append(no_reference_line(self.scenario))
