@@ -51,7 +51,7 @@ import numpy as np
 from navfdi._errors import ScenarioError
 from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, utc_to_gps
-from navfdi.logs import PosLog, read_pos
+from navfdi.logs import PosLog, _gpst, read_pos
 
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
 
@@ -121,8 +121,7 @@ def _left_out(path: str | Path, t: np.ndarray, why: str) -> None:
 
     from navfdi._errors import LeftOutFixesWarning
 
-    first = (GPS_EPOCH + _dt.timedelta(seconds=float(t[0]))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
-    warnings.warn(f"source.gnss: {path}: {len(t)} fix(es) {why} left out (the first at {first} GPST)", LeftOutFixesWarning, stacklevel=2)
+    warnings.warn(f"source.gnss: {path}: {len(t)} fix(es) {why} left out (the first at {_gpst(t[0])} GPST)", LeftOutFixesWarning, stacklevel=2)
 
 
 def _read_gnss(spec: Any, base: Path) -> PosLog:

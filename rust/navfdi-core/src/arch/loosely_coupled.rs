@@ -783,12 +783,12 @@ fn test<const NS: usize>(
     })
 }
 
-/// Update the filter with a measurement and feed the correction back into the state.
 /// A north, east, down vector as east, north, up.
 fn enu(v: &Vector3<f64>) -> Vector3<f64> {
     Vector3::new(v.y, v.x, -v.z)
 }
 
+/// Update the filter with a measurement and feed the correction back into the state.
 fn update<const NS: usize>(kf: &mut ErrorFilter<NS>, s: &mut NavState, meas: &Meas) -> Result<()> {
     let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
     let dx = kf.update(&inn, &meas.h, &meas.r)?;
