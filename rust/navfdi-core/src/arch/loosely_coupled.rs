@@ -433,6 +433,11 @@ fn run<const NS: usize>(
             }
         }
         let had_gnss = !tested.is_empty();
+        // Position variance (east, north, up) before the GNSS updates: what they take off it.
+        let pos_var = |kf: &ErrorFilter<NS>| {
+            Vector3::new(kf.p[(R + 1, R + 1)], kf.p[(R, R)], kf.p[(R + 2, R + 2)])
+        };
+        let p_before = pos_var(&kf);
         for (a, meas, mut o) in tested {
             let alarm = o.excluded;
             let gross = gross_of(&aids[a], &o);
@@ -551,15 +556,17 @@ fn run<const NS: usize>(
             outcomes[a] = o;
         }
         if had_gnss {
-            // How far the GNSS updates moved the INS antenna this epoch.
+            // How far the GNSS updates moved the INS antenna this epoch, and how much position
+            // variance they took off.
             let after = antenna(&s, &lever);
             let moved = logged.origin.to_enu(&Nominal {
                 lat: after.lat,
                 lon: after.lon,
                 h: after.h,
             }) - ant_enu;
+            let dvar = p_before - pos_var(&kf);
             for h in holds.iter_mut() {
-                h.pull.add(tk, &moved);
+                h.pull.add(tk, &moved, &dvar);
             }
         }
         // Record.
