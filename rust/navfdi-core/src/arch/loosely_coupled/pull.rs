@@ -101,25 +101,20 @@ mod tests {
         // An INS drifting north that every update corrects by 0.4 m, each taking 0.5 m² off
         // the position variance (σ of the sum over 40 updates: √20 = 4.5 m; a 16 m pull is
         // 3.6 of it, within what a MEMS INS is corrected by without a fault).
-        let mut p = PullHistory::default();
-        for k in 0..40 {
-            p.add(
-                k as f64,
-                &Vector3::new(0.0, 0.4, 0.0),
-                &Vector3::new(0.0, 0.5, 0.0),
-            );
-        }
-        assert!(!p.back(1, 16.0, 4.0));
+        let pulled = |dvar: f64| {
+            let mut p = PullHistory::default();
+            for k in 0..40 {
+                p.add(
+                    k as f64,
+                    &Vector3::new(0.0, 0.4, 0.0),
+                    &Vector3::new(0.0, dvar, 0.0),
+                );
+            }
+            p
+        };
+        assert!(!pulled(0.5).back(1, 16.0, 4.0));
         // The same pull with the variance a settled filter takes off (0.05 m² per update).
-        let mut q = PullHistory::default();
-        for k in 0..40 {
-            q.add(
-                k as f64,
-                &Vector3::new(0.0, 0.4, 0.0),
-                &Vector3::new(0.0, 0.05, 0.0),
-            );
-        }
-        assert!(q.back(1, 16.0, 4.0));
+        assert!(pulled(0.05).back(1, 16.0, 4.0));
     }
 
     #[test]
