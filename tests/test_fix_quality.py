@@ -16,7 +16,7 @@ import pytest
 import navfdi
 from navfdi._logtime import GPS_EPOCH
 from navfdi.gnss_logs import read_gnss, read_nmea
-from navfdi.logs import read_pos
+from navfdi.logs import PosLog, read_pos
 from navfdi.scenario import ScenarioError, from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
@@ -41,9 +41,9 @@ def test_gga_qualities_are_read_on_rtklib_scale_and_non_measurements_left_out(tm
     with pytest.warns(navfdi.LeftOutFixesWarning) as rec:
         p = read_nmea(f)
     msgs = [str(w.message) for w in rec]
-    assert any("2 fix(es) of GGA quality 6 (estimated, dead reckoning" in m for m in msgs), msgs
-    assert any("1 fix(es) of GGA quality 7 (manual input" in m for m in msgs)
-    assert any("1 fix(es) of GGA quality 8 (simulator" in m for m in msgs)
+    assert any("2 fix(es) of GGA quality 6 or GNS mode E (estimated, dead reckoning" in m for m in msgs), msgs
+    assert any("1 fix(es) of GGA quality 7 or GNS mode M (manual input" in m for m in msgs)
+    assert any("1 fix(es) of GGA quality 8 or GNS mode S (simulator" in m for m in msgs)
     assert p.q.tolist() == [5, 4, 1, 2, 3, 5]
     assert p.ns is not None and p.ns.tolist() == [5, 6, 7, 8, 9, 14]
 
@@ -141,7 +141,7 @@ def test_dead_reckoned_fixes_do_not_pull_the_filter(tmp_path: Path) -> None:
         return navfdi.run_scenario(from_dict(raw, source=str(path))).runs["fde"]
 
     clean = run(None)
-    with pytest.warns(navfdi.LeftOutFixesWarning, match=r"fix\(es\) of GGA quality 6 \(estimated, dead reckoning"):
+    with pytest.warns(navfdi.LeftOutFixesWarning, match=r"fix\(es\) of GGA quality 6 or GNS mode E \(estimated, dead reckoning"):
         held = run("6")
     with warnings.catch_warnings():
         warnings.simplefilter("error", navfdi.LeftOutFixesWarning)
@@ -154,3 +154,36 @@ def test_dead_reckoned_fixes_do_not_pull_the_filter(tmp_path: Path) -> None:
     assert tested(held) == tested(clean) - 60
     assert worst(held) <= float(np.nanmax(horizontal_error(clean)))
     assert worst(used) > 1.5 * worst(held), (worst(used), worst(held))
+
+
+GNS = "GNGNS,{hms},4000.0000000,N,10500.0000000,W,{mode},{ns},0.8,1600.0,-20.0,,,V"
+
+
+def test_gns_sentences_are_read_where_an_epoch_has_no_gga(tmp_path: Path) -> None:
+    """``GNS`` (the multi-constellation fix, which some receivers write instead of ``GGA``):
+    the best system's mode is the fix's (``RA`` → RTK fixed), ``N`` systems are skipped, ``E``
+    alone is dead reckoning (left out, warned), a ``GGA`` of the same epoch is read instead,
+    the position and height are those of the ``GGA`` it stands for, an unknown letter is
+    refused with its line."""
+    lines = [nmea(RMC), _gga("120000.00", 1, 9)]
+    lines += [nmea(GNS.format(hms=h, mode=m, ns=n)) for h, m, n in
+              (("120000.00", "RR", 14), ("120001.00", "AN", 9), ("120002.00", "RA", 15), ("120003.00", "NE", 6), ("120004.00", "DAN", 11))]
+    f = tmp_path / "gns.nmea"
+    f.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.warns(navfdi.LeftOutFixesWarning, match=r"1 fix\(es\) of GGA quality 6 or GNS mode E"):
+        p = read_nmea(f)
+    assert p.q.tolist() == [5, 5, 1, 4]  # GGA (not the GNS "RR"), A, R, D
+    assert p.ns is not None and p.ns.tolist() == [9, 9, 15, 11]
+    gga = read_nmea_text(tmp_path, [nmea(RMC), _gga("120000.00", 1, 9)])
+    assert np.allclose([p.lat[1], p.lon[1], p.height[1]], [gga.lat[0], gga.lon[0], gga.height[0]])
+    bad = tmp_path / "bad_gns.nmea"
+    bad.write_text("\n".join([nmea(RMC), nmea(GNS.format(hms="120000.00", mode="AX", ns=9))]) + "\n", encoding="utf-8")
+    with pytest.raises(ScenarioError, match=r"bad_gns.nmea, line 2: GNS mode indicator 'AX'"):
+        read_nmea(bad)
+
+
+def read_nmea_text(folder: Path, lines: list[str]) -> PosLog:
+    """``lines`` written to a file in ``folder`` and read."""
+    f = folder / "one.nmea"
+    f.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return read_nmea(f)

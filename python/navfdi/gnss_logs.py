@@ -15,7 +15,8 @@
   the geometry and the solve's weights (:func:`navfdi._gnss_geometry.enu_sigma`), velocity from the
   Doppler; the same as writing ``solution.csv`` with ``navfdi gnss`` and reading it;
 * ``nmea`` — NMEA 0183 sentences: ``GGA`` (position; the height above the ellipsoid is the
-  altitude above mean sea level plus the geoid separation the sentence gives), ``RMC`` (date,
+  altitude above mean sea level plus the geoid separation the sentence gives; or ``GNS``, the
+  multi-constellation fix, where an epoch has no ``GGA``), ``RMC`` (date,
   speed and course → horizontal velocity), ``VTG`` (speed and course), ``GST`` (σ of latitude,
   longitude and altitude). Times are UTC, turned into GPST with the leap seconds; a log without
   ``RMC`` needs ``date = "YYYY-MM-DD"`` in the table. Sentences with a bad checksum are
@@ -266,10 +267,14 @@ def _deg(v: str, hemi: str) -> float:
 GGA_QUALITY = {1: 5, 2: 4, 3: 5, 4: 1, 5: 2, 9: 3}
 #: GGA fix qualities that are not GNSS measurements: left out as the log is read.
 GGA_NOT_MEASURED = {6: "estimated, dead reckoning", 7: "manual input", 8: "simulator"}
+#: GNS mode letters as the GGA quality they stand for (autonomous, differential, precise, RTK
+#: fixed, RTK float, estimated, manual, simulator; ``N``, no fix, is skipped).
+GNS_MODE = {"A": 1, "D": 2, "P": 3, "R": 4, "F": 5, "E": 6, "M": 7, "S": 8}
+_GNS_LETTER = {v: k for k, v in GNS_MODE.items()}
 
 
 def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> PosLog:
-    """NMEA 0183 ``GGA`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
+    """NMEA 0183 ``GGA`` / ``GNS`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
     module's description. The GGA quality is turned into RTKLIB's (:data:`GGA_QUALITY`); fixes
     of qualities 6–8 (:data:`GGA_NOT_MEASURED`) are left out with a
     :class:`~navfdi.LeftOutFixesWarning`; the satellite count is read into ``ns``."""
@@ -306,6 +311,20 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
                 r["q"] = float(GGA_QUALITY.get(code, -code))
                 if f[7]:
                     r["ns"] = float(f[7])
+            elif kind == "GNS" and len(f) >= 11 and f[1] and f[6].strip("N"):
+                # Mode per system (GPS, GLONASS, Galileo, …): the best one is the fix's.
+                if any(c != "N" and c not in GNS_MODE for c in f[6]):
+                    raise ScenarioError(f"source.gnss: {path}, line {i}: GNS mode indicator {f[6]!r} has a letter none of NMEA 0183's (NADPRFEMS)")
+                codes = [GNS_MODE[c] for c in f[6] if c != "N"]
+                measured = [c for c in codes if c in GGA_QUALITY]
+                code = min(measured, key=GGA_QUALITY.__getitem__) if measured else min(codes)
+                r = row(f[1])
+                if "lat" not in r:  # a GGA of the same epoch is read instead
+                    r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
+                    r["h"] = float(f[9]) + (float(f[10]) if f[10] else 0.0)
+                    r["q"] = float(GGA_QUALITY.get(code, -code))
+                    if f[7]:
+                        r["ns"] = float(f[7])
             elif kind == "RMC" and len(f) >= 10 and f[1] and f[2] == "A":
                 r = row(f[1])
                 pending_day[f[1]] = _dt.datetime.strptime(f[9], "%d%m%y").date()
@@ -326,7 +345,7 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
         except (ValueError, IndexError):
             raise ScenarioError(f"source.gnss: {path}, line {i}: malformed {kind} sentence: {ln.strip()[:80]!r}") from None
     if not order:
-        raise ScenarioError(f"source.gnss: {path}: no NMEA GGA/RMC sentences")
+        raise ScenarioError(f"source.gnss: {path}: no NMEA GGA/GNS/RMC sentences")
     if day is None and not pending_day:
         raise ScenarioError(f"source.gnss: {path}: no RMC sentence gives the date; add date = \"YYYY-MM-DD\" (UTC) to source.gnss")
     t, cur, prev_sec = [], day, None
@@ -347,7 +366,7 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
     for code, name in GGA_NOT_MEASURED.items():
         hit = q == -code
         if hit.any():
-            _left_out(path, tt[hit], f"of GGA quality {code} ({name}: not a GNSS measurement)")
+            _left_out(path, tt[hit], f"of GGA quality {code} or GNS mode {_GNS_LETTER[code]} ({name}: not a GNSS measurement)")
     lat = np.where(q > 0, g("lat"), np.nan)  # no position: dropped by _log
     if not np.isfinite(lat).any() and (q < 0).any():
         raise ScenarioError(f"source.gnss: {path}: no GGA fix of a GNSS quality (every one is {', '.join(sorted({GGA_NOT_MEASURED.get(-int(x), '?') for x in q[q < 0]}))})")
