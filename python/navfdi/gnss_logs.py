@@ -273,6 +273,17 @@ GNS_MODE = {"A": 1, "D": 2, "P": 3, "R": 4, "F": 5, "E": 6, "M": 7, "S": 8}
 _GNS_LETTER = {v: k for k, v in GNS_MODE.items()}
 
 
+def _fix(r: dict[str, float], f: list[str], code: int, sep: int) -> None:
+    """Fill row ``r`` from the fields ``f`` of a ``GGA`` or ``GNS`` sentence (the same latitude,
+    longitude, satellite and altitude fields; the geoid separation at ``sep``) of GGA quality
+    ``code``, stored on RTKLIB's scale (negative: not a GNSS measurement)."""
+    r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
+    r["h"] = float(f[9]) + (float(f[sep]) if f[sep] else 0.0)
+    r["q"] = float(GGA_QUALITY.get(code, -code))
+    if f[7]:
+        r["ns"] = float(f[7])
+
+
 def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> PosLog:
     """NMEA 0183 ``GGA`` / ``GNS`` / ``RMC`` / ``VTG`` / ``GST`` sentences (any talker) into a log; see the
     module's description. The GGA quality is turned into RTKLIB's (:data:`GGA_QUALITY`); fixes
@@ -302,15 +313,10 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
         kind = f[0][-3:]
         try:
             if kind == "GGA" and len(f) >= 12 and f[1] and f[6] not in ("", "0"):
-                r = row(f[1])
-                r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
-                r["h"] = float(f[9]) + (float(f[11]) if f[11] else 0.0)
                 code = int(f[6])
                 if code not in GGA_QUALITY and code not in GGA_NOT_MEASURED:
                     raise ScenarioError(f"source.gnss: {path}, line {i}: GGA fix quality {code} is none of NMEA 0183's (0–9)")
-                r["q"] = float(GGA_QUALITY.get(code, -code))
-                if f[7]:
-                    r["ns"] = float(f[7])
+                _fix(row(f[1]), f, code, 11)
             elif kind == "GNS" and len(f) >= 11 and f[1] and f[6].strip("N"):
                 # Mode per system (GPS, GLONASS, Galileo, …): the best one is the fix's.
                 if any(c != "N" and c not in GNS_MODE for c in f[6]):
@@ -320,11 +326,7 @@ def read_nmea(path: Path, text: str | None = None, date: str | None = None) -> P
                 code = min(measured, key=GGA_QUALITY.__getitem__) if measured else min(codes)
                 r = row(f[1])
                 if "lat" not in r:  # a GGA of the same epoch is read instead
-                    r["lat"], r["lon"] = _deg(f[2], f[3]), _deg(f[4], f[5])
-                    r["h"] = float(f[9]) + (float(f[10]) if f[10] else 0.0)
-                    r["q"] = float(GGA_QUALITY.get(code, -code))
-                    if f[7]:
-                        r["ns"] = float(f[7])
+                    _fix(r, f, code, 10)
             elif kind == "RMC" and len(f) >= 10 and f[1] and f[2] == "A":
                 r = row(f[1])
                 pending_day[f[1]] = _dt.datetime.strptime(f[9], "%d%m%y").date()

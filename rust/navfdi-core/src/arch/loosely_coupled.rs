@@ -268,6 +268,8 @@ fn run<const NS: usize>(
 
     // Velocity components left out for the receiver's own inconsistency.
     let mut blame = blame::VelocityBlame::default();
+    // How far the GNSS updates moved the INS lately (one history: it is the filter's).
+    let mut pull = pull::PullHistory::default();
     for k in ka..epochs {
         if k % 256 == 0 {
             cancel.check()?;
@@ -477,6 +479,10 @@ fn run<const NS: usize>(
                     converged,
                     gross,
                     l.accommodate,
+                    recv[a]
+                        .as_ref()
+                        .is_some_and(|c| c.ins_referenced)
+                        .then_some(&pull),
                 );
                 keep.retain(|&i| i < off || i >= off + 3);
                 for (j, u) in uses.iter().enumerate() {
@@ -565,9 +571,7 @@ fn run<const NS: usize>(
                 h: after.h,
             }) - ant_enu;
             let dvar = p_before - pos_var(&kf);
-            for h in holds.iter_mut() {
-                h.pull.add(tk, &moved, &dvar);
-            }
+            pull.add(tk, &moved, &dvar);
         }
         // Record.
         let mut fused = 0;

@@ -41,7 +41,7 @@ impl VelocityBlame {
     ) -> [bool; 3] {
         let mut out = [false; 3];
         if c.ins_referenced || !(dt > 0.0) {
-            *self = VelocityBlame::default();
+            self.reset();
             return out;
         }
         for j in 0..3 {

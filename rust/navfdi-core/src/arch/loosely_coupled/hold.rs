@@ -129,8 +129,6 @@ pub struct PositionHold {
     prev: Option<(Vector3<f64>, Vector3<f64>)>,
     /// The previous fix (east, north, up, m) and the INS position then (same frame).
     last_fix: Option<(Vector3<f64>, Vector3<f64>)>,
-    /// How far the GNSS updates moved the INS lately (a receiver without velocities).
-    pub pull: super::pull::PullHistory,
 }
 
 impl Default for PositionHold {
@@ -139,7 +137,6 @@ impl Default for PositionHold {
             comps: [Comp::Normal; 3],
             prev: None,
             last_fix: None,
-            pull: Default::default(),
         }
     }
 }
@@ -163,7 +160,8 @@ impl PositionHold {
     /// alarms (all, when it cannot say), `thr1` the 1-dof critical value of the deciding test,
     /// `ramp` the components the sequential test flags, `converged`: the filter has settled
     /// (before, only a `gross` innovation starts a hold), `accommodate`: a step is used as a
-    /// relative fix.
+    /// relative fix, `pull`: how far the GNSS updates moved the INS lately, given for a
+    /// receiver without velocities (a jump back across such a pull ends a followed fault).
     ///
     /// An alarm whose innovation appeared since the previous fix (a jump of at least half the
     /// innovation and 2σ of the jump) is a step, held; one that grew into the test (no jump:
@@ -186,6 +184,7 @@ impl PositionHold {
         converged: bool,
         gross: bool,
         accommodate: bool,
+        pull: Option<&super::pull::PullHistory>,
     ) -> [Use; 3] {
         let mut out = [Use::Raw; 3];
         // The jump of this fix, in innovation units (INS − fix: a step of +x in the fix is
@@ -261,10 +260,8 @@ impl PositionHold {
                         (alarm && (converged || gross) && isolated.contains(&j)) || receiver_step;
                     // Without the receiver's velocity, a jump back across an INS the
                     // updates had pulled the other way is the end of a fault it followed.
-                    let pulled_back = recv.is_some_and(|c| c.ins_referenced)
-                        && flagged
-                        && jump
-                        && self.pull.back(j, d[j], s[j]);
+                    let pulled_back =
+                        flagged && jump && pull.is_some_and(|p| p.back(j, d[j], s[j]));
                     if returned(j) || pulled_back {
                         // Used as measured: it corrects the filter.
                         Comp::Return { fixes: 1 }

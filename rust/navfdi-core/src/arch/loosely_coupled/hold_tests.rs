@@ -38,6 +38,7 @@ fn decide_north(h: &mut PositionHold, t: f64, d: f64, s: f64, alarm: bool, c: &C
         true,
         false,
         true,
+        None,
     )[1]
 }
 
@@ -70,6 +71,7 @@ fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, 
         true,
         false,
         true,
+        None,
     )[1]
 }
 
