@@ -41,11 +41,28 @@ fn check_dof(dof: usize) -> Result<()> {
 pub fn chi2_threshold(pf: f64, dof: usize) -> Result<f64> {
     check_probability("pf", pf)?;
     check_dof(dof)?;
-    let key = (pf.to_bits(), dof);
+    memo(0, [pf.to_bits(), dof as u64, 0], || {
+        chi2_threshold_uncached(pf, dof)
+    })
+}
+
+/// Entries kept by the per-thread memo of [`chi2_threshold`], [`noncentrality`] and
+/// [`crate::gnss::lsq::w_noncentrality`] before it is cleared.
+pub const THRESHOLD_CACHE: usize = 4096;
+
+thread_local! {
+    static CACHE: std::cell::RefCell<std::collections::HashMap<(u8, [u64; 3]), f64>> =
+        std::cell::RefCell::new(std::collections::HashMap::new());
+}
+
+/// `f()` memoised per thread under `(kind, key)` (the bits of the arguments; `kind` tells the
+/// functions apart); errors are not kept. At most [`THRESHOLD_CACHE`] entries, then cleared.
+pub(crate) fn memo(kind: u8, key: [u64; 3], f: impl FnOnce() -> Result<f64>) -> Result<f64> {
+    let key = (kind, key);
     if let Some(t) = CACHE.with(|c| c.borrow().get(&key).copied()) {
         return Ok(t);
     }
-    let t = chi2_threshold_uncached(pf, dof)?;
+    let t = f()?;
     CACHE.with(|c| {
         let mut c = c.borrow_mut();
         if c.len() >= THRESHOLD_CACHE {
@@ -56,15 +73,6 @@ pub fn chi2_threshold(pf: f64, dof: usize) -> Result<f64> {
     Ok(t)
 }
 
-/// Entries kept by [`chi2_threshold`]'s per-thread memo before it is cleared.
-pub const THRESHOLD_CACHE: usize = 4096;
-
-thread_local! {
-    static CACHE: std::cell::RefCell<std::collections::HashMap<(u64, usize), f64>> =
-        std::cell::RefCell::new(std::collections::HashMap::new());
-}
-
-/// [`chi2_threshold`] without the memo (inputs already checked).
 fn chi2_threshold_uncached(pf: f64, dof: usize) -> Result<f64> {
     let dist = ChiSquared::new(dof as f64).map_err(|e| Error::Numerical {
         context: "chi2_threshold".into(),
@@ -229,7 +237,15 @@ pub fn ncx2_cdf(x: f64, dof: usize, lambda: f64) -> Result<f64> {
 ///
 /// Requires `pf + pm < 1` (otherwise `λ0 = 0` already misses more often than `pm`).
 /// Example: `pf = 0.1, pm = 0.05, dof = 6 → 17.87`; `pf = pm = 0.005, dof = 6 → 41.04`.
+/// Memoised per thread like [`chi2_threshold`] (the root costs ≈ 200 µs: a configuration built
+/// per call, as `snapshot_fde` from Python does, paid it at every call).
 pub fn noncentrality(pf: f64, pm: f64, dof: usize) -> Result<f64> {
+    memo(1, [pf.to_bits(), pm.to_bits(), dof as u64], || {
+        noncentrality_uncached(pf, pm, dof)
+    })
+}
+
+fn noncentrality_uncached(pf: f64, pm: f64, dof: usize) -> Result<f64> {
     check_probability("pm", pm)?;
     let td = chi2_threshold(pf, dof)?;
     if pf + pm >= 1.0 {
@@ -404,6 +420,30 @@ mod tests {
             let l = noncentrality(pf, pm, m).unwrap();
             let td = chi2_threshold(pf, m).unwrap();
             assert_relative_eq!(ncx2_cdf(td, m, l).unwrap(), pm, max_relative = 1e-9);
+        }
+    }
+
+    #[test]
+    fn memo_returns_each_function_its_own_value_and_keeps_no_error() {
+        // Same argument bits under the three kinds: each gets its own value, equal to the
+        // uncached computation, also on the second (memoised) call.
+        for _ in 0..2 {
+            assert_eq!(
+                noncentrality(0.1, 0.05, 6).unwrap(),
+                noncentrality_uncached(0.1, 0.05, 6).unwrap()
+            );
+            assert_eq!(
+                chi2_threshold(0.1, 6).unwrap(),
+                chi2_threshold_uncached(0.1, 6).unwrap()
+            );
+            let k = crate::gnss::lsq::two_sided_quantile(0.01).unwrap();
+            let w = crate::gnss::lsq::w_noncentrality(k, 0.8).unwrap();
+            assert!((w.sqrt() - 3.4172).abs() < 1e-3, "{w}"); // k0 2.5758 + z(0.8) 0.8416
+        }
+        // An error is returned every time, not kept as a value.
+        for _ in 0..2 {
+            assert!(noncentrality(0.5, 0.6, 3).is_err());
+            assert!(crate::gnss::lsq::w_noncentrality(1.0, 0.1).is_err());
         }
     }
 

@@ -181,8 +181,15 @@ impl Detection {
 pub const DEFAULT_POWER: f64 = 0.8;
 
 /// Non-centrality `λ` at which the two-sided w-test with critical value `k0` detects with
-/// probability `power`: `P(|N(√λ, 1)| > k0) = power`.
+/// probability `power`: `P(|N(√λ, 1)| > k0) = power`. Memoised per thread like
+/// [`crate::stats::chi2_threshold`].
 pub fn w_noncentrality(k0: f64, power: f64) -> Result<f64> {
+    crate::stats::memo(2, [k0.to_bits(), power.to_bits(), 0], || {
+        w_noncentrality_uncached(k0, power)
+    })
+}
+
+fn w_noncentrality_uncached(k0: f64, power: f64) -> Result<f64> {
     let n = Normal::new(0.0, 1.0).map_err(|e| Error::Numerical {
         context: "normal".into(),
         detail: e.to_string(),
