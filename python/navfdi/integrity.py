@@ -85,6 +85,8 @@ def _check_values(name: str, v: Any, *, low: float, low_open: bool, high: float,
     ``scalar``) lies in the interval (NaN and booleans never do)."""
     if isinstance(v, (bool, np.bool_)) or (scalar and np.ndim(v) != 0):
         raise ValueError(f"{name}: expected a number ({what}), got {v!r}")
+    if isinstance(v, (int, float)) and math.isfinite(v) and (v > low if low_open else v >= low) and (v < high if high_open else v <= high):
+        return  # the common case, a plain number in range, without numpy (µs per field)
     try:
         a = np.asarray(v, dtype=float)
     except (TypeError, ValueError):
@@ -103,6 +105,12 @@ def lpv200() -> Allocation:
     """The LPV-200 allocation of the ADD: P_HMI 1e-7 (9.8e-8 vertical, 2e-9 horizontal), P_FA
     3.9e-6 / 9e-8, P_THRES 8e-8, P_EMT 1e-5; HAL 40 m, VAL 35 m; TOL_PL 5 cm."""
     return Allocation(9.8e-8, 2e-9, 3.9e-6, 9e-8, 8e-8, 1e-5)
+
+
+#: The defaults of :func:`araim`, built (and checked) once: building them per call cost more
+#: than the levels themselves at 10 satellites.
+_DEFAULT_ISM = Ism()
+_LPV200 = lpv200()
 
 
 @dataclass(frozen=True)
@@ -214,8 +222,8 @@ def araim(
         Wrong shapes, non-finite or non-unit lines of sight, non-positive variances, a system
         without a constellation prior, non-finite residuals.
     """
-    ism = ism or Ism()
-    allocation = allocation or lpv200()
+    ism = ism or _DEFAULT_ISM
+    allocation = allocation or _LPV200
     los = np.asarray(los_enu, dtype=float)
     if los.ndim != 2 or los.shape[1] != 3 or los.shape[0] == 0:
         raise ValueError(f"los_enu: expected shape (n, 3), got {los.shape}")
@@ -285,6 +293,8 @@ def _residuals(v: ArrayLike, n: int) -> list[float]:
 
 def _per_satellite(v: Any, name: str, n: int) -> np.ndarray:
     """``v`` (a scalar or (n,) values) as (n,) floats; ``ValueError`` naming ``name`` otherwise."""
+    if isinstance(v, (int, float)):
+        return np.full(n, float(v))
     if np.ndim(v) != 0 and np.size(v) != n:
         raise ValueError(f"{name}: expected a scalar or ({n},) values")
     return np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()
