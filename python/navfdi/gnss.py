@@ -777,8 +777,15 @@ def gnss_solve(
     v = np.column_stack([vel["vx"], vel["vy"], vel["vz"]])
     sol["vx"], sol["vy"], sol["vz"], sol["clock_drift"] = v[:, 0], v[:, 1], v[:, 2], vel["clock_drift"]
     venu = np.full_like(v, np.nan)
-    for i in np.flatnonzero(np.isfinite(v[:, 0]) & np.isfinite(lla[:, 0])):
-        venu[i] = enu_rotation(lla[i, 0], lla[i, 1]) @ v[i]
+    ok = np.flatnonzero(np.isfinite(v[:, 0]) & np.isfinite(lla[:, 0]))
+    if len(ok):
+        # enu_rotation(lat, lon) @ v for every epoch at once, row by row
+        la, lo = np.radians(lla[ok, 0]), np.radians(lla[ok, 1])
+        sl, cl, so, co = np.sin(la), np.cos(la), np.sin(lo), np.cos(lo)
+        x, y, z = v[ok, 0], v[ok, 1], v[ok, 2]
+        venu[ok, 0] = -so * x + co * y + 0.0 * z
+        venu[ok, 1] = -sl * co * x + -sl * so * y + cl * z
+        venu[ok, 2] = cl * co * x + cl * so * y + sl * z
     sol["vel_e"], sol["vel_n"], sol["vel_u"] = venu[:, 0], venu[:, 1], venu[:, 2]
     sol["vel_statistic"], sol["vel_threshold"] = vel["statistic"], vel["threshold"]
     sol["vel_used"] = vel["used"]

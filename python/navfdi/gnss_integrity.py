@@ -238,10 +238,24 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
         key = f"{kind}: {e}"
         failures[key] = failures.get(key, 0) + 1
 
-    used = sats[sats["status"] == "used"]
-    by_epoch = {int(e): g for e, g in used.groupby("epoch", observed=True)}
-    tested = sats[sats["status"].isin(["used", "excluded"]) & np.isfinite(sats["residual"].to_numpy(float))]
-    all_by_epoch = {int(e): g for e, g in tested.groupby("epoch", observed=True)}
+    # Each epoch's rows as positions into numpy columns read once (a pandas group per epoch
+    # cost more than the levels themselves).
+    status = sats["status"].astype(str).to_numpy()
+    residual = sats["residual"].to_numpy(float)
+    epoch_of = sats["epoch"].to_numpy(int)
+    col = {k: sats[k].to_numpy(float) for k in ("elevation", "azimuth", "sigma", "iono_sigma")}
+    names_all = sats["satellite"].astype(str).to_numpy()
+
+    def rows(mask: np.ndarray) -> dict[int, np.ndarray]:
+        pos = np.flatnonzero(mask)
+        ep = epoch_of[pos]
+        order = np.argsort(ep, kind="stable")
+        pos, ep = pos[order], ep[order]
+        cut = np.flatnonzero(np.diff(ep)) + 1
+        return {int(epoch_of[c[0]]): c for c in np.split(pos, cut)} if len(pos) else {}
+
+    by_epoch = rows(status == "used")
+    all_by_epoch = rows(np.isin(status, ["used", "excluded"]) & np.isfinite(residual))
     n = len(sol)
     cols = {k: np.full(n, np.nan) for k in ("hpl", "vpl", "emt", "hpl_raim", "vpl_raim", "hpl_fde", "vpl_fde", "fde_ratio", "fde_de", "fde_dn", "fde_du")}
     state = np.full(n, "no_solution", dtype=object)
@@ -249,36 +263,45 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
     # The snapshot RAIM levels' error model per used satellite-epoch (NaN elsewhere).
     terms = {k: np.full(len(sats), np.nan) for k in ("ura", "tropo", "total")}
     fde_excluded = np.full(n, "", dtype=object)
+    sol_status = sol["status"].astype(str).to_numpy()
+    sol_threshold = sol["threshold"].to_numpy(float)
+    sol_statistic = sol["statistic"].to_numpy(float)
+    ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
+    ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
+
+    def geometry(r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        el, az = np.radians(col["elevation"][r]), np.radians(col["azimuth"][r])
+        return el, np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+
     for i in range(n):
-        if sol["status"].iat[i] != "no_solution" and i in all_by_epoch:
-            state_fde[i], fde_excluded[i] = _araim_fde_epoch(all_by_epoch[i], cols, i, ism, alloc, limits, record_failure)
-        if sol["status"].iat[i] == "no_solution" or i not in by_epoch:
+        if sol_status[i] != "no_solution" and i in all_by_epoch:
+            r = all_by_epoch[i]
+            _, los = geometry(r)
+            state_fde[i], fde_excluded[i] = _araim_fde_epoch(los, names_all[r].tolist(), col["sigma"][r] ** 2, residual[r], cols, i, ism, alloc, limits, record_failure)
+        if sol_status[i] == "no_solution" or i not in by_epoch:
             continue
-        g = by_epoch[i]
-        el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
-        los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
-        systems = [str(s)[0] for s in g["satellite"]]
-        s2 = g["sigma"].to_numpy(float) ** 2
-        ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
-        ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
+        r = by_epoch[i]
+        el, los = geometry(r)
+        systems = [str(x)[0] for x in names_all[r]]
+        s2 = col["sigma"][r] ** 2
         try:
-            r = araim(los, systems, c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc)
-            cols["hpl"][i], cols["vpl"][i], cols["emt"][i] = r.hpl, r.vpl, r.emt
-            ok = r.available and r.hpl <= limits["hal"] and r.vpl <= limits["val"] and r.emt <= limits["emt"]
+            a = araim(los, systems, c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc)
+            cols["hpl"][i], cols["vpl"][i], cols["emt"][i] = a.hpl, a.vpl, a.emt
+            ok = a.available and a.hpl <= limits["hal"] and a.vpl <= limits["val"] and a.emt <= limits["emt"]
         except ValueError as e:
             record_failure("ARAIM", e)
             ok = False
-        thr = float(sol["threshold"].iat[i])
+        thr = float(sol_threshold[i])
         if math.isfinite(thr) and thr > 0:
             try:
-                em = range_error_model(el, g["iono_sigma"].to_numpy(float), np.sqrt(s2), ism)
+                em = range_error_model(el, col["iono_sigma"][r], np.sqrt(s2), ism)
                 for k in terms:
-                    terms[k][g.index.to_numpy()] = em[k]
+                    terms[k][r] = em[k]
                 p = snapshot_pl(los, systems, s2, thr, p_md, overbound=(em["total"] ** 2, em["b_nom"]))
                 cols["hpl_raim"][i], cols["vpl_raim"][i] = p["hpl"], p["vpl"]
             except ValueError as e:
                 record_failure("snapshot RAIM", e)
-        failed = sol["status"].iat[i] == "unidentified" or (sol["statistic"].iat[i] >= thr if math.isfinite(thr) else False)
+        failed = sol_status[i] == "unidentified" or (sol_statistic[i] >= thr if math.isfinite(thr) else False)
         state[i] = "alarm" if failed else ("available" if ok else "unavailable")
     for k, v in cols.items():
         sol[k] = v
@@ -303,20 +326,17 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
     }
 
 
-def _araim_fde_epoch(g: Any, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float], record_failure: Any) -> tuple[str, str]:
+def _araim_fde_epoch(los: np.ndarray, names: list[str], s2: np.ndarray, residuals: np.ndarray, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float], record_failure: Any) -> tuple[str, str]:
     """ARAIM's own fault detection and exclusion on one epoch's tested satellites (used and
-    excluded by the snapshot test), from their residuals about the solution: fills
-    ``hpl_fde``, ``vpl_fde``, ``fde_ratio`` and the correction ``fde_de/dn/du`` (m) of row
-    ``i``; returns the state and the excluded satellites' names. An epoch it cannot compute
-    is passed to ``record_failure(kind, error)`` (counted per reason) and is ``unavailable``."""
-    el, az = np.radians(g["elevation"].to_numpy(float)), np.radians(g["azimuth"].to_numpy(float))
-    los = np.column_stack([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
-    names = [str(s) for s in g["satellite"]]
-    s2 = g["sigma"].to_numpy(float) ** 2
+    excluded by the snapshot test: lines of sight ``los`` (k, 3) east/north/up, ``names``,
+    variances ``s2`` (m²) and ``residuals`` (m) about the solution): fills ``hpl_fde``,
+    ``vpl_fde``, ``fde_ratio`` and the correction ``fde_de/dn/du`` (m) of row ``i``; returns
+    the state and the excluded satellites' names. An epoch it cannot compute is passed to
+    ``record_failure(kind, error)`` (counted per reason) and is ``unavailable``."""
     ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
     ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
     try:
-        r = araim(los, [s[0] for s in names], c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc, residuals=g["residual"].to_numpy(float))
+        r = araim(los, [s[0] for s in names], c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc, residuals=residuals)
     except ValueError as e:
         record_failure("ARAIM FDE", e)
         return "unavailable", ""
