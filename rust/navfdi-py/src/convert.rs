@@ -141,8 +141,33 @@ pub fn read(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Array> {
     Ok(logical(f.as_array()))
 }
 
+/// The fast path of [`vector`] and [`matrix`]: a float64 array in C order with `ndim`
+/// dimensions, handed to `f` as its shape and row-major data without an intermediate copy;
+/// None for anything else (which [`read`] then converts).
+fn c_order<T>(
+    obj: &Bound<'_, PyAny>,
+    ndim: usize,
+    f: impl FnOnce(&[usize], &[f64]) -> T,
+) -> Option<T> {
+    let a = obj.cast::<PyArrayDyn<f64>>().ok()?;
+    if a.ndim() != ndim {
+        return None;
+    }
+    let ro = a.try_readonly().ok()?;
+    let view = ro.as_array();
+    let data = view.as_slice()?; // Some only in standard (C) layout
+    Some(f(view.shape(), data))
+}
+
 /// Read a 1-D array of length `len` (any length when `None`).
 pub fn vector(name: &str, obj: &Bound<'_, PyAny>, len: Option<usize>) -> PyResult<DVector<f64>> {
+    if let Some(v) = c_order(obj, 1, |shape, data| {
+        (len.is_none_or(|l| shape[0] == l)).then(|| DVector::from_column_slice(data))
+    })
+    .flatten()
+    {
+        return Ok(v);
+    }
     let a = read(name, obj)?;
     if a.shape.len() != 1 || len.is_some_and(|l| a.shape[0] != l) {
         let expected = match len {
@@ -159,6 +184,11 @@ pub fn vector(name: &str, obj: &Bound<'_, PyAny>, len: Option<usize>) -> PyResul
 
 /// Read a 2-D array.
 pub fn matrix(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<DMatrix<f64>> {
+    if let Some(m) = c_order(obj, 2, |shape, data| {
+        navfdi_core::linalg::from_row_major(shape[0], shape[1], data)
+    }) {
+        return Ok(m);
+    }
     let a = read(name, obj)?;
     if a.shape.len() != 2 {
         return Err(PyValueError::new_err(format!(
