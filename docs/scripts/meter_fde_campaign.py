@@ -10,7 +10,8 @@ the share of fault fixes excluded, the largest horizontal error in the fault (wi
 without), runs with an exclusion left standing more than 5 s after the end, the largest error 20-60 s
 after the end (with FDE and without), and false
 exclusions per clean tested epoch (Wilson 95 % interval).
-Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter|meter_pos] [step|ramp]"""
+Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter|meter_pos] [step|ramp] [TAU]
+(TAU: ``[loosely_coupled] position_correlation`` in s, default 0: white)"""
 
 from __future__ import annotations
 
@@ -76,9 +77,13 @@ def _one(base: navfdi.Scenario, fault: dict) -> dict[str, float]:
     return out
 
 
-def main(runs: int = 500, which: str = "meter", kind: str = "step") -> None:
+def main(runs: int = 500, which: str = "meter", kind: str = "step", tau: float = 0.0) -> None:
     folder = tempfile.mkdtemp(prefix="navfdi_meter_")
     base = _base(which, folder)
+    if tau:
+        raw = dict(base.raw)
+        raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": f"{tau} s"}
+        base = from_dict(raw, source=base.source)
     span = float(base.core["duration"])
     rng = np.random.default_rng(0)
     lo, hi, dur, unit = (5.0, 40.0, 60.0, "m") if kind == "step" else (0.1, 2.0, 40.0, "m/s")
@@ -92,7 +97,7 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step") -> None:
                  "start": f"{onset} s", "end": f"{onset + dur} s"}
         rows.append((size, _one(base, fault)))
     wall = time.perf_counter() - t0
-    print(f"{which} / {kind}: {runs} runs (2 variants each) in {wall:.0f} s")
+    print(f"{which} / {kind} (position_correlation {tau:g} s): {runs} runs (2 variants each) in {wall:.0f} s")
     edges = [5, 10, 20, 40] if kind == "step" else [0.1, 0.3, 0.6, 1.0, 2.0]
     print(f"| {kind} [{unit}] | runs | excluded at first fix | median delay [s] | max error before it (median / 95 %) [m] | fixes excluded | max error FDE (median / 95 %) [m] | no FDE (median) [m] | excluded > 5 s after end | max error 20-60 s after end, FDE (median / 95 %) / no FDE (median) [m] |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -115,4 +120,4 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step") -> None:
 
 if __name__ == "__main__":
     main(int(sys.argv[1]) if len(sys.argv) > 1 else 500, sys.argv[2] if len(sys.argv) > 2 else "meter",
-         sys.argv[3] if len(sys.argv) > 3 else "step")
+         sys.argv[3] if len(sys.argv) > 3 else "step", float(sys.argv[4]) if len(sys.argv) > 4 else 0.0)

@@ -137,6 +137,13 @@ pub struct LooselyCoupledSpec {
     /// its manoeuvres); a number fixes it. The filter's update uses the σ as given either way.
     #[serde(default)]
     pub noise_scale: Option<f64>,
+    /// Correlation time τ (s) of the GNSS position errors, as a first-order Gauss-Markov
+    /// process: the update weighs each fix as the `(1 + ρ)/(1 − ρ)` (`ρ = e^(−Δt/τ)`, Δt the
+    /// fix interval) independent fixes it is worth, i.e. its position variance is multiplied by
+    /// that factor in the update (not in the tests, whose σ is the errors' size). 0 (default):
+    /// white errors, the update as before.
+    #[serde(default)]
+    pub position_correlation: f64,
 }
 
 fn default_convergence() -> f64 {
@@ -227,6 +234,15 @@ impl ScenarioSpec {
                 format!(
                     "{}: a multiple of the GNSS σ in [0, 1e6] (0: converged from the start)",
                     l.convergence
+                ),
+            ));
+        }
+        if !(l.position_correlation >= 0.0 && l.position_correlation <= 1e5) {
+            return Err(bad(
+                format!("{p}.position_correlation"),
+                format!(
+                    "{} s: a correlation time in [0, 1e5] s (0: white errors)",
+                    l.position_correlation
                 ),
             ));
         }

@@ -3,7 +3,7 @@
 
 pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// A measurement ready for the filter, components in the channel's order.
 pub(super) struct Meas {
@@ -46,5 +46,64 @@ pub(super) fn rows(m: &Meas, keep: &[usize]) -> Meas {
         res: DVector::from_iterator(keep.len(), keep.iter().map(|&i| m.res[i])),
         h: m.h.select_rows(keep),
         r: m.r.select_rows(keep).select_columns(keep),
+    }
+}
+
+/// Three components from `off` of an innovation `r` and the diagonal of its covariance `sv`
+/// (east, north, up of a position or velocity).
+pub(super) fn three(
+    r: &DVector<f64>,
+    sv: &DMatrix<f64>,
+    off: usize,
+) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        Vector3::new(r[off], r[off + 1], r[off + 2]),
+        Vector3::new(
+            sv[(off, off)],
+            sv[(off + 1, off + 1)],
+            sv[(off + 2, off + 2)],
+        ),
+    )
+}
+
+/// A diagonal covariance with the squares of the σ `sig` on its diagonal.
+pub(super) fn diag(sig: &[f64]) -> DMatrix<f64> {
+    DMatrix::from_diagonal(&DVector::from_iterator(
+        sig.len(),
+        sig.iter().map(|s| s * s),
+    ))
+}
+
+/// The factor on a fix's position variance in the update for Gauss-Markov errors of
+/// correlation time `tau` (s) sampled every `dt` (s): `(1 + ρ)/(1 − ρ)` with `ρ = e^(−dt/τ)`,
+/// the variance ratio of the mean of many such fixes to the mean of as many independent ones;
+/// 1 for `tau = 0` (white).
+pub(super) fn correlation_weight(dt: f64, tau: f64) -> f64 {
+    if !(tau > 0.0 && dt > 0.0) {
+        return 1.0;
+    }
+    let x = dt / tau;
+    // (1 + e^(−x))/(1 − e^(−x)) = coth(x/2), written without cancellation for small x.
+    1.0 / (0.5 * x).tanh()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::correlation_weight;
+
+    #[test]
+    fn correlation_weight_is_the_worth_of_correlated_fixes() {
+        assert_eq!(correlation_weight(1.0, 0.0), 1.0);
+        for (dt, tau) in [(1.0, 30.0), (0.25, 30.0), (1.0, 1.0), (0.2, 1e5)] {
+            let rho = f64::exp(-dt / tau);
+            let want = (1.0 + rho) / (1.0 - rho);
+            let got = correlation_weight(dt, tau);
+            assert!(
+                (got - want).abs() <= 1e-9 * want,
+                "{dt} {tau}: {got} {want}"
+            );
+        }
+        // σ 2 m fixes at 1 Hz with τ 30 s count as about 1/60 of an independent fix each.
+        assert!((correlation_weight(1.0, 30.0) - 60.0).abs() < 0.01);
     }
 }

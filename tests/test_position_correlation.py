@@ -1,0 +1,83 @@
+"""``[loosely_coupled] position_correlation``: fixes whose errors are time-correlated
+(Gauss-Markov, correlation time τ) weighted in the update as the independent fixes they are
+worth, on a simulated meter-level drive with known truth (σ 2 m, τ 30 s, receiver velocities)."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import navfdi
+from navfdi.scenario import from_dict, load_scenario
+from navfdi.simlog import simulate_log
+
+from loglib import horizontal_error
+
+RAMP = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp", "magnitude": "0.45 m/s", "start": "300 s", "end": "340 s"}]
+
+
+@cache
+def _scenario(folder: str) -> navfdi.Scenario:
+    path = simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1).scenario
+    return load_scenario(str(path))
+
+
+def _run(folder: Path, tau: str | None, faults: list[dict] | None = None) -> navfdi.ScenarioRun:
+    base = _scenario(str(folder))
+    raw = dict(base.raw)
+    raw.pop("faults", None)
+    if faults:
+        raw["faults"] = faults
+    if tau is not None:
+        raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": tau}
+    return navfdi.run_scenario(from_dict(raw, source=base.source))
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return tmp_path_factory.mktemp("corr")
+
+
+def test_zero_is_the_white_filter(folder: Path) -> None:
+    a, b = _run(folder, None), _run(folder, "0 s")
+    for v in ("fde", "no_fde"):
+        np.testing.assert_array_equal(a.runs[v].record["error"], b.runs[v].record["error"])
+
+
+def test_a_slow_ramp_the_tests_cannot_see_pulls_the_filter_less(folder: Path) -> None:
+    """A 0.45 m/s north ramp over 40 s, too slow for the tests at σ 2 m: the filter that takes
+    the fixes as white follows it (about 10 m); weighted for their 30 s correlation, the
+    receiver's velocities hold the INS and the error stays near the fault-free run's. The
+    fault-free run is no worse either (the σ 2 m errors are averaged over their correlation
+    time, not followed)."""
+    t = _run(folder, None).runs["fde"].t
+    win = (t >= 300.0) & (t < 400.0)
+    white, corr = _run(folder, None, RAMP), _run(folder, "30 s", RAMP)
+    clean_white, clean_corr = _run(folder, None), _run(folder, "30 s")
+    peak = lambda r: float(np.nanmax(horizontal_error(r.runs["fde"])[win]))  # noqa: E731
+    rms = lambda r: float(np.sqrt(np.nanmean(horizontal_error(r.runs["fde"]) ** 2)))  # noqa: E731
+    assert peak(white) > 2.0 * peak(clean_white), (peak(white), peak(clean_white))  # the ramp is followed
+    assert peak(corr) < 0.5 * peak(white), (peak(corr), peak(white))
+    assert peak(corr) < 1.5 * float(np.nanmax(horizontal_error(clean_corr.runs["fde"]))), peak(corr)
+    assert rms(clean_corr) <= rms(clean_white), (rms(clean_corr), rms(clean_white))
+
+
+@pytest.mark.parametrize("value, match", [("-1 s", r"position_correlation.*\[0, 1e5\]"), ("2 m", "position_correlation"),
+                                          ("1e6 s", r"position_correlation.*\[0, 1e5\]")])
+def test_the_correlation_time_is_checked(folder: Path, value: str, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        _run(folder, value)
+
+
+def test_positions_only_logs_refuse_it(tmp_path: Path) -> None:
+    """Without the receiver's velocities the weighting lets the INS drift (measured: 10-20 m
+    steps left out at their first fix in 80 % of runs instead of all): refused, naming why."""
+    path = simulate_log(str(tmp_path), duration=120, seed=2, gnss_sigma=2.0, gnss_tau=30.0, gnss_velocity=False).scenario
+    base = load_scenario(str(path))
+    raw = dict(base.raw)
+    raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "30 s"}
+    with pytest.raises(ValueError, match="needs the receiver's velocities"):
+        navfdi.run_scenario(from_dict(raw, source=base.source))
