@@ -2,7 +2,7 @@
 
 Usage: ``python benches/bench_montecarlo.py [RUNS]`` (default 1000) prints a markdown table:
 
-* per filter-epoch cost of a campaign (runs × epochs × sub-filters) against the core step
+* per filter-epoch cost of a campaign (runs × variants × epochs × sub-filters) against the core step
   cost measured in the same process (``run_filter`` per epoch, n = 15, m = 6);
 * speed-up of 2 threads over 1;
 * peak resident memory of a 10 000-run campaign with summaries only, in a fresh process.
@@ -58,12 +58,13 @@ def main() -> None:
     sc = navfdi.load_scenario("yang2013")
     epochs = int(sc.core["duration"] / sc.core["dt"])
     subs = len(sc.core["federated"]["subfilters"])
+    variants = max(1, len(sc.raw.get("variants", [])))  # every run runs each variant
     campaign_seconds(20, 1)  # warm-up
     step = core_step_seconds()
     t1 = campaign_seconds(runs, 1)
     t2 = campaign_seconds(runs, 2)
-    per_fe = t1 / (runs * epochs * subs)
-    print(f"machine: {platform.machine()}, {resource.getpagesize()} B pages, Python {platform.python_version()}; yang2013, {runs} runs")
+    per_fe = t1 / (runs * variants * epochs * subs)
+    print(f"machine: {platform.machine()}, {resource.getpagesize()} B pages, Python {platform.python_version()}; yang2013, {runs} runs × {variants} variants")
     print("| measurement | value | target |")
     print("|---|---:|---|")
     print(f"| core step (run_filter, n=15, m=6), µs/epoch | {step * 1e6:.2f} | reference |")
