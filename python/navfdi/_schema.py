@@ -269,7 +269,7 @@ SECTIONS: dict[str, Section] = {
         ("isolate", "bool", "true", "false: detectors report but every measurement is used"),
         ("convergence", "number", "3", "converged once every channel's predicted σ is within this multiple of its own"),
         ("noise_scale", "\"auto\" or number", "auto", "scale of the GNSS σ in the tests (auto: from the innovations, clamped to [1, 10])"),
-        ("position_correlation", "time", "0 s", "correlation time of the GNSS position errors (Gauss-Markov): each fix is weighted in the update as the (1 + ρ)/(1 − ρ) independent fixes it is worth, ρ = exp(−Δt/τ); 0: white"),
+        ("position_correlation", "time", "0 s", "correlation time of the GNSS position errors (Gauss-Markov): in the update each fix counts as the fraction (1 − ρ)/(1 + ρ) of an independent fix (its position variance × (1 + ρ)/(1 − ρ)), ρ = exp(−Δt/τ), Δt the fix interval; 0: white"),
     ]),
     "strapdown.imu": _s("[loosely_coupled.imu] / [tight.strapdown.imu]", "IMU noise figures, per IMU axis.", [
         ("gyro_noise", "angular rate density ×3 (deg/s/sqrt(Hz), deg/sqrt(h)), or \"auto\"", REQ, "angle random walk; \"auto\": from the log's rest intervals (loosely coupled)"),

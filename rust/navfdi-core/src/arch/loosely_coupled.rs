@@ -271,8 +271,9 @@ fn run<const NS: usize>(
     // last fix, against its nominal interval (a longer gap forgets the jump reference).
     let mut holds: Vec<hold::PositionHold> = vec![hold::PositionHold::default(); aids.len()];
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
-    // Time-correlated position errors: each fix is worth (1 + ρ)/(1 − ρ) fewer independent
-    // ones in the update (1 for white errors).
+    // Time-correlated position errors: in the update each fix's position variance is
+    // multiplied by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent
+    // one (1 for white errors).
     let weight: Vec<f64> = fix_interval
         .iter()
         .map(|&dt| correlation_weight(dt, l.position_correlation))

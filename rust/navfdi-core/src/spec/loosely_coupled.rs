@@ -138,10 +138,10 @@ pub struct LooselyCoupledSpec {
     #[serde(default)]
     pub noise_scale: Option<f64>,
     /// Correlation time τ (s) of the GNSS position errors, as a first-order Gauss-Markov
-    /// process: the update weighs each fix as the `(1 + ρ)/(1 − ρ)` (`ρ = e^(−Δt/τ)`, Δt the
-    /// fix interval) independent fixes it is worth, i.e. its position variance is multiplied by
-    /// that factor in the update (not in the tests, whose σ is the errors' size). 0 (default):
-    /// white errors, the update as before.
+    /// process: in the update each fix counts as the fraction `(1 − ρ)/(1 + ρ)` of an
+    /// independent fix that it is worth (`ρ = e^(−Δt/τ)`, Δt the fix interval), i.e. its
+    /// position variance is multiplied by `(1 + ρ)/(1 − ρ)` (not in the tests, whose σ is the
+    /// errors' size). 0 (default): white errors, the update as before.
     #[serde(default)]
     pub position_correlation: f64,
 }
