@@ -373,16 +373,29 @@ struct SppGeometry<'a> {
 }
 
 impl SppGeometry<'_> {
-    /// Predicted ρ_c, unit vector to the satellite and (I, T, el, az) at `x`.
-    fn predict(&self, x: &[f64], i: usize) -> (f64, Vector3<f64>, [f64; 4]) {
+    /// The receiver's geodetic position at `x` where the atmosphere and elevation are modelled
+    /// (more than 6 000 km from the centre; None before the first iterations get there).
+    fn receiver_lla(x: &[f64]) -> Option<(f64, f64, f64)> {
+        let r = Vector3::new(x[0], x[1], x[2]);
+        (r.norm() > 6.0e6).then(|| ecef_to_lla(&r))
+    }
+
+    /// Predicted ρ_c, unit vector to the satellite and (I, T, el, az) at `x`, with the
+    /// receiver's geodetic position `lla` of `x` ([`SppGeometry::receiver_lla`]: one
+    /// conversion per iteration, not one per satellite).
+    fn predict(
+        &self,
+        x: &[f64],
+        i: usize,
+        lla: Option<(f64, f64, f64)>,
+    ) -> (f64, Vector3<f64>, [f64; 4]) {
         let r = Vector3::new(x[0], x[1], x[2]);
         let s = self.sat[i];
         let d = s - r;
         let range = d.norm();
         let geo = range + OMEGA_E * (s.x * r.y - s.y * r.x) / C;
         let mut extra = [0.0, 0.0, f64::NAN, f64::NAN];
-        if r.norm() > 6.0e6 {
-            let (lat, lon, h) = ecef_to_lla(&r);
+        if let Some((lat, lon, h)) = lla {
             let (el, az) = elevation_azimuth(&r, lat, lon, &s);
             extra[2] = el;
             extra[3] = az;
@@ -401,8 +414,9 @@ impl SppGeometry<'_> {
         let u = 3 + self.n_clk;
         let mut b = DMatrix::zeros(idx.len(), u);
         let mut l = DVector::zeros(idx.len());
+        let lla = Self::receiver_lla(x);
         for (j, &i) in idx.iter().enumerate() {
-            let (pred, e, _) = self.predict(x, i);
+            let (pred, e, _) = self.predict(x, i, lla);
             for c in 0..3 {
                 b[(j, c)] = -e[c];
             }
@@ -806,12 +820,13 @@ fn solve_epoch(
             .collect();
         let w = outcome.w_with_excluded();
         let (lat, lon, _) = ecef_to_lla(&p);
+        let lla = SppGeometry::receiver_lla(x.as_slice());
         for (i, c) in cands.iter().enumerate() {
             let row = &mut out.sats[c.row];
             if !usable[i] {
                 continue;
             }
-            let (pred, _, extra) = model.geo.predict(x.as_slice(), i);
+            let (pred, _, extra) = model.geo.predict(x.as_slice(), i, lla);
             row.residual = rho[i] - pred;
             row.iono = extra[0];
             row.iono_sigma = klobuchar_residual_sigma(lat, lon, extra[3], extra[2]) * c.iono_scale;
