@@ -6,8 +6,10 @@ none is excluded fault-free."""
 from __future__ import annotations
 
 import warnings
+from importlib import resources
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import navfdi
@@ -66,3 +68,21 @@ def test_cli_weighting_cn0(tmp_path, capsys, quiet) -> None:
     summary = json.loads((tmp_path / "summary.json").read_text())
     text = json.dumps(summary)
     assert '"weighting": "cn0"' in text and '"cn0_reference": 45.0' in text
+
+
+def test_the_satellite_table_carries_the_recorded_cn0() -> None:
+    """``satellites.cn0`` is the signal's C/N0 as the file records it (S1C for GPS C1C, S1X for
+    Galileo C1X on the walk's u-blox file), for every solved satellite-epoch; NaN for rows
+    never solved (no ephemeris)."""
+    walk = Path(str(resources.files("navfdi") / "data" / "walk_0827"))
+    obs, nav = walk / "gnss_1730.obs.gz", walk / "gnss_1730.nav"
+    sol = navfdi.gnss_solve(obs, nav, systems="G,E")
+    sats = sol.satellites
+    raw = navfdi.read_rinex(str(obs))
+    snr = raw[raw["observable"].isin(["S1C", "S1X"])]
+    want = snr.set_index(["epoch", "satellite"])["value"]
+    used = sats[sats["status"].isin(["used", "excluded"])]
+    got = used.set_index(["epoch", used["satellite"].astype(str)])["cn0"]
+    assert len(got) > 1000
+    np.testing.assert_array_equal(got.to_numpy(), want.reindex(got.index).to_numpy())
+    assert sats.loc[sats["status"] == "no_ephemeris", "cn0"].isna().all()

@@ -1057,7 +1057,7 @@ class GnssRun:
     def satellite_table(self) -> dict[str, Any]:
         """Per epoch and satellite columns: ``epoch``; ``satellite`` (list[str]);
         ``elevation``, ``azimuth`` deg; ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault``
-        m; ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``sprt``, ``aime``, ``cusum``
+        m; ``cn0`` dB-Hz (NaN where none); ``w``; ``sat_x, sat_y, sat_z`` m; ``sat_clock`` s; ``sprt``, ``aime``, ``cusum``
         (sequential statistics); ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm`` (list[bool]); ``status`` (list[str])."""
     @property
     def dropped(self) -> list[str]:

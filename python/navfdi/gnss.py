@@ -284,7 +284,8 @@ class GnssSolution:
     ``unidentified``, ``no_solution``), ``used``, ``faulty`` (satellites with an injected
     fault), ``clock_G`` … (m), and with a truth ``east, north, up`` errors in m).
     ``satellites``: per epoch and satellite (``epoch``, ``time``, ``satellite``, ``elevation``,
-    ``azimuth`` deg, ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault`` m, ``w``,
+    ``azimuth`` deg, ``residual``, ``sigma``, ``iono``, ``tropo``, ``fault`` m, ``cn0``
+    (the signal's recorded C/N0, dB-Hz; NaN where the file has none), ``w``,
     ``sat_x, sat_y, sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s),
     ``status``). ``truth``: ECEF (3,) m or None. ``config``: the settings. Velocity from Doppler:
     ``vx, vy, vz`` (ECEF) and ``vel_e, vel_n, vel_u`` (m/s), ``clock_drift`` (m/s),

@@ -532,7 +532,8 @@ impl PyGnssRun {
     /// Per epoch and satellite columns of the epochs solved so far: ``epoch`` (int),
     /// ``satellite`` (str), ``elevation``, ``azimuth`` (deg), ``residual`` (m), ``w``, ``mdb``
     /// (minimal detectable bias, m), ``sigma`` (m), ``iono``, ``tropo`` (m), ``iono_sigma`` (σ of the delay left after
-    /// the broadcast correction, DO-229's single-frequency model, m), ``fault`` (injected, m), ``sat_x, sat_y,
+    /// the broadcast correction, DO-229's single-frequency model, m), ``cn0`` (recorded C/N0,
+    /// dB-Hz; NaN where none), ``fault`` (injected, m), ``sat_x, sat_y,
     /// sat_z`` (satellite ECEF at transmission, m), ``sat_clock`` (s), ``sprt``, ``aime``,
     /// ``cusum`` (sequential statistics), ``sprt_alarm``, ``aime_alarm``, ``cusum_alarm``
     /// (bool), ``status`` (``used``,
@@ -565,6 +566,7 @@ impl PyGnssRun {
         d.set_item("iono", to_numpy(py, f(&|x| x.iono), &[n])?)?;
         d.set_item("iono_sigma", to_numpy(py, f(&|x| x.iono_sigma), &[n])?)?;
         d.set_item("tropo", to_numpy(py, f(&|x| x.tropo), &[n])?)?;
+        d.set_item("cn0", to_numpy(py, f(&|x| x.cn0), &[n])?)?;
         d.set_item("fault", to_numpy(py, f(&|x| x.fault), &[n])?)?;
         for (c, name) in ["sat_x", "sat_y", "sat_z"].iter().enumerate() {
             d.set_item(*name, to_numpy(py, f(&|x| x.sat_pos[c]), &[n])?)?;

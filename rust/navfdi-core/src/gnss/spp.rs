@@ -316,6 +316,9 @@ pub struct SatRow {
     pub iono_sigma: f64,
     /// Tropospheric delay (m).
     pub tropo: f64,
+    /// Carrier-to-noise density of the signal as recorded (dB-Hz; NaN where the file has none
+    /// for it, or no ephemeris let the satellite be solved).
+    pub cn0: f64,
     /// Injected fault (m; 0 when none).
     pub fault: f64,
     /// Satellite ECEF position at transmission (m; NaN without an ephemeris).
@@ -573,6 +576,7 @@ pub fn solve(
                 iono: f64::NAN,
                 iono_sigma: f64::NAN,
                 tropo: f64::NAN,
+                cn0: f64::NAN,
                 fault,
                 sat_pos: Vector3::repeat(f64::NAN),
                 sat_clock: f64::NAN,
@@ -620,6 +624,7 @@ pub fn solve(
                         .map(|x| x.value)
                         .filter(|v| v.is_finite() && *v > 0.0)
                         .unwrap_or(f64::NAN);
+                    out.sats[row].cn0 = cn0;
                     cands.push(Candidate {
                         cn0,
                         sat: o.sat,
