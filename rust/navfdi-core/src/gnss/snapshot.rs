@@ -173,9 +173,6 @@ pub fn fde<M: FdeModel>(
         if first_solution.is_none() {
             first_solution = Some((model.solution(), out.w.clone()));
         }
-        if out.excluded.is_empty() && active.len() == all.len() {
-            full = Some(PairScreen::new(&b, &test.v, &dinv));
-        }
         // Largest |w| among the testable observations.
         let worst = active
             .iter()
@@ -190,6 +187,11 @@ pub fn fde<M: FdeModel>(
             Detection::WTest => w_fails,
             _ => global_fails || w_fails,
         };
+        if fails && out.excluded.is_empty() && active.len() == all.len() {
+            // The whole set's linearisation, kept for the pair check of a second exclusion
+            // (only epochs that fail need it).
+            full = Some(PairScreen::new(&b, &test.v, &dinv));
+        }
         if !fails {
             let what = match snoop.test {
                 Detection::Global => "global test passed".to_string(),
