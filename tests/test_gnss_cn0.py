@@ -86,3 +86,21 @@ def test_the_satellite_table_carries_the_recorded_cn0() -> None:
     assert len(got) > 1000
     np.testing.assert_array_equal(got.to_numpy(), want.reindex(got.index).to_numpy())
     assert sats.loc[sats["status"] == "no_ephemeris", "cn0"].isna().all()
+
+
+def test_the_clean_w_spread_per_cn0_class_shows_how_the_model_fits() -> None:
+    """The summary's clean w robust SD per C/N0 class, on the walk: the C/N0 model (variance ×
+    10 per 10 dB) over-penalises this receiver's weak signals (their w spread smallest), the
+    elevation model under-penalises them (largest); the console says which."""
+    walk = Path(str(resources.files("navfdi") / "data" / "walk_0827"))
+    obs, nav = walk / "gnss_1730.obs.gz", walk / "gnss_1730.nav"
+    got = {}
+    for wt in ("cn0", "elevation"):
+        sol = navfdi.gnss_solve(obs, nav, systems="G,E", weighting=wt, noise_scale="auto")
+        by = sol.summary()["clean_w_sd_robust_by_cn0"]
+        assert len(by) >= 4 and list(by)[0] == "<30" and list(by)[-1] == ">=45", by
+        got[wt] = (by["<30"], by[">=45"], sol.format_summary())
+    assert got["cn0"][0] < 0.67 * got["cn0"][1], got["cn0"][:2]
+    assert "per C/N0 (dB-Hz) <30" in got["cn0"][2] and "weak signals penalised more than they need" in got["cn0"][2]
+    assert got["elevation"][0] > 1.5 * got["elevation"][1], got["elevation"][:2]
+    assert "weak signals noisier than modelled" in got["elevation"][2]

@@ -110,14 +110,45 @@ def robust_sd(w: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(w - np.median(w)))) if w.size > 1 else math.nan
 
 
+#: Edges of the C/N0 classes (dB-Hz) of :func:`robust_sd_by`.
+CN0_EDGES = (30.0, 35.0, 40.0, 45.0)
+
+
+def robust_sd_by(sats: pd.DataFrame) -> tuple[dict[str, float], dict[str, float]]:
+    """The clean w's robust SD (:func:`robust_sd`) per system letter and per C/N0 class
+    (``"<30"``, ``"30-35"``, …, ``">=45"`` dB-Hz, from the satellite table's ``cn0``) of the
+    satellite rows ``sats`` (clean, used), each group with at least 30 values: a receiver whose
+    systems differ in noise (a ``--noise-factor`` evens them out), or whose weak signals the
+    σ model over- or under-penalises, shows it here."""
+    cw = sats[["satellite", "w"] + (["cn0"] if "cn0" in sats else [])].dropna(subset=["w"])
+    by_sys = {str(g): robust_sd(v.to_numpy(float)) for g, v in cw.groupby(cw["satellite"].astype(str).str[0])["w"] if len(v) >= 30}
+    by_cn0: dict[str, float] = {}
+    if "cn0" in cw:
+        c = cw["cn0"].to_numpy(float)
+        edges = (-math.inf, *CN0_EDGES, math.inf)
+        for lo, hi in zip(edges[:-1], edges[1:]):
+            m = (c >= lo) & (c < hi)
+            if m.sum() >= 30:
+                by_cn0[f"<{hi:g}" if lo == -math.inf else (f">={lo:g}" if hi == math.inf else f"{lo:g}-{hi:g}")] = robust_sd(cw["w"].to_numpy(float)[m])
+    return by_sys, by_cn0
+
+
 def by_system_text(s: dict[str, Any]) -> str:
     """``"; per system G 0.94, E 1.70"`` for the summary line (empty with one system), with the
-    ``--noise-factor`` that evens the systems out when they differ by more than 1.5×."""
+    ``--noise-factor`` that evens the systems out when they differ by more than 1.5×, then
+    ``"; per C/N0 (dB-Hz) <30 0.42, …"`` where two or more classes have values, saying which
+    way the weakest and strongest classes differ when they do by more than 1.5×."""
     by = {k: v for k, v in s.get("clean_w_sd_robust_by_system", {}).items() if math.isfinite(v) and v > 0}
-    if len(by) < 2:
-        return ""
-    text = "; per system " + ", ".join(f"{k} {v:.2f}" for k, v in by.items())
-    lo = min(by.values())
-    if max(by.values()) > 1.5 * lo:
-        text += " — the systems differ; --noise-factor " + " ".join(f"{k}={v / lo:.2g}" for k, v in by.items() if v > 1.5 * lo) + " models that"
+    text = ""
+    if len(by) >= 2:
+        text = "; per system " + ", ".join(f"{k} {v:.2f}" for k, v in by.items())
+        lo = min(by.values())
+        if max(by.values()) > 1.5 * lo:
+            text += " — the systems differ; --noise-factor " + " ".join(f"{k}={v / lo:.2g}" for k, v in by.items() if v > 1.5 * lo) + " models that"
+    cn = {k: v for k, v in s.get("clean_w_sd_robust_by_cn0", {}).items() if math.isfinite(v) and v > 0}
+    if len(cn) >= 2:
+        text += "; per C/N0 (dB-Hz) " + ", ".join(f"{k} {v:.2f}" for k, v in cn.items())
+        first, last = next(iter(cn.values())), list(cn.values())[-1]
+        if max(first, last) > 1.5 * min(first, last):
+            text += " — " + ("weak signals noisier than modelled" if first > last else "weak signals penalised more than they need")
     return text

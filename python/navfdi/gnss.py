@@ -28,7 +28,7 @@ import numpy as np
 
 from navfdi import _core, _json
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, robust_sd
+from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, robust_sd, robust_sd_by
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
@@ -361,12 +361,8 @@ class GnssSolution:
         out["mdb_median"] = float(np.nanmedian(mdb)) if np.isfinite(mdb).any() else math.nan
         out["clean_w_sd"] = float(np.std(w)) if w.size > 1 else math.nan
         out["clean_w_sd_robust"] = robust_sd(w)
-        # Per system: a receiver whose systems differ in noise shows it here (a factor per
-        # system, --noise-factor, evens them out).
-        cw = sats.loc[clean, ["satellite", "w"]].dropna()
-        out["clean_w_sd_robust_by_system"] = {
-            str(g): robust_sd(v.to_numpy(float))
-            for g, v in cw.groupby(cw["satellite"].astype(str).str[0])["w"] if len(v) >= 30}
+        # Per system and per C/N0 class: where the σ model misfits a receiver (see robust_sd_by).
+        out["clean_w_sd_robust_by_system"], out["clean_w_sd_robust_by_cn0"] = robust_sd_by(sats.loc[clean])
         out["skipped"] = {k: int(v) for k, v in sats["status"].value_counts().items() if k in ("no_ephemeris", "unhealthy", "bad_ephemeris", "below_mask", "unsolved") and v > 0}
         excl = sats[sats["status"] == "excluded"]
         out["exclusions"] = {str(k): int(v) for k, v in excl["satellite"].value_counts().items() if v > 0}
