@@ -90,11 +90,13 @@ def ecef_to_lla(xyz: np.ndarray) -> np.ndarray:
     return np.column_stack([np.degrees(lat), np.degrees(lon), h])
 
 
-def enu_rotation(lat_deg: float, lon_deg: float) -> np.ndarray:
-    """Rotation (3, 3) from ECEF to east-north-up at a geodetic latitude, longitude (deg)."""
-    la, lo = math.radians(lat_deg), math.radians(lon_deg)
-    sl, cl, so, co = math.sin(la), math.cos(la), math.sin(lo), math.cos(lo)
-    return np.array([[-so, co, 0.0], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]])
+def enu_rotation(lat_deg: Any, lon_deg: Any) -> np.ndarray:
+    """Rotation from ECEF to east-north-up at a geodetic latitude, longitude (deg): (3, 3) for
+    scalars, (n, 3, 3) for arrays of shape (n,)."""
+    la, lo = np.radians(lat_deg), np.radians(lon_deg)
+    sl, cl, so, co = np.sin(la), np.cos(la), np.sin(lo), np.cos(lo)
+    rows = [[-so, co, np.zeros_like(so)], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
+    return np.moveaxis(np.array(rows, dtype=float), (0, 1), (-2, -1))
 
 
 def _kind(path: str) -> str:
@@ -776,13 +778,7 @@ def gnss_solve(
     venu = np.full_like(v, np.nan)
     ok = np.flatnonzero(np.isfinite(v[:, 0]) & np.isfinite(lla[:, 0]))
     if len(ok):
-        # enu_rotation(lat, lon) @ v for every epoch at once, row by row
-        la, lo = np.radians(lla[ok, 0]), np.radians(lla[ok, 1])
-        sl, cl, so, co = np.sin(la), np.cos(la), np.sin(lo), np.cos(lo)
-        x, y, z = v[ok, 0], v[ok, 1], v[ok, 2]
-        venu[ok, 0] = -so * x + co * y + 0.0 * z
-        venu[ok, 1] = -sl * co * x + -sl * so * y + cl * z
-        venu[ok, 2] = cl * co * x + cl * so * y + sl * z
+        venu[ok] = np.einsum("kij,kj->ki", enu_rotation(lla[ok, 0], lla[ok, 1]), v[ok])
     sol["vel_e"], sol["vel_n"], sol["vel_u"] = venu[:, 0], venu[:, 1], venu[:, 2]
     sol["vel_statistic"], sol["vel_threshold"] = vel["statistic"], vel["threshold"]
     sol["vel_used"] = vel["used"]

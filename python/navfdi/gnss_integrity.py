@@ -277,7 +277,8 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
         if sol_status[i] != "no_solution" and i in all_by_epoch:
             r = all_by_epoch[i]
             _, los = geometry(r)
-            state_fde[i], fde_excluded[i] = _araim_fde_epoch(los, names_all[r].tolist(), col["sigma"][r] ** 2, residual[r], cols, i, ism, alloc, limits, record_failure)
+            s2 = col["sigma"][r] ** 2
+            state_fde[i], fde_excluded[i] = _araim_fde_epoch(los, names_all[r].tolist(), s2 + ura, s2 + ure, residual[r], cols, i, ism, alloc, limits, record_failure)
         if sol_status[i] == "no_solution" or i not in by_epoch:
             continue
         r = by_epoch[i]
@@ -326,17 +327,16 @@ def add_integrity(solution: Any, name: str | os.PathLike[str] | IntegritySetting
     }
 
 
-def _araim_fde_epoch(los: np.ndarray, names: list[str], s2: np.ndarray, residuals: np.ndarray, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float], record_failure: Any) -> tuple[str, str]:
+def _araim_fde_epoch(los: np.ndarray, names: list[str], c_int: np.ndarray, c_acc: np.ndarray, residuals: np.ndarray, cols: dict[str, np.ndarray], i: int, ism: Ism, alloc: Allocation, limits: dict[str, float], record_failure: Any) -> tuple[str, str]:
     """ARAIM's own fault detection and exclusion on one epoch's tested satellites (used and
     excluded by the snapshot test: lines of sight ``los`` (k, 3) east/north/up, ``names``,
-    variances ``s2`` (m²) and ``residuals`` (m) about the solution): fills ``hpl_fde``,
+    integrity and accuracy variances ``c_int``, ``c_acc`` (m²) and ``residuals`` (m) about the
+    solution): fills ``hpl_fde``,
     ``vpl_fde``, ``fde_ratio`` and the correction ``fde_de/dn/du`` (m) of row ``i``; returns
     the state and the excluded satellites' names. An epoch it cannot compute is passed to
     ``record_failure(kind, error)`` (counted per reason) and is ``unavailable``."""
-    ura = np.asarray(ism.sigma_ura, dtype=float) ** 2
-    ure = np.asarray(ism.sigma_ure, dtype=float) ** 2
     try:
-        r = araim(los, [s[0] for s in names], c_int=s2 + ura, c_acc=s2 + ure, ism=ism, allocation=alloc, residuals=residuals)
+        r = araim(los, [s[0] for s in names], c_int=c_int, c_acc=c_acc, ism=ism, allocation=alloc, residuals=residuals)
     except ValueError as e:
         record_failure("ARAIM FDE", e)
         return "unavailable", ""

@@ -287,6 +287,15 @@ fn run<const NS: usize>(
     let mut blame = blame::VelocityBlame::default();
     // How far the GNSS updates moved the INS lately (one history: it is the filter's).
     let mut pull = pull::PullHistory::default();
+    // The INS antenna in the log's east, north, up frame (m).
+    let antenna_enu = |s: &NavState| {
+        let a = antenna(s, &lever);
+        logged.origin.to_enu(&Nominal {
+            lat: a.lat,
+            lon: a.lon,
+            h: a.h,
+        })
+    };
     for k in ka..epochs {
         if k % 256 == 0 {
             cancel.check()?;
@@ -343,12 +352,7 @@ fn run<const NS: usize>(
         // GNSS: every channel tested on the pre-update state (its raw fix: the detectors'
         // records show what the receiver gave); with `witness`, a channel's alarm excludes it
         // only if another GNSS channel of the epoch passes.
-        let ant = antenna(&s, &lever);
-        let ant_enu = logged.origin.to_enu(&Nominal {
-            lat: ant.lat,
-            lon: ant.lon,
-            h: ant.h,
-        });
+        let ant_enu = antenna_enu(&s);
         let mut tested: Vec<(usize, Meas, Outcome)> = Vec::new();
         let mut stale_epoch = false;
         // A receiver without velocities: its fixes' displacement is compared with the INS's
@@ -586,12 +590,7 @@ fn run<const NS: usize>(
         if had_gnss {
             // How far the GNSS updates moved the INS antenna this epoch, and how much position
             // variance they took off.
-            let after = antenna(&s, &lever);
-            let moved = logged.origin.to_enu(&Nominal {
-                lat: after.lat,
-                lon: after.lon,
-                h: after.h,
-            }) - ant_enu;
+            let moved = antenna_enu(&s) - ant_enu;
             let dvar = p_before - pos_var(&kf);
             pull.add(tk, &moved, &dvar);
         }

@@ -101,9 +101,10 @@ pub fn fde<M: FdeModel>(
     let mut out = FdeOutcome::empty(n);
     // The all-observation solution, kept in case exclusion runs out of observations.
     let mut first_solution: Option<(DVector<f64>, Vec<f64>)> = None;
-    // The whole set's linearisation (B, v, D⁻¹), for the pair check (see `best_pair`).
+    // The whole set's residuals, their covariance and D⁻¹ (v, D_V, D⁻¹), for the pair check
+    // (see `best_pair`).
     #[allow(clippy::type_complexity)]
-    let mut full: Option<(DMatrix<f64>, DVector<f64>, DMatrix<f64>)> = None;
+    let mut full: Option<(DVector<f64>, DMatrix<f64>, DMatrix<f64>)> = None;
     loop {
         if active.len() < u + 1 {
             out.reason = format!(
@@ -191,7 +192,7 @@ pub fn fde<M: FdeModel>(
         if fails && out.excluded.is_empty() && active.len() == all.len() {
             // The whole set's linearisation, kept for the pair check of a second exclusion
             // (only epochs that fail need it; the downdate's M is formed only if one comes).
-            full = Some((b.clone(), test.v.clone(), dinv.clone()));
+            full = Some((test.v.clone(), test.dv.clone(), dinv.clone()));
         }
         if !fails {
             let what = match snoop.test {
@@ -262,8 +263,8 @@ pub fn fde<M: FdeModel>(
                     &full,
                     out.excluded.len() == 1 && out.excluded_w[0].is_finite(),
                 ) {
-                    (Some((b0, v0, d0)), true) => {
-                        best_pair(&PairScreen::new(b0, v0, d0), c, u, &all, groups, cfg)?
+                    (Some((v0, dv0, d0)), true) => {
+                        best_pair(&PairScreen::new(v0, dv0, d0), c, u, &all, groups, cfg)?
                     }
                     _ => None,
                 };

@@ -16,18 +16,16 @@ pub(super) struct PairScreen {
 }
 
 impl PairScreen {
-    pub(super) fn new(b: &DMatrix<f64>, v: &DVector<f64>, dinv: &DMatrix<f64>) -> Self {
-        let f = dinv * b;
-        let n_inv = Cholesky::new(b.transpose() * &f).map(|c| c.inverse());
-        let m = match n_inv {
-            Some(n_inv) => dinv - &f * n_inv * f.transpose(),
-            None => DMatrix::from_element(dinv.nrows(), dinv.ncols(), f64::NAN),
-        };
+    /// From the whole set's residuals `v`, their covariance `dv` (`D_V`, as [`ls_test`]
+    /// gives them) and `dinv` (`D⁻¹`), all in the normalised units of the loop.
+    ///
+    /// [`ls_test`]: super::super::lsq::ls_test
+    pub(super) fn new(v: &DVector<f64>, dv: &DMatrix<f64>, dinv: &DMatrix<f64>) -> Self {
         let g = dinv * v;
         PairScreen {
             statistic: v.dot(&g),
             g,
-            m,
+            m: dinv * dv * dinv,
             dinv_diag: dinv.diagonal(),
         }
     }
@@ -135,7 +133,7 @@ mod tests {
         let inv = |m: &DMatrix<f64>| Cholesky::new(m.clone()).unwrap().inverse();
         let dinv = inv(&d);
         let full = ls_test(&b, &l, &d, &dinv).unwrap();
-        let screen = PairScreen::new(&b, &full.v, &dinv);
+        let screen = PairScreen::new(&full.v, &full.dv, &dinv);
         let mut checked = 0;
         for i in 0..n {
             for j in i + 1..n {
