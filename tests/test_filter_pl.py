@@ -6,6 +6,7 @@ hazardously misleading counts in `run` and `montecarlo`."""
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
 import pytest
@@ -294,19 +295,21 @@ def test_sub_filters_outlive_their_satellites_absences_on_the_walk():
     assert not in_view[:, g23].all()  # it does drop out
 
 
-def test_a_1e5_epoch_campaign_at_the_worst_moment_stays_within_the_allocation():
-    """The issue's count: ≥ 10⁵ epochs per variant, near-threshold steps (6, 10 m) on the
-    worst pair (G16, G19: similar lines of sight) from the worst onset the campaign script
-    found (5 s, when the sub-filters have barely separated). Every run carries a fault, so
-    the allocation bounds the hazardous epochs per fault epoch by P_HMI / P_sat (9.8e-3
-    vertical, 2e-4 horizontal); the filter levels stay below the snapshot ones."""
+def test_a_campaign_at_the_worst_moment_stays_within_the_allocation():
+    """Near-threshold steps (6, 10 m) on the worst pair (G16, G19: similar lines of sight)
+    from the worst onset the campaign script found (5 s, when the sub-filters have barely
+    separated). Every run carries a fault, so the allocation bounds the hazardous epochs per
+    fault epoch by P_HMI / P_sat (9.8e-3 vertical, 2e-4 horizontal); the filter levels stay
+    below the snapshot ones. By default 5 runs per point (2 × 10⁴ epochs per variant, 7 s);
+    with ``NAVFDI_SLOW_TESTS=1`` the issue's count, 25 runs (≥ 10⁵ epochs per variant, 30 s)."""
+    runs = 25 if os.environ.get("NAVFDI_SLOW_TESTS") == "1" else 5
     sweep = {"faults[0].satellite": ["G16", "G19"], "faults[0].magnitude": ["6 m", "10 m"], "faults[0].start": ["5 s"]}
-    c = montecarlo("shao2018_integrity", runs=25, seed=2, sweep=sweep, progress=False)
+    c = montecarlo("shao2018_integrity", runs=runs, seed=2, sweep=sweep, progress=False)
     t = c.integrity_summary()
     for variant, g in t.groupby("variant"):
-        assert g["epochs"].sum() >= 100_000, variant
+        assert g["epochs"].sum() >= 4000 * runs, variant
         assert (g["hpl_ratio_mean"] < 1).all() and (g["vpl_ratio_mean"] < 1).all()
     sep = t[t["variant"] == "separation"]
-    fault_epochs = 100 * (110 - 5) * 2  # the step's window at 2 Hz, 100 runs
+    fault_epochs = 4 * runs * (110 - 5) * 2  # the step's window at 2 Hz, 4 points
     assert sep["hazardous_v"].sum() <= 9.8e-8 / 1e-5 * fault_epochs
     assert sep["hazardous_h"].sum() <= 2e-9 / 1e-5 * fault_epochs
