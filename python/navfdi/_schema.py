@@ -281,7 +281,7 @@ SECTIONS: dict[str, Section] = {
         ("accel_scale", "fraction", "0 ppm", "accelerometer scale-factor σ"),
     ]),
     "strapdown.alignment": _s("[loosely_coupled.alignment] / [tight.strapdown.alignment]", "Initial alignment.", [
-        ("speed", "velocity", REQ, "GNSS speed above which heading is taken from the course and navigation starts"),
+        ("speed", "velocity", REQ, "GNSS speed above which heading is taken from the course and navigation starts (and at least 5× the velocity's σ, where the log reaches it)"),
         ("heading", "angle", "from the course", "a known initial heading"),
         ("static_speed", "velocity", "0.05 m/s", "rest below this (or 2.5× the receiver's velocity σ)"),
         ("gyro_bias", "bool", "true", "gyro biases from the static start"),

@@ -96,10 +96,16 @@ pub fn velocity_from_positions(
     out
 }
 
+/// The speed, in σ of the GNSS velocity, from which the alignment reads the heading from the
+/// velocity's direction (its σ then at most 1/5 rad, 11.5°: the error filter's small-angle
+/// regime).
+pub const HEADING_SPEED_SIGMAS: f64 = 5.0;
+
 /// Align on record epochs `t` (s): `vel(k)`, `pos(k)` the GNSS velocity and position east,
 /// north, up (m/s; m from `origin`) at epoch k where measured; `sig_v` the velocity σ at the
 /// alignment epoch (m/s, given its index); `rest_by_sigma`: `sig_v` is the receiver's velocity
-/// σ, and speeds below 2.5 σ count as rest. `section` names the configuration in errors.
+/// σ, speeds below 2.5 σ count as rest, and the heading is read at a speed of at least
+/// [`HEADING_SPEED_SIGMAS`] σ where the log reaches it. `section` names the configuration in errors.
 #[allow(clippy::too_many_arguments)]
 pub fn align(
     a: &AlignmentSpec,
@@ -113,10 +119,25 @@ pub fn align(
     rest_by_sigma: bool,
 ) -> Result<Aligned> {
     let speed_at = |k: usize| vel(k).map(|v| v.xy().norm());
+    let usable = |k: usize, min: f64| {
+        speed_at(k).is_some_and(|s| s >= min) && pos(k).is_some() && t[k] > imu.t[0]
+    };
+    // The heading is read from the velocity's direction: at the first epoch where that
+    // direction is known to 1/HEADING_SPEED_SIGMAS rad (the speed at least that many times
+    // the velocity's σ) — at a speed of a few σ (a meter-level receiver's velocity from
+    // position differences, σ ≈ 1.4 m/s, at the 1 m/s of an RTK set-up) it may be off by
+    // tens of degrees, beyond what the error filter's small-angle model can correct, and the
+    // INS runs away from the fixes. Where the log never gets that fast, the first epoch at
+    // `speed` as before. Only where `sig_v` is the velocity's σ (`rest_by_sigma`; the tight
+    // filter's is a range rate's).
+    let heading_sigmas = if rest_by_sigma {
+        HEADING_SPEED_SIGMAS
+    } else {
+        0.0
+    };
     let ka = (0..t.len())
-        .find(|&k| {
-            speed_at(k).is_some_and(|s| s >= a.speed) && pos(k).is_some() && t[k] > imu.t[0]
-        })
+        .find(|&k| usable(k, a.speed.max(heading_sigmas * sig_v(k))))
+        .or_else(|| (0..t.len()).find(|&k| usable(k, a.speed)))
         .ok_or_else(|| {
             Error::Invalid(format!(
                 "alignment: no epoch with a GNSS fix and a GNSS speed of at least {section}.alignment.speed = {} m/s inside the IMU log",

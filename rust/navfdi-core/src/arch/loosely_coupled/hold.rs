@@ -340,9 +340,13 @@ impl PositionHold {
                     // The held offset moves with the receiver's own inconsistency where it is
                     // significant (beyond 3σ_e: a fault that keeps growing after its jump — a
                     // ramp taken for a step — is followed, not let into the solution; its end
-                    // brings it back to zero), and stays put otherwise (a step).
+                    // brings it back to zero), and stays put otherwise (a step). Not against
+                    // the INS's displacement (a receiver without velocities): there `e` holds
+                    // the INS's own drift, and an offset that followed it would keep the
+                    // relative fixes agreeing with an INS drifting away (tens of km, fault-free,
+                    // with an IMU noise set above the sensor's).
                     let (b, var) = match recv {
-                        Some(c) if c.e[j].abs() > 3.0 * c.sigma[j] => {
+                        Some(c) if !c.ins_referenced && c.e[j].abs() > 3.0 * c.sigma[j] => {
                             (b - c.e[j], var + c.sigma[j] * c.sigma[j])
                         }
                         _ => (b, var),
