@@ -664,7 +664,7 @@ fn receiver_epoch(
     for (a, aid) in aids.iter().enumerate().take(n_gnss) {
         if let (Some(p), Some(v)) = (measured(aid, aid.pos), vel) {
             out[a] = receivers[a]
-                .step(models.t[k], &p, &v, 2.5 * intervals[a])
+                .step(models.t[k], &p, &v, 2.5 * intervals[a], own.is_some())
                 .map(|c| hold::Consistency {
                     ins_referenced: own.is_none(),
                     ..c

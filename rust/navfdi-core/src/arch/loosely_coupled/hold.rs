@@ -686,14 +686,27 @@ impl ReceiverConsistency {
 
     /// Feed the fix `p` (east, north, up, m) and velocity `v` (m/s) at time `t` (s); None for
     /// the first fixes (until `σ_e` is estimated) or after a gap of more than `max_gap` s
-    /// (the CUSUM restarts).
+    /// (the CUSUM restarts); with `own_velocity` (`v` is the receiver's), None for a stale fix.
     pub fn step(
         &mut self,
         t: f64,
         p: &Vector3<f64>,
         v: &Vector3<f64>,
         max_gap: f64,
+        own_velocity: bool,
     ) -> Option<Consistency> {
+        // A fix identical to the previous one while the receiver moved more than
+        // [`STALE_MOTION`] by its own velocity: the receiver repeating its last fix
+        // ([`PositionHold::stale`]), not a position. It is not taken in; the displacement is
+        // measured from the last fresh fix, across the spell (a gap when that is long) — fed in,
+        // the first fresh fix after it read as a jump back, and a held step was let in. (Against
+        // the INS's displacement, on positions only, the restart cost more than it saved:
+        // docs/meter_fde.md.)
+        if let (true, Some((t0, p0, v0))) = (own_velocity, self.prev) {
+            if (p - p0).amax() < 1e-3 && 0.5 * (v + v0).norm() * (t - t0) > STALE_MOTION {
+                return None;
+            }
+        }
         let prev = self.prev.replace((t, *p, *v));
         let (t0, p0, v0) = prev?;
         let dt = t - t0;
@@ -837,7 +850,7 @@ mod consistency_tests {
             // A 0.5 m/s ramp on north from 120 s.
             let ramp = if k >= 120 { 0.5 * (t - 120.0) } else { 0.0 };
             let p = Vector3::new(10.0 * t, noise + ramp, 0.0);
-            if let Some(c) = rc.step(t, &p, &v, 2.5) {
+            if let Some(c) = rc.step(t, &p, &v, 2.5, true) {
                 if c.ramp[1] {
                     flagged.push(k);
                 }

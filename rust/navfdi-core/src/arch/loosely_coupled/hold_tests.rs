@@ -291,6 +291,43 @@ fn a_stale_fix_is_one_repeated_while_the_ins_moves() {
     assert!(!h.stale(&(f + Vector3::repeat(0.01)), &Vector3::new(20.0, 0.0, 0.0)));
 }
 
+/// The receiver's consistency does not take a stale fix in: a spell of repeated fixes while
+/// moving at 10 m/s north gives no consistency, and the first fresh fix after it is measured
+/// across the spell (a gap: no jump, the sequential tests restarted) instead of reading as a
+/// 40 m jump back. Only with the receiver's own velocity.
+#[test]
+fn the_receiver_consistency_skips_stale_fixes() {
+    let mut r = ReceiverConsistency::default();
+    let vel = v(10.0);
+    let at = |t: f64| Vector3::new(0.0, 10.0 * t, 0.0);
+    let mut got = None;
+    for k in 0..40 {
+        let t = k as f64;
+        got = r.step(t, &at(t), &vel, 2.5, true);
+    }
+    let c = got.expect("moving fixes give a consistency once σ_e is known");
+    assert!(c.e.amax() < 1e-6);
+    for k in 40..44 {
+        assert!(
+            r.step(k as f64, &at(39.0), &vel, 2.5, true).is_none(),
+            "stale fix at {k} s"
+        );
+    }
+    assert!(r.step(44.0, &at(44.0), &vel, 2.5, true).is_none());
+    let c = r
+        .step(45.0, &at(45.0), &vel, 2.5, true)
+        .expect("fresh fixes again");
+    assert!(c.e.amax() < 1e-6 && c.onset.iter().all(|o| o.is_none()));
+    // Against the INS's displacement (positions only) it is taken in, as before.
+    let mut r = ReceiverConsistency::default();
+    for k in 0..40 {
+        r.step(k as f64, &at(k as f64), &vel, 2.5, false);
+    }
+    assert!(r
+        .step(40.0, &at(39.0), &vel, 2.5, false)
+        .is_some_and(|c| c.e[1] < -5.0));
+}
+
 /// A faulty velocity (the receiver's displacement off by −δv·Δt per fix, its velocity's
 /// innovation −δv) is blamed from the second fix and while it lasts; a position ramp (the
 /// velocity's innovation near 0) and a one-fix blip of the velocity's noise are not.
