@@ -129,8 +129,8 @@ pub fn align(
     // tens of degrees, beyond what the error filter's small-angle model can correct, and the
     // INS runs away from the fixes. Where the log never gets that fast, the first epoch at
     // `speed` as before. Only where `sig_v` is the velocity's σ (`rest_by_sigma`; the tight
-    // filter's is a range rate's).
-    let heading_sigmas = if rest_by_sigma {
+    // filter's is a range rate's) and no heading is given.
+    let heading_sigmas = if rest_by_sigma && a.heading.is_none() {
         HEADING_SPEED_SIGMAS
     } else {
         0.0
