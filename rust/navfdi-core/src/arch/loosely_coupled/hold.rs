@@ -84,6 +84,10 @@ pub enum Comp {
         /// velocity (the fault is over even if the INS, having followed part of it, still
         /// disagrees).
         quiet: u32,
+        /// The held offset before the receiver's last jump away from zero (m), while that
+        /// jump stands: a jump back to it (a multipath burst on a held step ending) returns to
+        /// the step, not to the fault's end.
+        base: Option<f64>,
     },
     /// A held ramp since `since` (s): its size `b` (innovation units, m) followed by the
     /// receiver's own displacement against its velocity, with variance `var` (m²).
@@ -277,6 +281,7 @@ impl PositionHold {
                             back: false,
                             agree: 0,
                             quiet: 0,
+                            base: None,
                         }
                     } else if let (true, Some((sum, var))) =
                         (converged, recv.and_then(|c| c.onset[j]))
@@ -322,17 +327,32 @@ impl PositionHold {
                     back,
                     agree,
                     quiet,
+                    base,
                 } => {
                     // The jump back: from the receiver's consistency, or where it has none at
                     // this fix (moving off from rest, after a gap) from the innovation's change.
-                    let jump_back = |dd: f64| dd * b < 0.0 && dd.abs() > 0.5 * b.abs();
-                    let receiver_back = recv.is_some_and(|c| {
-                        c.e[j].abs() > RECEIVER_JUMP * c.sigma[j] && jump_back(-c.e[j])
-                    });
+                    // Not one that takes the offset back to where it was before the receiver's
+                    // last jump away (nearer that than zero): a burst on the held step ended.
+                    let to_base =
+                        |dd: f64| base.is_some_and(|b0| (b + dd - b0).abs() < (b + dd).abs());
+                    let jump_back =
+                        |dd: f64| dd * b < 0.0 && dd.abs() > 0.5 * b.abs() && !to_base(dd);
+                    let receiver_jump = recv
+                        .filter(|c| c.e[j].abs() > RECEIVER_JUMP * c.sigma[j])
+                        .map(|c| c.e[j]);
+                    let receiver_back = receiver_jump.is_some_and(|e| jump_back(-e));
                     let back = back
                         || delta(j)
                             .or_else(|| self.prev.map(|(pd, ps)| (d[j] - pd[j], s[j] + ps[j])))
                             .is_some_and(|(dd, _)| jump_back(dd));
+                    // A jump away from zero (with the receiver's velocity) remembers the offset
+                    // before it; one back to it forgets it.
+                    let base =
+                        match receiver_jump.filter(|_| recv.is_some_and(|c| !c.ins_referenced)) {
+                            Some(e) if (b - e).abs() > b.abs() => Some(b),
+                            Some(e) if to_base(-e) => None,
+                            _ => base,
+                        };
                     let quiet = match recv {
                         Some(c) if back && c.e[j].abs() <= 3.0 * c.sigma[j] => quiet + 1,
                         _ => 0,
@@ -381,6 +401,7 @@ impl PositionHold {
                                 back,
                                 agree,
                                 quiet,
+                                base,
                             }
                         }
                     } else if (d[j] - b).powi(2) / (s[j] + var) <= thr1 {
@@ -395,6 +416,7 @@ impl PositionHold {
                             back: false,
                             agree: 0,
                             quiet: 0,
+                            base,
                         }
                     } else {
                         out[j] = Use::Out(STEP);
@@ -407,6 +429,7 @@ impl PositionHold {
                             back: back && !renew,
                             agree: 0,
                             quiet: if renew { 0 } else { quiet },
+                            base: if renew { None } else { base },
                         }
                     }
                 }

@@ -118,6 +118,55 @@ fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
     assert_eq!(h.comps[1], Comp::Normal);
 }
 
+/// A multipath burst on top of a held step, the same way (the offset follows it through the
+/// receiver's consistency): its end takes the offset back to the step's, which is not the
+/// fault's end — the step stays held; the step's own end is.
+#[test]
+fn a_burst_on_a_held_step_ends_back_on_the_step() {
+    let mut h = PositionHold::default();
+    for k in 0..5 {
+        assert_eq!(
+            step_e(&mut h, k as f64, 0.1, false, Some((0.1, 0.0))),
+            Use::Raw
+        );
+    }
+    // A 20 m step.
+    assert!(matches!(
+        step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
+        Use::Relative(..)
+    ));
+    for k in 6..10 {
+        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
+    }
+    // A 25 m burst on it, the same way, for five fixes.
+    step_e(&mut h, 10.0, -45.0, true, Some((25.0, 0.0)));
+    for k in 11..15 {
+        assert!(matches!(
+            step_e(&mut h, k as f64, -45.0, true, Some((0.1, 0.0))),
+            Use::Relative(..)
+        ));
+    }
+    // The burst ends: the fix jumps back 25 m (more than half of the 45 m offset), to the step.
+    assert!(matches!(
+        step_e(&mut h, 15.0, -20.0, true, Some((-25.0, 0.0))),
+        Use::Relative(..)
+    ));
+    assert!(
+        matches!(h.comps[1], Comp::Step { b, .. } if (b + 20.0).abs() < 0.5),
+        "{:?}",
+        h.comps[1]
+    );
+    for k in 16..20 {
+        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
+    }
+    // The step ends.
+    assert_eq!(
+        step_e(&mut h, 20.0, 0.0, false, Some((-20.0, 0.0))),
+        Use::Raw
+    );
+    assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
+}
+
 /// A fault the filter followed unseen (no alarm during it): at its end the receiver
 /// returns; its fixes correct the INS though the test alarms at them, and a new jump
 /// while returning is tested again.
