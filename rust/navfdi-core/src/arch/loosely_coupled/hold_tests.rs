@@ -75,12 +75,8 @@ fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, 
     )[1]
 }
 
-/// A ramp taken for a step (its size followed by the receiver's inconsistency) that the
-/// INS partly followed: when the receiver jumps back to where its velocity says it is, the
-/// fix is used as measured at once (it corrects the INS), not held as a new offset equal
-/// to the INS's error.
-#[test]
-fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
+/// A hold after five clean fixes on north (the receiver consistent), all used as measured.
+fn settled() -> PositionHold {
     let mut h = PositionHold::default();
     for k in 0..5 {
         assert_eq!(
@@ -88,6 +84,16 @@ fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
             Use::Raw
         );
     }
+    h
+}
+
+/// A ramp taken for a step (its size followed by the receiver's inconsistency) that the
+/// INS partly followed: when the receiver jumps back to where its velocity says it is, the
+/// fix is used as measured at once (it corrects the INS), not held as a new offset equal
+/// to the INS's error.
+#[test]
+fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
+    let mut h = settled();
     // The fix jumps by 5 m (a step to the receiver: e = 5 m against σ_e 1 m), then keeps
     // moving 2 m per fix; the INS ends 3 m off by the ramp's end.
     assert!(matches!(
@@ -123,13 +129,7 @@ fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
 /// fault's end — the step stays held; the step's own end is.
 #[test]
 fn a_burst_on_a_held_step_ends_back_on_the_step() {
-    let mut h = PositionHold::default();
-    for k in 0..5 {
-        assert_eq!(
-            step_e(&mut h, k as f64, 0.1, false, Some((0.1, 0.0))),
-            Use::Raw
-        );
-    }
+    let mut h = settled();
     // A 20 m step.
     assert!(matches!(
         step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
