@@ -133,7 +133,13 @@ pub struct PositionHold {
     prev: Option<(Vector3<f64>, Vector3<f64>)>,
     /// The previous fix (east, north, up, m) and the INS position then (same frame).
     last_fix: Option<(Vector3<f64>, Vector3<f64>)>,
+    /// Per component, when a held step was taken as over by a jump back (s) and its offset
+    /// (m): a jump back to it within [`RESUME`] s resumes the fault (a burst against it ended).
+    ended: [Option<(f64, f64)>; 3],
 }
+
+/// How long (s) after a held step was taken as over a jump back to its offset resumes it.
+pub const RESUME: f64 = 60.0;
 
 impl Default for PositionHold {
     fn default() -> Self {
@@ -141,6 +147,7 @@ impl Default for PositionHold {
             comps: [Comp::Normal; 3],
             prev: None,
             last_fix: None,
+            ended: [None; 3],
         }
     }
 }
@@ -266,7 +273,12 @@ impl PositionHold {
                     // updates had pulled the other way is the end of a fault it followed.
                     let pulled_back =
                         flagged && jump && pull.is_some_and(|p| p.back(j, d[j], s[j]));
-                    if returned(j) || pulled_back {
+                    // A jump back to the offset of a step taken as over lately: the step
+                    // resumes (held by the rule below), whatever the window says.
+                    let resumes = self.ended[j].is_some_and(|(t0, b0)| {
+                        t - t0 <= RESUME && (d[j] - b0).powi(2) <= 2.0 * AGREE_W2 * s[j]
+                    });
+                    if (returned(j) || pulled_back) && !(resumes && flagged && jump) {
                         // Used as measured: it corrects the filter.
                         Comp::Return { fixes: 1 }
                     } else if flagged && jump {
@@ -365,6 +377,7 @@ impl PositionHold {
                     // the INS's own drift, and an offset that followed it would keep the
                     // relative fixes agreeing with an INS drifting away (tens of km, fault-free,
                     // with an IMU noise set above the sensor's).
+                    let held = b;
                     let (b, var) = match recv {
                         Some(c) if !c.ins_referenced && c.e[j].abs() > 3.0 * c.sigma[j] => {
                             (b - c.e[j], var + c.sigma[j] * c.sigma[j])
@@ -388,6 +401,7 @@ impl PositionHold {
                         // rather than being held as an offset of its own.
                         // Without the receiver at the jump (from rest): once it has agreed with
                         // its own velocity for [`AGREE_LONG`] fixes since.
+                        self.ended[j] = Some((t, held));
                         Comp::Return { fixes: 1 }
                     } else if (back && w2(j) <= thr1) || w2(j) <= AGREE_W2 {
                         let agree = agree + 1;

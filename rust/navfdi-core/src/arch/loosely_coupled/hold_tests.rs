@@ -167,6 +167,37 @@ fn a_burst_on_a_held_step_ends_back_on_the_step() {
     assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
 }
 
+/// A multipath burst against a held step: its start reads as the step's end (a return,
+/// the fixes used as measured — right, the burst cancels the step), and its end, a jump back
+/// to the step's offset that also cancels the window's record of the burst's start, resumes
+/// the step instead of reading as a second return.
+#[test]
+fn a_burst_against_a_held_step_ends_by_resuming_it() {
+    let mut h = settled();
+    assert!(matches!(
+        step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
+        Use::Relative(..)
+    ));
+    for k in 6..10 {
+        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
+    }
+    // The burst: the fix back near the truth.
+    assert_eq!(
+        step_e(&mut h, 10.0, -1.0, false, Some((-19.0, 0.0))),
+        Use::Raw
+    );
+    for k in 11..16 {
+        assert_eq!(
+            step_e(&mut h, k as f64, -1.0, false, Some((0.1, 0.0))),
+            Use::Raw
+        );
+    }
+    // Its end: back to the step's offset, the window holding the burst's −19 m.
+    let u = decide_north(&mut h, 16.0, -20.0, 4.5, true, &north(19.0, 1.0, -19.0));
+    assert!(matches!(u, Use::Relative(..)), "{u:?}");
+    assert!(matches!(h.comps[1], Comp::Step { .. }), "{:?}", h.comps[1]);
+}
+
 /// A fault the filter followed unseen (no alarm during it): at its end the receiver
 /// returns; its fixes correct the INS though the test alarms at them, and a new jump
 /// while returning is tested again.
