@@ -87,6 +87,19 @@ fn settled() -> PositionHold {
     h
 }
 
+/// [`settled`], then a 20 m north step from 5 s held (a relative fix) for five fixes.
+fn held_step() -> PositionHold {
+    let mut h = settled();
+    assert!(matches!(
+        step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
+        Use::Relative(..)
+    ));
+    for k in 6..10 {
+        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
+    }
+    h
+}
+
 /// A ramp taken for a step (its size followed by the receiver's inconsistency) that the
 /// INS partly followed: when the receiver jumps back to where its velocity says it is, the
 /// fix is used as measured at once (it corrects the INS), not held as a new offset equal
@@ -129,15 +142,7 @@ fn the_receivers_jump_back_ends_a_hold_the_ins_partly_followed() {
 /// fault's end — the step stays held; the step's own end is.
 #[test]
 fn a_burst_on_a_held_step_ends_back_on_the_step() {
-    let mut h = settled();
-    // A 20 m step.
-    assert!(matches!(
-        step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
-        Use::Relative(..)
-    ));
-    for k in 6..10 {
-        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
-    }
+    let mut h = held_step();
     // A 25 m burst on it, the same way, for five fixes.
     step_e(&mut h, 10.0, -45.0, true, Some((25.0, 0.0)));
     for k in 11..15 {
@@ -173,14 +178,7 @@ fn a_burst_on_a_held_step_ends_back_on_the_step() {
 /// the step instead of reading as a second return.
 #[test]
 fn a_burst_against_a_held_step_ends_by_resuming_it() {
-    let mut h = settled();
-    assert!(matches!(
-        step_e(&mut h, 5.0, -20.0, true, Some((20.0, 0.0))),
-        Use::Relative(..)
-    ));
-    for k in 6..10 {
-        step_e(&mut h, k as f64, -20.0, true, Some((0.1, 0.0)));
-    }
+    let mut h = held_step();
     // The burst: the fix back near the truth.
     assert_eq!(
         step_e(&mut h, 10.0, -1.0, false, Some((-19.0, 0.0))),
