@@ -81,7 +81,7 @@ def _one(base: navfdi.Scenario, fault: dict, natural: np.ndarray | None = None, 
     t = x.t
     sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
     tested = np.asarray(sub["dof"]) > 0
-    ex = (np.asarray(sub["reason"]) > 0) & tested
+    ex = _excluded(x)
     during = tested & (t >= a) & (t < b)
     first = t[during][0] if during.any() else np.nan
     hits = t[ex & (t >= a) & (t < b)]

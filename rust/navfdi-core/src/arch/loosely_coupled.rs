@@ -17,6 +17,7 @@
 mod blame;
 mod checks;
 mod hold;
+mod noise_scale;
 mod pull;
 mod window;
 
@@ -278,9 +279,9 @@ fn run<const NS: usize>(
         .iter()
         .map(|&dt| correlation_weight(dt, l.position_correlation))
         .collect();
-    let mut scales: Vec<hold::NoiseScale> = aids
+    let mut scales: Vec<noise_scale::NoiseScale> = aids
         .iter()
-        .map(|_| hold::NoiseScale::new(l.noise_scale, 1.0, 10.0))
+        .map(|_| noise_scale::NoiseScale::new(l.noise_scale, 1.0, 10.0))
         .collect();
 
     // Velocity components left out for the receiver's own inconsistency.

@@ -23,6 +23,7 @@
 //! [`STALE_MOTION`] m is the receiver repeating its last fix; position and velocity of the
 //! epoch are left out.
 
+use super::noise_scale::{median, SCALE_MIN, SCALE_WINDOW};
 use nalgebra::Vector3;
 
 // Why a GNSS measurement (or some of its components) was left out at an epoch: indices into
@@ -55,6 +56,11 @@ pub const PROBATION: u32 = 5;
 
 /// INS motion (m) between two identical fixes that marks the second as stale.
 pub const STALE_MOTION: f64 = 0.5;
+
+/// A fix equal to the previous one (to 1 mm) after a motion (m) beyond [`STALE_MOTION`].
+fn repeated(fix: &Vector3<f64>, last: &Vector3<f64>, motion: f64) -> bool {
+    (fix - last).amax() < 1e-3 && motion > STALE_MOTION
+}
 
 /// The state of one position component.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -158,7 +164,7 @@ impl PositionHold {
     pub fn stale(&mut self, fix: &Vector3<f64>, ins: &Vector3<f64>) -> bool {
         let out = self
             .last_fix
-            .is_some_and(|(f, i)| (fix - f).amax() < 1e-3 && (ins - i).norm() > STALE_MOTION);
+            .is_some_and(|(f, i)| repeated(fix, &f, (ins - i).norm()));
         if !out {
             self.last_fix = Some((*fix, *ins));
         }
@@ -529,108 +535,6 @@ impl PositionHold {
 #[path = "hold_tests.rs"]
 mod tests;
 
-/// The scale `c` of a GNSS channel's measurement σ, estimated from its own innovations: over
-/// the last [`SCALE_WINDOW`] components of fixes used as measured, `c² = (med(d²)/0.4549 −
-/// med(HPHᵀ)) / med(R)` (0.4549: the median of χ²₁), so that the innovations' median matches
-/// a consistent filter's — robust to the faults it must find (held fixes are not counted, and
-/// a median ignores the rest). Optimistic σ give `c > 1` (tests that hold their pf); the
-/// loosely coupled filter clamps it to `[1, 10]`. Clamped to `[lo, hi]`; 1 until
-/// [`SCALE_MIN`] samples are in.
-#[derive(Debug, Clone)]
-pub struct NoiseScale {
-    d2: std::collections::VecDeque<f64>,
-    hph: std::collections::VecDeque<f64>,
-    r: std::collections::VecDeque<f64>,
-    /// Fixed scale (no estimation) when set.
-    fixed: Option<f64>,
-    lo: f64,
-    hi: f64,
-}
-
-/// The (upper) median of a window (not empty).
-fn median(v: &std::collections::VecDeque<f64>) -> f64 {
-    let mut x: Vec<f64> = v.iter().copied().collect();
-    let m = x.len() / 2;
-    *x.select_nth_unstable_by(m, f64::total_cmp).1
-}
-
-/// Components (3 per fix) the scale is estimated over.
-pub const SCALE_WINDOW: usize = 180;
-/// Components needed before the scale departs from 1.
-pub const SCALE_MIN: usize = 30;
-
-impl NoiseScale {
-    /// An estimated scale clamped to `[lo, hi]`, or a `fixed` one.
-    pub fn new(fixed: Option<f64>, lo: f64, hi: f64) -> Self {
-        NoiseScale {
-            d2: Default::default(),
-            hph: Default::default(),
-            r: Default::default(),
-            fixed,
-            lo,
-            hi,
-        }
-    }
-
-    /// Add a fix used as measured: its components' squared innovations `d²`, predicted
-    /// variances `HPHᵀ` and measurement variances `R` (unscaled).
-    pub fn add(&mut self, d2: &[f64], hph: &[f64], r: &[f64]) {
-        if self.fixed.is_some() {
-            return;
-        }
-        for j in 0..d2.len().min(hph.len()).min(r.len()) {
-            if !(d2[j].is_finite() && hph[j].is_finite() && r[j] > 0.0) {
-                continue;
-            }
-            if self.d2.len() == SCALE_WINDOW {
-                self.d2.pop_front();
-                self.hph.pop_front();
-                self.r.pop_front();
-            }
-            self.d2.push_back(d2[j]);
-            self.hph.push_back(hph[j].max(0.0));
-            self.r.push_back(r[j]);
-        }
-    }
-
-    /// The current scale `c` (of σ).
-    pub fn scale(&self) -> f64 {
-        if let Some(f) = self.fixed {
-            return f;
-        }
-        if self.d2.len() < SCALE_MIN {
-            return 1.0;
-        }
-        let med = |v: &std::collections::VecDeque<f64>| median(v);
-        let c2 = (med(&self.d2) / 0.454_936_4 - med(&self.hph)) / med(&self.r);
-        c2.max(self.lo * self.lo).sqrt().clamp(self.lo, self.hi)
-    }
-}
-
-#[cfg(test)]
-mod scale_tests {
-    use super::*;
-
-    #[test]
-    fn the_scale_matches_the_innovations_and_ignores_outliers() {
-        use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        let mut s = NoiseScale::new(None, 0.1, 10.0);
-        assert_eq!(s.scale(), 1.0);
-        // Innovations of σ 0.6 m against a reported R of 4 m² and HPHᵀ 0.04 m²: c ≈ 0.29.
-        for k in 0..200 {
-            let n: f64 = StandardNormal.sample(&mut rng);
-            let d = 0.6 * n;
-            let d = if k % 10 == 0 { 30.0 } else { d }; // 10 % gross outliers
-            s.add(&[d * d], &[0.04], &[4.0]);
-        }
-        let c = s.scale();
-        assert!((c - (0.36f64 - 0.04).sqrt() / 2.0).abs() < 0.06, "{c}");
-        assert_eq!(NoiseScale::new(Some(2.0), 0.1, 10.0).scale(), 2.0);
-    }
-}
-
 /// The receiver's own consistency: its position displacement between two fixes against its
 /// velocity, `e = p_k − p_{k−1} − ½(v_k + v_{k−1})(t_k − t_{k−1})` per component (east,
 /// north, up, m). A position fault shows in it and nothing of the INS does: a step as one
@@ -740,7 +644,7 @@ impl ReceiverConsistency {
         // the INS's displacement, on positions only, the restart cost more than it saved:
         // docs/meter_fde.md.)
         if let (true, Some((t0, p0, v0))) = (own_velocity, self.prev) {
-            if (p - p0).amax() < 1e-3 && 0.5 * (v + v0).norm() * (t - t0) > STALE_MOTION {
+            if repeated(p, &p0, 0.5 * (v + v0).norm() * (t - t0)) {
                 return None;
             }
         }

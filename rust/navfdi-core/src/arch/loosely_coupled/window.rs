@@ -69,8 +69,8 @@ impl Default for DriftWindow {
     }
 }
 
-/// The median of `v` (reordered); NaN when empty.
-fn median_of(v: &mut [f64]) -> f64 {
+/// The median of `v` (reordered; the upper one of an even count); NaN when empty.
+pub(super) fn median_of(v: &mut [f64]) -> f64 {
     if v.is_empty() {
         return f64::NAN;
     }
