@@ -329,7 +329,7 @@ fn bench_tight_ins(c: &mut Criterion) {
 /// (`strapdown_propagate_15`, `strapdown_update_15x6`) and the row-by-row update of the tight
 /// filter at the same size (`strapdown_sequential_15x6`).
 fn bench_strapdown_epoch(c: &mut Criterion) {
-    use navfdi_core::ins::error_filter::{ErrorFilter, N, R, V};
+    use navfdi_core::ins::error_filter::{ErrorFilter, N, N_CLOCK, R, V};
     use navfdi_core::ins::strapdown::NavState;
     let noise = bench_imu();
     let kf = ErrorFilter::<N>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise);
@@ -370,6 +370,17 @@ fn bench_strapdown_epoch(c: &mut Criterion) {
         b.iter(|| {
             f15.propagate(&st, black_box(&f), &w, 0.01);
             f15.p = kf.p;
+        })
+    });
+    // The tight filter's size (15 + 3 clock states), propagated at every IMU sample by the
+    // filter and by each sub-filter of the protection-level bank.
+    let k18 = ErrorFilter::<N_CLOCK>::new(3.0, 0.3, Vector3::repeat(0.02), Vector3::zeros(), noise)
+        .with_clock([0.0; 3], [10.0, 10.0, 1.0], (0.1, 0.1));
+    g.bench_function("strapdown_propagate_18", |b| {
+        let mut f18 = k18.clone();
+        b.iter(|| {
+            f18.propagate(&st, black_box(&f), &w, 0.01);
+            f18.p = k18.p;
         })
     });
     g.bench_function("strapdown_update_15x6", |b| {

@@ -274,7 +274,12 @@ impl<const NS: usize> ErrorFilter<NS> {
             }
         }
         let _ = w_b;
-        let phi = SMatrix::<f64, NS, NS>::identity() + f * dt;
+        // Φ = I + F Δt, formed in F's place (the same values as `I + F·Δt`).
+        let mut phi = f;
+        phi *= dt;
+        for i in 0..NS {
+            phi[(i, i)] += 1.0;
+        }
         // Discrete process noise: white noise through C, Gauss-Markov drivers on the biases.
         let qv = c * self.q_acc * c.transpose() * dt;
         let qa = c * self.q_gyro * c.transpose() * dt;
@@ -284,7 +289,9 @@ impl<const NS: usize> ErrorFilter<NS> {
             *t = crate::linalg::left_block_sparse(&phi, t);
         }
         // Ten of Φ's 25 3 × 3 blocks are non-zero at 15 states: the zero ones are skipped.
-        let mut p = crate::linalg::sandwich_block_sparse(&phi, &self.p);
+        // Formed, Q added and symmetrised in P's own storage (no copies of P per sample).
+        let p = &mut self.p;
+        crate::linalg::sandwich_block_sparse_in_place(&phi, p);
         {
             let mut b = p.fixed_view_mut::<3, 3>(V, V);
             b += qv;
@@ -313,7 +320,7 @@ impl<const NS: usize> ErrorFilter<NS> {
             }
             p[(CD, CD)] += qd * dt;
         }
-        self.p = 0.5 * (p + p.transpose());
+        crate::linalg::symmetrise(p);
     }
 
     /// The innovation `res` of a measurement (its model's prediction from the error state,
@@ -407,6 +414,29 @@ impl<const NS: usize> ErrorFilter<NS> {
                 r.nrows()
             )));
         }
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            return Ok(unsafe { self.joseph_avx2(inn, m) });
+        }
+        Ok(self.joseph(inn, m))
+    }
+
+    /// [`ErrorFilter::joseph`] compiled with AVX2 enabled (4-wide vectors instead of the
+    /// baseline's SSE2; element-wise products and sums, no fused multiply-add: the same bits).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn joseph_avx2(&mut self, inn: &Innovation, m: usize) -> SVector<f64, NS> {
+        self.joseph(inn, m)
+    }
+
+    /// The gain, the state correction and the Joseph-form covariance of
+    /// [`ErrorFilter::update`] (`m` rows, shapes checked there).
+    #[inline(always)]
+    fn joseph(&mut self, inn: &Innovation, m: usize) -> SVector<f64, NS> {
         // K = P Hᵀ S⁻¹ (NS × m) by substitution on the contiguous columns of P Hᵀ with
         // reciprocal pivots; K S Kᵀ = (K S) Kᵀ.
         let mut k = inn.hp.transpose();
@@ -448,9 +478,15 @@ impl<const NS: usize> ErrorFilter<NS> {
                 }
             }
         }
-        let pn = self.p - khp - khp.transpose() + ksk;
-        self.p = 0.5 * (pn + pn.transpose());
-        Ok(dx)
+        // P − K H P − (K H P)ᵀ + K S Kᵀ element by element in P's storage (the order of
+        // `P − KHP − (KHP)ᵀ + KSKᵀ`), then symmetrised in place.
+        for j in 0..NS {
+            for i in 0..NS {
+                self.p[(i, j)] = self.p[(i, j)] - khp[(i, j)] - khp[(j, i)] + ksk[(i, j)];
+            }
+        }
+        crate::linalg::symmetrise(&mut self.p);
+        dx
     }
 
     /// `h_i P h_iᵀ` (the state's share of the innovation variance) of row `i` of `h` (rows of
@@ -466,6 +502,38 @@ impl<const NS: usize> ErrorFilter<NS> {
     /// innovations (`rᵀS⁻¹r` of the batch, to rounding) — no m × m factorisation. Commit with
     /// `self.p = p` and [`ErrorFilter::feedback`].
     pub fn sequential(
+        &self,
+        res: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r_diag: &[f64],
+    ) -> Result<(SMatrix<f64, NS, NS>, SVector<f64, NS>, f64)> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked on the line above).
+            return unsafe { self.sequential_avx2(res, h, r_diag) };
+        }
+        self.sequential_rows(res, h, r_diag)
+    }
+
+    /// [`ErrorFilter::sequential_rows`] compiled with AVX2 enabled (the same bits, as
+    /// [`ErrorFilter::joseph_avx2`]).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn sequential_avx2(
+        &self,
+        res: &DVector<f64>,
+        h: &DMatrix<f64>,
+        r_diag: &[f64],
+    ) -> Result<(SMatrix<f64, NS, NS>, SVector<f64, NS>, f64)> {
+        self.sequential_rows(res, h, r_diag)
+    }
+
+    /// The row-by-row update of [`ErrorFilter::sequential`].
+    #[inline(always)]
+    fn sequential_rows(
         &self,
         res: &DVector<f64>,
         h: &DMatrix<f64>,
