@@ -278,6 +278,7 @@ unsafe fn times_transpose_blocks_avx2<const NS: usize>(
     times_transpose_blocks_body(x, phi, nz, out);
 }
 
+/// The loops of [`times_transpose_blocks_into`], inlined into each of its two builds.
 #[inline(always)]
 fn times_transpose_blocks_body<const NS: usize>(
     x: &SMatrix<f64, NS, NS>,
@@ -343,10 +344,12 @@ pub fn sandwich_block_sparse_in_place<const NS: usize>(
     }
 }
 
-/// `p ← (p + pᵀ)/2` in place: each off-diagonal pair set to `0.5·(p_ij + p_ji)`, the diagonal
-/// kept (`0.5·(x + x)` is `x`) — the same values as `0.5 * (p + p.transpose())`.
+/// `p ← (p + pᵀ)/2` in place: each pair set to `0.5·(p_ij + p_ji)` — the same values as
+/// `0.5 * (p + p.transpose())`, without its two temporaries.
 pub fn symmetrise<const NS: usize>(p: &mut SMatrix<f64, NS, NS>) {
     for j in 0..NS {
+        // `0.5·(x + x)` is `x` but where `x + x` overflows: kept as the expression is.
+        p[(j, j)] = 0.5 * (p[(j, j)] + p[(j, j)]);
         for i in j + 1..NS {
             let m = 0.5 * (p[(i, j)] + p[(j, i)]);
             p[(i, j)] = m;
