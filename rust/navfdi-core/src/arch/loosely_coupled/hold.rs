@@ -440,9 +440,10 @@ impl PositionHold {
                         }
                     } else {
                         out[j] = Use::Out(STEP);
-                        // The fault changed (a new jump the receiver cannot account for): a
-                        // new offset; else the old one held.
-                        let renew = jump && recv.is_none();
+                        // The fault changed (a new jump the receiver cannot account for — or,
+                        // against the INS's displacement, any jump of the fix: a multipath
+                        // burst on a held step): a new offset; else the old one held.
+                        let renew = jump && recv.is_none_or(|c| c.ins_referenced);
                         Comp::Step {
                             b: if renew { d[j] } else { b },
                             var: if renew { s[j] } else { var },

@@ -49,6 +49,19 @@ fn step(h: &mut PositionHold, t: f64, d: f64, alarm: bool, ramp: bool) -> Use {
 /// One fix: `recv` the receiver's `e` on north and, where the CUSUM fires, the sum since
 /// its onset (σ_e 1 m); None: no velocity channel.
 fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, f64)>) -> Use {
+    step_with(h, t, d, alarm, recv, false)
+}
+
+/// [`step_e`] with the consistency read against the receiver's velocity or, `ins_referenced`,
+/// against the INS's displacement (a receiver without velocities).
+fn step_with(
+    h: &mut PositionHold,
+    t: f64,
+    d: f64,
+    alarm: bool,
+    recv: Option<(f64, f64)>,
+    ins_referenced: bool,
+) -> Use {
     let s = Vector3::repeat(4.5);
     let c = recv.map(|(e, sum)| Consistency {
         e: Vector3::new(0.0, e, 0.0),
@@ -57,7 +70,7 @@ fn step_e(h: &mut PositionHold, t: f64, d: f64, alarm: bool, recv: Option<(f64, 
         onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
         window: Vector3::zeros(),
         excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
-        ins_referenced: false,
+        ins_referenced,
     });
     h.decide(
         t,
@@ -322,6 +335,37 @@ fn ramps_are_held_until_the_receiver_returns() {
         Use::Relative(-1.0, 31.0)
     );
     assert_eq!(step_e(&mut h, 41.0, 0.2, false, Some((0.0, 0.0))), Use::Raw);
+}
+
+/// On positions only (the consistency against the INS's displacement) a jump of the fix on
+/// a held step — a multipath burst on top of it — is a new offset: the fixes of the burst are
+/// used relative to it, not relative to the step's offset (a 33 m relative innovation passed
+/// the gate at pf 1e-12 as the INS's variance grew, and pulled a simulated log 536 m RMS off).
+#[test]
+fn a_jump_on_a_held_step_against_the_ins_displacement_is_a_new_offset() {
+    let mut h = PositionHold::default();
+    for k in 0..10 {
+        step_with(&mut h, k as f64, 0.0, false, Some((0.0, 0.0)), true);
+    }
+    // A 30 m step (the fix +30 m: innovation −30), held and used relative to its offset.
+    assert!(matches!(
+        step_with(&mut h, 10.0, -30.0, true, Some((30.0, 0.0)), true),
+        Use::Relative(b, _) if b == -30.0
+    ));
+    assert!(matches!(
+        step_with(&mut h, 11.0, -30.0, true, Some((0.0, 0.0)), true),
+        Use::Relative(b, _) if b == -30.0
+    ));
+    // A burst moves the fix 40 m further: left out, its offset taken as the new one, and its
+    // next fix used relative to that (not left out against the step's −30 m).
+    assert_eq!(
+        step_with(&mut h, 12.0, -70.0, true, Some((40.0, 0.0)), true),
+        Use::Out(STEP)
+    );
+    assert!(matches!(
+        step_with(&mut h, 13.0, -70.0, true, Some((0.0, 0.0)), true),
+        Use::Relative(b, _) if b == -70.0
+    ));
 }
 
 /// A sequential-test alarm whose fix never leaves the INS is a false one: held for
