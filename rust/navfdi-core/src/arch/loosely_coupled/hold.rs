@@ -115,6 +115,13 @@ pub enum Comp {
         seen: bool,
         /// Consecutive fixes, after `seen`, at which it was within its noise again.
         quiet: u32,
+        /// Time (s) and size (m) the ramp's line is measured from: the start of the hold, or
+        /// the last fix that left the line.
+        start: (f64, f64),
+        /// Against the INS's displacement (positions only): the ramp's line fixed after
+        /// [`PROBATION`] fixes — time (s), size (m) and rate (m/s) — which the size follows from
+        /// then on.
+        trend: Option<(f64, f64, f64)>,
     },
 }
 
@@ -317,6 +324,8 @@ impl PositionHold {
                             agree: 0,
                             seen: sum * sum > AGREE_W2 * var,
                             quiet: 0,
+                            start: (t, -sum),
+                            trend: None,
                         }
                     } else if flagged {
                         out[j] = Use::Out(TEST);
@@ -463,14 +472,40 @@ impl PositionHold {
                     agree,
                     seen,
                     quiet,
+                    start,
+                    trend,
                 } => {
                     // The ramp's size moves with the receiver's inconsistency (its end: a
                     // jump back to zero).
                     // Without it (at rest, or after a gap) the INS, held by the constraints,
                     // is the reference: the offset is re-anchored to the fix's innovation.
-                    let (b, var) = match recv {
-                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j]),
-                        None => (d[j], s[j]),
+                    // Against the INS's displacement the inconsistency holds the INS's own
+                    // velocity error, which a size following it would hide from the relative
+                    // fixes: there the size follows the line of its first fixes.
+                    let (b, var, trend) = match recv {
+                        Some(c) if c.ins_referenced => {
+                            let var = var + c.sigma[j] * c.sigma[j];
+                            match trend {
+                                Some((t0, b0, r)) => (b0 + r * (t - t0), var, trend),
+                                None => {
+                                    let nb = b - c.e[j];
+                                    let (ts, bs) = start;
+                                    let line = (fixes + 1 >= AGREE_LONG && t > ts)
+                                        .then(|| (t, nb, (nb - bs) / (t - ts)));
+                                    (nb, var, line)
+                                }
+                            }
+                        }
+                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j], trend),
+                        None => (d[j], s[j], trend),
+                    };
+                    // The fix off the line beyond the deciding test (the ramp ended, or
+                    // changed): the line is measured again from this fix.
+                    let (b, start, trend) = match trend {
+                        Some(_) if (d[j] - b).powi(2) / (s[j] + var) > thr1 => {
+                            (d[j], (t, d[j]), None)
+                        }
+                        _ => (b, start, trend),
                     };
                     let confirmed = confirmed || leaves(j, b);
                     let fixes = fixes + 1;
@@ -508,6 +543,8 @@ impl PositionHold {
                             agree,
                             seen,
                             quiet,
+                            start,
+                            trend,
                         }
                     }
                 }

@@ -368,6 +368,40 @@ fn a_jump_on_a_held_step_against_the_ins_displacement_is_a_new_offset() {
     ));
 }
 
+/// On positions only a held ramp's size follows the fixes' displacement against the INS's
+/// velocity for its first [`AGREE_LONG`] fixes, then the line they drew: an INS velocity
+/// error that shows in the displacement afterwards is not taken into the size (the relative
+/// fixes then see it), and a fix off the line beyond the test starts a new line.
+#[test]
+fn a_ramp_against_the_ins_displacement_follows_its_line() {
+    let mut h = PositionHold::default();
+    for k in 0..10 {
+        step_with(&mut h, k as f64, 0.0, false, Some((0.0, 0.0)), true);
+    }
+    let mut d = 11.0;
+    assert_eq!(
+        step_with(&mut h, 10.0, d, true, Some((-1.0, -11.0)), true),
+        Use::Out(RAMP)
+    );
+    // A 1 m/s ramp: the size follows the displacement, then its line (1 m/s from 11 m at 10 s).
+    for k in 11..25 {
+        d += 1.0;
+        let u = step_with(&mut h, k as f64, d, true, Some((-1.0, 0.0)), true);
+        assert_eq!(u, Use::Relative(d, 1.0 + k as f64), "{k}");
+    }
+    // The INS's velocity drifts 0.5 m/s off: the displacement says −1.5 m per fix, the size
+    // stays on the line, and the fix (the INS 0.5 m further off each second) is used relative
+    // to it until it leaves the test.
+    for k in 25..30 {
+        d += 1.5;
+        let u = step_with(&mut h, k as f64, d, true, Some((-1.5, 0.0)), true);
+        assert!(
+            matches!(u, Use::Relative(b, _) if b == 1.0 + k as f64),
+            "{k}: {u:?}"
+        );
+    }
+}
+
 /// A sequential-test alarm whose fix never leaves the INS is a false one: held for
 /// [`PROBATION`] fixes only.
 #[test]
