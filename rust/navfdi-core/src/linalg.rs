@@ -319,18 +319,13 @@ pub fn sandwich_block_sparse<const NS: usize>(
     phi: &SMatrix<f64, NS, NS>,
     p: &SMatrix<f64, NS, NS>,
 ) -> SMatrix<f64, NS, NS> {
-    match nonzero_blocks(phi) {
-        Some(nz) => {
-            let c = times_transpose_blocks(p, phi, &nz);
-            times_transpose_blocks(&c.transpose(), phi, &nz)
-        }
-        None => phi * p * phi.transpose(),
-    }
+    let mut out = *p;
+    sandwich_block_sparse_in_place(phi, &mut out);
+    out
 }
 
-/// [`sandwich_block_sparse`] written over `p` itself: the same sums in the same order, without
-/// the copies of `p` that returning the product costs (the strapdown filters propagate their
-/// covariance at every IMU sample).
+/// [`sandwich_block_sparse`] written over `p` itself, without the copies of `p` that returning
+/// the product costs (the strapdown filters propagate their covariance at every IMU sample).
 pub fn sandwich_block_sparse_in_place<const NS: usize>(
     phi: &SMatrix<f64, NS, NS>,
     p: &mut SMatrix<f64, NS, NS>,

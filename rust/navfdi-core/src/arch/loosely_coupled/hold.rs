@@ -118,10 +118,10 @@ pub enum Comp {
         /// Time (s) and size (m) the ramp's line is measured from: the start of the hold, or
         /// the last fix that left the line.
         start: (f64, f64),
-        /// Against the INS's displacement (positions only): the ramp's line fixed after
-        /// [`PROBATION`] fixes — time (s), size (m) and rate (m/s) — which the size follows from
-        /// then on.
-        trend: Option<(f64, f64, f64)>,
+        /// Against the INS's displacement (positions only): the rate (m/s) of the ramp's line
+        /// through `start`, fixed after [`AGREE_LONG`] fixes, which the size follows from then
+        /// on.
+        rate: Option<f64>,
     },
 }
 
@@ -325,7 +325,7 @@ impl PositionHold {
                             seen: sum * sum > AGREE_W2 * var,
                             quiet: 0,
                             start: (t, -sum),
-                            trend: None,
+                            rate: None,
                         }
                     } else if flagged {
                         out[j] = Use::Out(TEST);
@@ -473,7 +473,7 @@ impl PositionHold {
                     seen,
                     quiet,
                     start,
-                    trend,
+                    rate,
                 } => {
                     // The ramp's size moves with the receiver's inconsistency (its end: a
                     // jump back to zero).
@@ -482,30 +482,30 @@ impl PositionHold {
                     // Against the INS's displacement the inconsistency holds the INS's own
                     // velocity error, which a size following it would hide from the relative
                     // fixes: there the size follows the line of its first fixes.
-                    let (b, var, trend) = match recv {
+                    let (ts, bs) = start;
+                    let (b, var, rate) = match recv {
                         Some(c) if c.ins_referenced => {
                             let var = var + c.sigma[j] * c.sigma[j];
-                            match trend {
-                                Some((t0, b0, r)) => (b0 + r * (t - t0), var, trend),
+                            match rate {
+                                Some(r) => (bs + r * (t - ts), var, rate),
                                 None => {
                                     let nb = b - c.e[j];
-                                    let (ts, bs) = start;
                                     let line = (fixes + 1 >= AGREE_LONG && t > ts)
-                                        .then(|| (t, nb, (nb - bs) / (t - ts)));
+                                        .then(|| (nb - bs) / (t - ts));
                                     (nb, var, line)
                                 }
                             }
                         }
-                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j], trend),
-                        None => (d[j], s[j], trend),
+                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j], rate),
+                        None => (d[j], s[j], rate),
                     };
                     // The fix off the line beyond the deciding test (the ramp ended, or
                     // changed): the line is measured again from this fix.
-                    let (b, start, trend) = match trend {
+                    let (b, start, rate) = match rate {
                         Some(_) if (d[j] - b).powi(2) / (s[j] + var) > thr1 => {
                             (d[j], (t, d[j]), None)
                         }
-                        _ => (b, start, trend),
+                        _ => (b, start, rate),
                     };
                     let confirmed = confirmed || leaves(j, b);
                     let fixes = fixes + 1;
@@ -544,7 +544,7 @@ impl PositionHold {
                             seen,
                             quiet,
                             start,
-                            trend,
+                            rate,
                         }
                     }
                 }
