@@ -2,8 +2,8 @@
 exclusion per size and elevation with the global test, data snooping (w-test) and both,
 beside RTKLIB's RAIM (``rnx2rtkp``, ``pos1-posopt5 = on``) on the same faulted files.
 
-Usage: ``python docs/scripts/snapshot_fde_campaign.py [WEIGHTING]`` (default ``cn0``; or
-``elevation``) prints the markdown tables of ``docs/gnss_real.md``. Needs RTKLIB's
+Usage: ``python docs/scripts/snapshot_fde_campaign.py [WEIGHTING [SLOPE]]`` (default ``cn0``; or
+``elevation``; SLOPE the C/N0 model's ``cn0_slope``, a number or ``auto``, default 1) prints the markdown tables of ``docs/gnss_real.md``. Needs RTKLIB's
 ``rnx2rtkp`` on the PATH (Debian package ``rtklib``) for its column.
 
 Settings: G + E (C1C, C1X), 10° mask, α = 0.01, the allocation's power β0 = 0.8, the σ factor
@@ -68,9 +68,12 @@ def rtklib_kept(obs: Path, work: Path) -> dict[float, set[str]]:
 def main() -> None:
     warnings.simplefilter("ignore")
     weighting = sys.argv[1] if len(sys.argv) > 1 else "cn0"
-    common = dict(systems="G,E", weighting=weighting)
-    scale = gnss_solve(OBS, NAV, noise_scale="auto", **common).config["noise_scale"]
+    slope: float | str = 1.0 if len(sys.argv) < 3 else (sys.argv[2] if sys.argv[2] == "auto" else float(sys.argv[2]))
+    common: dict[str, object] = dict(systems="G,E", weighting=weighting)
+    first = gnss_solve(OBS, NAV, noise_scale="auto", cn0_slope=slope, **common).config
+    scale = first["noise_scale"]
     common["noise_scale"] = scale
+    common["cn0_slope"] = first["cn0_slope"]
     clean = {t: gnss_solve(OBS, NAV, test=t, **common) for t in TESTS}
     sol = clean["global"].solution
     tt = (sol["gps_seconds"] - sol["gps_seconds"].iloc[0]).to_numpy()
@@ -81,7 +84,7 @@ def main() -> None:
     cand = sorted(s for s, n in counts.items() if n >= 0.9 * len(win))
     elev = inwin.groupby("satellite", observed=True)["elevation"].mean()
     mdb = {t: clean[t].satellites[clean[t].satellites["epoch"].isin(win)].groupby("satellite", observed=True)["mdb"].median() for t in TESTS}
-    print(f"walk_0827, G+E, weighting {weighting}, sigma factor {scale:.2f} (--noise auto); {len(cand)} satellites in view over {T0:g}-{T1:g} s")
+    print(f"walk_0827, G+E, weighting {weighting} (C/N0 slope {common['cn0_slope']:.2f}), sigma factor {scale:.2f} (--noise auto); {len(cand)} satellites in view over {T0:g}-{T1:g} s")
     for t in TESTS:
         c = clean[t].solution
         print(f"clean file, {t}: epochs with an exclusion {(c['excluded'] != '').mean():.2%} (alpha 1 %)")

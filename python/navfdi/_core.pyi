@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 __all__ = [
     "__version__",
     "DETECTION_GRACE",
+    "CN0_SLOPE_MAX",
     "Prefilter",
     "PrefilterStep",
     "dll_variance",
@@ -577,6 +578,10 @@ def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, flo
 #: (``navfdi_core::metrics::GRACE``).
 DETECTION_GRACE: float
 
+#: The largest C/N0 weighting slope ``GnssRun`` accepts (``cn0_slope``; variance decades per
+#: 10 dB-Hz; ``navfdi_core::gnss::spp::CN0_SLOPE_MAX``).
+CN0_SLOPE_MAX: float
+
 def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float, tested: list[bool] | None = None) -> tuple[bool, float]:
     """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,) and
     the epochs ``tested`` (T,) (None: every epoch): whether the alarm was already raised at
@@ -1032,6 +1037,7 @@ class GnssRun:
         cn0_reference: float = 45.0,
         test: str = "global",
         power: float = 0.8,
+        cn0_slope: float = 1.0,
     ) -> GnssRun: ...
     @property
     def codes(self) -> dict[str, str]:

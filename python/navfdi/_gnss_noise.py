@@ -152,3 +152,90 @@ def by_system_text(s: dict[str, Any]) -> str:
         if max(first, last) > 1.5 * min(first, last):
             text += " — " + ("weak signals noisier than modelled" if first > last else "weak signals penalised more than they need")
     return text
+
+
+#: The smallest slope ``cn0_slope="auto"`` uses: the σ–ε model's. A code-tracking loop's
+#: thermal noise variance falls no faster than 1/(C/N0) as the signal strengthens, so a file
+#: whose w call for less is carrying errors that do not follow C/N0 (multipath on strong
+#: signals, broadcast orbit and atmosphere residuals), which a smaller slope would trade for
+#: weight on the weak, multipath-prone signals: on the walk's u-blox (fitted 0.60) that cost
+#: 6 points of exclusions of 5 m steps and 1.3 % false exclusions (docs/gnss_real.md).
+CN0_SLOPE_FLOOR = 1.0
+
+#: Width (dB-Hz) of the C/N0 bins of :func:`estimate_cn0_slope`, the fewest clean w per bin,
+#: the smallest C/N0 span (dB-Hz) between the outer bins' medians, the change of the slope
+#: at which its iteration stops and the most solves it takes.
+CN0_SLOPE_BIN, CN0_SLOPE_MIN_ROWS, CN0_SLOPE_MIN_SPAN, CN0_SLOPE_TOL, CN0_SLOPE_SOLVES = 2.5, 30, 5.0, 0.02, 10
+
+
+def cn0_slope_step(sats: pd.DataFrame, reference: float) -> tuple[float, int, float] | None:
+    """One step of :func:`estimate_cn0_slope` from the satellite rows of a solve without
+    exclusion (``status``, ``w``, ``cn0`` dB-Hz): the weighted least-squares slope of
+    ``log10(robust SD² of w)`` over :data:`CN0_SLOPE_BIN` dB-Hz bins (each with at least
+    :data:`CN0_SLOPE_MIN_ROWS` used rows, weighted by their count) against
+    ``(reference − median C/N0 of the bin) / 10`` — 0 when the model's slope fits — with the
+    number of bins and the C/N0 span (dB-Hz) between the outer bins; None when the rows have no
+    C/N0 or fewer than two bins :data:`CN0_SLOPE_MIN_SPAN` dB-Hz apart."""
+    if "cn0" not in sats:
+        return None
+    used = sats["status"].to_numpy() == "used"
+    w = sats["w"].to_numpy(float)[used]
+    c = sats["cn0"].to_numpy(float)[used]
+    ok = np.isfinite(w) & np.isfinite(c)
+    w, c = w[ok], c[ok]
+    if w.size < 2 * CN0_SLOPE_MIN_ROWS:
+        return None
+    b = np.floor(c / CN0_SLOPE_BIN)
+    xs, ys, ns = [], [], []
+    for k in np.unique(b):
+        m = b == k
+        sd = robust_sd(w[m])
+        if m.sum() >= CN0_SLOPE_MIN_ROWS and sd > 0:
+            xs.append((reference - float(np.median(c[m]))) / 10.0)
+            ys.append(math.log10(sd * sd))
+            ns.append(float(m.sum()))
+    if len(xs) < 2 or 10.0 * (max(xs) - min(xs)) < CN0_SLOPE_MIN_SPAN:
+        return None
+    x, y, n = np.array(xs), np.array(ys), np.array(ns)
+    xm, ym = np.average(x, weights=n), np.average(y, weights=n)
+    return float(np.sum(n * (x - xm) * (y - ym)) / np.sum(n * (x - xm) ** 2)), len(xs), 10.0 * float(x.max() - x.min())
+
+
+def estimate_cn0_slope(solve: Callable[[float], Any], reference: float) -> dict[str, Any]:
+    """``cn0_slope="auto"``: the slope ``s`` of the C/N0 model (variance ``× 10^(s (reference −
+    C/N0)/10)``) that leaves the clean w with one spread at every C/N0, for a file that
+    ``solve(s)`` solves without exclusion (a :class:`navfdi.gnss.GnssSolution`). From s = 1
+    (the σ–ε model), each solve's w spread per C/N0 bin is regressed on the C/N0
+    (:func:`cn0_slope_step`) and the slope moved by the regression's slope (the misfit's, in
+    the same units), kept in ``[0, CN0_SLOPE_MAX]``, until it moves by less than
+    :data:`CN0_SLOPE_TOL` (at most :data:`CN0_SLOPE_SOLVES` solves). The scale is not
+    estimated here (``noise_scale="auto"`` does that at the slope found). ``{"slope",
+    "estimate", "settled", "solves", "bins", "span_dbhz", "path"}``: ``estimate`` the slope
+    found, ``slope`` the one to use — the estimate, not below :data:`CN0_SLOPE_FLOOR`; ``slope``
+    1, ``estimate`` NaN and ``settled`` False with a ``reason`` when the file's C/N0 does not
+    span enough to estimate it."""
+    s, path, solves = 1.0, [1.0], 0
+    step, prev = None, None
+    moved = math.inf
+    for solves in range(1, CN0_SLOPE_SOLVES + 1):
+        step = cn0_slope_step(solve(s).satellites, reference)
+        if step is None:
+            why = f"fewer than two C/N0 bins of {CN0_SLOPE_MIN_ROWS} used satellite-epochs {CN0_SLOPE_MIN_SPAN:g} dB-Hz apart"
+            return {"slope": 1.0, "estimate": math.nan, "settled": False, "solves": solves, "bins": 0, "span_dbhz": math.nan, "path": path, "reason": why}
+        # The misfit's slope shrinks as the model's nears the file's, but by less than one for
+        # one (the w's spread is partly the weights' own): a secant on it from the second
+        # solve, the misfit's own step where the secant is flat or points the wrong way.
+        new = s + step[0]
+        if prev is not None and (prev[1] - step[0]) * (s - prev[0]) > 0:
+            new = s - step[0] * (s - prev[0]) / (step[0] - prev[1])
+        prev = (s, step[0])
+        new = min(max(new, 0.0), _core.CN0_SLOPE_MAX)
+        moved, s = abs(new - s), new
+        path.append(s)
+        if moved < CN0_SLOPE_TOL:
+            break
+    assert step is not None
+    out = {"slope": max(s, CN0_SLOPE_FLOOR), "estimate": s, "settled": moved < CN0_SLOPE_TOL, "solves": solves, "bins": step[1], "span_dbhz": step[2], "path": path}
+    if not out["settled"]:
+        out["reason"] = f"the slope still moved by {moved:.3f} after {solves} solves"
+    return out

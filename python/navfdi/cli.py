@@ -42,6 +42,19 @@ def _positive(text: str) -> int:
     return v
 
 
+def _cn0_slope(text: str) -> float | str:
+    """argparse type: ``auto`` or a C/N0 weighting slope in [0, 3] (variance decades per 10 dB-Hz)."""
+    if text == "auto":
+        return text
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a slope in [0, 3] or 'auto'") from None
+    if not 0.0 <= v <= 3.0:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a slope in [0, 3] or 'auto'")
+    return v
+
+
 def _keep_series(text: str) -> list[int]:
     """argparse type: comma-separated run indices."""
     out = []
@@ -148,6 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
     gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0", "auto"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^((ref - C/N0)/10), for low-cost receivers; auto: the one of elevation and cn0 whose fault-free statistics have the shape of a fitting model's)")
+    gn.add_argument("--cn0-slope", type=_cn0_slope, default="auto", metavar="SLOPE|auto", help="variance decades per 10 dB-Hz of the cn0 model, in [0, 3] (1: the sigma-epsilon model; 0: no C/N0 term); auto (default): the slope that gives the clean residuals one spread at every C/N0, estimated from the file and used where above 1")
     gn.add_argument("--cn0-reference", type=float, default=45.0, metavar="DBHZ", help="C/N0 (dB-Hz) at which --weighting cn0 gives the elevation model (default 45)")
     gn.add_argument("--test", choices=["global", "wtest", "both", "auto"], default="global", help="what opens the exclusion loop: the global chi-square test (default), data snooping (the largest |w| against k0, alpha shared over the satellites: more powerful for one faulty satellite among many, less with few), both (each at alpha/2) or auto (per epoch the one of the two with the smaller minimal detectable bias)")
     gn.add_argument("--power", type=float, default=0.8, metavar="BETA0", help="power at which the minimal detectable biases are computed (default 0.8)")
@@ -321,6 +335,7 @@ def _gnss(args: argparse.Namespace) -> int:
         exclude=not args.no_exclusion,
         weighting=args.weighting,
         cn0_reference=args.cn0_reference,
+        cn0_slope=args.cn0_slope,
         faults=faults,
         noise_factors=factors,
         codes=codes,

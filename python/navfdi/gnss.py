@@ -28,7 +28,7 @@ import numpy as np
 
 from navfdi import _core, _json
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, robust_sd, robust_sd_by
+from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, estimate_cn0_slope, robust_sd, robust_sd_by
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
@@ -353,6 +353,9 @@ class GnssSolution:
             out["noise_scale_auto"] = dict(self.config["noise_scale_auto"])
         if "weighting_auto" in self.config:
             out["weighting_auto"] = dict(self.config["weighting_auto"])
+        out["cn0_slope"] = self.config.get("cn0_slope", 1.0)
+        if "cn0_slope_auto" in self.config:
+            out["cn0_slope_auto"] = dict(self.config["cn0_slope_auto"])
         out["test"], out["power"] = self.config.get("test", "global"), self.config.get("power", 0.8)
         out["k0_median"] = float(np.nanmedian(sol["k0"])) if "k0" in sol and sol["k0"].notna().any() else math.nan
         out["alpha0_median"] = float(np.nanmedian(sol["alpha0"])) if "alpha0" in sol and sol["alpha0"].notna().any() else math.nan
@@ -463,6 +466,15 @@ class GnssSolution:
             wa = self.config["weighting_auto"]
             lines.append(f"weighting: {wa['chosen']}, chosen from the file (--weighting auto; the statistic's tail ratio "
                          + ", ".join(f"{kk} {v:.3f}" for kk, v in wa["tail"].items()) + "; 0 for a model of the right shape)")
+        if "cn0_slope_auto" in self.config:
+            c = self.config["cn0_slope_auto"]
+            if c["settled"] or math.isfinite(c["estimate"]):
+                how = f"fitted {c['estimate']:.2f} in {c['solves']} solves over {c['bins']} C/N0 bins spanning {c['span_dbhz']:.0f} dB-Hz"
+                how += "" if c["estimate"] >= c["slope"] else f", not below the sigma-epsilon model's {c['slope']:g}"
+                how += "" if c["settled"] else f"; {c['reason']}"
+            else:
+                how = f"not estimated: {c['reason']}"
+            lines.append(f"C/N0 slope {c['slope']:.2f} (variance decades per 10 dB-Hz; --cn0-slope auto: {how})")
         if self.config.get("noise_scale_estimated"):
             a = self.config.get("noise_scale_auto", {})
             detail = ""
@@ -494,7 +506,9 @@ class GnssSolution:
         sats["satellite"] = sats["satellite"].astype(str)
         sats.to_parquet(paths[1], index=False)
         paths[2].write_text(_json.dumps({"summary": self.summary(), "config": self.config}, default=_json_default) + "\n")
-        figs: list[Path] = _plot(self, d) if figures else []
+        from navfdi._gnss_plots import plot
+
+        figs: list[Path] = plot(self, d) if figures else []
         if figures and "integrity" in self.config and self.truth is not None:
             from navfdi.gnss_integrity import plot_stanford
 
@@ -566,6 +580,7 @@ def gnss_solve(
     noise_scale: float | str = 1.0,
     test: str = "global",
     power: float = 0.8,
+    cn0_slope: float | str = "auto",
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
@@ -586,7 +601,7 @@ def gnss_solve(
     noise : (a, b)
         Code noise (m): ``σ² = a² + b²/sin² el`` (``weighting="elevation"``), RTKLIB's
         ``pntpos`` variance with these a, b (``weighting="rtklib"``), or for low-cost receivers
-        and phones the elevation model times ``10^((cn0_reference − C/N0)/10)`` with the
+        and phones the elevation model times ``10^(cn0_slope (cn0_reference − C/N0)/10)`` with the
         recorded C/N0 (``weighting="cn0"``; ``S1C`` beside ``C1C``, a satellite without one
         keeps the elevation model), or ``weighting="auto"``: the one of ``"elevation"`` and
         ``"cn0"`` whose fault-free global statistics have the shape of a fitting model's (the
@@ -594,6 +609,18 @@ def gnss_solve(
         file without C/N0); ``config["weighting_auto"]`` holds the choice and both ratios.
     cn0_reference : float
         The C/N0 (dB-Hz) at which ``weighting="cn0"`` gives the elevation model (default 45).
+    cn0_slope : float or "auto"
+        The C/N0 model's variance decades per 10 dB-Hz (in ``[0, 3]``; 1 is the σ–ε model's
+        ``σ² ∝ 10^(−C/N0/10)``, 0 the elevation model). ``"auto"`` (default; used with
+        ``weighting="cn0"`` or ``"auto"``, nothing to estimate with the other models) estimates
+        it from the file: solved without exclusion, the clean w's robust spread per 2.5 dB-Hz
+        bin regressed on the C/N0, the slope moved by the misfit until it settles
+        (:func:`navfdi._gnss_noise.estimate_cn0_slope`), and the estimate used where it is
+        above the σ–ε model's 1 (:data:`navfdi._gnss_noise.CN0_SLOPE_FLOOR`: tracking noise falls
+        no faster than that; a file whose w call for less carries errors that do not follow
+        C/N0, and a smaller slope costs FDE power there); a file whose C/N0 spans less than
+        5 dB-Hz keeps 1. ``config["cn0_slope_auto"]`` holds the estimate and its path; the
+        noise scale (``noise_scale="auto"``) is estimated after it, at the slope used.
     ionosphere, troposphere : bool
         Apply the broadcast Klobuchar and the Saastamoinen models.
     faults : GnssFault or str
@@ -673,9 +700,27 @@ def gnss_solve(
         check_systems(integrity, systems)
     # The solver's settings other than what the "auto" passes below choose or leave out.
     common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
+    if isinstance(cn0_slope, str):
+        if cn0_slope != "auto":
+            raise ValueError(f"cn0_slope = {cn0_slope!r}: a slope in [0, {_core.CN0_SLOPE_MAX:g}] or 'auto'")
+        if weighting in ("cn0", "auto"):
+            slope = estimate_cn0_slope(lambda s_: gnss_solve(obs, nav, exclude=False, weighting="cn0", cn0_slope=s_, **common), float(cn0_reference))
+            out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=weighting, cn0_slope=slope["slope"], **common)
+            out.config["cn0_slope_auto"] = slope
+            return out
+        cn0_slope = 1.0  # the models without a C/N0 term have no slope to estimate
+    if isinstance(cn0_slope, bool) or not (isinstance(cn0_slope, (int, float)) and 0.0 <= cn0_slope <= _core.CN0_SLOPE_MAX):
+        raise ValueError(f"cn0_slope = {cn0_slope!r}: a slope in [0, {_core.CN0_SLOPE_MAX:g}] (variance decades per 10 dB-Hz) or 'auto'")
+    if cn0_slope != 1.0 and weighting not in ("cn0", "auto"):
+        raise ValueError(f"cn0_slope = {cn0_slope!r} is the C/N0 model's; weighting = {weighting!r} has none: give weighting='cn0' or 'auto'")
+    common["cn0_slope"] = float(cn0_slope)
     if weighting == "auto":
-        chosen = auto_weighting(lambda **kw: gnss_solve(obs, nav, exclude=False, **common, **kw))
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=chosen["chosen"], **common)
+
+        def with_model(w: str) -> dict[str, Any]:  # the slope is the C/N0 model's only
+            return {**common, "weighting": w, "cn0_slope": common["cn0_slope"] if w == "cn0" else 1.0}
+
+        chosen = auto_weighting(lambda weighting: gnss_solve(obs, nav, exclude=False, **with_model(weighting)))
+        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, **with_model(chosen["chosen"]))
         out.config["weighting_auto"] = chosen
         return out
     if isinstance(noise_scale, str):
@@ -724,6 +769,7 @@ def gnss_solve(
         float(cn0_reference),
         test,
         float(power),
+        float(cn0_slope),
     )
     bar = None
     if progress:
@@ -808,6 +854,7 @@ def gnss_solve(
         "noise": list(noise),
         "weighting": weighting,
         "cn0_reference": float(cn0_reference),
+        "cn0_slope": float(cn0_slope),
         "ionosphere": bool(ionosphere),
         "troposphere": bool(troposphere),
         "codes": used_codes,
@@ -835,58 +882,3 @@ def gnss_solve(
             warnings.warn(f"fault {f.label()}: never applied: {note}; it is left out of the detection statistics", NeverAppliedWarning, stacklevel=2)
     return out
 
-
-def _plot(s: GnssSolution, d: Path) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    sol, sats = s.solution, s.satellites
-    t = sol["gps_seconds"].to_numpy()
-    tau = t - t[0] if len(t) else t
-    cfg = s.config
-    what = f"{Path(cfg['obs']).name}: {','.join(cfg['systems'])}, mask {cfg['mask_deg']:g}°, α {cfg['alpha']:g}, {'FDE' if cfg['exclude'] else 'no exclusion'}"
-    paths = []
-    if s.truth is not None:
-        fig, ax = plt.subplots(figsize=(9, 4))
-        for c in ("east", "north", "up"):
-            ax.plot(tau, sol[c], label=c, lw=1)
-        ax.grid(alpha=0.3)
-        paths.append(_finish(plt, fig, ax, s.faults, d / "errors.png", {}, what, ylabel="error (m)", title="Position error against the truth"))
-    fig, ax = plt.subplots(figsize=(9, 4))
-    ax.semilogy(tau, sol["first_statistic"], lw=1, label="global test, all satellites")
-    ax.semilogy(tau, sol["first_threshold"], "k--", lw=1, label="threshold")
-    ax.grid(alpha=0.3)
-    paths.append(_finish(plt, fig, ax, s.faults, d / "statistic.png", {}, what, ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold"))
-    fig, ax = plt.subplots(figsize=(9, 4))
-    names = sorted(str(n) for n in sats["satellite"].unique())
-    pos = {n: i for i, n in enumerate(names)}
-    used = sats[sats["status"] == "used"]
-    ex = sats[sats["status"] == "excluded"]
-    ax.scatter(tau[used["epoch"]], [pos[str(n)] for n in used["satellite"]], s=2, c="0.75", label="used")
-    ax.scatter(tau[ex["epoch"]], [pos[str(n)] for n in ex["satellite"]], s=8, c="C3", label="excluded")
-    ax.set_yticks(range(len(names)), names, fontsize=7)
-    paths.append(_finish(plt, fig, ax, s.faults, d / "exclusions.png", {"loc": "upper left", "bbox_to_anchor": (1.01, 1.0)}, what, title="Satellites used and excluded per epoch"))
-    return paths
-
-
-def _finish(plt: Any, fig: Any, ax: Any, faults: list[GnssFault], path: Path, legend: dict[str, Any], what: str = "", **labels: str) -> Path:
-    """Shade the fault windows (one legend entry naming them), label the time axis, title the
-    figure with ``labels["title"]`` and what was run (``what``: file, systems, mask), add the
-    legend, save ``path`` and close."""
-    _shade_faults(ax, faults)
-    if faults:
-        ax.axvspan(np.nan, np.nan, color="C1", alpha=0.12, label="injected: " + ", ".join(f"{f.satellite} {f.shape}" for f in faults))
-    if what and "title" in labels:
-        labels = {**labels, "title": f"{labels['title']}\n{what}"}
-    ax.set(xlabel="time since first epoch (s)", **labels)
-    ax.legend(**legend)
-    fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
-    return path
-
-
-def _shade_faults(ax: Any, faults: list[GnssFault]) -> None:
-    for f in faults:
-        ax.axvspan(f.start, min(f.end, ax.get_xlim()[1]), color="C1", alpha=0.12)

@@ -6,7 +6,7 @@ use navfdi_core::gnss::broadcast::{Sat, Sys};
 use navfdi_core::gnss::rinex::{self, NavData, ObsData};
 use navfdi_core::gnss::snapshot::{Detection, FdeConfig};
 use navfdi_core::gnss::spp::{
-    self, FaultShape, InjectedFault, SppConfig, SppRun, SppState, Weighting,
+    self, FaultShape, InjectedFault, SppConfig, SppRun, SppState, Weighting, CN0_SLOPE_MAX,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -177,7 +177,8 @@ impl PyGnssRun {
     /// Read `obs_path` and `nav_path` and set up the solution. `systems` letters (G, E, C,
     /// J); `mask_deg` elevation mask (deg); `alpha`, `k` of the tests; `exclude` runs the
     /// exclusion loop; `noise` (a, b) in m; `weighting` ``"elevation"``, ``"rtklib"`` or
-    /// ``"cn0"`` (with `cn0_reference`, dB-Hz: the C/N0 at which σ is the elevation model's);
+    /// ``"cn0"`` (with `cn0_reference`, dB-Hz: the C/N0 at which σ is the elevation model's,
+    /// and `cn0_slope`: the variance's decades per 10 dB-Hz below it, 1 the σ–ε model's);
     /// `faults` tuples ``(satellite, shape, magnitude, start_s, end_s)`` with shape ``step``
     /// (m), ``ramp`` (m/s) or ``quadratic`` (m/s²); `codes` per system letter; `factors`
     /// per-system σ factors; `sprt` (P_f, P_m), `aime` (P_f, window epochs) and `cusum` (drift, threshold, tau epochs,
@@ -185,7 +186,7 @@ impl PyGnssRun {
     /// loop (``"global"``, ``"wtest"``: data snooping, ``"both"``, ``"auto"``) and `power` the
     /// β0 of the reported minimal detectable biases.
     #[new]
-    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum, cn0_reference = 45.0, test = "global", power = 0.8))]
+    #[pyo3(signature = (obs_path, nav_path, systems, mask_deg, alpha, k, exclude, noise, weighting, ionosphere, troposphere, faults, codes, factors, sprt, aime, cusum, cn0_reference = 45.0, test = "global", power = 0.8, cn0_slope = 1.0))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -209,6 +210,7 @@ impl PyGnssRun {
         cn0_reference: f64,
         test: &str,
         power: f64,
+        cn0_slope: f64,
     ) -> PyResult<Self> {
         let fde = FdeConfig::new(alpha, k)
             .and_then(|c| c.with_test(Detection::parse(test)?, power))
@@ -239,12 +241,20 @@ impl PyGnssRun {
         cfg.weighting = match weighting {
             "elevation" => Weighting::Elevation,
             "rtklib" => Weighting::Rtklib,
-            "cn0" if cn0_reference > 10.0 && cn0_reference < 70.0 => Weighting::Cn0(cn0_reference),
-            "cn0" => {
+            "cn0" if !(cn0_reference > 10.0 && cn0_reference < 70.0) => {
                 return Err(PyValueError::new_err(format!(
                     "cn0_reference: {cn0_reference} dB-Hz; expected a carrier-to-noise density in (10, 70) dB-Hz"
                 )))
             }
+            "cn0" if !(0.0..=CN0_SLOPE_MAX).contains(&cn0_slope) => {
+                return Err(PyValueError::new_err(format!(
+                    "cn0_slope: {cn0_slope}; expected the variance's decades per 10 dB-Hz in [0, {CN0_SLOPE_MAX}] (1: the σ–ε model, 0: no C/N0 term)"
+                )))
+            }
+            "cn0" => Weighting::Cn0 {
+                reference: cn0_reference,
+                slope: cn0_slope,
+            },
             other => {
                 return Err(PyValueError::new_err(format!(
                     "weighting: '{other}' is not 'elevation', 'rtklib' or 'cn0'"

@@ -233,6 +233,9 @@ impl SppConfig {
     }
 }
 
+/// The largest [`Weighting::Cn0`] slope accepted: 30 dB of variance per 10 dB-Hz of C/N0.
+pub const CN0_SLOPE_MAX: f64 = 3.0;
+
 /// Pseudorange variance model.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Weighting {
@@ -245,11 +248,16 @@ pub enum Weighting {
     /// common to all satellites and mostly absorbed by the clock).
     Rtklib,
     /// C/N0 weighting for low-cost receivers and phones: the elevation model scaled by
-    /// `10^((C/N0_ref − C/N0)/10)` with the recorded C/N0 (`S1C` beside `C1C`, dB-Hz; the σ–ε
-    /// model's `σ² ∝ 10^(−C/N0/10)`, Hartinger and Brunner 1999), `a`, `b` being the noise at
-    /// the reference C/N0 (the value, dB-Hz); a satellite without a recorded C/N0 keeps the
-    /// elevation model.
-    Cn0(f64),
+    /// `10^(slope (C/N0_ref − C/N0)/10)` with the recorded C/N0 (`S1C` beside `C1C`, dB-Hz;
+    /// slope 1 is the σ–ε model's `σ² ∝ 10^(−C/N0/10)`, Hartinger and Brunner 1999, slope 0
+    /// the elevation model), `a`, `b` being the noise at the reference C/N0 (dB-Hz); a
+    /// satellite without a recorded C/N0 keeps the elevation model.
+    Cn0 {
+        /// The C/N0 (dB-Hz) at which the variance is the elevation model's.
+        reference: f64,
+        /// The variance's decades per 10 dB-Hz below the reference (dimensionless, ≥ 0).
+        slope: f64,
+    },
 }
 
 /// What happened to a satellite at an epoch.
@@ -766,9 +774,9 @@ fn solve_epoch(
         let ura = if c.ura.is_finite() { c.ura } else { 0.0 };
         let var = match cfg.weighting {
             Weighting::Elevation => a * a + b * b / (s * s),
-            Weighting::Cn0(reference) => {
+            Weighting::Cn0 { reference, slope } => {
                 let f = if c.cn0.is_finite() {
-                    10f64.powf((reference - c.cn0) / 10.0)
+                    10f64.powf(slope * (reference - c.cn0) / 10.0)
                 } else {
                     1.0
                 };
@@ -856,40 +864,5 @@ fn solve_epoch(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn fault_offsets_and_windows() {
-        let sat = Sat::parse("G13").unwrap();
-        let f = InjectedFault {
-            sat,
-            shape: FaultShape::Ramp,
-            magnitude: 0.5,
-            start: 100.0,
-            end: 300.0,
-        };
-        assert_eq!(f.offset(99.0), 0.0);
-        assert_eq!(f.offset(100.0), 0.0);
-        assert!((f.offset(110.0) - 5.0).abs() < 1e-12);
-        assert_eq!(f.offset(300.0), 0.0);
-        let q = InjectedFault {
-            shape: FaultShape::Quadratic,
-            ..f
-        };
-        assert!((q.offset(110.0) - 50.0).abs() < 1e-12);
-        let bad = InjectedFault { end: 50.0, ..f };
-        assert!(bad.validate().is_err());
-    }
-
-    #[test]
-    fn codes_outside_the_first_band_are_refused() {
-        let mut cfg = SppConfig::new(FdeConfig::new(0.01, None).unwrap());
-        cfg.codes[0].1 = "C5Q".into();
-        let e = cfg.validate().unwrap_err().to_string();
-        assert!(e.contains("C5Q"), "{e}");
-        cfg.codes[0].1 = "C1C".into();
-        cfg.systems = vec![Sys::Glonass];
-        assert!(cfg.validate().is_err());
-    }
-}
+#[path = "spp_tests.rs"]
+mod tests;
