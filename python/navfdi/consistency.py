@@ -98,7 +98,9 @@ def consistency(run: RunRecord) -> dict[str, Any]:
     * ``navigating_from``: time of the first navigation epoch (s);
     * ``converged_at``: time (s) from which the filter counted as converged (every tested
       GNSS channel's predicted σ within ``loosely_coupled.convergence`` times its own σ;
-      before it only gross innovations exclude), NaN when it never did.
+      before it only gross innovations exclude), NaN when it never did;
+    * ``reanchored``: times (s) at which the INS, running away from the fixes it held out
+      (their distance growing faster than 3 m/s over 10 s), was moved back onto them.
     """
     rec = run.record
     if "nav" not in rec:
@@ -157,6 +159,7 @@ def consistency(run: RunRecord) -> dict[str, Any]:
         "channels": channels, "biases": biases, "heading": heading,
         "navigating_from": float(t[int(np.argmax(ok))]) if ok.any() else math.nan,
         "converged_at": float(rec.get("converged_at", math.nan)),
+        "reanchored": [float(x) for x in rec.get("reanchored", [])],
     }
 
 
@@ -167,6 +170,9 @@ def format_consistency(c: dict[str, Any]) -> list[str]:
         return []
     conv = "never converged (only gross innovations excluded)" if not math.isfinite(c["converged_at"]) else f"converged at {c['converged_at']:g} s"
     nav = "never navigated" if not math.isfinite(c["navigating_from"]) else f"navigating from {c['navigating_from']:g} s"
+    re = c.get("reanchored", [])
+    if re:
+        conv += "; the INS ran away from the fixes it held out and was moved back onto them " + (f"{len(re)} times, first" if len(re) > 1 else "once,") + f" at {re[0]:g} s"
     lines = [f"filter consistency (its own innovations outside fault windows; {nav}, {conv};",
              "  consistent: mean λ/m in the interval, median λ over χ²(m)'s median 1, lag-1 ρ within ±white):"]
     lines.append(f"  {'channel':<10} {'tests':>6} {'mean λ/m':>9} {'consistent':>13} {'median':>7} {'lag-1 ρ':>8} {'white':>7} {'excluded':>9}")

@@ -211,6 +211,9 @@ pub struct RunRecord {
     /// Loosely coupled: time (s) of the epoch from which the filter counted as converged
     /// (`loosely_coupled.convergence`); None when it never did (or another architecture).
     pub converged_at: Option<f64>,
+    /// Loosely coupled: times (s) at which the INS, diverged from the fixes it held out, was
+    /// moved back onto them (`arch::loosely_coupled::diverge`).
+    pub reanchored: Vec<f64>,
 }
 
 /// Per-epoch filter integrity of a tight run ([`crate::integrity::filter_ss`]), each T long.
@@ -392,6 +395,7 @@ impl RunRecord {
             nav: Vec::new(),
             integrity: None,
             converged_at: None,
+            reanchored: Vec::new(),
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

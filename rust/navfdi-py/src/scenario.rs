@@ -63,6 +63,9 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
     let d = PyDict::new(py);
     d.set_item("t", to_numpy(py, rec.t, &[t])?)?;
     d.set_item("faults_applied", rec.faults_applied)?;
+    if !rec.reanchored.is_empty() {
+        d.set_item("reanchored", rec.reanchored.clone())?;
+    }
     if let Some(c) = rec.converged_at {
         d.set_item("converged_at", c)?;
     }

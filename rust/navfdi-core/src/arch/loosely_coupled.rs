@@ -16,6 +16,7 @@
 
 mod blame;
 mod checks;
+mod diverge;
 mod hold;
 mod noise_scale;
 mod pull;
@@ -30,9 +31,9 @@ use crate::ins::earth;
 use crate::ins::error_filter::{ErrorFilter, N, N_SCALE, PHI, R, V};
 use crate::ins::strapdown::{mounting, skew, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
-use crate::spec::{ConstraintSpec, ScenarioSpec, SensorKind};
+use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
-use checks::{antenna, correlation_weight, diag, isolate, rows, shift, three, Meas};
+use checks::{antenna, correlation_weight, diag, enu, isolate, rows, shift, still, three, Meas};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
@@ -271,6 +272,7 @@ fn run<const NS: usize>(
     // Per GNSS channel: the position hold (faults held to their end) and the time of its
     // last fix, against its nominal interval (a longer gap forgets the jump reference).
     let mut holds: Vec<hold::PositionHold> = vec![hold::PositionHold::default(); aids.len()];
+    let mut diverged = vec![diverge::Divergence::default(); aids.len()];
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
     // Time-correlated position errors: in the update each fix's position variance is
     // multiplied by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent
@@ -506,6 +508,17 @@ fn run<const NS: usize>(
                         .is_some_and(|c| c.ins_referenced)
                         .then_some(&pull),
                 );
+                // Held fixes the INS runs away from: the INS is moved back onto them.
+                let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
+                let uses = match diverged[a].push(tk, [d[0], d[1]], held) {
+                    Some(rate) => {
+                        diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
+                        holds[a] = hold::PositionHold::default();
+                        rec.reanchored.push(tk);
+                        [hold::Use::Raw; 3]
+                    }
+                    None => uses,
+                };
                 keep.retain(|&i| i < off || i >= off + 3);
                 for (j, u) in uses.iter().enumerate() {
                     match *u {
@@ -675,30 +688,6 @@ fn receiver_epoch(
     out
 }
 
-/// Rest over the window before `tk`: σ of the specific-force magnitude and mean
-/// bias-corrected rate magnitude under their thresholds.
-fn still(
-    t: &[f64],
-    acc: &[Vector3<f64>],
-    gyro: &[Vector3<f64>],
-    bg: &Vector3<f64>,
-    i: usize,
-    tk: f64,
-    c: &ConstraintSpec,
-) -> bool {
-    let hi = i.min(t.len());
-    let lo = t[..hi].partition_point(|&x| x < tk - c.window);
-    let n = hi - lo;
-    if n < 5 {
-        return false;
-    }
-    let mags: Vec<f64> = acc[lo..hi].iter().map(|f| f.norm()).collect();
-    let mean = mags.iter().sum::<f64>() / n as f64;
-    let var = mags.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
-    let rate = gyro[lo..hi].iter().map(|w| (w - bg).norm()).sum::<f64>() / n as f64;
-    var.sqrt() < c.threshold && rate < c.rate_threshold
-}
-
 #[allow(clippy::too_many_arguments)]
 fn gnss_measurement<const NS: usize>(
     s: &NavState,
@@ -794,11 +783,6 @@ fn test<const NS: usize>(
         reason: 0,
         scale: 1.0,
     })
-}
-
-/// A north, east, down vector as east, north, up.
-fn enu(v: &Vector3<f64>) -> Vector3<f64> {
-    Vector3::new(v.y, v.x, -v.z)
 }
 
 /// Update the filter with a measurement and feed the correction back into the state.

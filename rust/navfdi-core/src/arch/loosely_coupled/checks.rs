@@ -3,6 +3,7 @@
 
 pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
+use crate::spec::ConstraintSpec;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// A measurement ready for the filter, components in the channel's order.
@@ -85,6 +86,35 @@ pub(super) fn correlation_weight(dt: f64, tau: f64) -> f64 {
     let x = dt / tau;
     // (1 + e^(−x))/(1 − e^(−x)) = coth(x/2), written without cancellation for small x.
     1.0 / (0.5 * x).tanh()
+}
+
+/// Rest over the window before `tk`: σ of the specific-force magnitude and mean
+/// bias-corrected rate magnitude under their thresholds.
+pub(super) fn still(
+    t: &[f64],
+    acc: &[Vector3<f64>],
+    gyro: &[Vector3<f64>],
+    bg: &Vector3<f64>,
+    i: usize,
+    tk: f64,
+    c: &ConstraintSpec,
+) -> bool {
+    let hi = i.min(t.len());
+    let lo = t[..hi].partition_point(|&x| x < tk - c.window);
+    let n = hi - lo;
+    if n < 5 {
+        return false;
+    }
+    let mags: Vec<f64> = acc[lo..hi].iter().map(|f| f.norm()).collect();
+    let mean = mags.iter().sum::<f64>() / n as f64;
+    let var = mags.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / (n - 1) as f64;
+    let rate = gyro[lo..hi].iter().map(|w| (w - bg).norm()).sum::<f64>() / n as f64;
+    var.sqrt() < c.threshold && rate < c.rate_threshold
+}
+
+/// A north, east, down vector as east, north, up.
+pub(super) fn enu(v: &Vector3<f64>) -> Vector3<f64> {
+    Vector3::new(v.y, v.x, -v.z)
 }
 
 #[cfg(test)]

@@ -1,0 +1,184 @@
+//! The INS running away from the fixes it holds out.
+//!
+//! The hold machine ([`super::hold`]) takes the INS prediction as the reference a fix is
+//! judged against. When the INS itself is wrong — a multipath burst absorbed before the filter
+//! settled, a velocity pulled by a step's first fixes, an unobservable drift on a log of
+//! positions only — the hold keeps out good fixes while the INS coasts away from them, and the
+//! filter ends kilometres off (simulated positions-only logs with 30 m bursts). Every fault
+//! the hold is meant for has a bounded rate against the INS: a step is a constant offset, a
+//! slow ramp drifts at up to about 2 m/s. An INS whose distance to the held fixes grows
+//! steadily faster than [`DIVERGE_RATE`] over [`DIVERGE_WINDOW`] — in each third of the
+//! window, the same way, so a burst's jump, or a step's end and a burst's start, is not a
+//! rate — is the one that is wrong: it
+//! is moved back onto the fixes ([`Divergence::push`] says when and at what rate).
+
+use super::shift;
+use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
+use crate::ins::strapdown::NavState;
+use nalgebra::{UnitQuaternion, Vector3};
+use std::collections::VecDeque;
+
+/// The rate (m/s) of the horizontal distance between the INS and the held fixes beyond which
+/// the INS is taken to have diverged: 1.5× the fastest slow fault the hold is built for
+/// (2 m/s ramps; faster drifts are jumps a fix or two apart and held as steps).
+pub const DIVERGE_RATE: f64 = 3.0;
+
+/// The window (s) over which that rate is read, in two halves.
+pub const DIVERGE_WINDOW: f64 = 10.0;
+
+/// The fewest held fixes in the window.
+const DIVERGE_FIXES: usize = 6;
+
+/// Held fixes of one GNSS channel: time (s) and the horizontal INS − fix (east, north; m).
+#[derive(Debug, Clone, Default)]
+pub struct Divergence {
+    held: VecDeque<(f64, [f64; 2])>,
+}
+
+/// Least-squares slope (per s) of `y` against `t` (NaN with fewer than two distinct times).
+fn slope(pts: &[(f64, [f64; 2])]) -> [f64; 2] {
+    let n = pts.len() as f64;
+    let tm = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let stt: f64 = pts.iter().map(|p| (p.0 - tm).powi(2)).sum();
+    let mut out = [f64::NAN; 2];
+    for (j, o) in out.iter_mut().enumerate() {
+        let ym = pts.iter().map(|p| p.1[j]).sum::<f64>() / n;
+        let sty: f64 = pts.iter().map(|p| (p.0 - tm) * (p.1[j] - ym)).sum();
+        *o = sty / stt;
+    }
+    out
+}
+
+impl Divergence {
+    /// Record the fix at `t` (s) with horizontal innovation `d` (INS − fix, east and north,
+    /// m) — `held`: the hold machine kept it out or used it relative to an offset (a fix used
+    /// as measured, or none at this epoch, empties the window). Returns the rate (m/s, INS −
+    /// fix, east and north) when the INS has diverged from the held fixes: over the last
+    /// [`DIVERGE_WINDOW`] s the distance grew at more than [`DIVERGE_RATE`] in each third of
+    /// the window, along the whole window's rate and within 45° of it; the window then
+    /// empties.
+    pub fn push(&mut self, t: f64, d: [f64; 2], held: bool) -> Option<[f64; 2]> {
+        if !held || !d.iter().all(|x| x.is_finite()) {
+            self.held.clear();
+            return None;
+        }
+        self.held.push_back((t, d));
+        while self.held.front().is_some_and(|p| p.0 < t - DIVERGE_WINDOW) {
+            self.held.pop_front();
+        }
+        let t0 = self.held.front()?.0;
+        if self.held.len() < DIVERGE_FIXES || t - t0 < 0.8 * DIVERGE_WINDOW {
+            return None;
+        }
+        let pts: Vec<(f64, [f64; 2])> = self.held.iter().copied().collect();
+        // Thirds of the window, each with its own rate: two jumps of one sign (a step's end
+        // and a burst's start) fill two thirds at most, a runaway all three.
+        let cut = |f: f64| pts.partition_point(|p| p.0 < t0 + f * (t - t0));
+        let (c1, c2) = (cut(1.0 / 3.0), cut(2.0 / 3.0));
+        if c1 < 3 || c2 - c1 < 3 || pts.len() - c2 < 3 {
+            return None;
+        }
+        let whole = slope(&pts);
+        let norm = |v: [f64; 2]| v[0].hypot(v[1]);
+        let along = |v: [f64; 2]| (v[0] * whole[0] + v[1] * whole[1]) / norm(whole);
+        let thirds = [slope(&pts[..c1]), slope(&pts[c1..c2]), slope(&pts[c2..])];
+        if norm(whole) > DIVERGE_RATE
+            && thirds.iter().all(|&v| {
+                along(v) > DIVERGE_RATE && along(v) > std::f64::consts::FRAC_1_SQRT_2 * norm(v)
+            })
+        {
+            self.held.clear();
+            Some(whole)
+        } else {
+            None
+        }
+    }
+}
+
+/// The heading variance (rad²) a re-anchored INS gets at least: (5°)², so that the fixes
+/// after it can correct a heading the runaway came from.
+const REANCHOR_HEADING_VAR: f64 = 0.087_266_462_599_716_47 * 0.087_266_462_599_716_47;
+
+/// The speed (m/s) above which, before and after a re-anchoring, the heading is turned with
+/// the course.
+const REANCHOR_SPEED: f64 = 3.0;
+
+/// Move the INS onto the fix it diverged from: its position by the fix's innovation `d`
+/// (INS − fix, east, north, up; m), its horizontal velocity by `rate` (INS − fix, east, north;
+/// m/s, from [`Divergence::push`]); the position variances reopened to the innovation's `var`
+/// (east, north, up; m²) and the horizontal velocity's to the rate's square, their
+/// correlations with the other states dropped, and the heading variance to at least
+/// (5°)²; moving before and after (above 3 m/s), the heading is turned by the change of
+/// course.
+pub fn reanchor<const NS: usize>(
+    s: &mut NavState,
+    kf: &mut ErrorFilter<NS>,
+    d: &Vector3<f64>,
+    var: &Vector3<f64>,
+    rate: [f64; 2],
+) {
+    shift(s, &Vector3::new(-d.y, -d.x, d.z));
+    let (old_n, old_e) = (s.v.x, s.v.y);
+    s.v.x -= rate[1];
+    s.v.y -= rate[0];
+    // Moving on both sides, the course the fixes give turns the heading with it: a heading
+    // the INS ran away on is what drove its velocity off.
+    if old_n.hypot(old_e) > REANCHOR_SPEED && s.v.x.hypot(s.v.y) > REANCHOR_SPEED {
+        let turn = s.v.y.atan2(s.v.x) - old_e.atan2(old_n);
+        s.q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), turn) * s.q;
+    }
+    let diag = [
+        (R, var.y),
+        (R + 1, var.x),
+        (R + 2, var.z),
+        (V, rate[1] * rate[1] + 1.0),
+        (V + 1, rate[0] * rate[0] + 1.0),
+    ];
+    for &(i, v) in &diag {
+        kf.p.row_mut(i).fill(0.0);
+        kf.p.column_mut(i).fill(0.0);
+        kf.p[(i, i)] = v;
+    }
+    let h = PHI + 2;
+    kf.p[(h, h)] = kf.p[(h, h)].max(REANCHOR_HEADING_VAR);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An INS running away at 5 m/s east from held fixes is caught within the window; a held
+    /// 20 m step (constant offset), a 2 m/s ramp and a 30 m burst's jump are not.
+    #[test]
+    fn a_runaway_is_a_rate_a_step_ramp_or_burst_is_not() {
+        let mut m = Divergence::default();
+        let hit = (0..20).find_map(|k| {
+            m.push(k as f64, [5.0 * k as f64, 1.0], true)
+                .map(|r| (k, r))
+        });
+        let (k, r) = hit.expect("caught");
+        assert!((8..=10).contains(&k), "{k}");
+        assert!((r[0] - 5.0).abs() < 1e-9 && r[1].abs() < 1e-9, "{r:?}");
+        for d in [
+            |k: f64| [20.0 + 0.5 * (k * 1.7).sin(), -3.0],
+            |k: f64| [2.0 * k, 0.0],
+            |k: f64| [if k < 6.0 { 0.0 } else { 30.0 }, 0.0],
+            |k: f64| {
+                [
+                    40.0 * f64::from(u8::from(k >= 13.0)) + 15.0 * f64::from(u8::from(k >= 17.0)),
+                    0.0,
+                ]
+            },
+        ] {
+            let mut m = Divergence::default();
+            assert!((0..40).all(|k| m.push(k as f64, d(k as f64), true).is_none()));
+        }
+        // A fix used as measured starts the window again.
+        let mut m = Divergence::default();
+        let caught = (0..20).any(|k| {
+            m.push(k as f64, [5.0 * k as f64, 0.0], k % 7 != 6)
+                .is_some()
+        });
+        assert!(!caught);
+    }
+}
