@@ -63,5 +63,9 @@ def test_the_console_says_when_the_ins_was_moved_back(burst_log: Callable[[int],
     c = consistency(r.runs["fde"])
     assert c["reanchored"] and all(40.0 < t < 600.0 for t in c["reanchored"])
     assert "the INS ran away from the fixes it held out and was moved back onto them" in "\n".join(format_consistency(c))
+    ev = r.runs["fde"].events()
+    moved = ev[ev["detector"] == "reanchored"]
+    assert list(moved["alarm_start"]) == c["reanchored"] and (moved["subfilter"] == "navigation").all()
     # Without FDE nothing is held, so nothing is moved.
     assert consistency(r.runs["no_fde"])["reanchored"] == []
+    assert not (r.runs["no_fde"].events()["detector"] == "reanchored").any()

@@ -240,7 +240,9 @@ class ScenarioRun(RunRecord):
         ``state_chi2``, matched to every fault; the loosely coupled filter's exclusion
         intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``, ``receiver``:
         the tested epochs at which the channel, or some of its components, was left out for
-        that reason). Returns a pandas DataFrame."""
+        that reason); and each time the loosely coupled INS, run away from the fixes it held
+        out, was moved back onto them as subfilter ``navigation``, detector ``reanchored``
+        (``alarm_start = alarm_end`` its time, no fault). Returns a pandas DataFrame."""
         import pandas as pd
 
         rows = []
@@ -276,6 +278,9 @@ class ScenarioRun(RunRecord):
             for r in np.unique(reason[reason > 0]):
                 # An exclusion interval: the tested epochs left out for one reason.
                 add(s["sensor"], f"excluded:{s['reason_names'][r]}", {"alarm": list(reason == r), "statistic": s["statistic"]}, self._faults_on(s["sensor"]))
+        for t in self.record.get("reanchored", []):
+            rows.append({"subfilter": "navigation", "detector": "reanchored", "alarm_start": float(t), "alarm_end": float(t), "tests": 1,
+                         "fault_id": None, "fault_start": None, "fault_end": None, "delay": None})
         cols = ["subfilter", "detector", "alarm_start", "alarm_end", "tests", "fault_id", "fault_start", "fault_end", "delay"]
         df = pd.DataFrame(rows, columns=cols)
         for c in ("alarm_start", "alarm_end", "fault_start", "fault_end", "delay"):
