@@ -613,7 +613,7 @@ def gnss_solve(
         The C/N0 model's variance decades per 10 dB-Hz (in ``[0, 3]``; 1 is the σ–ε model's
         ``σ² ∝ 10^(−C/N0/10)``, 0 the elevation model). ``"auto"`` (default; used with
         ``weighting="cn0"`` or ``"auto"``, nothing to estimate with the other models) estimates
-        it from the file: solved without exclusion, the clean w's robust spread per 2.5 dB-Hz
+        it from the file, without the injected faults: solved without exclusion, the clean w's robust spread per 2.5 dB-Hz
         bin regressed on the C/N0, the slope moved by the misfit until it settles
         (:func:`navfdi._gnss_noise.estimate_cn0_slope`), and the estimate used where it is
         above the σ–ε model's 1 (:data:`navfdi._gnss_noise.CN0_SLOPE_FLOOR`: tracking noise falls

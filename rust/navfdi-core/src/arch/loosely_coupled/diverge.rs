@@ -9,8 +9,8 @@
 //! slow ramp drifts at up to about 2 m/s. An INS whose distance to the held fixes grows
 //! steadily faster than [`DIVERGE_RATE`] over [`DIVERGE_WINDOW`] — in each third of the
 //! window, the same way, so a burst's jump, or a step's end and a burst's start, is not a
-//! rate — is the one that is wrong: it
-//! is moved back onto the fixes ([`Divergence::push`] says when and at what rate).
+//! rate — is the one that is wrong: it is moved back onto the fixes ([`Divergence::push`]
+//! says when and at what rate, [`reanchor`] moves it).
 
 use super::shift;
 use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
@@ -23,7 +23,7 @@ use std::collections::VecDeque;
 /// (2 m/s ramps; faster drifts are jumps a fix or two apart and held as steps).
 pub const DIVERGE_RATE: f64 = 3.0;
 
-/// The window (s) over which that rate is read, in two halves.
+/// The window (s) over which that rate is read, in thirds.
 pub const DIVERGE_WINDOW: f64 = 10.0;
 
 /// The fewest held fixes in the window.
@@ -106,7 +106,7 @@ const REANCHOR_SPEED: f64 = 3.0;
 /// Move the INS onto the fix it diverged from: its position by the fix's innovation `d`
 /// (INS − fix, east, north, up; m), its horizontal velocity by `rate` (INS − fix, east, north;
 /// m/s, from [`Divergence::push`]); the position variances reopened to the innovation's `var`
-/// (east, north, up; m²) and the horizontal velocity's to the rate's square, their
+/// (east, north, up; m²) and the horizontal velocity's to the rate's square plus 1 m²/s², their
 /// correlations with the other states dropped, and the heading variance to at least
 /// (5°)²; moving before and after (above 3 m/s), the heading is turned by the change of
 /// course.
