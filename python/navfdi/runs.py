@@ -249,19 +249,9 @@ class ScenarioRun(RunRecord):
         def add(channel: str, detector: str, d: dict[str, Any], faults: list[dict[str, Any]]) -> None:
             for iv, fi in self._events(d, faults):
                 f = None if fi is None else faults[fi]
-                rows.append(
-                    {
-                        "subfilter": channel,
-                        "detector": detector,
-                        "alarm_start": iv.start,
-                        "alarm_end": iv.end,
-                        "tests": iv.tests,
-                        "fault_id": f["id"] if f else None,
-                        "fault_start": f["start"] if f else None,
-                        "fault_end": f["end"] if f else None,
-                        "delay": max(iv.start - f["start"], 0.0) if f else None,
-                    }
-                )
+                rows.append({"subfilter": channel, "detector": detector, "alarm_start": iv.start, "alarm_end": iv.end, "tests": iv.tests,
+                             "fault_id": f["id"] if f else None, "fault_start": f["start"] if f else None, "fault_end": f["end"] if f else None,
+                             "delay": max(iv.start - f["start"], 0.0) if f else None})
 
         for s in self.record["subfilters"]:
             faults = self._faults_on(s["sensor"])
