@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
 import pytest
 
 import navfdi
@@ -80,6 +81,8 @@ def test_bad_slopes_are_named() -> None:
     for bad, what in ((-0.5, r"cn0_slope = -0.5: a slope in \[0, 3\]"), (4.0, r"cn0_slope = 4.0"), ("steep", r"cn0_slope = 'steep'"), (float("nan"), "cn0_slope = nan"), (True, "cn0_slope = True")):
         with pytest.raises(ValueError, match=what):
             navfdi.gnss_solve(o, n, systems="G,E", weighting="cn0", cn0_slope=bad)
+    # numpy scalars are numbers too.
+    assert navfdi.gnss_solve(o, n, systems="G,E", weighting="cn0", cn0_slope=np.int64(2), exclude=False).config["cn0_slope"] == 2.0
     with pytest.raises(ValueError, match="weighting = 'elevation' has none"):
         navfdi.gnss_solve(o, n, systems="G,E", cn0_slope=2.0)
     with pytest.raises(ValueError, match="weighting = 'rtklib' has none"):

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import gzip
 import math
+import numbers
 import os
 import re
 import warnings
@@ -709,7 +710,7 @@ def gnss_solve(
             out.config["cn0_slope_auto"] = slope
             return out
         cn0_slope = 1.0  # the models without a C/N0 term have no slope to estimate
-    if isinstance(cn0_slope, bool) or not (isinstance(cn0_slope, (int, float)) and 0.0 <= cn0_slope <= _core.CN0_SLOPE_MAX):
+    if isinstance(cn0_slope, bool) or not (isinstance(cn0_slope, numbers.Real) and 0.0 <= cn0_slope <= _core.CN0_SLOPE_MAX):
         raise ValueError(f"cn0_slope = {cn0_slope!r}: a slope in [0, {_core.CN0_SLOPE_MAX:g}] (variance decades per 10 dB-Hz) or 'auto'")
     if cn0_slope != 1.0 and weighting not in ("cn0", "auto"):
         raise ValueError(f"cn0_slope = {cn0_slope!r} is the C/N0 model's; weighting = {weighting!r} has none: give weighting='cn0' or 'auto'")
