@@ -181,4 +181,56 @@ mod tests {
         });
         assert!(!caught);
     }
+
+    /// The INS is put on the fix, its velocity moved by the rate and its heading turned by
+    /// the change of course; the position and horizontal velocity variances reopened with
+    /// their correlations dropped, the heading's raised to (5°)².
+    #[test]
+    fn reanchoring_puts_the_ins_on_the_fix() {
+        use crate::ins::error_filter::tests::noise;
+        use crate::ins::error_filter::N;
+        let lat = 0.7_f64;
+        let q0 = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.3);
+        let mut s = NavState {
+            lat,
+            lon: 0.2,
+            h: 100.0,
+            v: Vector3::new(10.0, 0.0, 0.0),
+            q: q0,
+        };
+        let mut kf =
+            ErrorFilter::<N>::new(1.0, 0.1, Vector3::repeat(0.001), Vector3::zeros(), noise());
+        kf.p[(R, PHI)] = 0.5;
+        kf.p[(PHI, R)] = 0.5;
+        let before = s;
+        // INS − fix: 30 m east, −40 m north, 2 m up; the INS running 10 m/s east of the fixes.
+        let d = Vector3::new(30.0, -40.0, 2.0);
+        reanchor(
+            &mut s,
+            &mut kf,
+            &d,
+            &Vector3::new(4.0, 5.0, 9.0),
+            [10.0, 0.0],
+        );
+        let rm = crate::ins::earth::r_meridian(lat) + before.h;
+        assert!(
+            ((s.lat - before.lat) * rm - 40.0).abs() < 1e-6,
+            "north moved by +40 m"
+        );
+        assert!((s.h - 98.0).abs() < 1e-9);
+        // Velocity 10 north → 10 north − 10 east: the course turns by −45°, so does the heading.
+        assert!((s.v.x - 10.0).abs() < 1e-12 && (s.v.y + 10.0).abs() < 1e-12);
+        let turned = (s.q * before.q.inverse()).scaled_axis();
+        assert!(
+            (turned.z + std::f64::consts::FRAC_PI_4).abs() < 1e-9 && turned.xy().norm() < 1e-9,
+            "{turned:?}"
+        );
+        assert_eq!(
+            (kf.p[(R, R)], kf.p[(R + 1, R + 1)], kf.p[(R + 2, R + 2)]),
+            (5.0, 4.0, 9.0)
+        );
+        assert_eq!((kf.p[(V, V)], kf.p[(V + 1, V + 1)]), (1.0, 101.0));
+        assert_eq!((kf.p[(R, PHI)], kf.p[(PHI, R)]), (0.0, 0.0));
+        assert!((kf.p[(PHI + 2, PHI + 2)] - REANCHOR_HEADING_VAR).abs() < 1e-15);
+    }
 }
