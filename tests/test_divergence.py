@@ -19,6 +19,7 @@ import pytest
 
 import navfdi
 from navfdi.consistency import consistency, format_consistency
+from loglib import horizontal_error
 
 
 @pytest.fixture()
@@ -30,8 +31,7 @@ def burst_log(tmp_path: Path, docs_script: Callable[[str], ModuleType]) -> Calla
 
 
 def _rms(run: navfdi.ScenarioRun) -> float:
-    e = run.record["error"]
-    return float(np.sqrt(np.nanmean(np.hypot(e[:, 6], e[:, 7]) ** 2)))
+    return float(np.sqrt(np.nanmean(horizontal_error(run) ** 2)))
 
 
 @pytest.mark.parametrize(("seed", "before"), [(4, 5784.0), (11, 2877.0)])
@@ -50,10 +50,10 @@ def test_the_rtk_set_up_on_positions_only_no_longer_runs_away(tmp_path: Path) ->
     """docs/meter_fde.md's seed 6 with bursts under drive_lc's settings: a ramp held after a
     step, an INS velocity already off, 301 m RMS fault-free (94 m after the held ramp's line,
     no FDE 9.8 m). The INS is moved back onto the held fixes instead of coasting away."""
-    from test_positions_only import _hor, _rtk_set_up_on
+    from test_positions_only import _rtk_set_up_on
 
     r = _rtk_set_up_on(tmp_path / "log", 6, 15.0)
-    rms = {v: float(np.sqrt(np.nanmean(_hor(x) ** 2))) for v, x in r.runs.items()}
+    rms = {v: _rms(x) for v, x in r.runs.items()}
     assert rms["fde"] <= 1.5 * rms["no_fde"] and rms["fde"] < 20.0, rms
     assert r.runs["fde"].record.get("reanchored")
 

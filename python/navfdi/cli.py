@@ -43,15 +43,16 @@ def _positive(text: str) -> int:
 
 
 def _cn0_slope(text: str) -> float | str:
-    """argparse type: ``auto`` or a C/N0 weighting slope in [0, 3] (variance decades per 10 dB-Hz)."""
+    """argparse type: ``auto`` or a C/N0 weighting slope in [0, ``_core.CN0_SLOPE_MAX``]
+    (variance decades per 10 dB-Hz)."""
     if text == "auto":
         return text
     try:
         v = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a slope in [0, 3] or 'auto'") from None
-    if not 0.0 <= v <= 3.0:
-        raise argparse.ArgumentTypeError(f"{text!r} is not a slope in [0, 3] or 'auto'")
+        v = float("nan")
+    if not 0.0 <= v <= _core.CN0_SLOPE_MAX:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a slope in [0, {_core.CN0_SLOPE_MAX:g}] or 'auto'")
     return v
 
 
