@@ -20,6 +20,7 @@ mod diverge;
 mod hold;
 mod noise_scale;
 mod pull;
+mod receiver;
 mod window;
 
 use super::common::make_detector;
@@ -491,6 +492,7 @@ fn run<const NS: usize>(
                 } else {
                     vec![0, 1, 2]
                 };
+                let before = holds[a].comps;
                 let uses = holds[a].decide(
                     tk,
                     &d,
@@ -508,6 +510,15 @@ fn run<const NS: usize>(
                         .is_some_and(|c| c.ins_referenced)
                         .then_some(&pull),
                 );
+                // A held step the receiver's jump back ended: that jump is the step test's, not
+                // a drift of the receiver — its sequential tests start again after it.
+                for (j, was) in before.iter().enumerate() {
+                    let ended = matches!(was, hold::Comp::Step { .. })
+                        && matches!(holds[a].comps[j], hold::Comp::Return { .. });
+                    if ended {
+                        receivers[a].forget(j);
+                    }
+                }
                 // Held fixes the INS runs away from: the INS is moved back onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let uses = match diverged[a].push(tk, [d[0], d[1]], held) {

@@ -2,7 +2,7 @@
 //! when the velocity's innovation against the INS says what the receiver's displacement says
 //! ([`VelocityBlame`]); the position otherwise (the hold machine, [`super::hold`]).
 
-use super::hold::Consistency;
+use super::receiver::Consistency;
 use nalgebra::Vector3;
 
 /// Per component east, north, up: whether the receiver's velocity, not its position, is what

@@ -20,10 +20,13 @@
 //! * A step whose offset stops explaining the fix (the fault changed) is re-estimated.
 //!
 //! **Stale fixes**: a fix identical to the previous one (to 1 mm) while the INS moved more than
-//! [`STALE_MOTION`] m is the receiver repeating its last fix; position and velocity of the
+//! [`STALE_MOTION`](super::receiver::STALE_MOTION) m is the receiver repeating its last fix; position and velocity of the
 //! epoch are left out.
 
-use super::noise_scale::{median, SCALE_MIN, SCALE_WINDOW};
+use super::receiver::repeated;
+pub use super::receiver::{
+    Consistency, ReceiverConsistency, HISTORY, MOVING, RECEIVER_JUMP, RETURN_Z,
+};
 use nalgebra::Vector3;
 
 // Why a GNSS measurement (or some of its components) was left out at an epoch: indices into
@@ -53,14 +56,6 @@ pub const AGREE_W2: f64 = 6.634_896_6;
 /// Fixes a ramp flagged by the sequential test is held before the fix must have left the
 /// INS prediction (|w| > 2.58) to confirm it.
 pub const PROBATION: u32 = 5;
-
-/// INS motion (m) between two identical fixes that marks the second as stale.
-pub const STALE_MOTION: f64 = 0.5;
-
-/// A fix equal to the previous one (to 1 mm) after a motion (m) beyond [`STALE_MOTION`].
-fn repeated(fix: &Vector3<f64>, last: &Vector3<f64>, motion: f64) -> bool {
-    (fix - last).amax() < 1e-3 && motion > STALE_MOTION
-}
 
 /// The state of one position component.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,6 +99,9 @@ pub enum Comp {
         b: f64,
         /// Its variance (m²).
         var: f64,
+        /// Its variance at the start of the hold (m²): what the receiver's drift over the hold
+        /// adds to it is bounded by the drift's structure function.
+        var0: f64,
         /// The fix left the INS prediction during the hold (else, after [`PROBATION`]
         /// fixes, the sequential test's alarm was a false one).
         confirmed: bool,
@@ -149,7 +147,24 @@ pub struct PositionHold {
     /// Per component, when a held step was taken as over by a jump back (s) and its offset
     /// (m): a jump back to it within [`RESUME`] s resumes the fault (a burst against it ended).
     ended: [Option<(f64, f64)>; 3],
+    /// Per component, the side (sign of `d`) and start time (s) of the run of consecutive
+    /// fixes off the INS prediction on that side (begun beyond |w| 2, carried on beyond |w| 1)
+    /// while nothing was held, up to the previous fix; None otherwise.
+    lag: [Option<(f64, f64)>; 3],
 }
+
+/// Seconds of fixes off the INS prediction (|w| > 2, then > 1) on one side that make a jump back
+/// across the INS the end of a fault the filter followed, without the receiver's own
+/// drift to show it (its windows restart at every stop).
+pub const LAG_RUN: f64 = 5.0;
+/// The largest innovation (as a multiple of the lag before it) at which a jump back across a
+/// lagging INS ([`LAG_RUN`]) is the end of a fault it followed.
+pub const LAG_RATIO: f64 = 5.0;
+
+/// A receiver's move (σ_e of its consistency) a held step's offset follows without the INS
+/// confirming it: beyond any noise of a consistent receiver, as a ramp taken for a step on RTK
+/// fixes is (a 0.5 m/s ramp at σ_e 4 cm: 12σ_e per fix).
+pub const MOVE_ALONE: f64 = 5.0;
 
 /// How long (s) after a held step was taken as over a jump back to its offset resumes it.
 pub const RESUME: f64 = 60.0;
@@ -161,13 +176,14 @@ impl Default for PositionHold {
             prev: None,
             last_fix: None,
             ended: [None; 3],
+            lag: [None; 3],
         }
     }
 }
 
 impl PositionHold {
     /// Whether `fix` (east, north, up, m) repeats the previous fix while the INS (`ins`, same
-    /// frame) moved more than [`STALE_MOTION`] since then; remembers both.
+    /// frame) moved more than [`STALE_MOTION`](super::receiver::STALE_MOTION) since then; remembers both.
     pub fn stale(&mut self, fix: &Vector3<f64>, ins: &Vector3<f64>) -> bool {
         let out = self
             .last_fix
@@ -250,13 +266,22 @@ impl PositionHold {
                     && (w + e).abs() <= w.abs() - 0.5 * e.abs();
 
                 // The previous fix's innovation, fix − INS: the side it drifted to.
+                // The second witness: the receiver's drift, or (its windows restart at a
+                // stop) the fixes off the INS that way for [`LAG_RUN`] s, with the jump landing
+                // within [`LAG_RATIO`] times that lag on the other side (an INS that followed
+                // at most five sixths of the fault; a 30 m multipath burst starting against an
+                // INS 4 m behind the fixes is no return).
                 let lagging = self.prev.is_some_and(|(pd, ps)| {
                     let off = -pd[j];
+                    let run = self.lag[j]
+                        .is_some_and(|(side, t0)| side * pd[j] > 0.0 && t - t0 >= LAG_RUN)
+                        && d[j].abs() <= LAG_RATIO * off.abs();
                     off * e < 0.0
                         && off * off > 4.0 * ps[j]
-                        && c.excursion[j]
-                            .iter()
-                            .any(|&(x, z)| z > RETURN_Z && x * off > 0.0)
+                        && (run
+                            || c.excursion[j]
+                                .iter()
+                                .any(|&(x, z)| z > RETURN_Z && x * off > 0.0))
                 });
                 e.abs() > RECEIVER_JUMP * c.sigma[j] && (window_back || lagging)
             })
@@ -319,6 +344,7 @@ impl PositionHold {
                             since: t,
                             b: -sum,
                             var,
+                            var0: var,
                             confirmed: leaves(j, -sum),
                             fixes: 0,
                             agree: 0,
@@ -385,17 +411,28 @@ impl PositionHold {
                         _ => 0,
                     };
                     // The held offset moves with the receiver's own inconsistency where it is
-                    // significant (beyond 3σ_e: a fault that keeps growing after its jump — a
-                    // ramp taken for a step — is followed, not let into the solution; its end
-                    // brings it back to zero), and stays put otherwise (a step). Not against
+                    // significant (a fault that keeps growing after its jump — a ramp taken for
+                    // a step — is followed, not let into the solution; its end brings it back
+                    // to zero), and stays put otherwise (a step). Significant: beyond 3σ_e
+                    // where the INS confirms it (the fix found further that way), beyond
+                    // [`MOVE_ALONE`] σ_e where it does not (a ramp the INS follows) — one noisy
+                    // fix of a white σ 1 m receiver (2.5 m one way, then 2.5 m the other) is a
+                    // 3-4σ_e jump the INS does not see. Not against
                     // the INS's displacement (a receiver without velocities): there `e` holds
                     // the INS's own drift, and an offset that followed it would keep the
                     // relative fixes agreeing with an INS drifting away (tens of km, fault-free,
                     // with an IMU noise set above the sensor's).
                     let held = b;
                     let (b, var) = match recv {
-                        Some(c) if !c.ins_referenced && c.e[j].abs() > 3.0 * c.sigma[j] => {
-                            (b - c.e[j], var + c.sigma[j] * c.sigma[j])
+                        Some(c) if !c.ins_referenced => {
+                            let (e, v) = (c.e[j], c.sigma[j] * c.sigma[j]);
+                            let confirmed = (d[j] - b + e).abs() < (d[j] - b).abs();
+                            let z2 = e * e / v;
+                            if z2 > MOVE_ALONE * MOVE_ALONE || (z2 > 9.0 && confirmed) {
+                                (b - e, var + v)
+                            } else {
+                                (b, var)
+                            }
                         }
                         _ => (b, var),
                     };
@@ -467,6 +504,7 @@ impl PositionHold {
                     since,
                     b,
                     var,
+                    var0,
                     confirmed,
                     fixes,
                     agree,
@@ -496,7 +534,16 @@ impl PositionHold {
                                 }
                             }
                         }
-                        Some(c) => (b - c.e[j], var + c.sigma[j] * c.sigma[j], rate),
+                        // Its variance grows as a random walk's, but not beyond what the
+                        // receiver's drift over the hold measures (white or Gauss-Markov
+                        // errors' sums saturate: a ramp's size would otherwise sink into a
+                        // variance grown past it, and the hold end mid-ramp).
+                        Some(c) => {
+                            let rw = var + c.sigma[j] * c.sigma[j];
+                            let sat = super::window::drift_var(&c.structure[j], t - since)
+                                .map_or(rw, |v| rw.min(var0 + v));
+                            (b - c.e[j], sat, rate)
+                        }
                         None => (d[j], s[j], rate),
                     };
                     // The fix off the line beyond the deciding test (the ramp ended, or
@@ -538,6 +585,7 @@ impl PositionHold {
                             since,
                             b,
                             var,
+                            var0,
                             confirmed,
                             fixes,
                             agree,
@@ -552,12 +600,26 @@ impl PositionHold {
         }
         // The next fix's jump is measured from this one's raw innovation.
         self.prev = Some((*d, *s));
+        for j in 0..3 {
+            let side = d[j].signum();
+            // Fixes of a held fault are off the INS by the fault, not by a lagging INS.
+            let used = matches!(self.comps[j], Comp::Normal);
+            // Begun beyond |w| 2, carried on beyond |w| 1 on the same side (at 5–10 Hz the
+            // noise of a lagging INS's innovations crosses 2 now and then).
+            let w2 = d[j] * d[j] / s[j];
+            self.lag[j] = match self.lag[j] {
+                Some((sd, t0)) if used && sd == side && w2 > 1.0 => Some((sd, t0)),
+                _ if used && w2 > 4.0 => Some((side, t)),
+                _ => None,
+            };
+        }
         out
     }
 
     /// Forget the jump reference (after an outage: no fix to measure a jump from).
     pub fn gap(&mut self) {
         self.prev = None;
+        self.lag = [None; 3];
     }
 
     /// Use component `j` as measured again if it is held as a ramp: the drift the receiver's
@@ -572,270 +634,3 @@ impl PositionHold {
 #[cfg(test)]
 #[path = "hold_tests.rs"]
 mod tests;
-
-/// The receiver's own consistency: its position displacement between two fixes against its
-/// velocity, `e = p_k − p_{k−1} − ½(v_k + v_{k−1})(t_k − t_{k−1})` per component (east,
-/// north, up, m). A position fault shows in it and nothing of the INS does: a step as one
-/// `e` of the step's size (and one of the opposite sign at its end), a ramp as a steady bias
-/// of rate × interval, which a two-sided Page CUSUM on `e / σ_e` accumulates (reference
-/// [`CUSUM_K`], threshold [`CUSUM_H`]; `σ_e` robust, from the median |e| of the last
-/// [`SCALE_WINDOW`] values while moving, above [`MOVING`]; the velocity's latency estimated
-/// and removed). Beside the CUSUM, a window test ([`super::window::DriftWindow`]) compares the
-/// sums of `e` over 15–60 s with their own measured spread: a receiver's time-correlated
-/// error makes those sums saturate where the CUSUM's random-walk model lets them grow, so
-/// slow ramps stand out sooner. Needs a velocity channel from the same receiver.
-#[derive(Debug, Clone, Default)]
-pub struct ReceiverConsistency {
-    prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-    abs_e: [std::collections::VecDeque<f64>; 3],
-    up: [f64; 3],
-    down: [f64; 3],
-    /// The sums of `e` (m) and their count since each CUSUM side was last at zero: the
-    /// ramp's displacement from its estimated onset.
-    acc_up: [(f64, u32); 3],
-    acc_down: [(f64, u32); 3],
-    /// The last [`HISTORY`] values of `e` per component, for the window sum.
-    hist: [std::collections::VecDeque<f64>; 3],
-    /// The last [`HISTORY`] raw `e` and velocity changes, for the velocity's latency.
-    pairs: std::collections::VecDeque<(Vector3<f64>, Vector3<f64>)>,
-    /// The window drift test per component (slow ramps against the measured noise of the
-    /// receiver's window sums).
-    windows: [super::window::DriftWindow; 3],
-}
-/// Fixes over which the receiver's displacement is compared with its velocity
-/// ([`Consistency::window`]).
-pub const HISTORY: usize = 120;
-
-/// A jump of the receiver's position against its velocity beyond this many σ_e, confirmed
-/// by the INS, is a step ([`PositionHold::decide`]).
-pub const RECEIVER_JUMP: f64 = 8.0;
-
-/// A receiver drift beyond this many σ of a window test's sums, with the fix off the INS the
-/// same way, that a jump goes back across is the end of a slow fault ([`PositionHold::decide`]).
-pub const RETURN_Z: f64 = 3.0;
-
-/// Fixes (while moving) before the receiver's consistency speaks: its σ_e is their median.
-pub const RECEIVER_MIN: usize = 10;
-/// CUSUM reference value (σ_e per fix).
-pub const CUSUM_K: f64 = 0.5;
-/// CUSUM threshold (σ_e).
-pub const CUSUM_H: f64 = 12.0;
-/// Speed (m/s) below which the receiver's consistency is not measured: at rest its
-/// displacement noise is millimetres, in motion its velocity's latency makes it decimetres,
-/// and one σ_e would not fit both.
-pub const MOVING: f64 = 0.5;
-
-/// What [`ReceiverConsistency::step`] reports for one fix.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Consistency {
-    /// `e` per component (m).
-    pub e: Vector3<f64>,
-    /// Its robust σ per component (m).
-    pub sigma: Vector3<f64>,
-    /// The CUSUM or the window test flags a ramp per component.
-    pub ramp: [bool; 3],
-    /// Where a ramp is flagged: the receiver's displacement against its velocity since the
-    /// ramp's estimated onset (m; the fault's size at this fix) and its variance (m²).
-    pub onset: [Option<(f64, f64)>; 3],
-    /// The sum of `e` over the previous fixes (up to [`HISTORY`], this one excluded, m): a
-    /// jump `e` that cancels it returns the receiver to where its velocity says it is.
-    pub window: Vector3<f64>,
-    /// Per component, the receiver's drift before this fix over each of the window test's
-    /// lengths (m) and its size in σ of that window
-    /// ([`super::window::DriftWindow::excursions`]; zeros where not measured).
-    pub excursion: [[(f64, f64); super::window::LAGS.len()]; 3],
-    /// `e` compares the fixes with the INS's displacement (a receiver without velocities),
-    /// not with the receiver's own velocity: after a fault the filter followed, the INS has
-    /// followed it too, and the window's sums say nothing of where the receiver should be
-    /// (no return is read from them).
-    pub ins_referenced: bool,
-}
-
-impl ReceiverConsistency {
-    /// Forget component `j`'s sequential tests (CUSUM and window sums): its `e` measured a
-    /// faulty velocity ([`super::blame::VelocityBlame`]), not a drift of the position.
-    pub fn forget(&mut self, j: usize) {
-        self.up[j] = 0.0;
-        self.down[j] = 0.0;
-        self.acc_up[j] = (0.0, 0);
-        self.acc_down[j] = (0.0, 0);
-        self.hist[j].clear();
-        self.windows[j].restart();
-    }
-
-    /// Feed the fix `p` (east, north, up, m) and velocity `v` (m/s) at time `t` (s); None for
-    /// the first fixes (until `σ_e` is estimated) or after a gap of more than `max_gap` s
-    /// (the CUSUM restarts); with `own_velocity` (`v` is the receiver's), None for a stale fix.
-    pub fn step(
-        &mut self,
-        t: f64,
-        p: &Vector3<f64>,
-        v: &Vector3<f64>,
-        max_gap: f64,
-        own_velocity: bool,
-    ) -> Option<Consistency> {
-        // A fix identical to the previous one while the receiver moved more than
-        // [`STALE_MOTION`] by its own velocity: the receiver repeating its last fix
-        // ([`PositionHold::stale`]), not a position. It is not taken in; the displacement is
-        // measured from the last fresh fix, across the spell (a gap when that is long) — fed in,
-        // the first fresh fix after it read as a jump back, and a held step was let in. (Against
-        // the INS's displacement, on positions only, the restart cost more than it saved:
-        // docs/meter_fde.md.)
-        if let (true, Some((t0, p0, v0))) = (own_velocity, self.prev) {
-            if repeated(p, &p0, 0.5 * (v + v0).norm() * (t - t0)) {
-                return None;
-            }
-        }
-        let prev = self.prev.replace((t, *p, *v));
-        let (t0, p0, v0) = prev?;
-        let dt = t - t0;
-        if !(dt > 0.0 && dt <= max_gap) {
-            self.up = [0.0; 3];
-            self.down = [0.0; 3];
-            self.acc_up = [(0.0, 0); 3];
-            self.acc_down = [(0.0, 0); 3];
-            self.hist.iter_mut().for_each(|h| h.clear());
-            self.windows.iter_mut().for_each(|w| w.restart());
-            // The latency (`pairs`) and σ_e are the receiver's: kept across the gap.
-            return None;
-        }
-        if v.xy().norm() < MOVING || v0.xy().norm() < MOVING {
-            // Window sums across a stop would span unmeasured time.
-            self.windows.iter_mut().for_each(|w| w.restart());
-            return None;
-        }
-        // A receiver's velocity lags its position by some latency τ (≈ 0.13 s on drive_0708's
-        // receiver): the trapezoid then misses τ·Δv. τ is estimated by least squares over the
-        // last fixes (all components) and removed.
-        let raw = p - p0 - (v + v0) * (0.5 * dt);
-        let dv = v - v0;
-        let (sxy, sxx) = self
-            .pairs
-            .iter()
-            .fold((0.0, 0.0), |(a, b), (e, x)| (a + e.dot(x), b + x.dot(x)));
-        let tau = if self.pairs.len() >= SCALE_MIN && sxx > 0.0 {
-            (sxy / sxx).clamp(-dt, dt)
-        } else {
-            0.0
-        };
-        let e = raw - dv * tau;
-        let mut pending = Some((raw, dv));
-        let mut sigma = Vector3::zeros();
-        let mut ramp = [false; 3];
-        let mut onset = [None; 3];
-        let mut window = Vector3::zeros();
-        let mut excursion = [[(0.0, 0.0); super::window::LAGS.len()]; 3];
-        for j in 0..3 {
-            window[j] = self.hist[j].iter().sum();
-            excursion[j] = self.windows[j].excursions();
-            if self.hist[j].len() == HISTORY {
-                self.hist[j].pop_front();
-            }
-            self.hist[j].push_back(e[j]);
-            let w = &mut self.abs_e[j];
-            let med = if w.len() >= RECEIVER_MIN {
-                median(w)
-            } else {
-                f64::NAN
-            };
-            sigma[j] = if med.is_finite() {
-                (med / 0.674_489_75).max(1e-3)
-            } else {
-                f64::NAN
-            };
-            if w.len() == SCALE_WINDOW {
-                w.pop_front();
-            }
-            w.push_back(e[j].abs());
-            // A jump or a fault's drift does not teach the latency.
-            if !(sigma[j].is_finite() && e[j].abs() <= 4.0 * sigma[j]) {
-                pending = None;
-            }
-            // Clipped at 4σ: one jump (a step) cannot fire the CUSUM, a ramp of any rate
-            // does within a few fixes.
-            if sigma[j].is_finite() {
-                let x = (e[j] / sigma[j]).clamp(-4.0, 4.0);
-                self.up[j] = (self.up[j] + x - CUSUM_K).max(0.0);
-                self.down[j] = (self.down[j] - x - CUSUM_K).max(0.0);
-                let acc = |a: (f64, u32), stat: f64| {
-                    if stat > 0.0 {
-                        (a.0 + e[j], a.1 + 1)
-                    } else {
-                        (0.0, 0)
-                    }
-                };
-                self.acc_up[j] = acc(self.acc_up[j], self.up[j]);
-                self.acc_down[j] = acc(self.acc_down[j], self.down[j]);
-                let window = self.windows[j].add(t, e[j], sigma[j]);
-                let fired = if self.up[j] > CUSUM_H {
-                    Some((
-                        self.acc_up[j].0,
-                        f64::from(self.acc_up[j].1) * sigma[j] * sigma[j],
-                    ))
-                } else if self.down[j] > CUSUM_H {
-                    Some((
-                        self.acc_down[j].0,
-                        f64::from(self.acc_down[j].1) * sigma[j] * sigma[j],
-                    ))
-                } else {
-                    window
-                };
-                if let Some(drift) = fired {
-                    ramp[j] = true;
-                    onset[j] = Some(drift);
-                    self.windows[j].hold_off();
-                    self.up[j] = 0.0;
-                    self.down[j] = 0.0;
-                    self.acc_up[j] = (0.0, 0);
-                    self.acc_down[j] = (0.0, 0);
-                }
-            }
-        }
-        if let Some(pair) = pending {
-            if self.pairs.len() == HISTORY {
-                self.pairs.pop_front();
-            }
-            self.pairs.push_back(pair);
-        }
-        // Until σ_e is known (the first fixes) the receiver says nothing.
-        sigma.iter().all(|x| x.is_finite()).then_some(Consistency {
-            e,
-            sigma,
-            ramp,
-            onset,
-            window,
-            excursion,
-            ins_referenced: false,
-        })
-    }
-}
-
-#[cfg(test)]
-mod consistency_tests {
-    use super::*;
-
-    #[test]
-    fn steps_jump_once_and_ramps_accumulate() {
-        use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
-        let mut rc = ReceiverConsistency::default();
-        let v = Vector3::new(10.0, 0.0, 0.0);
-        let mut flagged = Vec::new();
-        for k in 0..200 {
-            let t = k as f64;
-            let n: f64 = StandardNormal.sample(&mut rng);
-            let noise = 0.3 * n;
-            // A 0.5 m/s ramp on north from 120 s.
-            let ramp = if k >= 120 { 0.5 * (t - 120.0) } else { 0.0 };
-            let p = Vector3::new(10.0 * t, noise + ramp, 0.0);
-            if let Some(c) = rc.step(t, &p, &v, 2.5, true) {
-                if c.ramp[1] {
-                    flagged.push(k);
-                }
-            }
-        }
-        assert!(flagged.iter().all(|&k| k >= 120), "{flagged:?}");
-        assert!(flagged.first().is_some_and(|&k| k <= 150), "{flagged:?}");
-    }
-}

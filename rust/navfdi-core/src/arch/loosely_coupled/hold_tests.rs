@@ -19,6 +19,7 @@ fn north(e: f64, sigma: f64, window: f64) -> Consistency {
         onset: [None; 3],
         window: Vector3::new(0.0, window, 0.0),
         excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+        structure: [[f64::NAN; crate::arch::loosely_coupled::window::LAGS.len()]; 3],
         ins_referenced: false,
     }
 }
@@ -70,6 +71,7 @@ fn step_with(
         onset: [None, (sum != 0.0).then_some((sum, 11.0)), None],
         window: Vector3::zeros(),
         excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+        structure: [[f64::NAN; crate::arch::loosely_coupled::window::LAGS.len()]; 3],
         ins_referenced,
     });
     h.decide(
@@ -263,6 +265,124 @@ fn a_jump_back_across_a_lagging_ins_after_a_drift_is_a_return() {
     weak.excursion[1][1] = (6.0, 2.5);
     let (_, comp) = run(-6.16, weak);
     assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
+}
+
+/// The same jump back across the INS where the receiver's windows were restarted by a stop
+/// (no drift to read) but the fixes had been off the INS that way (|w| > 2) for
+/// [`LAG_RUN`] s: a return. After a shorter run, with the INS on the fix at the fix before,
+/// or with the jump landing beyond [`LAG_RATIO`] times the lag, a step.
+#[test]
+fn a_jump_back_across_an_ins_lagging_for_seconds_is_a_return() {
+    let run = |lagging: usize, d_before: f64, d_after: f64| {
+        let mut h = PositionHold::default();
+        let quiet = north(0.3, 0.74, 0.0);
+        for k in 0..5 {
+            decide_north(&mut h, 300.0 + k as f64, 0.5, 9.36, false, &quiet);
+        }
+        // The fixes run ahead of the INS (d = INS − fix < 0, |w| 2.6–3.3) for `lagging` fixes.
+        for k in 0..lagging {
+            let d = if k + 1 == lagging {
+                d_before
+            } else {
+                -8.0 - 0.2 * k as f64
+            };
+            decide_north(&mut h, 305.0 + k as f64, d, 9.36, false, &quiet);
+        }
+        let t = 305.0 + lagging as f64;
+        let jump = north(d_before - d_after, 0.74, 0.0);
+        let u = decide_north(&mut h, t, d_after, 9.36, true, &jump);
+        (u, h.comps[1])
+    };
+    assert_eq!(run(6, -10.0, 9.9), (Use::Raw, Comp::Return { fixes: 1 }));
+    let (_, comp) = run(4, -10.0, 9.9);
+    assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
+    let (_, comp) = run(6, -0.5, 9.9);
+    assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
+    // A jump far beyond the lag (a burst starting: 40 m against a 7 m lag): a step.
+    let (_, comp) = run(6, -7.0, 40.0);
+    assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
+    assert_eq!(run(6, -7.0, 20.0).0, Use::Raw);
+}
+
+/// A held step's offset follows the receiver's own jump where the INS agrees the fix moved,
+/// or where the jump is beyond any noise ([`MOVE_ALONE`] σ_e): one noisy fix (white σ 1 m
+/// fixes: 2.5 m one way, then 2.5 m the other) is a 5 m jump of the receiver's consistency
+/// (σ_e 1.4 m) the INS does not see, and the offset stays (before, it moved 5 m for the rest
+/// of the fault); a ramp the INS follows (8σ_e per fix) moves it.
+#[test]
+fn a_held_offset_moves_with_a_jump_the_ins_confirms_or_beyond_noise() {
+    let offset = |h: &PositionHold| match h.comps[1] {
+        Comp::Step { b, .. } => b,
+        c => panic!("{c:?}"),
+    };
+    let fix = |h: &mut PositionHold, t: f64, d: f64, e: f64| {
+        decide_north(h, t, d, 4.5, true, &north(e, 1.4, 0.0))
+    };
+    let held = || {
+        let mut h = PositionHold::default();
+        for k in 0..5 {
+            fix(&mut h, k as f64, 0.1, 0.1);
+        }
+        assert!(matches!(fix(&mut h, 5.0, -20.0, 20.0), Use::Relative(..)));
+        h
+    };
+    // Noise: +2.5 m (within 3σ_e), −2.5 m (a 5 m jump), back.
+    let mut h = held();
+    fix(&mut h, 6.0, -22.5, 2.5);
+    fix(&mut h, 7.0, -17.5, -5.0);
+    assert_eq!(offset(&h), -20.0);
+    let u = fix(&mut h, 8.0, -20.0, 2.5);
+    assert!(matches!(u, Use::Relative(b, _) if b == -20.0), "{u:?}");
+    // A move the INS confirms (the fix 5 m further off it): taken.
+    let mut h = held();
+    fix(&mut h, 6.0, -24.8, 5.0);
+    assert_eq!(offset(&h), -25.0);
+    // A ramp the INS follows (the innovation unchanged), 8σ_e per fix: taken.
+    let mut h = held();
+    fix(&mut h, 6.0, -20.0, 11.2);
+    assert!((offset(&h) + 31.2).abs() < 1e-9, "{}", offset(&h));
+}
+
+/// A held ramp on a receiver whose drift windows saturate (white errors: their sums do not
+/// grow with the window): the size's variance stops at its onset's plus the receiver's
+/// measured drift spread, so a ramp still growing stays held. Grown as a random walk's instead
+/// (the spread not yet measured), the 10 m ramp's size sinks into it within five fixes and the
+/// hold ends ten fixes later, mid-ramp.
+#[test]
+fn a_held_ramps_variance_stops_at_the_receivers_drift_spread() {
+    let run = |spread: f64| {
+        let mut h = PositionHold::default();
+        for k in 0..10 {
+            decide_north(&mut h, k as f64, 0.0, 4.5, false, &north(0.0, 2.0, 0.0));
+        }
+        let fix = |e: f64, onset: Option<(f64, f64)>| {
+            let mut c = north(e, 2.0, 0.0);
+            c.onset[1] = onset;
+            c.ramp[1] = onset.is_some();
+            c.structure[1] = [spread; crate::arch::loosely_coupled::window::LAGS.len()];
+            c
+        };
+        let u = decide_north(
+            &mut h,
+            10.0,
+            10.0,
+            4.5,
+            true,
+            &fix(-0.5, Some((-10.0, 4.0))),
+        );
+        assert_eq!(u, Use::Out(RAMP));
+        for k in 1..=25 {
+            let d = 10.0 + 0.5 * k as f64;
+            decide_north(&mut h, 10.0 + k as f64, d, 4.5, true, &fix(-0.5, None));
+        }
+        h.comps[1]
+    };
+    assert!(matches!(run(8.0), Comp::Drift { .. }), "{:?}", run(8.0));
+    assert!(
+        matches!(run(f64::NAN), Comp::Return { .. } | Comp::Normal),
+        "{:?}",
+        run(f64::NAN)
+    );
 }
 
 /// A ramp's first increment on RTK fixes (σ_e 4 cm) beside a window of latency residuals

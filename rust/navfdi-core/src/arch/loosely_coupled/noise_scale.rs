@@ -1,6 +1,6 @@
 //! The scale of a GNSS channel's measurement σ, estimated from its own innovations
 //! ([`NoiseScale`], `[loosely_coupled] noise_scale = "auto"`), and the window lengths the
-//! receiver's consistency ([`super::hold::ReceiverConsistency`]) shares with it.
+//! receiver's consistency ([`super::receiver::ReceiverConsistency`]) shares with it.
 
 use super::window::median_of;
 use std::collections::VecDeque;

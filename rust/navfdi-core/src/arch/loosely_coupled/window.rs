@@ -69,6 +69,20 @@ impl Default for DriftWindow {
     }
 }
 
+/// The variance (m²) of a receiver's drift over `lag` s from its structure function
+/// ([`DriftWindow::structure`]): σ_L² of the shortest measured lag at least as long, or beyond
+/// the longest, its σ_L² grown in proportion to the lag (as a random walk's: the conservative
+/// side); None where no lag that long is measured.
+pub fn drift_var(structure: &[f64; LAGS.len()], lag: f64) -> Option<f64> {
+    let last = LAGS.len() - 1;
+    match LAGS.iter().position(|&l| l >= lag) {
+        Some(l) => structure[l..].iter().copied().find(|v| v.is_finite()),
+        None => structure[last]
+            .is_finite()
+            .then(|| structure[last] * lag / LAGS[last]),
+    }
+}
+
 /// The median of `v` (reordered; the upper one of an even count); NaN when empty.
 pub(super) fn median_of(v: &mut [f64]) -> f64 {
     if v.is_empty() {
@@ -137,6 +151,11 @@ impl DriftWindow {
             self.measure();
         }
         self.test()
+    }
+
+    /// The structure function: σ_L² (m²) per lag of [`LAGS`], NaN where not measured.
+    pub fn structure(&self) -> [f64; LAGS.len()] {
+        self.sigma.map(|s| s * s)
     }
 
     /// The receiver's drift up to its latest fix over each window of [`LAGS`] (from a stop or
@@ -237,6 +256,19 @@ mod tests {
     use rand::SeedableRng;
     use rand_distr::{Distribution, StandardNormal};
 
+    #[test]
+    fn the_drift_variance_reads_the_next_measured_lag_and_grows_beyond_the_longest() {
+        let nan = f64::NAN;
+        assert_eq!(drift_var(&[1.0, 2.0, 3.0, 4.0], 10.0), Some(1.0));
+        assert_eq!(drift_var(&[1.0, 2.0, 3.0, 4.0], 15.0), Some(1.0));
+        assert_eq!(drift_var(&[1.0, 2.0, 3.0, 4.0], 20.0), Some(2.0));
+        assert_eq!(drift_var(&[1.0, 2.0, 3.0, 4.0], 90.0), Some(6.0));
+        assert_eq!(drift_var(&[nan, 2.0, nan, 4.0], 10.0), Some(2.0));
+        assert_eq!(drift_var(&[nan, 2.0, nan, 4.0], 40.0), Some(4.0));
+        assert_eq!(drift_var(&[1.0, 2.0, 3.0, nan], 90.0), None);
+        assert_eq!(drift_var(&[nan; 4], 10.0), None);
+    }
+
     /// `e` of a receiver whose position error is Gauss-Markov (σ `sg`, τ `tau` s) plus
     /// white `sw`, at 1 Hz, with a ramp of `rate` m/s from `from` s.
     fn receiver_e(
@@ -321,8 +353,8 @@ mod tests {
                     hit.get_or_insert((k + 1 - 400, d, var));
                 }
                 // The receiver consistency's CUSUM on the same e (one side).
-                up = (up + (x / se).clamp(-4.0, 4.0) - super::super::hold::CUSUM_K).max(0.0);
-                if up > super::super::hold::CUSUM_H && k + 1 >= 400 {
+                up = (up + (x / se).clamp(-4.0, 4.0) - super::super::receiver::CUSUM_K).max(0.0);
+                if up > super::super::receiver::CUSUM_H && k + 1 >= 400 {
                     cusum_hit.get_or_insert((k + 1 - 400) as f64);
                 }
             }
