@@ -147,10 +147,11 @@ pub struct PositionHold {
     /// Per component, when a held step was taken as over by a jump back (s) and its offset
     /// (m): a jump back to it within [`RESUME`] s resumes the fault (a burst against it ended).
     ended: [Option<(f64, f64)>; 3],
-    /// Per component, the side (sign of `d`) and start time (s) of the run of consecutive
-    /// fixes off the INS prediction on that side (begun beyond |w| 2, carried on beyond |w| 1)
-    /// while nothing was held, up to the previous fix; None otherwise.
-    lag: [Option<(f64, f64)>; 3],
+    /// Per component, the side (sign of `d`), start time (s), sum of `d` (m) and count of the
+    /// run of consecutive fixes off the INS prediction on that side (begun beyond |w| 2,
+    /// carried on beyond |w| 1) while nothing was held, up to the previous fix; None
+    /// otherwise.
+    lag: [Option<(f64, f64, f64, u32)>; 3],
 }
 
 /// Seconds of fixes off the INS prediction (|w| > 2, then > 1) on one side that make a jump back
@@ -273,15 +274,22 @@ impl PositionHold {
                 // INS 4 m behind the fixes is no return).
                 let lagging = self.prev.is_some_and(|(pd, ps)| {
                     let off = -pd[j];
-                    let run = self.lag[j]
-                        .is_some_and(|(side, t0)| side * pd[j] > 0.0 && t - t0 >= LAG_RUN)
-                        && d[j].abs() <= LAG_RATIO * off.abs();
+                    // The lag (fix − INS): the run's last, or its mean where larger (the last
+                    // fix may have dipped below |w| 2).
+                    let run = self.lag[j].is_some_and(|(side, t0, sum, n)| {
+                        let mean = -sum / f64::from(n);
+                        let lag = if mean.abs() > off.abs() { mean } else { off };
+                        side * pd[j] > 0.0
+                            && t - t0 >= LAG_RUN
+                            && lag * lag > 4.0 * ps[j]
+                            && d[j].abs() <= LAG_RATIO * lag.abs()
+                    });
                     off * e < 0.0
-                        && off * off > 4.0 * ps[j]
                         && (run
-                            || c.excursion[j]
-                                .iter()
-                                .any(|&(x, z)| z > RETURN_Z && x * off > 0.0))
+                            || off * off > 4.0 * ps[j]
+                                && c.excursion[j]
+                                    .iter()
+                                    .any(|&(x, z)| z > RETURN_Z && x * off > 0.0))
                 });
                 e.abs() > RECEIVER_JUMP * c.sigma[j] && (window_back || lagging)
             })
@@ -608,8 +616,10 @@ impl PositionHold {
             // noise of a lagging INS's innovations crosses 2 now and then).
             let w2 = d[j] * d[j] / s[j];
             self.lag[j] = match self.lag[j] {
-                Some((sd, t0)) if used && sd == side && w2 > 1.0 => Some((sd, t0)),
-                _ if used && w2 > 4.0 => Some((side, t)),
+                Some((sd, t0, sum, n)) if used && sd == side && w2 > 1.0 => {
+                    Some((sd, t0, sum + d[j], n + 1))
+                }
+                _ if used && w2 > 4.0 => Some((side, t, d[j], 1)),
                 _ => None,
             };
         }

@@ -269,8 +269,9 @@ fn a_jump_back_across_a_lagging_ins_after_a_drift_is_a_return() {
 
 /// The same jump back across the INS where the receiver's windows were restarted by a stop
 /// (no drift to read) but the fixes had been off the INS that way (|w| > 2) for
-/// [`LAG_RUN`] s: a return. After a shorter run, with the INS on the fix at the fix before,
-/// or with the jump landing beyond [`LAG_RATIO`] times the lag, a step.
+/// [`LAG_RUN`] s: a return, the run's mean standing for the lag where larger than its last
+/// fix's (which may dip below |w| 2). After a shorter run, with the INS on the fix at the fix before, or with the jump
+/// landing beyond [`LAG_RATIO`] times the lag, a step.
 #[test]
 fn a_jump_back_across_an_ins_lagging_for_seconds_is_a_return() {
     let run = |lagging: usize, d_before: f64, d_after: f64| {
@@ -298,10 +299,12 @@ fn a_jump_back_across_an_ins_lagging_for_seconds_is_a_return() {
     assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
     let (_, comp) = run(6, -0.5, 9.9);
     assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
-    // A jump far beyond the lag (a burst starting: 40 m against a 7 m lag): a step.
-    let (_, comp) = run(6, -7.0, 40.0);
+    // A jump far beyond the lag (a burst starting: 45 m against a mean lag of 8 m): a step.
+    let (_, comp) = run(6, -7.0, 45.0);
     assert!(matches!(comp, Comp::Step { .. }), "{comp:?}");
     assert_eq!(run(6, -7.0, 20.0).0, Use::Raw);
+    // The run's last fix dipped to |w| 1.3: its mean lag stands, a return.
+    assert_eq!(run(6, -4.0, 9.9).0, Use::Raw);
 }
 
 /// A held step's offset follows the receiver's own jump where the INS agrees the fix moved,
