@@ -18,7 +18,6 @@ step on one component, scored with the metrics of docs/meter_fde.md's campaigns
 
 from __future__ import annotations
 
-import copy
 import warnings
 from collections.abc import Callable
 from pathlib import Path
@@ -29,22 +28,19 @@ import numpy as np
 import pytest
 
 import navfdi
-from navfdi.scenario import from_dict, load_scenario
-from navfdi.simlog import simulate_log
+from navfdi.scenario import from_dict
 
 
-def _case(folder: Path, mc: ModuleType, seed: int, fault: dict[str, Any], rate: float = 1.0, **noise: float) -> tuple[dict[str, float], float]:
-    """Run ``fault`` on a simulated log (σ, τ, white noise from ``noise``) with and without FDE:
-    the campaign's metrics and the fault-free run's largest horizontal error (m)."""
-    simulate_log(folder, duration=600, seed=seed, gnss_rate=rate, gnss_velocity_sigma=0.1, **noise)  # type: ignore[arg-type]
-    base = load_scenario(str(folder / "scenario.toml"))
-    raw = copy.deepcopy(dict(base.raw))
-    for s in raw["sensors"]:
-        s["rate"] = f"{rate:g} Hz"
-    base = from_dict(raw, source=base.source)
+def _case(folder: Path, script: Callable[[str], ModuleType], seed: int, fault: dict[str, Any], rate: float = 1.0,
+          **noise: float) -> tuple[dict[str, float], float]:
+    """Run ``fault`` on a simulated log (σ, τ, white noise from ``noise``; fixes at ``rate`` Hz,
+    as ``receiver_sweep.log_scenario`` writes it) with and without FDE: the campaign's metrics
+    and the fault-free run's largest horizontal error (m)."""
+    mc = script("meter_fde_campaign")
+    base = script("receiver_sweep").log_scenario(str(folder), seed, {**noise, "gnss_rate": rate})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        clean = navfdi.run_scenario(from_dict({**raw, "faults": []}, source=base.source)).runs["fde"]
+        clean = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs["fde"]
         out = mc._one(base, fault, mc._natural(str(folder)), clean.t[mc._excluded(clean)])
     e = clean.record["error"]
     return out, float(np.nanmax(np.hypot(e[:, 6], e[:, 7])))
@@ -66,7 +62,7 @@ WHITE = {"gnss_sigma": 0.0, "gnss_tau": 0.0, "gnss_white": 1.0}
 ])
 def test_the_end_of_a_followed_ramp_is_not_held(tmp_path: Path, docs_script: Callable[[str], ModuleType], name: str, seed: int,
                                                  fault: dict[str, Any], rate: float, noise: dict[str, float], before: float) -> None:
-    r, clean_max = _case(tmp_path, docs_script("meter_fde_campaign"), seed, fault, rate, **noise)
+    r, clean_max = _case(tmp_path, docs_script, seed, fault, rate, **noise)
     # After the end the fixes correct the filter: no fix left out from 5 s after it on (beyond
     # what the fault-free run leaves out), and 20-60 s after it the error is back within the
     # fault-free run's largest.
@@ -77,7 +73,7 @@ def test_the_end_of_a_followed_ramp_is_not_held(tmp_path: Path, docs_script: Cal
 @pytest.mark.parametrize(("seed", "start"), [(2, 138.9), (1, 275.0)])
 def test_a_white_receivers_step_is_held_without_moving_or_outlasting(tmp_path: Path, docs_script: Callable[[str], ModuleType],
                                                                    seed: int, start: float) -> None:
-    r, clean_max = _case(tmp_path, docs_script("meter_fde_campaign"), seed, _fault("pos_e", "step", "20 m", start, 30.0), **WHITE)
+    r, clean_max = _case(tmp_path, docs_script, seed, _fault("pos_e", "step", "20 m", start, 30.0), **WHITE)
     # Held from its first fix to its last; the error in it stays near the fault-free run's
     # largest (1.0-1.4 m) — seed 2: 3.9 m before, when the offset moved by one fix's noise.
     assert r["first_fix_excluded"] == 1.0 and r["share"] == 1.0, r

@@ -492,7 +492,6 @@ fn run<const NS: usize>(
                 } else {
                     vec![0, 1, 2]
                 };
-                let before = holds[a].comps;
                 let uses = holds[a].decide(
                     tk,
                     &d,
@@ -512,12 +511,8 @@ fn run<const NS: usize>(
                 );
                 // A held step the receiver's jump back ended: that jump is the step test's, not
                 // a drift of the receiver — its sequential tests start again after it.
-                for (j, was) in before.iter().enumerate() {
-                    let ended = matches!(was, hold::Comp::Step { .. })
-                        && matches!(holds[a].comps[j], hold::Comp::Return { .. });
-                    if ended {
-                        receivers[a].forget(j);
-                    }
+                for j in (0..3).filter(|&j| holds[a].step_ended_at(j, tk)) {
+                    receivers[a].forget(j);
                 }
                 // Held fixes the INS runs away from: the INS is moved back onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));

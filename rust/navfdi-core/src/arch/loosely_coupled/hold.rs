@@ -147,11 +147,11 @@ pub struct PositionHold {
     /// Per component, when a held step was taken as over by a jump back (s) and its offset
     /// (m): a jump back to it within [`RESUME`] s resumes the fault (a burst against it ended).
     ended: [Option<(f64, f64)>; 3],
-    /// Per component, the side (sign of `d`), start time (s), sum of `d` (m) and count of the
-    /// run of consecutive fixes off the INS prediction on that side (begun beyond |w| 2,
+    /// Per component, the start time (s), sum of `d` (m; its sign the side) and count of the
+    /// run of consecutive fixes off the INS prediction on one side (begun beyond |w| 2,
     /// carried on beyond |w| 1) while nothing was held, up to the previous fix; None
     /// otherwise.
-    lag: [Option<(f64, f64, f64, u32)>; 3],
+    lag: [Option<(f64, f64, u32)>; 3],
 }
 
 /// Seconds of fixes off the INS prediction (|w| > 2, then > 1) on one side that make a jump back
@@ -276,11 +276,10 @@ impl PositionHold {
                     let off = -pd[j];
                     // The lag (fix − INS): the run's last, or its mean where larger (the last
                     // fix may have dipped below |w| 2).
-                    let run = self.lag[j].is_some_and(|(side, t0, sum, n)| {
+                    let run = self.lag[j].is_some_and(|(t0, sum, n)| {
                         let mean = -sum / f64::from(n);
                         let lag = if mean.abs() > off.abs() { mean } else { off };
-                        side * pd[j] > 0.0
-                            && t - t0 >= LAG_RUN
+                        t - t0 >= LAG_RUN
                             && lag * lag > 4.0 * ps[j]
                             && d[j].abs() <= LAG_RATIO * lag.abs()
                     });
@@ -609,21 +608,26 @@ impl PositionHold {
         // The next fix's jump is measured from this one's raw innovation.
         self.prev = Some((*d, *s));
         for j in 0..3 {
-            let side = d[j].signum();
             // Fixes of a held fault are off the INS by the fault, not by a lagging INS.
             let used = matches!(self.comps[j], Comp::Normal);
             // Begun beyond |w| 2, carried on beyond |w| 1 on the same side (at 5–10 Hz the
             // noise of a lagging INS's innovations crosses 2 now and then).
             let w2 = d[j] * d[j] / s[j];
             self.lag[j] = match self.lag[j] {
-                Some((sd, t0, sum, n)) if used && sd == side && w2 > 1.0 => {
-                    Some((sd, t0, sum + d[j], n + 1))
+                Some((t0, sum, n)) if used && sum * d[j] > 0.0 && w2 > 1.0 => {
+                    Some((t0, sum + d[j], n + 1))
                 }
-                _ if used && w2 > 4.0 => Some((side, t, d[j], 1)),
+                _ if used && w2 > 4.0 => Some((t, d[j], 1)),
                 _ => None,
             };
         }
         out
+    }
+
+    /// Whether the fix at `t` ended a held step of component `j` by the receiver's jump back
+    /// (the step is then a [`Comp::Return`]).
+    pub fn step_ended_at(&self, j: usize, t: f64) -> bool {
+        self.ended[j].is_some_and(|(t0, _)| t0 == t)
     }
 
     /// Forget the jump reference (after an outage: no fix to measure a jump from).
