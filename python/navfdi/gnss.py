@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navfdi import _core, _json
+from navfdi._gnss_coverage import check_ephemeris_coverage
 from navfdi._gnss_geometry import enu_sigma
 from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, estimate_cn0_slope, robust_sd, robust_sd_by
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
@@ -585,6 +586,11 @@ def gnss_solve(
 ) -> GnssSolution:
     """Single-point positioning with satellite FDE over every epoch of a RINEX 3 file.
 
+    A navigation file that does not cover the observations is named: ``ValueError`` with both
+    files' time spans when not one satellite-epoch has an ephemeris (another day's file), a
+    :class:`navfdi.PartialLogWarning` per system whose satellite-epochs lack one more than
+    half the time.
+
     Parameters
     ----------
     obs, nav : path
@@ -840,6 +846,8 @@ def gnss_solve(
     sats["epoch"] = sats["epoch"].astype("int64")
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
     sats["satellite"] = sats["satellite"].astype("category")
+    if len(sol):
+        check_ephemeris_coverage(sats, int((sol["status"] != "no_solution").sum()), obs, nav, tuple(gps_time(ep["time"][[0, -1]])))
     sd = enu_sigma(sats, len(sol))
     at = sol.columns.get_loc("height") + 1
     for j, c in enumerate(("sd_e", "sd_n", "sd_u")):

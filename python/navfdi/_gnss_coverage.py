@@ -1,0 +1,72 @@
+"""Does the navigation file cover the observations? Checked after a single-point run from
+the satellite table's statuses, so that a navigation file of another day, or one without a
+selected system's records, is named as such instead of giving an empty solution."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from navfdi import _core
+from navfdi._errors import PartialLogWarning
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+# A system whose satellite-epochs lack an ephemeris more often than this is reported.
+UNCOVERED_SHARE = 0.5
+
+_NAMES = {"G": "GPS", "E": "Galileo", "C": "BeiDou", "J": "QZSS"}
+
+
+def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.PathLike[str], nav: str | os.PathLike[str], obs_span: tuple[Any, Any]) -> None:
+    """Raise or warn when the navigation file ``nav`` does not cover the observations.
+
+    ``sats``: the run's satellite table (one row per satellite-epoch of the selected
+    systems, columns ``satellite`` and ``status``); ``solved``: epochs with a solution;
+    ``obs_span``: the first and last observation epochs (GPST timestamps).
+
+    * No epoch solved and not one satellite-epoch with an ephemeris: ``ValueError`` naming
+      both files' time spans (a navigation file of another day).
+    * Otherwise a :class:`navfdi.PartialLogWarning` for each system whose satellite-epochs
+      lack an ephemeris more than half the time (``UNCOVERED_SHARE``), with the spans.
+    """
+    if len(sats) == 0:
+        return
+    system = sats["satellite"].astype(str).str[0].to_numpy()
+    missing = (sats["status"] == "no_ephemeris").to_numpy()
+    share = {s: float(missing[system == s].mean()) for s in np.unique(system)}
+    short = {s: v for s, v in share.items() if v > UNCOVERED_SHARE}
+    if not short:
+        return
+    spans = _nav_spans(nav)
+    first, last = (t.strftime("%Y-%m-%d %H:%M:%S") for t in obs_span)
+    obs_text = f"the observations of {os.fspath(obs)} span {first} to {last} GPST"
+
+    def covered(s: str) -> str:
+        if s not in spans:
+            return f"{os.fspath(nav)} has no {_NAMES.get(s, s)} records"
+        a, b = spans[s]
+        return f"its {_NAMES.get(s, s)} ephemerides (t_oe) span {a} to {b} GPST"
+
+    if solved == 0 and bool(missing.all()):
+        raise ValueError(f"no epoch solved: not one of the {len(sats)} satellite-epochs has a broadcast ephemeris in {os.fspath(nav)}: " + "; ".join(covered(s) for s in sorted(share)) + f"; {obs_text}. Give the navigation file of the observations' day(s)")
+    for s in sorted(short):
+        warnings.warn(f"{_NAMES.get(s, s)}: {short[s]:.0%} of its satellite-epochs have no broadcast ephemeris ({covered(s)}; {obs_text}); they are left out of the solution", PartialLogWarning, stacklevel=3)
+
+
+def _nav_spans(nav: str | os.PathLike[str]) -> dict[str, tuple[str, str]]:
+    """First and last t_oe per system of a navigation file, as text (GPST)."""
+    import pandas as pd
+
+    d = _core.read_rinex_nav(os.fspath(nav))
+    system = np.array([str(s)[0] for s in d["satellite"]])
+    toe = np.asarray(d["toe"], dtype=float)
+    out = {}
+    for s in np.unique(system):
+        a, b = (pd.Timestamp("1980-01-06") + pd.to_timedelta(float(v), unit="s") for v in (toe[system == s].min(), toe[system == s].max()))
+        out[str(s)] = (a.strftime("%Y-%m-%d %H:%M:%S"), b.strftime("%Y-%m-%d %H:%M:%S"))
+    return out
