@@ -138,3 +138,18 @@ def test_ls_precheck_takes_the_test():
         j = sat["names"].index("G27")
         alone = sat["excluded"][fault, j] & (sat["excluded"][fault].sum(axis=1) == 1)
         assert alone.mean() > 0.8
+
+
+def test_on_heavy_tails_snooping_false_alarms_grow_with_the_satellites_and_the_global_tests_do_not(docs_script):
+    # The reason the default stays "global" (docs/gnss_real.md, heavy-tailed errors): with
+    # Student-t errors and the σ factor --noise auto fits, the w-test's false exclusions grow
+    # with the number of satellites, the global test's much less; on Gaussian errors both hold
+    # α and the w-test is the more powerful with many satellites.
+    ht = docs_script("heavy_tails_tests")
+    few, many = ht.case("t4", 8, 800), ht.case("t4", 36, 800)
+    assert many["wtest_false"] > 2.0 * many["global_false"], many
+    assert many["wtest_false"] > 2.0 * few["wtest_false"], (few, many)
+    assert many["global_false"] < 2.0 * few["global_false"], (few, many)
+    gauss = ht.case("gauss", 36, 800)
+    assert gauss["wtest_false"] < 0.03 and gauss["global_false"] < 0.03, gauss
+    assert gauss["wtest_exact"] > gauss["global_exact"] + 0.1, gauss
