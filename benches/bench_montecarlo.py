@@ -4,6 +4,10 @@ Usage: ``python benches/bench_montecarlo.py [RUNS]`` (default 1000) prints a mar
 
 * per filter-epoch cost of a campaign (runs × variants × epochs × sub-filters) against the core step
   cost measured in the same process (``run_filter`` per epoch, n = 15, m = 6);
+* what the Python layer adds: ``navfdi.montecarlo`` (1 thread) against the same runs through
+  ``_core.PreparedScenario.run_chunk`` alone (every variant), interleaved, median of 15 rounds of 25 runs
+  (the campaign run against ``run_filter`` on the same two filters is criterion's
+  ``campaign_ratio``: ``cargo bench -p navfdi-bench --bench federated``);
 * speed-up of 2 threads over 1;
 * peak resident memory of a 10 000-run campaign with summaries only, in a fresh process.
 """
@@ -17,6 +21,7 @@ import sys
 import time
 
 import navfdi
+from navfdi import _core
 from problem import problem, run_filter
 
 
@@ -26,6 +31,20 @@ def campaign_seconds(runs: int, workers: int) -> float:
     dt = time.perf_counter() - t0
     assert not c.partial and c.runs.run.nunique() == runs
     return dt
+
+
+def python_layer_ratio(runs: int = 25, rounds: int = 15) -> float:
+    """Median over ``rounds`` of ``navfdi.montecarlo`` (1 thread) / the same runs through
+    ``PreparedScenario.run_chunk`` for every variant, the two timed back to back."""
+    jsons = [sc.to_json() for _, sc in navfdi.load_scenario("yang2013").variants()]
+    ratios = []
+    for _ in range(rounds):
+        campaign = campaign_seconds(runs, 1)
+        t0 = time.perf_counter()
+        for j in jsons:
+            _core.PreparedScenario(j).run_chunk(0, 0, runs, 1, [])
+        ratios.append(campaign / (time.perf_counter() - t0))
+    return sorted(ratios)[len(ratios) // 2]
 
 
 def core_step_seconds() -> float:
@@ -71,6 +90,7 @@ def main() -> None:
     print(f"| campaign, 1 thread: {runs} runs | {t1:.2f} s | |")
     print(f"| campaign per filter-epoch, 1 thread, µs | {per_fe * 1e6:.2f} ({per_fe / step:.2f}× the core step) | ≤ 2× |")
     print(f"| campaign, 2 threads | {t2:.2f} s ({t1 / t2:.2f}× faster) | ≥ 1.7× |")
+    print(f"| Python layer: campaign / its runs through run_chunk (25 runs, median of 15, interleaved) | {python_layer_ratio():.3f}× | — |")
     mem = peak_memory_mb(10_000)
     print(f"| peak RSS, 10 000 runs, summaries only | {mem:.0f} MB | < 500 MB |")
 

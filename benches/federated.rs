@@ -5,13 +5,22 @@
 //!
 //! * `federated_run`: the federated loop of one simulated run (`run_federated`, isolation on);
 //! * `run_filter_m3` and `run_filter_m6`: plain `run_filter` over the same T with the same
-//!   n and the two sub-filters' measurement sizes.
+//!   n and the two sub-filters' measurement sizes;
+//! * `campaign_run`: one Monte-Carlo run as a campaign makes it (`montecarlo::one_run`: the
+//!   simulation, the federated loop and the run's metrics), against which the campaign's
+//!   per filter-epoch cost is `campaign_run / (run_filter_m3 + run_filter_m6)`.
+//!
+//! Criterion times each benchmark in turn, and this machine's speed drifts by up to 1.5×
+//! within minutes, so the last two ratios are also measured interleaved: after criterion,
+//! `campaign_ratio` runs one campaign run, `run_filter_m3` and `run_filter_m6` back to back,
+//! 41 times, and prints the median and quartiles of the per-round ratios.
 //!
 //! Target: federated ≤ 2 × (m3 + m6).
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, Criterion};
 use navfdi_core::arch::federated::run_federated;
 use navfdi_core::cancel::NEVER;
+use navfdi_core::montecarlo::{cells, one_run};
 use navfdi_core::run::{run_filter, MatrixSeq};
 use navfdi_core::sim::noise::simulate;
 use navfdi_core::sim::prepare::Prepared;
@@ -33,6 +42,14 @@ fn bench(c: &mut Criterion) {
     g.bench_function("federated_run", |b| {
         b.iter(|| {
             black_box(run_federated(&prep.spec, &sim.streams(&prep), true, &NEVER).expect("run"))
+        })
+    });
+    let cells = cells(&prep);
+    let mut run = 0u64;
+    g.bench_function("campaign_run", |b| {
+        b.iter(|| {
+            run += 1;
+            black_box(one_run(&prep, 0, run, &cells, false, &NEVER).expect("run"))
         })
     });
     let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
@@ -68,5 +85,59 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
+/// The campaign's per filter-epoch cost against `run_filter`'s on the same two filters,
+/// measured interleaved (see the module doc): median and quartiles of 41 rounds.
+fn campaign_ratio() {
+    use std::time::Instant;
+    let prep = Prepared::new(yang2013()).expect("prepared");
+    let sim = simulate(&prep, 1, 0);
+    let t = prep.epochs();
+    let cells = cells(&prep);
+    let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
+    let q = MatrixSeq::PerEpoch(prep.models.q.clone());
+    let filters: Vec<(Vec<f64>, MatrixSeq, MatrixSeq)> = [0usize, 1]
+        .iter()
+        .map(|&si| {
+            let zs = sim.meas.z[si]
+                .iter()
+                .flat_map(|z| z.iter().copied())
+                .collect();
+            let h = MatrixSeq::PerEpoch(prep.models.h[si].clone());
+            let r = MatrixSeq::Const(prep.models.r[si].clone());
+            (zs, h, r)
+        })
+        .collect();
+    let mut ratios = Vec::new();
+    for round in 0..42u64 {
+        let t0 = Instant::now();
+        black_box(one_run(&prep, 0, round, &cells, false, &NEVER).expect("run"));
+        let campaign = t0.elapsed().as_secs_f64();
+        let t0 = Instant::now();
+        for (zs, h, r) in &filters {
+            let p0 = prep.models.p0.clone();
+            let x0 = nalgebra::DVector::zeros(15);
+            black_box(run_filter(x0, p0, &phi, &q, zs, t, h, r, 1.0, &NEVER).expect("run"));
+        }
+        let filters_time = t0.elapsed().as_secs_f64();
+        if round > 0 {
+            ratios.push(campaign / filters_time); // round 0 warms up
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f).round() as usize];
+    println!(
+        "campaign_ratio: campaign run / (run_filter_m3 + run_filter_m6), interleaved, {} rounds: median {:.3} (quartiles {:.3}–{:.3})",
+        ratios.len(),
+        q(0.5),
+        q(0.25),
+        q(0.75)
+    );
+}
+
 criterion_group!(benches, bench);
-criterion_main!(benches);
+
+fn main() {
+    benches();
+    campaign_ratio();
+    Criterion::default().configure_from_args().final_summary();
+}
