@@ -662,10 +662,11 @@ def gnss_solve(
         the file, without the injected faults. The *whole file's* factor: a pass without
         exclusion, then the 90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global
         statistic against its 90 % quantile; 1 when the model fits) gives the factor's square.
-        It holds α on a receiver whose residuals are heavy-tailed but drowns real faults when
-        more than about 10 % of the epochs carry one (multipath on a phone). The factor *with
-        the faults excluded*: the same percentile of the statistic left after FDE's exclusions,
-        iterated (solve with the factor, rescale by the percentile) from below — the smaller of
+        It is robust to faults in up to about 10 % of the epochs but drowns them beyond (multipath
+        on a phone), and on heavy-tailed residuals the tests still exceed α (the percentile does
+        not see the tail they work in; docs/gnss_real.md). The factor *with the faults
+        excluded*: the same percentile of the statistic left after the global test's exclusions
+        (whatever ``test`` is: the factor is the receiver's), iterated (solve with the factor, rescale by the percentile) from below — the smaller of
         the residuals' median-absolute-w scale and 1 — until it changes by < 1 %. The whole
         file's factor is used unless it is more than
         :data:`navfdi._gnss_noise.AUTO_NOISE_CONTAMINATION_RATIO` (2)
@@ -733,7 +734,10 @@ def gnss_solve(
     if isinstance(noise_scale, str):
         if noise_scale != "auto":
             raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, weighting=weighting, **common, **kw))
+        # Calibrated with the global test's exclusions whatever test then runs: the factor is
+        # the receiver's, and data snooping's false exclusions grow with the satellites on
+        # heavy-tailed errors (docs/gnss_real.md), which would pull the factor down.
+        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, weighting=weighting, **{**common, "test": "global"}, **kw))
         out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], weighting=weighting, **common)
         out.config["noise_scale_estimated"] = True
         out.config["noise_scale_auto"] = auto
