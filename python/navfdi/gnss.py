@@ -662,12 +662,13 @@ def gnss_solve(
         the file, without the injected faults. The *whole file's* factor: a pass without
         exclusion, then the 90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global
         statistic against its 90 % quantile; 1 when the model fits) gives the factor's square.
-        It is robust to faults in up to about 10 % of the epochs but drowns them beyond (multipath
-        on a phone), and on heavy-tailed residuals the tests still exceed α (the percentile does
-        not see the tail they work in; docs/gnss_real.md). The factor *with the faults
-        excluded*: the same percentile of the statistic left after the global test's exclusions
-        (whatever ``test`` is: the factor is the receiver's), iterated (solve with the factor, rescale by the percentile) from below — the smaller of
-        the residuals' median-absolute-w scale and 1 — until it changes by < 1 %. The whole
+        It is robust to faults in up to about 10 % of the epochs but drowns them beyond
+        (multipath on a phone), and on heavy-tailed residuals the tests still exceed α (the
+        percentile does not see the tail they work in; docs/gnss_real.md). The factor *with the
+        faults excluded*: the same percentile of the statistic left after the global test's
+        exclusions (whatever ``test`` is: the factor is the receiver's), iterated (solve with
+        the factor, rescale by the percentile) from below — the smaller of the residuals'
+        median-absolute-w scale and 1 — until it changes by < 1 %. The whole
         file's factor is used unless it is more than
         :data:`navfdi._gnss_noise.AUTO_NOISE_CONTAMINATION_RATIO` (2)
         times the other (then the file's statistic is set by its faults, not by its noise:
