@@ -36,7 +36,8 @@ def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.Path
     """
     if len(sats) == 0:
         return
-    system = sats["satellite"].astype(str).str[0].to_numpy()
+    sat = sats["satellite"].astype("category")  # per category, not per row: day files have ~10^5 rows
+    system = np.array([str(c)[:1] for c in sat.cat.categories] + [""])[sat.cat.codes.to_numpy()]
     missing = (sats["status"] == "no_ephemeris").to_numpy()
     share = {s: float(missing[system == s].mean()) for s in np.unique(system)}
     short = {s: v for s, v in share.items() if v > UNCOVERED_SHARE}
