@@ -124,13 +124,13 @@ fn campaign_ratio() {
         }
     }
     ratios.sort_by(f64::total_cmp);
-    let q = |f: f64| ratios[((ratios.len() - 1) as f64 * f).round() as usize];
+    let quantile = |f: f64| ratios[((ratios.len() - 1) as f64 * f).round() as usize];
     println!(
         "campaign_ratio: campaign run / (run_filter_m3 + run_filter_m6), interleaved, {} rounds: median {:.3} (quartiles {:.3}–{:.3})",
         ratios.len(),
-        q(0.5),
-        q(0.25),
-        q(0.75)
+        quantile(0.5),
+        quantile(0.25),
+        quantile(0.75)
     );
 }
 
