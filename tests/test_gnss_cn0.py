@@ -104,3 +104,15 @@ def test_the_clean_w_spread_per_cn0_class_shows_how_the_model_fits() -> None:
     assert "per C/N0 (dB-Hz) <30" in got["cn0"][2] and "weak signals penalised more than they need" in got["cn0"][2]
     assert got["elevation"][0] > 1.5 * got["elevation"][1], got["elevation"][:2]
     assert "weak signals noisier than modelled" in got["elevation"][2]
+
+
+def test_the_console_points_an_unfitted_elevation_model_to_the_cn0_model(capsys, quiet) -> None:
+    # The walk with the elevation model at factor 1: the global test alarms at 33.6 % of the
+    # fault-free epochs; the file records C/N0, so the hint names --weighting auto too. The
+    # static file (geodetic receiver) fits: no hint.
+    assert main(["gnss", OBS, NAV, "--systems", "G,E"]) == 0
+    out = capsys.readouterr().out.replace("\n  ", " ")
+    assert "the noise model does not fit this receiver" in out
+    assert "--weighting auto takes the C/N0 model" in out
+    assert main(["gnss", OBS, NAV, "--systems", "G,E", "--weighting", "cn0"]) == 0
+    assert "--weighting auto takes" not in capsys.readouterr().out.replace("\n  ", " ")

@@ -484,7 +484,8 @@ class GnssSolution:
                 detail = f": {a['method']} (whole file {a['whole_file']:.3f}, with the faults excluded {a['faults_excluded']:.3f} after {a['iterations']} solves)"
             lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto){detail}")
         elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
-            lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto') estimates a sigma factor from the file")
+            cn0 = self.config.get("weighting") == "elevation" and bool(s.get("clean_w_sd_robust_by_cn0"))  # the file records C/N0
+            lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto') estimates a sigma factor from the file" + ("; it records C/N0: --weighting auto takes the C/N0 model where its statistics fit better" if cn0 else ""))
         for f in s["faults"]:
             if not f["applied"]:
                 lines.append(f"fault {f['fault']}: never applied ({f['note']}); left out of the statistics")
