@@ -48,6 +48,18 @@ def step_api(x0, P0, Phi, Q, zs, H, R):
     return kf.x
 
 
+def step_model_api(x0, P0, Phi, Q, zs, H, R):
+    """navfdi's step API with the model fixed once (``set_model``, then ``step(z)`` per epoch,
+    as filterpy keeps F, Q, H, R on its object); returns the final state."""
+    import navfdi
+
+    kf = navfdi.KalmanFilter(x0, P0)
+    kf.set_model(Phi, Q, H, R)
+    for z in zs:
+        kf.step(z)
+    return kf.x
+
+
 def filterpy_loop(x0, P0, Phi, Q, zs, H, R):
     """The reference: filterpy's KalmanFilter, predict + update per epoch; final state."""
     from filterpy.kalman import KalmanFilter

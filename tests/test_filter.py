@@ -153,3 +153,44 @@ def test_predict_rechecks_a_q_that_changed():
     with pytest.raises(ValueError, match="Q"):
         kf.predict(np.eye(3), Qn)
     kf.predict(np.eye(3), np.eye(3) * 0.1)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_fixed_model_step_is_predict_then_update_to_the_bit(seed):
+    rng = np.random.default_rng(seed)
+    n, m, T = int(rng.integers(2, 16)), int(rng.integers(1, 7)), 30
+    x0, P0, Phi, Q, zs, H, R = random_system(rng, n, m, T)
+    zs[rng.random(zs.shape) < 0.1] = np.nan
+    a, b = navfdi.KalmanFilter(x0, P0), navfdi.KalmanFilter(x0, P0)
+    a.set_model(Phi[0], Q[0], H[0], R[0])
+    for k in range(T):
+        ia = a.step(zs[k])
+        b.predict(Phi[0], Q[0])
+        ib = b.update(zs[k], H[0], R[0])
+        np.testing.assert_array_equal(a.x, b.x)
+        np.testing.assert_array_equal(a.P, b.P)
+        np.testing.assert_array_equal(ia.used, ib.used)
+        assert (ia.statistic == ib.statistic) or (np.isnan(ia.statistic) and np.isnan(ib.statistic))
+
+
+def test_a_fixed_model_refuses_bad_input_and_survives_pickling():
+    import pickle
+
+    rng = np.random.default_rng(7)
+    x0, P0, Phi, Q, zs, H, R = random_system(rng, 4, 2, 3)
+    kf = navfdi.KalmanFilter(x0, P0)
+    with pytest.raises(ValueError, match="no model"):
+        kf.step(zs[0])
+    with pytest.raises(ValueError, match="Q"):
+        kf.set_model(Phi[0], -np.eye(4), H[0], R[0])
+    with pytest.raises(ValueError, match="H"):
+        kf.set_model(Phi[0], Q[0], H[0][:, :3], R[0])
+    kf.set_model(Phi[0], Q[0], H[0], R[0])
+    x, P = kf.x, kf.P
+    for bad in ([1.0, 2.0, 3.0], [np.inf, 0.0], [[1.0, 2.0]]):
+        with pytest.raises(ValueError):
+            kf.step(np.asarray(bad))
+    np.testing.assert_array_equal(kf.x, x)
+    np.testing.assert_array_equal(kf.P, P)
+    back = pickle.loads(pickle.dumps(kf))
+    np.testing.assert_array_equal(back.step(zs[1]).residual, kf.step(zs[1]).residual)

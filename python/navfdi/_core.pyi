@@ -104,7 +104,8 @@ class Innovation:
 class KalmanFilter:
     """Linear Kalman filter with state ``x`` (n,) and covariance ``P`` (n, n).
 
-    Per-epoch step API: call :meth:`predict` then :meth:`update`. Every call validates its
+    Per-epoch step API: call :meth:`predict` then :meth:`update`, or fix a model once with
+    :meth:`set_model` and call :meth:`step` with each measurement. Every call validates its
     inputs before changing anything; a rejected call leaves the filter exactly as it was.
 
     Parameters
@@ -163,6 +164,46 @@ class KalmanFilter:
             Wrong shapes, inf in ``z``, NaN/inf in ``H`` or ``R``, ``R`` not symmetric PSD.
         LinAlgError
             ``A = H P⁻ Hᵀ + R`` of the used components is not positive definite.
+        """
+    def set_model(self, Phi: ArrayLike, Q: ArrayLike, H: ArrayLike, R: ArrayLike) -> None:
+        """Fix the model :meth:`step` runs (kept when pickled).
+
+        Parameters
+        ----------
+        Phi, Q : array_like, shape (n, n)
+            State transition and process-noise covariance (symmetric PSD), as for :meth:`predict`.
+        H : array_like, shape (m, n)
+            Measurement matrix (finite).
+        R : array_like, shape (m, m)
+            Measurement-noise covariance, symmetric PSD.
+
+        Raises
+        ------
+        ValueError
+            Wrong shapes, NaN/inf, ``Q`` or ``R`` not symmetric PSD; the filter and any model
+            it had are unchanged.
+        """
+    def step(self, z: ArrayLike) -> Innovation:
+        """One epoch of the model set by :meth:`set_model`: :meth:`predict` then :meth:`update`
+        with the same arithmetic (the same bits), converting and checking only ``z``.
+
+        Parameters
+        ----------
+        z : array_like, shape (m,)
+            Measurement; NaN marks a missing component (skipped; all NaN: predict only).
+
+        Returns
+        -------
+        Innovation
+            As :meth:`update` returns it.
+
+        Raises
+        ------
+        ValueError
+            No model set, ``z`` of the wrong length or with an inf.
+        LinAlgError
+            ``A = H P⁻ Hᵀ + R`` of the used components is not positive definite (the filter is
+            then unchanged, the prediction included).
         """
     def set_state(self, x: ArrayLike, P: ArrayLike) -> None:
         """Replace the state (n,) and covariance (n, n), validated like the constructor."""

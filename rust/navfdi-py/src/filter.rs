@@ -66,7 +66,9 @@ impl PyInnovation {
 /// ``predict(Phi, Q, fading=1.0)``: ``x = Φx``, ``P = S·ΦPΦᵀ + Q``. ``update(z, H, R)``: the
 /// Cholesky/Joseph-form update; NaN components of ``z`` are left out (reduced-dimension
 /// update); returns an :class:`Innovation` (residual, covariance ``A = HPHᵀ + R``, statistic
-/// ``rᵀA⁻¹r``, components used). A rejected call leaves the filter as it was. Properties
+/// ``rᵀA⁻¹r``, components used). ``set_model(Phi, Q, H, R)`` fixes a model once and
+/// ``step(z)`` runs an epoch of it (the same arithmetic as ``predict`` then ``update``; only
+/// ``z`` is converted and checked). A rejected call leaves the filter as it was. Properties
 /// ``x``, ``P``, ``n``; picklable. Shapes and units in ``navfdi._core.pyi`` / ``help()``.
 #[pyclass(name = "KalmanFilter", module = "navfdi._core")]
 pub struct PyKalmanFilter {
@@ -121,6 +123,31 @@ impl PyKalmanFilter {
         let r = matrix("R", R)?;
         Ok(PyInnovation {
             inner: self.inner.update(&z, &h, &r).py()?,
+        })
+    }
+
+    /// Fix the model ``step`` runs: ``Phi``, ``Q`` (n, n), ``H`` (m, n), ``R`` (m, m), validated
+    /// once as ``predict`` and ``update`` validate theirs.
+    #[pyo3(signature = (Phi, Q, H, R))]
+    #[allow(non_snake_case)]
+    fn set_model(
+        &mut self,
+        Phi: &Bound<'_, PyAny>,
+        Q: &Bound<'_, PyAny>,
+        H: &Bound<'_, PyAny>,
+        R: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let (phi, q) = (matrix("Phi", Phi)?, matrix("Q", Q)?);
+        let (h, r) = (matrix("H", H)?, matrix("R", R)?);
+        self.inner.set_model(phi, q, h, r).py()
+    }
+
+    /// One epoch of the fixed model: ``predict`` then ``update`` with ``z`` (m,).
+    #[pyo3(signature = (z))]
+    fn step(&mut self, z: &Bound<'_, PyAny>) -> PyResult<PyInnovation> {
+        let z = vector("z", z, None)?;
+        Ok(PyInnovation {
+            inner: self.inner.step(&z).py()?,
         })
     }
 

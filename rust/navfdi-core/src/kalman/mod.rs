@@ -21,7 +21,9 @@ use crate::validate::{
 };
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
+mod model;
 mod sequential;
+pub use model::FixedModel;
 pub(crate) use sequential::sequential_rows;
 pub use sequential::Sequential;
 
@@ -86,25 +88,39 @@ pub struct KalmanFilter {
     /// (element by element) is not checked again (the symmetric-PSD check dominates the cost
     /// of a checked predict for large n). Never serialised.
     validated_q: Option<DMatrix<f64>>,
+    /// The model [`KalmanFilter::step`] runs ([`KalmanFilter::set_model`]).
+    model: Option<Box<FixedModel>>,
+    /// `x` and `P` before a [`KalmanFilter::step`], kept to restore them if it fails.
+    saved: (DVector<f64>, DMatrix<f64>),
 }
 
-/// The serialised form of a [`KalmanFilter`].
+/// The serialised form of a [`KalmanFilter`]: its state and its fixed model, if any.
 #[derive(serde::Serialize, serde::Deserialize)]
 struct KalmanState {
     x: DVector<f64>,
     p: DMatrix<f64>,
+    #[serde(default)]
+    model: Option<FixedModel>,
 }
 
 impl From<KalmanFilter> for KalmanState {
     fn from(kf: KalmanFilter) -> Self {
-        KalmanState { x: kf.x, p: kf.p }
+        KalmanState {
+            x: kf.x,
+            p: kf.p,
+            model: kf.model.map(|m| *m),
+        }
     }
 }
 
 impl TryFrom<KalmanState> for KalmanFilter {
     type Error = Error;
     fn try_from(s: KalmanState) -> Result<Self> {
-        KalmanFilter::new(s.x, s.p)
+        let mut kf = KalmanFilter::new(s.x, s.p)?;
+        if let Some(m) = s.model {
+            kf.set_model(m.phi, m.q, m.h, m.r)?;
+        }
+        Ok(kf)
     }
 }
 
@@ -131,6 +147,8 @@ impl KalmanFilter {
             ws: Workspace::new(n),
             mws: None,
             validated_q: None,
+            model: None,
+            saved: (DVector::zeros(0), DMatrix::zeros(0, 0)),
         })
     }
 
