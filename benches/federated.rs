@@ -22,7 +22,7 @@ use navfdi_core::arch::federated::run_federated;
 use navfdi_core::cancel::NEVER;
 use navfdi_core::montecarlo::{cells, one_run};
 use navfdi_core::run::{run_filter, MatrixSeq};
-use navfdi_core::sim::noise::simulate;
+use navfdi_core::sim::noise::{simulate, Simulated};
 use navfdi_core::sim::prepare::Prepared;
 use navfdi_core::spec::ScenarioSpec;
 use std::hint::black_box;
@@ -33,10 +33,61 @@ fn yang2013() -> ScenarioSpec {
     ScenarioSpec::from_json(json).expect("valid scenario")
 }
 
+/// The two sub-filters of yang2013 as plain `run_filter` inputs: the simulated run's
+/// measurements, the per-epoch Φ, Q and H, and R.
+struct SubFilters {
+    phi: MatrixSeq,
+    q: MatrixSeq,
+    /// Per sub-filter: measurements (T × m, row-major), H and R.
+    inputs: Vec<(Vec<f64>, MatrixSeq, MatrixSeq)>,
+}
+
+impl SubFilters {
+    fn new(prep: &Prepared, sim: &Simulated) -> Self {
+        let inputs = [0usize, 1]
+            .iter()
+            .map(|&si| {
+                let zs = sim.meas.z[si]
+                    .iter()
+                    .flat_map(|z| z.iter().copied())
+                    .collect();
+                let h = MatrixSeq::PerEpoch(prep.models.h[si].clone());
+                let r = MatrixSeq::Const(prep.models.r[si].clone());
+                (zs, h, r)
+            })
+            .collect();
+        SubFilters {
+            phi: MatrixSeq::PerEpoch(prep.models.phi.clone()),
+            q: MatrixSeq::PerEpoch(prep.models.q.clone()),
+            inputs,
+        }
+    }
+
+    /// `run_filter` over every epoch with sub-filter `si`'s inputs.
+    fn run(&self, prep: &Prepared, si: usize) {
+        let (zs, h, r) = &self.inputs[si];
+        let x0 = nalgebra::DVector::zeros(prep.models.p0.nrows());
+        black_box(
+            run_filter(
+                x0,
+                prep.models.p0.clone(),
+                &self.phi,
+                &self.q,
+                zs,
+                prep.epochs(),
+                h,
+                r,
+                1.0,
+                &NEVER,
+            )
+            .expect("run"),
+        );
+    }
+}
+
 fn bench(c: &mut Criterion) {
     let prep = Prepared::new(yang2013()).expect("prepared");
     let sim = simulate(&prep, 1, 0);
-    let t = prep.epochs();
     let mut g = c.benchmark_group("federated");
     g.sample_size(20);
     g.bench_function("federated_run", |b| {
@@ -52,35 +103,9 @@ fn bench(c: &mut Criterion) {
             black_box(one_run(&prep, 0, run, &cells, false, &NEVER).expect("run"))
         })
     });
-    let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
-    let q = MatrixSeq::PerEpoch(prep.models.q.clone());
+    let filters = SubFilters::new(&prep, &sim);
     for (label, si) in [("run_filter_m3", 0usize), ("run_filter_m6", 1usize)] {
-        let zs: Vec<f64> = sim.meas.z[si]
-            .iter()
-            .flat_map(|z| z.iter().copied())
-            .collect();
-        let h = MatrixSeq::PerEpoch(prep.models.h[si].clone());
-        let r = MatrixSeq::Const(prep.models.r[si].clone());
-        let p0 = prep.models.p0.clone();
-        g.bench_function(label, |b| {
-            b.iter(|| {
-                black_box(
-                    run_filter(
-                        nalgebra::DVector::zeros(15),
-                        p0.clone(),
-                        &phi,
-                        &q,
-                        &zs,
-                        t,
-                        &h,
-                        &r,
-                        1.0,
-                        &NEVER,
-                    )
-                    .expect("run"),
-                )
-            })
-        });
+        g.bench_function(label, |b| b.iter(|| filters.run(&prep, si)));
     }
     g.finish();
 }
@@ -91,33 +116,16 @@ fn campaign_ratio() {
     use std::time::Instant;
     let prep = Prepared::new(yang2013()).expect("prepared");
     let sim = simulate(&prep, 1, 0);
-    let t = prep.epochs();
     let cells = cells(&prep);
-    let phi = MatrixSeq::PerEpoch(prep.models.phi.clone());
-    let q = MatrixSeq::PerEpoch(prep.models.q.clone());
-    let filters: Vec<(Vec<f64>, MatrixSeq, MatrixSeq)> = [0usize, 1]
-        .iter()
-        .map(|&si| {
-            let zs = sim.meas.z[si]
-                .iter()
-                .flat_map(|z| z.iter().copied())
-                .collect();
-            let h = MatrixSeq::PerEpoch(prep.models.h[si].clone());
-            let r = MatrixSeq::Const(prep.models.r[si].clone());
-            (zs, h, r)
-        })
-        .collect();
+    let filters = SubFilters::new(&prep, &sim);
     let mut ratios = Vec::new();
     for round in 0..42u64 {
         let t0 = Instant::now();
         black_box(one_run(&prep, 0, round, &cells, false, &NEVER).expect("run"));
         let campaign = t0.elapsed().as_secs_f64();
         let t0 = Instant::now();
-        for (zs, h, r) in &filters {
-            let p0 = prep.models.p0.clone();
-            let x0 = nalgebra::DVector::zeros(15);
-            black_box(run_filter(x0, p0, &phi, &q, zs, t, h, r, 1.0, &NEVER).expect("run"));
-        }
+        filters.run(&prep, 0);
+        filters.run(&prep, 1);
         let filters_time = t0.elapsed().as_secs_f64();
         if round > 0 {
             ratios.push(campaign / filters_time); // round 0 warms up
