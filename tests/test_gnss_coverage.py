@@ -56,17 +56,17 @@ SPAN = tuple(pd.to_datetime(["2024-06-24 08:20:00", "2024-06-24 08:25:00"]))
 def test_a_system_mostly_without_ephemerides_is_warned_with_its_span():
     sats = _sats({"G05": (10, 0), "E07": (3, 7), "E08": (2, 8)})
     with pytest.warns(navfdi.PartialLogWarning, match=r"Galileo: 75% of its satellite-epochs have no broadcast ephemeris \(its Galileo ephemerides \(t_oe\) span 2024-06-24"):
-        check_ephemeris_coverage(sats, 10, OBS, NAV, SPAN)
+        check_ephemeris_coverage(sats, 10, OBS, NAV, SPAN, navfdi.read_rinex)
     # Half or less is not reported, nor a system that has all of its ephemerides.
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        check_ephemeris_coverage(_sats({"G05": (10, 0), "E07": (5, 5)}), 10, OBS, NAV, SPAN)
+        check_ephemeris_coverage(_sats({"G05": (10, 0), "E07": (5, 5)}), 10, OBS, NAV, SPAN, navfdi.read_rinex)
 
 
 def test_solved_epochs_turn_the_error_into_a_warning():
     # Every satellite-epoch of the table lacks an ephemeris but an epoch is solved (the
     # table given is only part of the run): a warning, not an error.
     with pytest.warns(navfdi.PartialLogWarning, match="GPS: 100%"):
-        check_ephemeris_coverage(_sats({"G05": (0, 4)}), 1, OBS, NAV, SPAN)
+        check_ephemeris_coverage(_sats({"G05": (0, 4)}), 1, OBS, NAV, SPAN, navfdi.read_rinex)
     with pytest.raises(ValueError, match="no epoch solved"):
-        check_ephemeris_coverage(_sats({"G05": (0, 4)}), 0, OBS, NAV, SPAN)
+        check_ephemeris_coverage(_sats({"G05": (0, 4)}), 0, OBS, NAV, SPAN, navfdi.read_rinex)

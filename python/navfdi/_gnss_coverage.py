@@ -6,11 +6,10 @@ from __future__ import annotations
 
 import os
 import warnings
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
 
-from navfdi import _core
 from navfdi._errors import PartialLogWarning
 
 if TYPE_CHECKING:
@@ -22,12 +21,15 @@ UNCOVERED_SHARE = 0.5
 _NAMES = {"G": "GPS", "E": "Galileo", "C": "BeiDou", "J": "QZSS"}
 
 
-def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.PathLike[str], nav: str | os.PathLike[str], obs_span: tuple[Any, Any]) -> None:
+def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.PathLike[str], nav: str | os.PathLike[str], obs_span: tuple[Any, Any],
+                             read_nav: Callable[[str | os.PathLike[str]], pd.DataFrame]) -> None:
     """Raise or warn when the navigation file ``nav`` does not cover the observations.
 
     ``sats``: the run's satellite table (one row per satellite-epoch of the selected
     systems, columns ``satellite`` and ``status``); ``solved``: epochs with a solution;
-    ``obs_span``: the first and last observation epochs (GPST timestamps).
+    ``obs_span``: the first and last observation epochs (GPST timestamps); ``read_nav``:
+    :func:`navfdi.gnss.read_rinex` (its ``satellite`` and ``toe`` columns give the spans; read
+    only when something is reported).
 
     * No epoch solved and not one satellite-epoch with an ephemeris: ``ValueError`` naming
       both files' time spans (a navigation file of another day).
@@ -43,7 +45,7 @@ def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.Path
     short = {s: v for s, v in share.items() if v > UNCOVERED_SHARE}
     if not short:
         return
-    spans = _nav_spans(nav)
+    spans = _nav_spans(read_nav(nav))
     first, last = (t.strftime("%Y-%m-%d %H:%M:%S") for t in obs_span)
     obs_text = f"the observations of {os.fspath(obs)} span {first} to {last} GPST"
 
@@ -59,15 +61,8 @@ def check_ephemeris_coverage(sats: pd.DataFrame, solved: int, obs: str | os.Path
         warnings.warn(f"{_NAMES.get(s, s)}: {short[s]:.0%} of its satellite-epochs have no broadcast ephemeris ({covered(s)}; {obs_text}); they are left out of the solution", PartialLogWarning, stacklevel=3)
 
 
-def _nav_spans(nav: str | os.PathLike[str]) -> dict[str, tuple[str, str]]:
-    """First and last t_oe per system of a navigation file, as text (GPST)."""
-    import pandas as pd
-
-    d = _core.read_rinex_nav(os.fspath(nav))
-    system = np.array([str(s)[0] for s in d["satellite"]])
-    toe = np.asarray(d["toe"], dtype=float)
-    out = {}
-    for s in np.unique(system):
-        a, b = (pd.Timestamp("1980-01-06") + pd.to_timedelta(float(v), unit="s") for v in (toe[system == s].min(), toe[system == s].max()))
-        out[str(s)] = (a.strftime("%Y-%m-%d %H:%M:%S"), b.strftime("%Y-%m-%d %H:%M:%S"))
-    return out
+def _nav_spans(records: pd.DataFrame) -> dict[str, tuple[str, str]]:
+    """First and last t_oe per system of a navigation file's records, as text (GPST)."""
+    toe = records.groupby(records["satellite"].astype(str).str[0])["toe"]
+    lo, hi = toe.min(), toe.max()
+    return {str(s): (lo[s].strftime("%Y-%m-%d %H:%M:%S"), hi[s].strftime("%Y-%m-%d %H:%M:%S")) for s in lo.index}

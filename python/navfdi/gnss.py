@@ -853,7 +853,7 @@ def gnss_solve(
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
     sats["satellite"] = sats["satellite"].astype("category")
     if len(sol):
-        check_ephemeris_coverage(sats, int((sol["status"] != "no_solution").sum()), obs, nav, tuple(gps_time(ep["time"][[0, -1]])))
+        check_ephemeris_coverage(sats, int((sol["status"] != "no_solution").sum()), obs, nav, tuple(gps_time(ep["time"][[0, -1]])), read_rinex)
     sd = enu_sigma(sats, len(sol))
     at = sol.columns.get_loc("height") + 1
     for j, c in enumerate(("sd_e", "sd_n", "sd_u")):
