@@ -84,7 +84,7 @@ def test_bad_slopes_are_named() -> None:
     # numpy scalars are numbers too.
     assert navfdi.gnss_solve(o, n, systems="G,E", weighting="cn0", cn0_slope=np.int64(2), exclude=False).config["cn0_slope"] == 2.0
     with pytest.raises(ValueError, match="weighting = 'elevation' has none"):
-        navfdi.gnss_solve(o, n, systems="G,E", cn0_slope=2.0)
+        navfdi.gnss_solve(o, n, systems="G,E", weighting="elevation", cn0_slope=2.0)
     with pytest.raises(ValueError, match="weighting = 'rtklib' has none"):
         navfdi.gnss_solve(o, n, systems="G,E", weighting="rtklib", cn0_slope=0.5)
     with pytest.raises(ValueError, match=r"cn0_slope: 9; expected"):

@@ -37,8 +37,8 @@ def quiet():
 
 
 def test_cn0_weighting_fits_a_low_cost_receiver(quiet) -> None:
-    elev = navfdi.gnss_solve(OBS, NAV, systems="G,E")
-    cn0 = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0")
+    elev = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="elevation", noise_scale=1.0)
+    cn0 = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", noise_scale=1.0)
     assert _exclusion_rate(elev) > 0.25
     assert _exclusion_rate(cn0) < 0.5 * _exclusion_rate(elev)
     auto = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", noise_scale="auto")
@@ -50,14 +50,14 @@ def test_cn0_weighting_fits_a_low_cost_receiver(quiet) -> None:
 
 
 def test_cn0_reference_moves_the_weights_and_bad_values_are_named(quiet) -> None:
-    a = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=45.0)
-    b = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=35.0)
+    a = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=45.0, noise_scale=1.0)
+    b = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=35.0, noise_scale=1.0)
     # A lower reference shrinks every σ by 10 dB: the same solution, ten times the statistic.
     ratio = (b.solution["first_statistic"] / a.solution["first_statistic"]).median()
     assert 9.0 < ratio < 11.0
     with pytest.raises(ValueError, match=r"cn0_reference: 90 dB-Hz"):
         navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="cn0", cn0_reference=90.0)
-    with pytest.raises(ValueError, match="weighting: 'snr' is not 'elevation', 'rtklib' or 'cn0'"):
+    with pytest.raises(ValueError, match="weighting: 'snr' is not 'elevation', 'rtklib', 'cn0' or 'auto'"):
         navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="snr")
 
 
@@ -110,9 +110,9 @@ def test_the_console_points_an_unfitted_elevation_model_to_the_cn0_model(capsys,
     # The walk with the elevation model at factor 1: the global test alarms at 33.6 % of the
     # fault-free epochs; the file records C/N0, so the hint names --weighting auto too. The
     # static file (geodetic receiver) fits: no hint.
-    assert main(["gnss", OBS, NAV, "--systems", "G,E"]) == 0
+    assert main(["gnss", OBS, NAV, "--systems", "G,E", "--weighting", "elevation", "--noise", "1"]) == 0
     out = capsys.readouterr().out.replace("\n  ", " ")
     assert "the noise model does not fit this receiver" in out
-    assert "--weighting auto takes the C/N0 model" in out
-    assert main(["gnss", OBS, NAV, "--systems", "G,E", "--weighting", "cn0"]) == 0
+    assert "--weighting auto (the default) takes the C/N0 model" in out
+    assert main(["gnss", OBS, NAV, "--systems", "G,E", "--weighting", "cn0", "--noise", "1"]) == 0
     assert "--weighting auto takes" not in capsys.readouterr().out.replace("\n  ", " ")

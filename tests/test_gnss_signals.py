@@ -111,10 +111,10 @@ def test_noise_auto_fits_a_receiver_the_default_model_does_not(capsys) -> None:
     excludes a satellite at a third of the fault-free epochs; --noise auto estimates the σ
     factor from the file, brings the fault-free exclusions to ≤ 5 % and still excludes a 20 m
     step on the highest satellite exactly in ≥ 90 % of its epochs."""
-    plain = navfdi.gnss_solve(*WALK, systems="G,E")
+    plain = navfdi.gnss_solve(*WALK, systems="G,E", weighting="elevation", noise_scale=1.0)
     assert plain.summary()["false_exclusion_rate"] > 0.25
     assert "--noise auto" in plain.format_summary()
-    auto = navfdi.gnss_solve(*WALK, systems="G,E", noise_scale="auto")
+    auto = navfdi.gnss_solve(*WALK, systems="G,E", weighting="elevation", noise_scale="auto")
     s = auto.summary()
     assert auto.config["noise_scale_estimated"] and 1.5 < s["noise_scale"] < 4
     assert s["false_exclusion_rate"] <= 0.05

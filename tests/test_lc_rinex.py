@@ -149,3 +149,20 @@ def test_bad_rinex_sources_are_named(tmp_path: Path) -> None:
         read_gnss({"format": "rinex", "obs": str(OBS), "nav": str(NAV), "systems": [1]}, tmp_path)
     with pytest.raises(ScenarioError, match="elevation_mask"):
         read_gnss({"format": "rinex", "obs": str(OBS), "nav": str(NAV), "elevation_mask": "5 m"}, tmp_path)
+    for bad in (-1.0, 0, "loud", True, float("nan")):
+        with pytest.raises(ScenarioError, match=r"source.gnss.noise = .*\"auto\" or a positive factor"):
+            read_gnss({"format": "rinex", "obs": str(OBS), "nav": str(NAV), "noise": bad}, tmp_path)
+
+
+def test_the_rinex_source_takes_a_noise_factor(tmp_path: Path) -> None:
+    """``noise = 2.0`` is ``navfdi gnss --noise 2`` (the σ of the fixes from that solve); the
+    default estimates it from the file, as ``navfdi gnss`` does."""
+    cfg = {"format": "rinex", "obs": str(OBS), "nav": str(NAV), "systems": ["G", "E"], "weighting": "elevation"}
+    two = read_gnss({**cfg, "noise": 2.0}, tmp_path)
+    sol = gnss_solve(OBS, NAV, systems=["G", "E"], weighting="elevation", noise_scale=2.0).solution
+    sol = sol[sol["status"] != "no_solution"]
+    np.testing.assert_allclose(two.sd_pos[:, 0], sol["sd_e"].to_numpy(float), rtol=1e-12)
+    auto = read_gnss(cfg, tmp_path)
+    est = gnss_solve(OBS, NAV, systems=["G", "E"], weighting="elevation").config["noise_scale"]
+    assert est > 2.0  # the walk's u-blox: 2.35 on the elevation model
+    assert np.median(auto.sd_pos[:, 0] / two.sd_pos[:, 0]) == pytest.approx(est / 2.0, rel=1e-9)

@@ -106,15 +106,21 @@ def test_test_and_power_are_checked():
 
 def test_gnss_solve_reports_the_allocation_and_mdb():
     obs, nav = STATIC
-    g = navfdi.gnss_solve(obs, nav, systems="G,E")
-    w = navfdi.gnss_solve(obs, nav, systems="G,E", test="wtest")
+    g = navfdi.gnss_solve(obs, nav, systems="G,E", weighting="elevation", noise_scale=1.0)
+    w = navfdi.gnss_solve(obs, nav, systems="G,E", weighting="elevation", noise_scale=1.0, test="wtest")
     for s in (g, w):
-        assert (s.solution["excluded"] == "").all()  # clean file: no exclusion with either test
+        assert (s.solution["excluded"] == "").all()  # clean file, σ as given: no exclusion with either test
         used = s.satellites[s.satellites["status"] == "used"]
         assert used["mdb"].notna().all() and (used["mdb"] > 0).all()
     # With 9–16 satellites in view, data snooping's MDB is the smaller.
     assert w.summary()["mdb_median"] < g.summary()["mdb_median"]
     assert w.summary()["test"] == "wtest" and "data snooping" in w.format_summary()
+    # With the σ model estimated from the file (the default; factor 0.59 here) each test holds
+    # α on this clean file, and the MDBs shrink.
+    for test, given in (("global", g), ("wtest", w)):
+        auto = navfdi.gnss_solve(obs, nav, systems="G,E", test=test)
+        assert auto.summary()["false_exclusion_rate"] <= 0.01, test
+        assert auto.summary()["mdb_median"] < 0.8 * given.summary()["mdb_median"], test
 
 
 def test_ls_precheck_takes_the_test():

@@ -1092,6 +1092,17 @@ class GnssRun:
     def advance(self, n: int) -> int:
         """Solve up to ``n`` more epochs (GIL released; Ctrl-C stops within one epoch and
         keeps the epochs before this call); returns how many were solved."""
+    def restart(self, weighting: str, cn0_slope: float, factors: dict[str, float], exclude: bool, test: str) -> None:
+        """Start again from the first epoch on the observations already read, with another
+        variance model (``"elevation"``, ``"rtklib"``, ``"cn0"`` with ``cn0_slope`` decades per
+        10 dB-Hz; the reference C/N0 kept), per-system σ ``factors`` (replacing the
+        constructor's), ``exclude`` and ``test`` (α, k and power kept). Drops everything solved
+        so far; on an error (ValueError) nothing changes."""
+    def estimation_table(self) -> dict[str, Any]:
+        """What ``navfdi.gnss_solve``'s ``"auto"`` estimates read, without the tables' strings:
+        per epoch (n_epochs_solved,) ``statistic``, ``dof``, ``first_statistic``,
+        ``first_dof`` (float64); per satellite-epoch row (n_rows,) ``w``, ``cn0`` dB-Hz (NaN
+        where none) and ``used`` (bool: status ``used``)."""
     def velocity(self, noise: tuple[float, float] = ...) -> dict[str, Any]:
         """Receiver velocity from Doppler for the epochs solved so far (``noise`` default
         (0.05, 0.05) m/s): ``vx, vy, vz``,

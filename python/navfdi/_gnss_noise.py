@@ -17,25 +17,36 @@ if TYPE_CHECKING:
     import pandas as pd
 
 
-def _factor(solution: pd.DataFrame, statistic: str, dof: str, tail: float) -> float | None:
+def _tested(solution: Any, statistic: str, dof: str) -> tuple[np.ndarray, np.ndarray]:
+    """The statistic and its degrees of freedom over the epochs of ``solution`` (a DataFrame or
+    a mapping of columns) that were tested (dof > 0, finite statistic)."""
+    t = np.asarray(solution[statistic], dtype=float)
+    d = np.asarray(solution[dof], dtype=float)
+    ok = (d > 0) & np.isfinite(t)
+    return t[ok], d[ok].astype(int)
+
+
+def _factor(solution: Any, statistic: str, dof: str, tail: float) -> float | None:
     """√ of the (1 − tail)-quantile over the tested epochs of ``solution[statistic]`` divided
     by χ²(dof)'s threshold at ``tail``: the σ factor that puts that quantile of the statistic
-    on χ²'s; None with fewer than 20 tested epochs."""
-    ok = (solution[dof] > 0) & np.isfinite(solution[statistic])
-    if ok.sum() < 20:
+    on χ²'s; None with fewer than 20 tested epochs. ``solution`` a DataFrame or a mapping of
+    columns."""
+    t, d = _tested(solution, statistic, dof)
+    if t.size < 20:
         return None
-    t = solution.loc[ok, statistic].to_numpy(float)
-    thr = np.array([_core.chi2_threshold(tail, int(d)) for d in solution.loc[ok, dof]])
+    levels, at = np.unique(d, return_inverse=True)
+    thr = np.array([_core.chi2_threshold(tail, int(k)) for k in levels])[at]
     return float(np.sqrt(np.quantile(t / thr, 1.0 - tail)))
 
 
-def estimate_noise_scale(solution: pd.DataFrame) -> float:
+def estimate_noise_scale(solution: Any) -> float:
     """The σ factor that makes the global test fit a file (see :func:`navfdi.gnss.gnss_solve`'s
     ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
-    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs."""
+    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs. ``solution`` a
+    DataFrame or a mapping of columns."""
     f = _factor(solution, "first_statistic", "first_dof", 0.1)
     if f is None:
-        n = int(((solution["first_dof"] > 0) & np.isfinite(solution["first_statistic"])).sum())
+        n = _tested(solution, "first_statistic", "first_dof")[0].size
         raise ValueError(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise")
     return f
 
@@ -55,7 +66,7 @@ def auto_noise_scale(solve: Callable[..., Any]) -> dict[str, Any]:
     :func:`navfdi.gnss.gnss_solve`."""
     first = solve(exclude=False, noise_scale=1.0)
     whole = estimate_noise_scale(first.solution)
-    w = first.satellites["w"].to_numpy(float)
+    w = np.asarray(first.satellites["w"], dtype=float)
     w = w[np.isfinite(w)]
     # Start below both fixed points: the residuals' median absolute w (robust to faulty
     # satellites unless the least-squares fit smears several over every residual), and never
@@ -81,7 +92,7 @@ def auto_noise_scale(solve: Callable[..., Any]) -> dict[str, Any]:
     return {"scale": scale, "whole_file": whole, "faults_excluded": robust, "iterations": iterations, "method": method}
 
 
-def tail_ratio(solution: pd.DataFrame) -> float:
+def tail_ratio(solution: Any) -> float:
     """How far a file's global statistics are from the χ² of a fitting σ model, in shape only:
     ``|log(f90 / f50)|`` with ``f_q = √(q-quantile of T / χ²_q(dof))`` over the epochs tested
     without exclusion (0 for residuals that are Gaussian with any common scale; larger for
@@ -168,9 +179,10 @@ CN0_SLOPE_FLOOR = 1.0
 CN0_SLOPE_BIN, CN0_SLOPE_MIN_ROWS, CN0_SLOPE_MIN_SPAN, CN0_SLOPE_TOL, CN0_SLOPE_SOLVES = 2.5, 30, 5.0, 0.02, 10
 
 
-def cn0_slope_step(sats: pd.DataFrame, reference: float) -> tuple[float, int, float] | None:
+def cn0_slope_step(sats: Any, reference: float) -> tuple[float, int, float] | None:
     """One step of :func:`estimate_cn0_slope` from the satellite rows of a solve without
-    exclusion (``status``, ``w``, ``cn0`` dB-Hz): the weighted least-squares slope of
+    exclusion (``status`` or a boolean ``used``, ``w``, ``cn0`` dB-Hz; a DataFrame or a
+    mapping of columns): the weighted least-squares slope of
     ``log10(robust SD² of w)`` over :data:`CN0_SLOPE_BIN` dB-Hz bins (each with at least
     :data:`CN0_SLOPE_MIN_ROWS` used rows, weighted by their count) against
     ``(reference − median C/N0 of the bin) / 10`` — 0 when the model's slope fits — with the
@@ -178,9 +190,9 @@ def cn0_slope_step(sats: pd.DataFrame, reference: float) -> tuple[float, int, fl
     C/N0 or fewer than two bins :data:`CN0_SLOPE_MIN_SPAN` dB-Hz apart."""
     if "cn0" not in sats:
         return None
-    used = sats["status"].to_numpy() == "used"
-    w = sats["w"].to_numpy(float)[used]
-    c = sats["cn0"].to_numpy(float)[used]
+    used = np.asarray(sats["used"], dtype=bool) if "used" in sats else np.asarray(sats["status"]) == "used"
+    w = np.asarray(sats["w"], dtype=float)[used]
+    c = np.asarray(sats["cn0"], dtype=float)[used]
     ok = np.isfinite(w) & np.isfinite(c)
     w, c = w[ok], c[ok]
     if w.size < 2 * CN0_SLOPE_MIN_ROWS:

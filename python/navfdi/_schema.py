@@ -348,7 +348,8 @@ SECTIONS: dict[str, Section] = {
         ("nav", "path", REQ, "RINEX navigation data"),
         ("systems", "list of letters (G, E, C, J)", "[\"G\"]", "systems used"),
         ("elevation_mask", "angle", "10 deg", "mask"),
-        ("weighting", "elevation, cn0, rtklib", "elevation", "σ model of the solve"),
+        ("weighting", "elevation, cn0, rtklib, auto", "auto", "σ model of the solve (`navfdi gnss --weighting`)"),
+        ("noise", "auto or a factor", "auto", "σ factor of the solve, estimated from the file by default (`navfdi gnss --noise`)"),
         ("test", "global, wtest, both, auto", "global", "snapshot FDE detection test"),
     ]),
     "source.imu": _s("[source.imu]", "An IMU CSV log (plain or gzip) and its columns.", [

@@ -161,12 +161,12 @@ def main(argv: list[str] | None = None) -> int:
     gn.add_argument("--alpha", type=float, default=0.01, help="false-alarm probability of the global test (default 0.01)")
     gn.add_argument("--k", type=float, default=None, help="w-test critical value (default: two-sided normal quantile of alpha)")
     gn.add_argument("--no-exclusion", action="store_true", help="weighted least squares only (the test is still reported)")
-    gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0", "auto"], default="elevation", help="pseudorange variance model (default elevation: 0.3^2 + 0.3^2/sin^2 el m^2; cn0: that times 10^(slope (ref - C/N0)/10), for low-cost receivers (see --cn0-slope); auto: the one of elevation and cn0 whose fault-free statistics have the shape of a fitting model's)")
+    gn.add_argument("--weighting", choices=["elevation", "rtklib", "cn0", "auto"], default="auto", help="pseudorange variance model: elevation (0.3^2 + 0.3^2/sin^2 el m^2), rtklib, cn0 (the elevation model times 10^(slope (ref - C/N0)/10), for low-cost receivers; see --cn0-slope) or auto (default: the one of elevation and cn0 whose fault-free statistics have the shape of a fitting model's; elevation on a file without C/N0)")
     gn.add_argument("--cn0-slope", type=_cn0_slope, default="auto", metavar="SLOPE|auto", help="variance decades per 10 dB-Hz of the cn0 model, in [0, 3] (1: the sigma-epsilon model; 0: no C/N0 term); auto (default): the slope that gives the clean residuals one spread at every C/N0, estimated from the file and used where above 1")
     gn.add_argument("--cn0-reference", type=float, default=45.0, metavar="DBHZ", help="C/N0 (dB-Hz) at which --weighting cn0 gives the elevation model (default 45)")
     gn.add_argument("--test", choices=["global", "wtest", "both", "auto"], default="global", help="what opens the exclusion loop: the global chi-square test (default), data snooping (the largest |w| against k0, alpha shared over the satellites: more powerful for one faulty satellite among many, less with few), both (each at alpha/2) or auto (per epoch the one of the two with the smaller minimal detectable bias)")
     gn.add_argument("--power", type=float, default=0.8, metavar="BETA0", help="power at which the minimal detectable biases are computed (default 0.8)")
-    gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' estimates the factor from the file (the whole file's statistic, or, when that is over twice the factor found with the faults excluded, the latter), or give a number")
+    gn.add_argument("--noise", default=None, metavar="auto|FACTOR", help="scale every system's sigma: 'auto' (default) estimates the factor from the file without the injected faults (the whole file's statistic, or, when that is over twice the factor found with the faults excluded, the latter), or give a number (1: the sigma model as it is)")
     gn.add_argument("--noise-factor", action="append", default=[], metavar="SYS=F", help="factor on a system's sigma, e.g. C=3 (repeatable)")
     gn.add_argument("--code", action="append", default=[], metavar="SYS=CODE", help="force a system's pseudorange code, e.g. E=C1X (repeatable; default: the first of the documented priority the file holds)")
     gn.add_argument("--integrity", default=None, metavar="ALLOCATION", help="add protection levels (ARAIM and snapshot RAIM) and the integrity state per epoch with this allocation: lpv200, or an allocation file (TOML: [allocation] probabilities and tol_pl, [limits] hal/val/emt, [ism]; absent keys keep LPV-200's; docs/integrity.md)")
@@ -197,9 +197,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _noise_scale(v: str | None) -> float | str:
-    """``--noise``: ``auto`` or a positive factor (1 without the option)."""
+    """``--noise``: ``auto`` (also without the option) or a positive factor."""
     if v is None:
-        return 1.0
+        return "auto"
     if v.strip().lower() == "auto":
         return "auto"
     try:

@@ -30,7 +30,8 @@ import numpy as np
 from navfdi import _core, _json
 from navfdi._gnss_coverage import check_ephemeris_coverage
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_noise import auto_noise_scale, auto_weighting, by_system_text, estimate_cn0_slope, robust_sd, robust_sd_by
+from navfdi._gnss_auto import MAX_NOISE_SCALE, resolve_auto
+from navfdi._gnss_noise import by_system_text, robust_sd, robust_sd_by
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
 
@@ -485,7 +486,7 @@ class GnssSolution:
             lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto){detail}")
         elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
             cn0 = self.config.get("weighting") == "elevation" and bool(s.get("clean_w_sd_robust_by_cn0"))  # the file records C/N0
-            lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto') estimates a sigma factor from the file" + ("; it records C/N0: --weighting auto takes the C/N0 model where its statistics fit better" if cn0 else ""))
+            lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto', the default) estimates a sigma factor from the file" + ("; it records C/N0: --weighting auto (the default) takes the C/N0 model where its statistics fit better" if cn0 else ""))
         for f in s["faults"]:
             if not f["applied"]:
                 lines.append(f"fault {f['fault']}: never applied ({f['note']}); left out of the statistics")
@@ -565,7 +566,7 @@ def gnss_solve(
     k: float | None = None,
     exclude: bool = True,
     noise: tuple[float, float] = (0.3, 0.3),
-    weighting: str = "elevation",
+    weighting: str = "auto",
     cn0_reference: float = 45.0,
     ionosphere: bool = True,
     troposphere: bool = True,
@@ -580,7 +581,7 @@ def gnss_solve(
     chunk: int = 500,
     integrity: str | os.PathLike[str] | IntegritySettings | None = None,
     doppler_noise: tuple[float, float] = (0.05, 0.05),
-    noise_scale: float | str = 1.0,
+    noise_scale: float | str = "auto",
     test: str = "global",
     power: float = 0.8,
     cn0_slope: float | str = "auto",
@@ -611,10 +612,11 @@ def gnss_solve(
         ``pntpos`` variance with these a, b (``weighting="rtklib"``), or for low-cost receivers
         and phones the elevation model times ``10^(cn0_slope (cn0_reference − C/N0)/10)`` with the
         recorded C/N0 (``weighting="cn0"``; ``S1C`` beside ``C1C``, a satellite without one
-        keeps the elevation model), or ``weighting="auto"``: the one of ``"elevation"`` and
-        ``"cn0"`` whose fault-free global statistics have the shape of a fitting model's (the
-        90th- and 50th-percentile σ factors nearest each other; elevation on a tie, as on a
-        file without C/N0); ``config["weighting_auto"]`` holds the choice and both ratios.
+        keeps the elevation model), or ``weighting="auto"`` (default): the one of
+        ``"elevation"`` and ``"cn0"`` whose fault-free global statistics have the shape of a
+        fitting model's (the 90th- and 50th-percentile σ factors nearest each other; elevation
+        on a tie, as on a file without C/N0); ``config["weighting_auto"]`` holds the choice and
+        both ratios. ``weighting="elevation", noise_scale=1.0`` is the model as given.
     cn0_reference : float
         The C/N0 (dB-Hz) at which ``weighting="cn0"`` gives the elevation model (default 45).
     cn0_slope : float or "auto"
@@ -659,8 +661,12 @@ def gnss_solve(
     chunk : int
         Epochs solved per call into Rust (progress granularity).
     noise_scale : float or "auto"
-        Factor on every system's σ (on top of ``noise_factors``). ``"auto"`` estimates it from
-        the file, without the injected faults. The *whole file's* factor: a pass without
+        Factor on every system's σ (on top of ``noise_factors``). ``"auto"`` (default)
+        estimates it from the file, without the injected faults; with fewer than 20 epochs
+        that can be tested it stays 1 (a warning says so), and a factor above
+        :data:`navfdi._gnss_auto.IMPLAUSIBLE_NOISE_SCALE` (30) is warned about (residuals that
+        are not code noise). The estimates of the ``"auto"`` settings solve the file several
+        times on one reading of it; ``config["estimation_solves"]`` counts the solves. The *whole file's* factor: a pass without
         exclusion, then the 90th percentile over the epochs of ``T / χ²₀.₉(dof)`` (the global
         statistic against its 90 % quantile; 1 when the model fits) gives the factor's square.
         It is robust to faults in up to about 10 % of the epochs but drowns them beyond
@@ -708,47 +714,19 @@ def gnss_solve(
 
         integrity = resolve_integrity(integrity)
         check_systems(integrity, systems)
-    # The solver's settings other than what the "auto" passes below choose or leave out.
+    # The solver's settings other than the ones the "auto" estimates choose.
     common: dict[str, Any] = dict(systems=systems, mask_deg=mask_deg, alpha=alpha, k=k, noise=noise, cn0_reference=cn0_reference, ionosphere=ionosphere, troposphere=troposphere, codes=codes, noise_factors=noise_factors, sprt=sprt, aime=aime, cusum=cusum, chunk=chunk, doppler_noise=doppler_noise, test=test, power=power)
+    if weighting not in ("elevation", "rtklib", "cn0", "auto"):
+        raise ValueError(f"weighting: {weighting!r} is not 'elevation', 'rtklib', 'cn0' or 'auto'")
     if isinstance(cn0_slope, str):
         if cn0_slope != "auto":
             raise ValueError(f"cn0_slope = {cn0_slope!r}: a slope in [0, {_core.CN0_SLOPE_MAX:g}] or 'auto'")
-        if weighting in ("cn0", "auto"):
-            slope = estimate_cn0_slope(lambda s_: gnss_solve(obs, nav, exclude=False, weighting="cn0", cn0_slope=s_, **common), float(cn0_reference))
-            out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, weighting=weighting, cn0_slope=slope["slope"], **common)
-            out.config["cn0_slope_auto"] = slope
-            return out
-        cn0_slope = 1.0  # the models without a C/N0 term have no slope to estimate
-    if isinstance(cn0_slope, bool) or not (isinstance(cn0_slope, numbers.Real) and 0.0 <= cn0_slope <= _core.CN0_SLOPE_MAX):
+    elif isinstance(cn0_slope, bool) or not (isinstance(cn0_slope, numbers.Real) and 0.0 <= cn0_slope <= _core.CN0_SLOPE_MAX):
         raise ValueError(f"cn0_slope = {cn0_slope!r}: a slope in [0, {_core.CN0_SLOPE_MAX:g}] (variance decades per 10 dB-Hz) or 'auto'")
-    if cn0_slope != 1.0 and weighting not in ("cn0", "auto"):
+    elif cn0_slope != 1.0 and weighting not in ("cn0", "auto"):
         raise ValueError(f"cn0_slope = {cn0_slope!r} is the C/N0 model's; weighting = {weighting!r} has none: give weighting='cn0' or 'auto'")
-    common["cn0_slope"] = float(cn0_slope)
-    if weighting == "auto":
-
-        def with_model(w: str) -> dict[str, Any]:  # the slope is the C/N0 model's only
-            return {**common, "weighting": w, "cn0_slope": common["cn0_slope"] if w == "cn0" else 1.0}
-
-        chosen = auto_weighting(lambda weighting: gnss_solve(obs, nav, exclude=False, **with_model(weighting)))
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=noise_scale, **with_model(chosen["chosen"]))
-        out.config["weighting_auto"] = chosen
-        return out
-    if isinstance(noise_scale, str):
-        if noise_scale != "auto":
-            raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-        # Calibrated with the global test's exclusions whatever test then runs: the factor is
-        # the receiver's, and data snooping's false exclusions grow with the satellites on
-        # heavy-tailed errors (docs/gnss_real.md), which would pull the factor down.
-        auto = auto_noise_scale(lambda **kw: gnss_solve(obs, nav, weighting=weighting, **{**common, "test": "global"}, **kw))
-        out = gnss_solve(obs, nav, exclude=exclude, faults=faults, truth=truth, progress=progress, integrity=integrity, noise_scale=auto["scale"], weighting=weighting, **common)
-        out.config["noise_scale_estimated"] = True
-        out.config["noise_scale_auto"] = auto
-        return out
-    if isinstance(noise_scale, bool) or not (isinstance(noise_scale, (int, float)) and 0 < noise_scale < 1e6):
+    if noise_scale != "auto" and (isinstance(noise_scale, (bool, str)) or not (isinstance(noise_scale, (int, float)) and 0 < noise_scale < MAX_NOISE_SCALE)):
         raise ValueError(f"noise_scale = {noise_scale!r}: a positive factor or 'auto'")
-    if noise_scale != 1.0:
-        given = {str(kk).upper(): float(v) for kk, v in (noise_factors or {}).items()}
-        noise_factors = {s_: given.get(s_, 1.0) * float(noise_scale) for s_ in ("G", "E", "C", "J")}
     if isinstance(faults, (str, GnssFault)):
         faults = [faults]  # one fault given alone, not a sequence of characters
     parsed = [f if isinstance(f, GnssFault) else GnssFault.parse(f, f"faults[{i}]") for i, f in enumerate(faults)]
@@ -761,6 +739,13 @@ def gnss_solve(
     t_ecef = None if truth is None else np.asarray(truth, dtype=float).reshape(-1)
     if t_ecef is not None:
         check_ecef_truth(t_ecef)
+    # The "auto" settings, estimated on one reading of the files without the injected faults.
+    weighting, cn0_slope, noise_scale, estimated = resolve_auto(obs, nav, common, weighting, cn0_slope, noise_scale)
+    if estimated.get("estimation_solves"):
+        _release_freed_memory()
+    if noise_scale != 1.0:
+        given = {str(kk).upper(): float(v) for kk, v in (noise_factors or {}).items()}
+        noise_factors = {s_: given.get(s_, 1.0) * float(noise_scale) for s_ in ("G", "E", "C", "J")}
     run = _core.GnssRun(
         os.fspath(obs),
         os.fspath(nav),
@@ -885,6 +870,7 @@ def gnss_solve(
         "power": float(power),
         "dropped_observation_types": dropped,
         "receiver": receiver,
+        **estimated,
     }
     out = GnssSolution(sol, sats, t_ecef, config, parsed)
     if integrity is not None:

@@ -224,6 +224,11 @@ def read_rinex_solution(cfg: Mapping[str, Any], base: Path) -> PosLog:
     for k, v in kw.items():
         if not isinstance(v, str):
             raise ScenarioError(f"source.gnss.{k} = {v!r}: a name (see navfdi gnss --help)")
+    if "noise" in cfg:
+        v = cfg["noise"]
+        if not (v == "auto" or (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0)):
+            raise ScenarioError(f"source.gnss.noise = {v!r}: \"auto\" or a positive factor on the solve's sigma (see navfdi gnss --noise)")
+        kw["noise_scale"] = v
     try:
         sol = gnss_solve(paths[0], paths[1], systems=systems, mask_deg=mask, exclude=True, **kw)
     except ValueError as e:

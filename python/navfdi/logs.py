@@ -551,7 +551,7 @@ def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], ma
 def solve_rinex_source(sc: Any) -> tuple[Path, Any]:
     """A tight scenario's ``[source]`` RINEX observations solved epoch by epoch
     (:func:`navfdi.gnss_solve`, with FDE) with the systems and elevation mask of its
-    ``[tight] sensor``: the observation file's path and the :class:`~navfdi.gnss.GnssSolution`."""
+    ``[tight] sensor`` and the tight filter's σ model (elevation weights, factor 1): the observation file's path and the :class:`~navfdi.gnss.GnssSolution`."""
     from navfdi.gnss import gnss_solve
 
     data = sc.raw["source"]
@@ -563,7 +563,10 @@ def solve_rinex_source(sc: Any) -> tuple[Path, Any]:
     letters = {"gps": "G", "galileo": "E", "beidou": "C", "qzss": "J"}
     rs = sensor.get("ranges", {})
     systems = [letters[s] for s in rs.get("systems", ["gps"]) if s in letters]
-    return obs, gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True)
+    # The tight filter's own σ model (elevation, factor 1): the residuals normalised by it are
+    # what its range-error models are estimated from.
+    return obs, gnss_solve(obs, nav, systems=systems, mask_deg=math.degrees(float(rs.get("elevation_mask", 0.0))), exclude=True,
+                           weighting="elevation", noise_scale=1.0)
 
 
 def _residual_arcs(sc: Any) -> tuple[Path, Any, list[tuple[np.ndarray, np.ndarray]]]:

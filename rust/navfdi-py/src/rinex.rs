@@ -160,6 +160,8 @@ pub struct PyGnssRun {
     state: SppState,
     out: SppRun,
     next: usize,
+    /// C/N0 (dB-Hz) at which the C/N0 model gives the elevation model's σ (for `restart`).
+    cn0_reference: f64,
 }
 
 fn parse_sys(s: &str) -> PyResult<Sys> {
@@ -170,6 +172,42 @@ fn parse_sys(s: &str) -> PyResult<Sys> {
             "systems: '{s}' is not a system that can be positioned; use G (GPS), E (Galileo), C (BeiDou) or J (QZSS)"
         ))),
     }
+}
+
+/// The variance model named `weighting` (``"elevation"``, ``"rtklib"``, ``"cn0"``; the last with
+/// its reference C/N0 in dB-Hz and slope in decades per 10 dB-Hz).
+fn parse_weighting(weighting: &str, cn0_reference: f64, cn0_slope: f64) -> PyResult<Weighting> {
+    Ok(match weighting {
+        "elevation" => Weighting::Elevation,
+        "rtklib" => Weighting::Rtklib,
+        "cn0" if !(cn0_reference > 10.0 && cn0_reference < 70.0) => {
+            return Err(PyValueError::new_err(format!(
+                "cn0_reference: {cn0_reference} dB-Hz; expected a carrier-to-noise density in (10, 70) dB-Hz"
+            )))
+        }
+        "cn0" if !(0.0..=CN0_SLOPE_MAX).contains(&cn0_slope) => {
+            return Err(PyValueError::new_err(format!(
+                "cn0_slope: {cn0_slope}; expected the variance's decades per 10 dB-Hz in [0, {CN0_SLOPE_MAX}] (1: the σ–ε model, 0: no C/N0 term)"
+            )))
+        }
+        "cn0" => Weighting::Cn0 {
+            reference: cn0_reference,
+            slope: cn0_slope,
+        },
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "weighting: '{other}' is not 'elevation', 'rtklib' or 'cn0'"
+            )))
+        }
+    })
+}
+
+/// Per-system σ factors from their letters.
+fn parse_factors(factors: &BTreeMap<String, f64>) -> PyResult<Vec<(Sys, f64)>> {
+    factors
+        .iter()
+        .map(|(letter, f)| Ok((parse_sys(letter)?, *f)))
+        .collect()
 }
 
 #[pymethods]
@@ -227,9 +265,7 @@ impl PyGnssRun {
                 None => cfg.codes.push((sys, code.clone())),
             }
         }
-        for (letter, f) in &factors {
-            cfg.factors.push((parse_sys(letter)?, *f));
-        }
+        cfg.factors.extend(parse_factors(&factors)?);
         if !mask_deg.is_finite() {
             return Err(PyValueError::new_err(format!(
                 "mask: {mask_deg} is not a finite elevation (deg)"
@@ -238,29 +274,7 @@ impl PyGnssRun {
         cfg.mask = mask_deg.to_radians();
         cfg.exclude = exclude;
         cfg.noise = noise;
-        cfg.weighting = match weighting {
-            "elevation" => Weighting::Elevation,
-            "rtklib" => Weighting::Rtklib,
-            "cn0" if !(cn0_reference > 10.0 && cn0_reference < 70.0) => {
-                return Err(PyValueError::new_err(format!(
-                    "cn0_reference: {cn0_reference} dB-Hz; expected a carrier-to-noise density in (10, 70) dB-Hz"
-                )))
-            }
-            "cn0" if !(0.0..=CN0_SLOPE_MAX).contains(&cn0_slope) => {
-                return Err(PyValueError::new_err(format!(
-                    "cn0_slope: {cn0_slope}; expected the variance's decades per 10 dB-Hz in [0, {CN0_SLOPE_MAX}] (1: the σ–ε model, 0: no C/N0 term)"
-                )))
-            }
-            "cn0" => Weighting::Cn0 {
-                reference: cn0_reference,
-                slope: cn0_slope,
-            },
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "weighting: '{other}' is not 'elevation', 'rtklib' or 'cn0'"
-                )))
-            }
-        };
+        cfg.weighting = parse_weighting(weighting, cn0_reference, cn0_slope)?;
         cfg.sequential = navfdi_core::gnss::sequential::SeqConfig {
             sprt,
             aime,
@@ -336,7 +350,40 @@ impl PyGnssRun {
             state: SppState::default(),
             out: SppRun::default(),
             next: 0,
+            cn0_reference,
         })
+    }
+
+    /// Start again from the first epoch on the observations already read, with another
+    /// variance model (`weighting`, `cn0_slope` as in the constructor; the reference C/N0 is
+    /// kept), per-system σ `factors` (replacing the constructor's), `exclude` and `test` (the
+    /// allocation's α, k and power kept): what ``navfdi.gnss_solve``'s ``"auto"`` estimates
+    /// solve a file with, several times, without reading it again. Everything solved so far is
+    /// dropped; on an error nothing changes.
+    fn restart(
+        &mut self,
+        weighting: &str,
+        cn0_slope: f64,
+        factors: BTreeMap<String, f64>,
+        exclude: bool,
+        test: &str,
+    ) -> PyResult<()> {
+        let mut cfg = self.cfg.clone();
+        cfg.weighting = parse_weighting(weighting, self.cn0_reference, cn0_slope)?;
+        cfg.factors = parse_factors(&factors)?;
+        cfg.exclude = exclude;
+        let power = cfg.fde.power;
+        cfg.fde = cfg
+            .fde
+            .clone()
+            .with_test(Detection::parse(test).py()?, power)
+            .py()?;
+        cfg.validate().py()?;
+        self.cfg = cfg;
+        self.state = SppState::default();
+        self.out = SppRun::default();
+        self.next = 0;
+        Ok(())
     }
 
     /// The pseudorange code used per system letter (chosen by priority or given).
@@ -535,6 +582,41 @@ impl PyGnssRun {
         d.set_item(
             "reason",
             e.iter().map(|s| s.fde.reason.clone()).collect::<Vec<_>>(),
+        )?;
+        Ok(d)
+    }
+
+    /// What the ``"auto"`` estimates of ``navfdi.gnss_solve`` read of the epochs solved so
+    /// far, without the full tables' strings: per epoch ``statistic``, ``dof``,
+    /// ``first_statistic``, ``first_dof`` (as in :meth:`epoch_table`); per satellite-epoch
+    /// row ``w``, ``cn0`` (dB-Hz, NaN where none) and ``used`` (bool: status ``used``).
+    fn estimation_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (e, r) = (&self.out.epochs, &self.out.sats);
+        let (n, m) = (e.len(), r.len());
+        let d = PyDict::new(py);
+        let f = |g: &dyn Fn(&spp::EpochSolution) -> f64| -> Vec<f64> { e.iter().map(g).collect() };
+        d.set_item("statistic", to_numpy(py, f(&|s| s.fde.statistic), &[n])?)?;
+        d.set_item("dof", to_numpy(py, f(&|s| s.fde.dof as f64), &[n])?)?;
+        d.set_item(
+            "first_statistic",
+            to_numpy(py, f(&|s| s.fde.first.0), &[n])?,
+        )?;
+        d.set_item(
+            "first_dof",
+            to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
+        )?;
+        d.set_item("w", to_numpy(py, r.iter().map(|x| x.w).collect(), &[m])?)?;
+        d.set_item(
+            "cn0",
+            to_numpy(py, r.iter().map(|x| x.cn0).collect(), &[m])?,
+        )?;
+        d.set_item(
+            "used",
+            to_numpy(
+                py,
+                r.iter().map(|x| x.status.as_str() == "used").collect(),
+                &[m],
+            )?,
         )?;
         Ok(d)
     }
