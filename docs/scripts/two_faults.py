@@ -21,7 +21,8 @@ OBS, NAV = str(DATA / "rover.obs.gz"), str(DATA / "base.nav")
 def main() -> None:
     warnings.simplefilter("ignore")
     step = float(sys.argv[1]) if len(sys.argv) > 1 else 30.0
-    clean = gnss_solve(OBS, NAV, systems="G,E")
+    given = {"weighting": "elevation", "noise_scale": 1.0}  # the σ model as given, as documented
+    clean = gnss_solve(OBS, NAV, systems="G,E", **given)
     sats = clean.satellites
     t = (sats["time"] - sats["time"].min()).dt.total_seconds()
     window = sats[(t >= 10) & (t < 50) & (sats["status"] == "used")]
@@ -31,7 +32,7 @@ def main() -> None:
     for test in ("global", "wtest"):
         exact, pairs = 0.0, 0
         for a, b in itertools.combinations(always, 2):
-            run = gnss_solve(OBS, NAV, systems="G,E", test=test, faults=[f"{a}:step:{step:g}m:10s:50s", f"{b}:step:{step:g}m:10s:50s"])
+            run = gnss_solve(OBS, NAV, systems="G,E", test=test, faults=[f"{a}:step:{step:g}m:10s:50s", f"{b}:step:{step:g}m:10s:50s"], **given)
             sol = run.solution
             tt = sol["gps_seconds"] - sol["gps_seconds"].iloc[0]
             ex = sol.loc[(tt >= 10) & (tt < 50), "excluded"].fillna("").astype(str).str.split()

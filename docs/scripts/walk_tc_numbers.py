@@ -77,12 +77,12 @@ def main() -> None:
     first = next(iter(r0.values()))
     t_gps = first["t"] + t0
     alive = np.isfinite(first["nav"][:, 0])
-    spp = navfdi.gnss_solve(str(obs), str(nav), systems="G,E")
+    spp = navfdi.gnss_solve(str(obs), str(nav), systems="G,E", weighting="elevation", noise_scale=1.0)
     s = spp.solution
     en_spp, ok_spp = reference_en(s["gps_seconds"].to_numpy(float), s["lat"].to_numpy(float), s["lon"].to_numpy(float), ref)
     ok_spp &= np.isfinite(en_spp).all(axis=1)
     common = np.isin(np.round(s["gps_seconds"].to_numpy(float), 2), np.round(t_gps[alive], 2)) & ok_spp
-    peers = {"navfdi gnss (SPP + FDE)": en_spp[common]}
+    peers = {"navfdi gnss --weighting elevation --noise 1 (SPP + FDE, the σ model as given)": en_spp[common]}
     s2 = navfdi.gnss_solve(str(obs), str(nav), systems="G,E", weighting="cn0", noise_scale="auto").solution
     en2, ok2 = reference_en(s2["gps_seconds"].to_numpy(float), s2["lat"].to_numpy(float), s2["lon"].to_numpy(float), ref)
     peers["navfdi gnss --weighting cn0 --noise auto"] = en2[common & ok2]
