@@ -2,8 +2,9 @@
 exclusion per size and elevation with the global test, data snooping (w-test) and both,
 beside RTKLIB's RAIM (``rnx2rtkp``, ``pos1-posopt5 = on``) on the same faulted files.
 
-Usage: ``python docs/scripts/snapshot_fde_campaign.py [WEIGHTING [SLOPE]]`` (default ``cn0``; or
-``elevation``; SLOPE the C/N0 model's ``cn0_slope``, a number or ``auto``, default 1) prints the markdown tables of ``docs/gnss_real.md``. Needs RTKLIB's
+Usage: ``python docs/scripts/snapshot_fde_campaign.py [WEIGHTING [SLOPE [FACTOR]]]`` (default ``cn0``; or
+``elevation``; SLOPE the C/N0 model's ``cn0_slope``, a number or ``auto``, default 1; FACTOR the
+σ factor, default ``auto``: ``elevation 1 1`` is the σ model as given) prints the markdown tables of ``docs/gnss_real.md``. Needs RTKLIB's
 ``rnx2rtkp`` on the PATH (Debian package ``rtklib``) for its column.
 
 Settings: G + E (C1C, C1X), 10° mask, α = 0.01, the allocation's power β0 = 0.8, the σ factor
@@ -69,8 +70,9 @@ def main() -> None:
     warnings.simplefilter("ignore")
     weighting = sys.argv[1] if len(sys.argv) > 1 else "cn0"
     slope: float | str = 1.0 if len(sys.argv) < 3 else (sys.argv[2] if sys.argv[2] == "auto" else float(sys.argv[2]))
+    factor: float | str = "auto" if len(sys.argv) < 4 or sys.argv[3] == "auto" else float(sys.argv[3])
     common: dict[str, object] = dict(systems="G,E", weighting=weighting)
-    first = gnss_solve(OBS, NAV, noise_scale="auto", cn0_slope=slope, **common).config
+    first = gnss_solve(OBS, NAV, noise_scale=factor, cn0_slope=slope, **common).config
     scale = first["noise_scale"]
     common["noise_scale"] = scale
     common["cn0_slope"] = first["cn0_slope"]
@@ -84,7 +86,7 @@ def main() -> None:
     cand = sorted(s for s, n in counts.items() if n >= 0.9 * len(win))
     elev = inwin.groupby("satellite", observed=True)["elevation"].mean()
     mdb = {t: clean[t].satellites[clean[t].satellites["epoch"].isin(win)].groupby("satellite", observed=True)["mdb"].median() for t in TESTS}
-    print(f"walk_0827, G+E, weighting {weighting} (C/N0 slope {common['cn0_slope']:.2f}), sigma factor {scale:.2f} (--noise auto); {len(cand)} satellites in view over {T0:g}-{T1:g} s")
+    print(f"walk_0827, G+E, weighting {weighting} (C/N0 slope {common['cn0_slope']:.2f}), sigma factor {scale:.2f} (--noise {factor}); {len(cand)} satellites in view over {T0:g}-{T1:g} s")
     for t in TESTS:
         c = clean[t].solution
         print(f"clean file, {t}: epochs with an exclusion {(c['excluded'] != '').mean():.2%} (alpha 1 %)")

@@ -22,6 +22,7 @@ use crate::validate::{
 use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
 
 mod model;
+mod selection;
 mod sequential;
 pub use model::FixedModel;
 pub(crate) use sequential::sequential_rows;
@@ -350,30 +351,37 @@ impl KalmanFilter {
         if mw.hp.nrows() != k {
             *mw = MWork::new(n, k);
         }
-        // HP⁻ (k × n); PHᵀ = (HP)ᵀ since P is symmetric.
-        gemm(&mut mw.hp, 1.0, h, &self.p, 0.0);
-        h.transpose_to(&mut mw.ht);
-        // A = (HP)Hᵀ + R  (k × k)
         let mut a = r.clone();
-        gemm(&mut a, 1.0, &mw.hp, &mw.ht, 1.0);
-        symmetrize(&mut a);
-        // residual r = z − Hx⁻
         let mut res = z.clone();
-        res.gemv(-1.0, h, &self.x, 1.0);
+        mw.selection = selection::rows_of(h, &mut mw.columns);
+        if mw.selection {
+            // H selects states (one 1 per row, zeros elsewhere): the products below are copies
+            // and single subtractions, the same numbers as the general path's.
+            selection::innovate(&self.p, &self.x, &mw.columns, &mut mw.hp, &mut a, &mut res);
+        } else {
+            // HP⁻ (k × n); PHᵀ = (HP)ᵀ since P is symmetric.
+            gemm(&mut mw.hp, 1.0, h, &self.p, 0.0);
+            h.transpose_to(&mut mw.ht);
+            // A = (HP)Hᵀ + R  (k × k)
+            gemm(&mut a, 1.0, &mw.hp, &mw.ht, 1.0);
+            // residual r = z − Hx⁻
+            res.gemv(-1.0, h, &self.x, 1.0);
+        }
+        symmetrize(&mut a);
         let chol: Cholesky<f64, Dyn> =
             Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
                 name: "innovation covariance A = H P Hᵀ + R".into(),
                 detail: "Cholesky factorisation failed; check R and P".into(),
             })?;
-        // Whitened residual w = L⁻¹r, λ = ‖w‖².
-        let w = chol
-            .l_dirty()
-            .solve_lower_triangular(&res)
-            .ok_or_else(|| Error::Numerical {
+        // Whitened residual w = L⁻¹r, λ = ‖w‖² (solved in a kept buffer).
+        mw.w.copy_from(&res);
+        if !chol.l_dirty().solve_lower_triangular_mut(&mut mw.w) {
+            return Err(Error::Numerical {
                 context: "update".into(),
                 detail: "triangular solve of the innovation covariance failed".into(),
-            })?;
-        let stat = w.norm_squared();
+            });
+        }
+        let stat = mw.w.norm_squared();
         if !stat.is_finite() {
             return Err(Error::Numerical {
                 context: "update".into(),
@@ -413,7 +421,11 @@ impl KalmanFilter {
         ws.nn_a.copy_from(&self.p);
         gemm(&mut ws.nn_a, -1.0, &mw.k, &mw.hp, 1.0);
         // U = THᵀ − KR  (n × k); a diagonal R (the usual case) scales K's columns.
-        gemm(&mut mw.u, 1.0, &ws.nn_a, &mw.ht, 0.0);
+        if mw.selection {
+            selection::columns(&ws.nn_a, &mw.columns, &mut mw.u);
+        } else {
+            gemm(&mut mw.u, 1.0, &ws.nn_a, &mw.ht, 0.0);
+        }
         if is_diagonal(r) {
             let n = mw.u.nrows();
             let ks = mw.k.as_slice();
@@ -456,11 +468,11 @@ impl KalmanFilter {
     ) -> Result<(Innovation, Option<Pending>)> {
         let m = z.len();
         let used: Vec<bool> = z.iter().map(|v| !v.is_nan()).collect();
-        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
-        if idx.is_empty() {
+        let n_used = used.iter().filter(|u| **u).count();
+        if n_used == 0 {
             return Ok((Innovation::empty(m), None));
         }
-        if idx.len() == m {
+        if n_used == m {
             let (res, a, chol, stat) = self.innovate_core(z, h, r)?;
             let inn = Innovation {
                 residual: res.clone(),
@@ -477,6 +489,7 @@ impl KalmanFilter {
                 }),
             ));
         }
+        let idx: Vec<usize> = (0..m).filter(|i| used[*i]).collect();
         let (zr, hr, rr) = (
             z.select_rows(&idx),
             h.select_rows(&idx),
@@ -548,6 +561,11 @@ struct MWork {
     k: DMatrix<f64>,
     u: DMatrix<f64>,
     inv_diag: Vec<f64>,
+    /// Whether the last innovation's H was a selection, and the state each row selects.
+    selection: bool,
+    columns: Vec<usize>,
+    /// The whitened residual `L⁻¹r` (k).
+    w: DVector<f64>,
 }
 
 impl MWork {
@@ -558,6 +576,9 @@ impl MWork {
             k: DMatrix::zeros(n, k),
             u: DMatrix::zeros(n, k),
             inv_diag: vec![0.0; k],
+            selection: false,
+            columns: Vec::with_capacity(k),
+            w: DVector::zeros(k),
         }
     }
 }
