@@ -123,3 +123,29 @@ def test_residuals_that_are_not_code_noise_are_named(tmp_path: Path) -> None:
     with pytest.warns(UserWarning, match="times the sigma model's: they are not code noise"):
         sol = navfdi.gnss_solve(str(tmp_path / "two.rnx"), str(DATA / "base.nav"), systems="G,E")
     assert sol.config["noise_scale"] > 1e3
+
+
+def test_a_long_file_is_estimated_on_every_kth_epoch(monkeypatch) -> None:
+    """The estimates solve at most MAX_ESTIMATION_EPOCHS epochs: with the limit at 100 the
+    walk (536 epochs) is estimated on every 6th, its epochs solved being those; the factor
+    lands near the whole file's."""
+    from navfdi import _gnss_auto
+
+    run = _run()
+    run.restart("elevation", 1.0, {}, False, "global", 6)
+    ep, est = _solved(run)
+    assert run.done == run.n_epochs and len(ep["statistic"]) == -(-run.n_epochs // 6)
+    full = _run()
+    ep1, _ = _solved(full)
+    # The epochs solved are the file's 0th, 6th, …: the first is solved alike (the same start).
+    assert ep["first_statistic"][0] == ep1["first_statistic"][0]
+    with pytest.raises(ValueError, match="every = 0"):
+        run.restart("elevation", 1.0, {}, False, "global", 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        whole = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="elevation")
+        monkeypatch.setattr(_gnss_auto, "MAX_ESTIMATION_EPOCHS", 100)
+        strided = navfdi.gnss_solve(OBS, NAV, systems="G,E", weighting="elevation")
+    assert whole.config["estimation_every"] == 1 and strided.config["estimation_every"] == 6
+    assert len(strided.solution) == 536  # the run itself solves every epoch
+    assert strided.config["noise_scale"] == pytest.approx(whole.config["noise_scale"], rel=0.15)

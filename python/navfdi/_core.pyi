@@ -1091,13 +1091,16 @@ class GnssRun:
         """Epochs solved so far."""
     def advance(self, n: int) -> int:
         """Solve up to ``n`` more epochs (GIL released; Ctrl-C stops within one epoch and
-        keeps the epochs before this call); returns how many were solved."""
-    def restart(self, weighting: str, cn0_slope: float, factors: dict[str, float], exclude: bool, test: str) -> None:
+        keeps the epochs before this call); returns how many were solved (after a ``restart``
+        with ``every`` > 1, of every ``every``-th epoch; ``done`` counts the file's epochs
+        passed)."""
+    def restart(self, weighting: str, cn0_slope: float, factors: dict[str, float], exclude: bool, test: str, every: int = 1) -> None:
         """Start again from the first epoch on the observations already read, with another
         variance model (``"elevation"``, ``"rtklib"``, ``"cn0"`` with ``cn0_slope`` decades per
         10 dB-Hz; the reference C/N0 kept), per-system σ ``factors`` (replacing the
-        constructor's), ``exclude`` and ``test`` (α, k and power kept). Drops everything solved
-        so far; on an error (ValueError) nothing changes."""
+        constructor's), ``exclude`` and ``test`` (α, k and power kept), solving every
+        ``every``-th epoch only (≥ 1). Drops everything solved so far; on an error
+        (ValueError) nothing changes."""
     def estimation_table(self) -> dict[str, Any]:
         """What ``navfdi.gnss_solve``'s ``"auto"`` estimates read, without the tables' strings:
         per epoch (n_epochs_solved,) ``statistic``, ``dof``, ``first_statistic``,

@@ -24,11 +24,18 @@ IMPLAUSIBLE_NOISE_SCALE = 30.0
 #: The largest σ factor :func:`navfdi.gnss.gnss_solve` takes (exclusive).
 MAX_NOISE_SCALE = 1e6
 
+#: The most epochs an estimate solves: a longer file is solved at every k-th epoch, k the
+#: smallest that keeps to this (an hour of 1 Hz fixes; the estimates are quantiles and robust
+#: spreads over the epochs, which this many pin down, and their solves then cost what an
+#: hour's file costs however long the file is).
+MAX_ESTIMATION_EPOCHS = 3600
+
 
 class EstimationRun:
     """One reading of ``obs`` and ``nav`` with the solver settings ``common`` (the keyword
     arguments of :func:`navfdi.gnss.gnss_solve` other than the ones estimated, the faults, the
-    truth and the integrity), solved again by :meth:`solve` with other σ settings."""
+    truth and the integrity), solved again by :meth:`solve` with other σ settings — at every
+    ``every``-th epoch, ``every`` the smallest that keeps to :data:`MAX_ESTIMATION_EPOCHS`."""
 
     def __init__(self, obs: str | os.PathLike[str], nav: str | os.PathLike[str], common: dict[str, Any]) -> None:
         c = common
@@ -43,6 +50,7 @@ class EstimationRun:
             float(c["cn0_reference"]), self.test, float(c["power"]), 1.0,
         )  # fmt: skip
         self.solves = 0
+        self.every = max(1, -(-self.run.n_epochs // MAX_ESTIMATION_EPOCHS))
 
     def solve(self, *, weighting: str, cn0_slope: float = 1.0, noise_scale: float = 1.0, exclude: bool = False,
               test: str | None = None) -> SimpleNamespace:
@@ -54,7 +62,7 @@ class EstimationRun:
         :mod:`navfdi._gnss_noise` read (no pandas: the run keeps the file's observations, and
         the peak memory of a day file is what that costs)."""
         factors = self.factors if noise_scale == 1.0 else {s: self.factors.get(s, 1.0) * float(noise_scale) for s in ("G", "E", "C", "J")}
-        self.run.restart(weighting, float(cn0_slope), factors, bool(exclude), self.test if test is None else test)
+        self.run.restart(weighting, float(cn0_slope), factors, bool(exclude), self.test if test is None else test, self.every)
         while self.run.done < self.run.n_epochs:
             self.run.advance(1 << 30)
         self.solves += 1
@@ -114,5 +122,6 @@ def resolve_auto(obs: str | os.PathLike[str], nav: str | os.PathLike[str], commo
         config["noise_scale_auto"] = auto
         noise_scale = float(auto["scale"])
     config["estimation_solves"] = est.solves if est is not None else 0
+    config["estimation_every"] = est.every if est is not None else 1
     est = None  # the file's observations freed before the solve that follows reads them again
     return weighting, slope_, float(noise_scale), config

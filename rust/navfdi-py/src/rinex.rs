@@ -162,6 +162,8 @@ pub struct PyGnssRun {
     next: usize,
     /// C/N0 (dB-Hz) at which the C/N0 model gives the elevation model's σ (for `restart`).
     cn0_reference: f64,
+    /// Solve every `every`-th epoch only (1: all; set by `restart`).
+    every: usize,
 }
 
 fn parse_sys(s: &str) -> PyResult<Sys> {
@@ -351,15 +353,17 @@ impl PyGnssRun {
             out: SppRun::default(),
             next: 0,
             cn0_reference,
+            every: 1,
         })
     }
 
     /// Start again from the first epoch on the observations already read, with another
     /// variance model (`weighting`, `cn0_slope` as in the constructor; the reference C/N0 is
     /// kept), per-system σ `factors` (replacing the constructor's), `exclude` and `test` (the
-    /// allocation's α, k and power kept): what ``navfdi.gnss_solve``'s ``"auto"`` estimates
-    /// solve a file with, several times, without reading it again. Everything solved so far is
-    /// dropped; on an error nothing changes.
+    /// allocation's α, k and power kept), solving every `every`-th epoch only (1: all): what
+    /// ``navfdi.gnss_solve``'s ``"auto"`` estimates solve a file with, several times, without
+    /// reading it again. Everything solved so far is dropped; on an error nothing changes.
+    #[pyo3(signature = (weighting, cn0_slope, factors, exclude, test, every = 1))]
     fn restart(
         &mut self,
         weighting: &str,
@@ -367,7 +371,13 @@ impl PyGnssRun {
         factors: BTreeMap<String, f64>,
         exclude: bool,
         test: &str,
+        every: usize,
     ) -> PyResult<()> {
+        if every == 0 {
+            return Err(PyValueError::new_err(
+                "every = 0: solve every k-th epoch with k >= 1",
+            ));
+        }
         let mut cfg = self.cfg.clone();
         cfg.weighting = parse_weighting(weighting, self.cn0_reference, cn0_slope)?;
         cfg.factors = parse_factors(&factors)?;
@@ -383,6 +393,7 @@ impl PyGnssRun {
         self.state = SppState::default();
         self.out = SppRun::default();
         self.next = 0;
+        self.every = every;
         Ok(())
     }
 
@@ -410,20 +421,25 @@ impl PyGnssRun {
     }
 
     /// Solve up to `n` more epochs (GIL released, Ctrl-C stops within one epoch); returns how
-    /// many were solved.
+    /// many were solved (of every `every`-th epoch after a `restart` with it: `done` then
+    /// counts the file's epochs passed).
     fn advance(&mut self, py: Python<'_>, n: usize) -> PyResult<usize> {
         let start = self.next;
-        let end = start.saturating_add(n).min(self.obs.epochs.len());
+        let every = self.every;
+        let end = start
+            .saturating_add(n.saturating_mul(every))
+            .min(self.obs.epochs.len());
         let (obs, nav, cfg, faults) = (&self.obs, &self.nav, &self.cfg, &self.faults);
         let mut state = self.state.clone();
         let mut out = std::mem::take(&mut self.out);
+        let solved_before = out.epochs.len();
         let res = crate::interrupt::run(py, |cancel| {
             spp::solve(
                 obs,
                 nav,
                 cfg,
                 faults,
-                start..end,
+                (start..end).step_by(every),
                 &mut state,
                 &mut out,
                 cancel,
@@ -432,7 +448,7 @@ impl PyGnssRun {
         // On an error (e.g. Ctrl-C) the epochs of this chunk are dropped so that the run
         // stays consistent: everything before `start` is kept.
         if res.is_err() {
-            out.epochs.truncate(start);
+            out.epochs.truncate(solved_before);
             out.sats.retain(|r| r.epoch < start);
             self.out = out;
             res?;
@@ -441,7 +457,7 @@ impl PyGnssRun {
         self.out = out;
         self.state = state;
         self.next = end;
-        Ok(end - start)
+        Ok((end - start).div_ceil(every))
     }
 
     /// Receiver velocity from Doppler for the epochs solved so far (`navfdi_core::gnss::doppler`),

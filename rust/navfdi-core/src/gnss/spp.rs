@@ -493,7 +493,8 @@ struct Candidate {
     row: usize,
 }
 
-/// Solve epochs `range` of `obs` with `nav`, appending to `out`. `t0` is the first epoch's
+/// Solve the epochs `epochs` (ascending indices; those past the file's end are ignored) of
+/// `obs` with `nav`, appending to `out`. `t0` is the first epoch's
 /// time (faults count from it); `state` carries the start position across calls.
 #[allow(clippy::too_many_arguments)]
 pub fn solve(
@@ -501,7 +502,7 @@ pub fn solve(
     nav: &NavData,
     cfg: &SppConfig,
     faults: &[InjectedFault],
-    range: std::ops::Range<usize>,
+    epochs: impl Iterator<Item = usize>,
     state: &mut SppState,
     out: &mut SppRun,
     cancel: &Cancel,
@@ -529,7 +530,7 @@ pub fn solve(
     } else {
         None
     };
-    let range = range.start.min(obs.epochs.len())..range.end.min(obs.epochs.len());
+    let n_epochs = obs.epochs.len();
     // Without exclusion the loop still reports the global test, with a w-test that never fires.
     let no_exclusion;
     let fde_cfg = if cfg.exclude {
@@ -538,7 +539,7 @@ pub fn solve(
         no_exclusion = FdeConfig::new(cfg.fde.alpha, Some(f64::MAX))?;
         &no_exclusion
     };
-    for ei in range {
+    for ei in epochs.take_while(|&e| e < n_epochs) {
         cancel.check()?;
         let ep = &obs.epochs[ei];
         let tau = ep.time.diff(&t0);
