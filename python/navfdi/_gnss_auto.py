@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from navfdi import _core
-from navfdi._gnss_noise import auto_noise_scale, auto_weighting, estimate_cn0_slope
+from navfdi._gnss_noise import TooFewEpochs, auto_noise_scale, auto_weighting, estimate_cn0_slope
 
 #: The σ factor above which ``noise_scale="auto"`` warns: the residuals are then not code noise
 #: (a navigation file of another constellation set, unmodelled clock jumps or biases), and the
@@ -107,7 +107,7 @@ def resolve_auto(obs: str | os.PathLike[str], nav: str | os.PathLike[str], commo
     if isinstance(noise_scale, str):
         try:
             auto = auto_noise_scale(lambda **kw: run().solve(weighting=weighting, cn0_slope=slope_, test="global", **kw))
-        except ValueError as e:
+        except TooFewEpochs as e:
             warnings.warn(f"{e}; the sigma factor stays 1 (--noise 1)", UserWarning, stacklevel=3)
             auto = {"scale": 1.0, "whole_file": math.nan, "faults_excluded": math.nan, "iterations": 0, "method": "too few epochs: 1"}
         why = ("they are not code noise (a navigation file that does not belong to the observations, receiver clock jumps, "

@@ -39,15 +39,19 @@ def _factor(solution: Any, statistic: str, dof: str, tail: float) -> float | Non
     return float(np.sqrt(np.quantile(t / thr, 1.0 - tail)))
 
 
+class TooFewEpochs(ValueError):
+    """A file with fewer than 20 epochs that can be tested: too few to estimate a σ factor."""
+
+
 def estimate_noise_scale(solution: Any) -> float:
     """The σ factor that makes the global test fit a file (see :func:`navfdi.gnss.gnss_solve`'s
     ``noise_scale="auto"``): √ of the 90th percentile over the tested epochs of
-    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs. ``solution`` a
-    DataFrame or a mapping of columns."""
+    ``first_statistic / χ²₀.₉(first_dof)``. Needs at least 20 tested epochs
+    (:class:`TooFewEpochs` otherwise). ``solution`` a DataFrame or a mapping of columns."""
     f = _factor(solution, "first_statistic", "first_dof", 0.1)
     if f is None:
         n = _tested(solution, "first_statistic", "first_dof")[0].size
-        raise ValueError(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise")
+        raise TooFewEpochs(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise")
     return f
 
 
