@@ -277,6 +277,7 @@ impl KalmanFilter {
                 detail: "the predicted state or covariance is not finite (overflow)".into(),
             });
         }
+        // The previous state stays in `ws.x` and `ws.nn_c` (`step` keeps it from there).
         std::mem::swap(&mut self.x, &mut ws.x);
         std::mem::swap(&mut self.p, &mut ws.nn_c);
         Ok(())
@@ -368,8 +369,15 @@ impl KalmanFilter {
             res.gemv(-1.0, h, &self.x, 1.0);
         }
         symmetrize(&mut a);
+        // Factored in the buffer the last applied update handed back (no allocation per epoch).
+        let mut buf = std::mem::replace(&mut mw.chol_buf, DMatrix::zeros(0, 0));
+        if buf.shape() == a.shape() {
+            buf.copy_from(&a);
+        } else {
+            buf = a.clone();
+        }
         let chol: Cholesky<f64, Dyn> =
-            Cholesky::new(a.clone()).ok_or_else(|| Error::NotPositiveDefinite {
+            Cholesky::new(buf).ok_or_else(|| Error::NotPositiveDefinite {
                 name: "innovation covariance A = H P Hᵀ + R".into(),
                 detail: "Cholesky factorisation failed; check R and P".into(),
             })?;
@@ -523,13 +531,18 @@ impl KalmanFilter {
     /// [`KalmanFilter::innovation_pending`] just computed (same `R`; no predict or update in
     /// between; `H` and `HP⁻` were kept from step 1).
     pub fn apply_pending(&mut self, pending: Pending, r: &DMatrix<f64>) -> Result<()> {
-        match &pending.idx {
+        let out = match &pending.idx {
             None => self.apply_core(r, &pending.res, &pending.chol),
             Some(idx) => {
                 let rr = r.select_rows(idx).select_columns(idx);
                 self.apply_core(&rr, &pending.res, &pending.chol)
             }
+        };
+        // The factor's storage goes back to the workspace for the next innovation.
+        if let Some(mw) = self.mws.as_mut() {
+            mw.chol_buf = pending.chol.unpack_dirty();
         }
+        out
     }
 }
 
@@ -566,6 +579,8 @@ struct MWork {
     columns: Vec<usize>,
     /// The whitened residual `L⁻¹r` (k).
     w: DVector<f64>,
+    /// Storage for the next Cholesky factor of `A` (k × k; empty until an update hands one back).
+    chol_buf: DMatrix<f64>,
 }
 
 impl MWork {
@@ -579,6 +594,7 @@ impl MWork {
             selection: false,
             columns: Vec::with_capacity(k),
             w: DVector::zeros(k),
+            chol_buf: DMatrix::zeros(0, 0),
         }
     }
 }

@@ -61,16 +61,17 @@ impl KalmanFilter {
     fn step_with(&mut self, m: &FixedModel, z: &DVector<f64>) -> Result<Innovation> {
         check_len("z", z, m.h.nrows())?;
         check_no_inf("z", z)?;
-        // Kept in buffers the filter owns (no allocation per epoch once they have the size).
-        if self.saved.1.shape() == self.p.shape() {
-            self.saved.0.copy_from(&self.x);
-            self.saved.1.copy_from(&self.p);
-        } else {
+        // The state before the epoch, for a failed update: the prediction leaves it in its
+        // workspace (it computes into `ws` and swaps), from where it is swapped into `saved`
+        // — buffers the filter owns, no copy or allocation per epoch once they have the size.
+        if self.saved.1.shape() != self.p.shape() {
             self.saved = (self.x.clone(), self.p.clone());
         }
-        let out = self
-            .predict_trusted(&m.phi, &m.q, 1.0)
-            .and_then(|()| self.update_trusted(z, &m.h, &m.r));
+        // A failed prediction leaves the filter as it was.
+        self.predict_trusted(&m.phi, &m.q, 1.0)?;
+        std::mem::swap(&mut self.saved.0, &mut self.ws.x);
+        std::mem::swap(&mut self.saved.1, &mut self.ws.nn_c);
+        let out = self.update_trusted(z, &m.h, &m.r);
         if out.is_err() {
             self.x.copy_from(&self.saved.0);
             self.p.copy_from(&self.saved.1);
@@ -128,6 +129,33 @@ mod tests {
         // A missing component: predict only.
         assert!(kf.step(&DVector::from_element(1, f64::NAN)).is_ok());
         assert_ne!(kf.p(), &p);
+    }
+
+    /// An update that fails after the prediction (a finite `z` whose statistic overflows)
+    /// restores the state before the epoch from the swapped buffers, and the next steps are
+    /// still predict + update to the bit.
+    #[test]
+    fn a_failed_update_restores_the_epoch_before() {
+        let (phi, q, h, r) = model();
+        let (mut a, mut b) = (filter(), filter());
+        a.set_model(phi.clone(), q.clone(), h.clone(), r.clone())
+            .unwrap();
+        for k in 0..3 {
+            let z = DVector::from_element(1, k as f64);
+            a.step(&z).unwrap();
+            b.predict(&phi, &q, 1.0).unwrap();
+            b.update(&z, &h, &r).unwrap();
+        }
+        let (x, p) = (a.x().clone(), a.p().clone());
+        assert!(a.step(&DVector::from_element(1, 1e300)).is_err());
+        assert_eq!((a.x(), a.p()), (&x, &p));
+        for k in 0..3 {
+            let z = DVector::from_element(1, -(k as f64));
+            a.step(&z).unwrap();
+            b.predict(&phi, &q, 1.0).unwrap();
+            b.update(&z, &h, &r).unwrap();
+            assert_eq!((a.x(), a.p()), (b.x(), b.p()));
+        }
     }
 
     #[test]
