@@ -70,3 +70,18 @@ def test_solved_epochs_turn_the_error_into_a_warning():
         check_ephemeris_coverage(_sats({"G05": (0, 4)}), 1, OBS, NAV, SPAN, navfdi.read_rinex)
     with pytest.raises(ValueError, match="no epoch solved"):
         check_ephemeris_coverage(_sats({"G05": (0, 4)}), 0, OBS, NAV, SPAN, navfdi.read_rinex)
+
+
+def test_a_file_with_no_epoch_solved_says_why():
+    """The shared RINEX 2 pair: its navigation file covers two or three of the satellites in
+    view in the observations' hour, so no epoch has four. The run says so — satellite-epochs
+    per status, the most any epoch had against the four needed — instead of NaN rates; the
+    σ model's estimate adds no warning of its own (nothing could be tested)."""
+    obs, nav = DATA / "rinex_formats" / "delf0010.21o.gz", DATA / "rinex_formats" / "cbw10010.21n.gz"
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        with pytest.raises(ValueError, match=r"no epoch solved in .*delf0010\.21o\.gz \(105 epochs\): satellite-epochs no_ephemeris 1030, "
+                                             r"unsolved 217; at most 3 satellite\(s\) with a usable ephemeris above the mask at any epoch, 4 needed"):
+            navfdi.gnss_solve(obs, nav, systems="G")
+    assert [type(w.message) for w in seen] == [navfdi.PartialLogWarning]
+    assert main(["gnss", str(obs), str(nav), "--systems", "G", "--no-figures"]) == 2

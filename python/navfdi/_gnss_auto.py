@@ -108,7 +108,8 @@ def resolve_auto(obs: str | os.PathLike[str], nav: str | os.PathLike[str], commo
         try:
             auto = auto_noise_scale(lambda **kw: run().solve(weighting=weighting, cn0_slope=slope_, test="global", **kw))
         except TooFewEpochs as e:
-            warnings.warn(f"{e}; the sigma factor stays 1 (--noise 1)", UserWarning, stacklevel=3)
+            if e.tested:  # with none, the run that follows says why nothing was solved
+                warnings.warn(f"{e}; the sigma factor stays 1 (--noise 1)", UserWarning, stacklevel=3)
             auto = {"scale": 1.0, "whole_file": math.nan, "faults_excluded": math.nan, "iterations": 0, "method": "too few epochs: 1"}
         why = ("they are not code noise (a navigation file that does not belong to the observations, receiver clock jumps, "
                "unmodelled biases)")

@@ -40,7 +40,12 @@ def _factor(solution: Any, statistic: str, dof: str, tail: float) -> float | Non
 
 
 class TooFewEpochs(ValueError):
-    """A file with fewer than 20 epochs that can be tested: too few to estimate a σ factor."""
+    """A file with fewer than 20 epochs that can be tested (``tested`` of them): too few to
+    estimate a σ factor."""
+
+    def __init__(self, message: str, tested: int) -> None:
+        super().__init__(message)
+        self.tested = tested
 
 
 def estimate_noise_scale(solution: Any) -> float:
@@ -51,7 +56,7 @@ def estimate_noise_scale(solution: Any) -> float:
     f = _factor(solution, "first_statistic", "first_dof", 0.1)
     if f is None:
         n = _tested(solution, "first_statistic", "first_dof")[0].size
-        raise TooFewEpochs(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise")
+        raise TooFewEpochs(f"noise_scale='auto': {n} epochs could be tested; at least 20 are needed to estimate the noise", n)
     return f
 
 

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navfdi import _core, _json
-from navfdi._gnss_coverage import check_ephemeris_coverage
+from navfdi._gnss_coverage import check_ephemeris_coverage, raise_if_nothing_solved
 from navfdi._gnss_geometry import enu_sigma
 from navfdi._gnss_auto import MAX_NOISE_SCALE, resolve_auto
 from navfdi._gnss_noise import by_system_text, robust_sd, robust_sd_by
@@ -838,7 +838,9 @@ def gnss_solve(
     sats.insert(1, "time", gps_time(ep["time"][sats["epoch"].to_numpy()]) if len(sats) else pd.DatetimeIndex([]))
     sats["satellite"] = sats["satellite"].astype("category")
     if len(sol):
-        check_ephemeris_coverage(sats, int((sol["status"] != "no_solution").sum()), obs, nav, tuple(gps_time(ep["time"][[0, -1]])), read_rinex)
+        solved = int((sol["status"] != "no_solution").sum())
+        check_ephemeris_coverage(sats, solved, obs, nav, tuple(gps_time(ep["time"][[0, -1]])), read_rinex)
+        raise_if_nothing_solved(sats, len(sol), solved, obs, len(systems))
     sd = enu_sigma(sats, len(sol))
     at = sol.columns.get_loc("height") + 1
     for j, c in enumerate(("sd_e", "sd_n", "sd_u")):
