@@ -105,6 +105,9 @@ def test_a_short_file_keeps_the_model_as_given_with_a_warning(tmp_path: Path, ca
     assert sol.config["noise_scale"] == 1.0 and len(sol.solution) == 12
     assert sol.config["noise_scale_auto"]["method"].startswith("too few epochs")
     assert main(["gnss", short, NAV, "--systems", "G,E", "--no-figures"]) == 0
+    out = capsys.readouterr().out.replace("\n  ", " ")
+    assert "noise: sigma factor 1 (--noise auto: too few epochs could be tested to estimate it; 20 needed)" in out
+    assert "too few epochs to compare the models" in out and "nan" not in out.split("weighting:")[1]
     # A factor given by hand is taken as it is, without estimates.
     fixed = navfdi.gnss_solve(short, NAV, systems="G,E", weighting="elevation", noise_scale=2.0)
     assert fixed.config["noise_scale"] == 2.0 and "noise_scale_auto" not in fixed.config

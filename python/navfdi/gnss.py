@@ -467,8 +467,11 @@ class GnssSolution:
             f"clean w SD {s['clean_w_sd']:.2f} (robust {s['clean_w_sd_robust']:.2f}{by_system_text(s)}; 1 when the sigma fit)")
         if "weighting_auto" in self.config:
             wa = self.config["weighting_auto"]
-            lines.append(f"weighting: {wa['chosen']}, chosen from the file (--weighting auto; the statistic's tail ratio "
-                         + ", ".join(f"{kk} {v:.3f}" for kk, v in wa["tail"].items()) + "; 0 for a model of the right shape)")
+            if any(math.isfinite(v) for v in wa["tail"].values()):
+                lines.append(f"weighting: {wa['chosen']}, chosen from the file (--weighting auto; the statistic's tail ratio "
+                             + ", ".join(f"{kk} {v:.3f}" for kk, v in wa["tail"].items()) + "; 0 for a model of the right shape)")
+            else:
+                lines.append(f"weighting: {wa['chosen']} (--weighting auto: too few epochs to compare the models; 20 tested needed)")
         if "cn0_slope_auto" in self.config:
             c = self.config["cn0_slope_auto"]
             if c["settled"] or math.isfinite(c["estimate"]):
@@ -481,9 +484,12 @@ class GnssSolution:
         if self.config.get("noise_scale_estimated"):
             a = self.config.get("noise_scale_auto", {})
             detail = ""
-            if a:
-                detail = f": {a['method']} (whole file {a['whole_file']:.3f}, with the faults excluded {a['faults_excluded']:.3f} after {a['iterations']} solves)"
-            lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto){detail}")
+            if a and not math.isfinite(a["whole_file"]):
+                lines.append("noise: sigma factor 1 (--noise auto: too few epochs could be tested to estimate it; 20 needed)")
+            else:
+                if a:
+                    detail = f": {a['method']} (whole file {a['whole_file']:.3f}, with the faults excluded {a['faults_excluded']:.3f} after {a['iterations']} solves)"
+                lines.append(f"noise: sigma scaled by {s['noise_scale']:.3f}, estimated from the file (--noise auto){detail}")
         elif s["global_alarm_rate_clean"] > 5 * s["alpha"]:
             cn0 = self.config.get("weighting") == "elevation" and bool(s.get("clean_w_sd_robust_by_cn0"))  # the file records C/N0
             lines.append(f"the global test alarms at {s['global_alarm_rate_clean']:.1%} of clean epochs against alpha {s['alpha']:g}: the noise model does not fit this receiver; --noise auto (noise_scale='auto', the default) estimates a sigma factor from the file" + ("; it records C/N0: --weighting auto (the default) takes the C/N0 model where its statistics fit better" if cn0 else ""))
