@@ -13,7 +13,11 @@ step on one component, scored with the metrics of docs/meter_fde.md's campaigns
   variance grown as a random walk's (white errors' sums do not grow) and the hold ended mid-ramp,
   the filter then 10 m off and the good fixes left out;
 * 5 Hz fixes: the innovations of an INS lagging a ramp cross |w| 2 now and then, and the jump
-  back at the ramp's end was held as a step (10.5 m after the end).
+  back at the ramp's end was held as a step (10.5 m after the end);
+* a receiver that reports 0.7 m for 2 m errors, a ramp across the stop: the filter followed
+  it through its position corrections while ZUPT held the velocity, and the jump back was
+  held as a step for the rest of the run (22 m after the end) — the pull-back rule read only
+  receivers without velocities.
 """
 
 from __future__ import annotations
@@ -59,6 +63,10 @@ WHITE = {"gnss_sigma": 0.0, "gnss_tau": 0.0, "gnss_white": 1.0}
     ("ramp across a stop", 1, _fault("pos_e", "ramp", "0.5 m/s", 275.0, 40.0), 1.0, GM, 11.3),
     ("white receiver, ramp", 1, _fault("pos_n", "ramp", "0.5 m/s", 290.8, 40.0), 1.0, WHITE, 10.5),
     ("5 Hz fixes, ramp", 2, _fault("pos_n", "ramp", "0.5 m/s", 169.9, 40.0), 5.0, GM, 10.5),
+    # σ reported 0.7 m for 2 m errors: the filter followed the ramp across the stop through
+    # its position corrections (ZUPT held the velocity); the pull-back rule now reads them.
+    ("ramp across a stop, σ under-reported", 3, _fault("pos_n", "ramp", "0.5 m/s", 261.2, 40.0), 1.0,
+     {**GM, "reported_sigma": 0.7}, 22.1),
 ])
 def test_the_end_of_a_followed_ramp_is_not_held(tmp_path: Path, docs_script: Callable[[str], ModuleType], name: str, seed: int,
                                                  fault: dict[str, Any], rate: float, noise: dict[str, float], before: float) -> None:

@@ -504,10 +504,7 @@ fn run<const NS: usize>(
                     converged,
                     gross,
                     l.accommodate,
-                    recv[a]
-                        .as_ref()
-                        .is_some_and(|c| c.ins_referenced)
-                        .then_some(&pull),
+                    Some(&pull),
                 );
                 // A held step the receiver's jump back ended: that jump is the step test's, not
                 // a drift of the receiver — its sequential tests start again after it.

@@ -201,8 +201,8 @@ impl PositionHold {
     /// alarms (all, when it cannot say), `thr1` the 1-dof critical value of the deciding test,
     /// `ramp` the components the sequential test flags, `converged`: the filter has settled
     /// (before, only a `gross` innovation starts a hold), `accommodate`: a step is used as a
-    /// relative fix, `pull`: how far the GNSS updates moved the INS lately, given for a
-    /// receiver without velocities (a jump back across such a pull ends a followed fault).
+    /// relative fix, `pull`: how far the GNSS updates moved the INS lately (a jump back across
+    /// such a pull ends a followed fault).
     ///
     /// An alarm whose innovation appeared since the previous fix (a jump of at least half the
     /// innovation and 2σ of the jump) is a step, held; one that grew into the test (no jump:
@@ -314,8 +314,10 @@ impl PositionHold {
                         });
                     let flagged =
                         (alarm && (converged || gross) && isolated.contains(&j)) || receiver_step;
-                    // Without the receiver's velocity, a jump back across an INS the
-                    // updates had pulled the other way is the end of a fault it followed.
+                    // A jump back across an INS the updates had pulled the other way is the
+                    // end of a fault it followed (without the receiver's velocity the filter
+                    // follows slow ramps; with it, at rest, where ZUPT holds the velocity and
+                    // only the position corrections move the INS).
                     let pulled_back =
                         flagged && jump && pull.is_some_and(|p| p.back(j, d[j], s[j]));
                     // A jump back to the offset of a step taken as over lately: the step

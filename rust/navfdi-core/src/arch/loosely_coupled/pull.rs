@@ -1,8 +1,10 @@
 //! How far the GNSS updates have moved the INS: the evidence that tells the end of a fault the
-//! filter followed from the start of a new one, on a receiver without velocities.
+//! filter followed from the start of a new one.
 //!
-//! Without the receiver's velocity a slow ramp is followed by the filter, and where it ends the
-//! fixes jump back across the INS: the same picture, in the innovations, as a step's onset.
+//! Without the receiver's velocity a slow ramp is followed by the filter (with it, a ramp
+//! across a stop, where ZUPT holds the velocity and the position corrections move the INS),
+//! and where it ends the fixes jump back across the INS: the same picture, in the
+//! innovations, as a step's onset.
 //! What differs is the past: before a ramp's end the GNSS updates had pushed the INS the way
 //! the fixes then jump back from; before a step's onset they only followed the receiver's
 //! correlated error. Only the updates' direct position corrections are summed: what they move
