@@ -17,7 +17,9 @@ step on one component, scored with the metrics of docs/meter_fde.md's campaigns
 * a receiver that reports 0.7 m for 2 m errors, a ramp across the stop: the filter followed
   it through its position corrections while ZUPT held the velocity, and the jump back was
   held as a step for the rest of the run (22 m after the end) — the pull-back rule read only
-  receivers without velocities.
+  receivers without velocities; and one that ended during the stop, held as a ramp for the
+  rest of the run (18 m after the end): a held ramp's end was read from the receiver's
+  consistency alone, which is not measured at rest.
 """
 
 from __future__ import annotations
@@ -67,6 +69,10 @@ WHITE = {"gnss_sigma": 0.0, "gnss_tau": 0.0, "gnss_white": 1.0}
     # its position corrections (ZUPT held the velocity); the pull-back rule now reads them.
     ("ramp across a stop, σ under-reported", 3, _fault("pos_n", "ramp", "0.5 m/s", 261.2, 40.0), 1.0,
      {**GM, "reported_sigma": 0.7}, 22.1),
+    # The same receiver, a ramp that ends during the stop: held as a ramp, its end at rest
+    # (no receiver consistency there) is a jump back across the pull.
+    ("ramp ending at a stop, σ under-reported", 3, _fault("pos_n", "ramp", "0.5 m/s", 241.9, 40.0), 1.0,
+     {**GM, "reported_sigma": 0.7}, 18.2),
 ])
 def test_the_end_of_a_followed_ramp_is_not_held(tmp_path: Path, docs_script: Callable[[str], ModuleType], name: str, seed: int,
                                                  fault: dict[str, Any], rate: float, noise: dict[str, float], before: float) -> None:

@@ -655,3 +655,53 @@ fn a_velocity_is_blamed_where_its_innovation_says_what_the_receiver_does() {
         assert_eq!(b.step(&ins, &v(-0.5), &s_dv, &quiet, 1.0), [false; 3]);
     }
 }
+
+/// A held ramp whose end comes at rest, where the receiver's consistency is not read: the
+/// fix jumps back across an INS the GNSS updates had pulled the ramp's way (16 m of position
+/// corrections, as a filter that weighs the fixes too much follows a ramp while ZUPT holds the
+/// velocity), which ends the hold, and the fixes after it are used as measured while they
+/// correct the INS — before, the ramp was held for the rest of the run.
+#[test]
+fn a_ramps_end_at_rest_across_a_pull_is_a_return() {
+    let mut pull = crate::arch::loosely_coupled::pull::PullHistory::default();
+    for k in 0..41 {
+        pull.add(k as f64, &v(0.4), &Vector3::zeros());
+    }
+    let mut h = settled();
+    // The ramp flagged by the receiver (11 m since its onset), the fix 4 m north of the INS.
+    assert!(matches!(
+        step_e(&mut h, 30.0, -4.0, true, Some((1.0, 11.0))),
+        Use::Out(RAMP) | Use::Relative(..)
+    ));
+    assert!(matches!(h.comps[1], Comp::Drift { .. }), "{:?}", h.comps[1]);
+    let at_rest = |h: &mut PositionHold, t: f64, d: f64, pull| {
+        h.decide(
+            t,
+            &v(d),
+            &Vector3::repeat(4.5),
+            d * d / 4.5 > THR,
+            &[1],
+            THR,
+            None,
+            true,
+            true,
+            false,
+            true,
+            pull,
+        )[1]
+    };
+    assert!(matches!(
+        at_rest(&mut h, 31.0, -4.2, Some(&pull)),
+        Use::Out(RAMP) | Use::Relative(..)
+    ));
+    // Without the pull the jump back is not told from a new fault: still held.
+    let mut other = h.clone();
+    assert!(matches!(
+        at_rest(&mut other, 32.0, 16.0, None),
+        Use::Out(_) | Use::Relative(..)
+    ));
+    // With it: a return, and the fixes that follow correct the INS.
+    assert_eq!(at_rest(&mut h, 32.0, 16.0, Some(&pull)), Use::Raw);
+    assert_eq!(at_rest(&mut h, 33.0, 12.0, Some(&pull)), Use::Raw);
+    assert_eq!(at_rest(&mut h, 34.0, 8.0, Some(&pull)), Use::Raw);
+}
