@@ -375,8 +375,8 @@ impl PositionHold {
                     // otherwise.
                     let consistent = recv.is_none_or(|c| c.e[j].abs() <= 3.0 * c.sigma[j]);
                     if w2(j) <= thr1 || fixes >= AGREE_LONG || !consistent {
-                        // Corrected (or the receiver jumped again, or cannot be read): tested
-                        // as any fix from the next one.
+                        // Corrected (or the receiver jumped again, or the return lasted
+                        // [`AGREE_LONG`] fixes): tested as any fix from the next one.
                         if !consistent && alarm && isolated.contains(&j) {
                             out[j] = Use::Out(TEST);
                         }
