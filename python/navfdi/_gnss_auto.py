@@ -31,6 +31,29 @@ MAX_NOISE_SCALE = 1e6
 MAX_ESTIMATION_EPOCHS = 3600
 
 
+def scaled_factors(noise_factors: dict[str, float] | None, scale: float) -> dict[str, float]:
+    """Per-system σ factors by system letter (``noise_factors``, letters upper-cased), each
+    system's times ``scale`` (every system's, given or 1, when ``scale`` is not 1)."""
+    given = {str(k).upper(): float(v) for k, v in (noise_factors or {}).items()}
+    return given if scale == 1.0 else {s: given.get(s, 1.0) * float(scale) for s in ("G", "E", "C", "J")}
+
+
+def new_run(obs: str | os.PathLike[str], nav: str | os.PathLike[str], common: dict[str, Any], *, exclude: bool, weighting: str,
+            cn0_slope: float, factors: dict[str, float], faults: list[tuple[str, str, float, float, float]]) -> _core.GnssRun:
+    """``_core.GnssRun`` reading ``obs`` and ``nav`` with the solver settings ``common`` (see
+    :class:`EstimationRun`) and these: exclusion, variance model and its C/N0 slope,
+    per-system σ ``factors`` and the faults ``(satellite, shape, magnitude, start_s, end_s)``."""
+    c = common
+    return _core.GnssRun(
+        os.fspath(obs), os.fspath(nav), list(c["systems"]), float(c["mask_deg"]), float(c["alpha"]),
+        None if c["k"] is None else float(c["k"]), bool(exclude), (float(c["noise"][0]), float(c["noise"][1])), weighting,
+        bool(c["ionosphere"]), bool(c["troposphere"]), faults, dict(c["codes"] or {}), factors,
+        (float(c["sprt"][0]), float(c["sprt"][1])), (float(c["aime"][0]), int(c["aime"][1])),
+        (float(c["cusum"][0]), float(c["cusum"][1]), float(c["cusum"][2]), int(c["cusum"][3]), float(c["cusum"][4])),
+        float(c["cn0_reference"]), str(c["test"]), float(c["power"]), float(cn0_slope),
+    )  # fmt: skip
+
+
 class EstimationRun:
     """One reading of ``obs`` and ``nav`` with the solver settings ``common`` (the keyword
     arguments of :func:`navfdi.gnss.gnss_solve` other than the ones estimated, the faults, the
@@ -38,17 +61,10 @@ class EstimationRun:
     ``every``-th epoch, ``every`` the smallest that keeps to :data:`MAX_ESTIMATION_EPOCHS`."""
 
     def __init__(self, obs: str | os.PathLike[str], nav: str | os.PathLike[str], common: dict[str, Any]) -> None:
-        c = common
-        self.factors = {str(k).upper(): float(v) for k, v in (c["noise_factors"] or {}).items()}
-        self.test = str(c["test"])
-        self.run = _core.GnssRun(
-            os.fspath(obs), os.fspath(nav), list(c["systems"]), float(c["mask_deg"]), float(c["alpha"]),
-            None if c["k"] is None else float(c["k"]), False, (float(c["noise"][0]), float(c["noise"][1])), "elevation",
-            bool(c["ionosphere"]), bool(c["troposphere"]), [], dict(c["codes"] or {}), self.factors,
-            (float(c["sprt"][0]), float(c["sprt"][1])), (float(c["aime"][0]), int(c["aime"][1])),
-            (float(c["cusum"][0]), float(c["cusum"][1]), float(c["cusum"][2]), int(c["cusum"][3]), float(c["cusum"][4])),
-            float(c["cn0_reference"]), self.test, float(c["power"]), 1.0,
-        )  # fmt: skip
+        self.given = common["noise_factors"]
+        self.test = str(common["test"])
+        self.run = new_run(obs, nav, common, exclude=False, weighting="elevation", cn0_slope=1.0,
+                           factors=scaled_factors(self.given, 1.0), faults=[])
         self.solves = 0
         self.every = max(1, -(-self.run.n_epochs // MAX_ESTIMATION_EPOCHS))
 
@@ -61,7 +77,7 @@ class EstimationRun:
         ``cn0`` dB-Hz, ``used`` bool) as mappings of numpy columns — what the estimators of
         :mod:`navfdi._gnss_noise` read (no pandas: the run keeps the file's observations, and
         the peak memory of a day file is what that costs)."""
-        factors = self.factors if noise_scale == 1.0 else {s: self.factors.get(s, 1.0) * float(noise_scale) for s in ("G", "E", "C", "J")}
+        factors = scaled_factors(self.given, noise_scale)
         self.run.restart(weighting, float(cn0_slope), factors, bool(exclude), self.test if test is None else test, self.every)
         while self.run.done < self.run.n_epochs:
             self.run.advance(1 << 30)

@@ -30,7 +30,7 @@ import numpy as np
 from navfdi import _core, _json
 from navfdi._gnss_coverage import check_ephemeris_coverage, raise_if_nothing_solved
 from navfdi._gnss_geometry import enu_sigma
-from navfdi._gnss_auto import MAX_NOISE_SCALE, resolve_auto
+from navfdi._gnss_auto import MAX_NOISE_SCALE, new_run, resolve_auto, scaled_factors
 from navfdi._gnss_noise import by_system_text, robust_sd, robust_sd_by
 from navfdi._gnss_noise import estimate_noise_scale as estimate_noise_scale  # the public name it had here
 from navfdi.scenario import NeverAppliedWarning
@@ -749,32 +749,11 @@ def gnss_solve(
     weighting, cn0_slope, noise_scale, estimated = resolve_auto(obs, nav, common, weighting, cn0_slope, noise_scale)
     if estimated.get("estimation_solves"):
         _release_freed_memory()
+    factors = scaled_factors(noise_factors, noise_scale)
     if noise_scale != 1.0:
-        given = {str(kk).upper(): float(v) for kk, v in (noise_factors or {}).items()}
-        noise_factors = {s_: given.get(s_, 1.0) * float(noise_scale) for s_ in ("G", "E", "C", "J")}
-    run = _core.GnssRun(
-        os.fspath(obs),
-        os.fspath(nav),
-        systems,
-        float(mask_deg),
-        float(alpha),
-        None if k is None else float(k),
-        bool(exclude),
-        (float(noise[0]), float(noise[1])),
-        weighting,
-        bool(ionosphere),
-        bool(troposphere),
-        [(f.satellite, f.shape, f.magnitude, f.start, min(f.end, 1e15)) for f in parsed],
-        dict(codes or {}),
-        {str(k).upper(): float(v) for k, v in (noise_factors or {}).items()},
-        (float(sprt[0]), float(sprt[1])),
-        (float(aime[0]), int(aime[1])),
-        (float(cusum[0]), float(cusum[1]), float(cusum[2]), int(cusum[3]), float(cusum[4])),
-        float(cn0_reference),
-        test,
-        float(power),
-        float(cn0_slope),
-    )
+        noise_factors = factors  # what the run used, as the config records it
+    run = new_run(obs, nav, common, exclude=exclude, weighting=weighting, cn0_slope=cn0_slope, factors=factors,
+                  faults=[(f.satellite, f.shape, f.magnitude, f.start, min(f.end, 1e15)) for f in parsed])
     bar = None
     if progress:
         from tqdm import tqdm
