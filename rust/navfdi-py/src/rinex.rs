@@ -204,6 +204,24 @@ fn parse_weighting(weighting: &str, cn0_reference: f64, cn0_slope: f64) -> PyRes
     })
 }
 
+/// The global test's columns of the epochs `e` into `d`: ``statistic``, ``dof`` of the final
+/// set and ``first_statistic``, ``first_dof`` of the first test (float64).
+fn test_columns(py: Python<'_>, d: &Bound<'_, PyDict>, e: &[spp::EpochSolution]) -> PyResult<()> {
+    let n = e.len();
+    let f = |g: &dyn Fn(&spp::EpochSolution) -> f64| -> Vec<f64> { e.iter().map(g).collect() };
+    d.set_item("dof", to_numpy(py, f(&|s| s.fde.dof as f64), &[n])?)?;
+    d.set_item("statistic", to_numpy(py, f(&|s| s.fde.statistic), &[n])?)?;
+    d.set_item(
+        "first_statistic",
+        to_numpy(py, f(&|s| s.fde.first.0), &[n])?,
+    )?;
+    d.set_item(
+        "first_dof",
+        to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
+    )?;
+    Ok(())
+}
+
 /// Per-system σ factors from their letters.
 fn parse_factors(factors: &BTreeMap<String, f64>) -> PyResult<Vec<(Sys, f64)>> {
     factors
@@ -560,20 +578,11 @@ impl PyGnssRun {
                 )?,
             )?;
         }
-        d.set_item("dof", to_numpy(py, f(&|s| s.fde.dof as f64), &[n])?)?;
-        d.set_item("statistic", to_numpy(py, f(&|s| s.fde.statistic), &[n])?)?;
+        test_columns(py, &d, e)?;
         d.set_item("threshold", to_numpy(py, f(&|s| s.fde.threshold), &[n])?)?;
-        d.set_item(
-            "first_statistic",
-            to_numpy(py, f(&|s| s.fde.first.0), &[n])?,
-        )?;
         d.set_item(
             "first_threshold",
             to_numpy(py, f(&|s| s.fde.first.1), &[n])?,
-        )?;
-        d.set_item(
-            "first_dof",
-            to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
         )?;
         let sn = |g: &dyn Fn(&navfdi_core::gnss::snapshot::Snooping) -> f64| {
             f(&|s: &spp::EpochSolution| s.fde.snooping.as_ref().map_or(f64::NAN, g))
@@ -607,20 +616,10 @@ impl PyGnssRun {
     /// ``first_statistic``, ``first_dof`` (as in :meth:`epoch_table`); per satellite-epoch
     /// row ``w``, ``cn0`` (dB-Hz, NaN where none) and ``used`` (bool: status ``used``).
     fn estimation_table<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (e, r) = (&self.out.epochs, &self.out.sats);
-        let (n, m) = (e.len(), r.len());
+        let r = &self.out.sats;
+        let m = r.len();
         let d = PyDict::new(py);
-        let f = |g: &dyn Fn(&spp::EpochSolution) -> f64| -> Vec<f64> { e.iter().map(g).collect() };
-        d.set_item("statistic", to_numpy(py, f(&|s| s.fde.statistic), &[n])?)?;
-        d.set_item("dof", to_numpy(py, f(&|s| s.fde.dof as f64), &[n])?)?;
-        d.set_item(
-            "first_statistic",
-            to_numpy(py, f(&|s| s.fde.first.0), &[n])?,
-        )?;
-        d.set_item(
-            "first_dof",
-            to_numpy(py, f(&|s| s.fde.first.2 as f64), &[n])?,
-        )?;
+        test_columns(py, &d, &self.out.epochs)?;
         d.set_item("w", to_numpy(py, r.iter().map(|x| x.w).collect(), &[m])?)?;
         d.set_item(
             "cn0",
