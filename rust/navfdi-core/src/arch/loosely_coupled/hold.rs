@@ -298,6 +298,9 @@ impl PositionHold {
         // ramp.
         let leaves =
             |j: usize, b: f64| w2(j) > AGREE_W2 && d[j] * b > 0.0 && d[j].abs() > 0.25 * b.abs();
+        // The fix jumped back across an INS the GNSS updates had pulled the other way
+        // ([`super::pull::PullHistory::back`]): the end of a fault the filter followed.
+        let pulled = |j: usize| pull.is_some_and(|p| p.back(j, d[j], s[j]));
         for j in 0..3 {
             let jump = jumped(j);
             self.comps[j] = match self.comps[j] {
@@ -318,8 +321,7 @@ impl PositionHold {
                     // end of a fault it followed (without the receiver's velocity the filter
                     // follows slow ramps; with it, at rest, where ZUPT holds the velocity and
                     // only the position corrections move the INS).
-                    let pulled_back =
-                        flagged && jump && pull.is_some_and(|p| p.back(j, d[j], s[j]));
+                    let pulled_back = flagged && jump && pulled(j);
                     // A jump back to the offset of a step taken as over lately: the step
                     // resumes (held by the rule below), whatever the window says.
                     let resumes = self.ended[j].is_some_and(|(t0, b0)| {
@@ -584,9 +586,7 @@ impl PositionHold {
                     // had pulled the ramp's way. Not where it can: on RTK fixes every fix of a
                     // fast ramp is a "jump", and it was taken for a return (0.6-1 m/s ramps'
                     // 95th percentile 4.6 -> 15 m on drive_lc).
-                    let pulled_back = recv.is_none_or(|c| c.ins_referenced)
-                        && jump
-                        && pull.is_some_and(|p| p.back(j, d[j], s[j]));
+                    let pulled_back = recv.is_none_or(|c| c.ins_referenced) && jump && pulled(j);
                     if returned(j) || quiet >= AGREE_LONG || pulled_back {
                         Comp::Return { fixes: 1 }
                     } else if (!confirmed && fixes >= PROBATION) || agree >= AGREE {
