@@ -96,19 +96,31 @@ mod tests {
         (phi, q, h, r)
     }
 
+    /// A filter with the model fixed and its twin stepped by hand.
+    fn twins() -> (KalmanFilter, KalmanFilter) {
+        let (phi, q, h, r) = model();
+        let mut a = filter();
+        a.set_model(phi, q, h, r).unwrap();
+        (a, filter())
+    }
+
+    /// `a.step(z)` beside `b.predict` + `b.update` with the same model: the same state and
+    /// statistic to the bit.
+    fn step_both(a: &mut KalmanFilter, b: &mut KalmanFilter, z: f64) {
+        let (phi, q, h, r) = model();
+        let z = DVector::from_element(1, z);
+        let ia = a.step(&z).unwrap();
+        b.predict(&phi, &q, 1.0).unwrap();
+        let ib = b.update(&z, &h, &r).unwrap();
+        assert_eq!((a.x(), a.p()), (b.x(), b.p()));
+        assert_eq!(ia.statistic.to_bits(), ib.statistic.to_bits());
+    }
+
     #[test]
     fn a_step_is_predict_then_update_to_the_bit() {
-        let (phi, q, h, r) = model();
-        let (mut a, mut b) = (filter(), filter());
-        a.set_model(phi.clone(), q.clone(), h.clone(), r.clone())
-            .unwrap();
+        let (mut a, mut b) = twins();
         for k in 0..20 {
-            let z = DVector::from_element(1, (k as f64).sin());
-            let ia = a.step(&z).unwrap();
-            b.predict(&phi, &q, 1.0).unwrap();
-            let ib = b.update(&z, &h, &r).unwrap();
-            assert_eq!((a.x(), a.p()), (b.x(), b.p()));
-            assert_eq!(ia.statistic.to_bits(), ib.statistic.to_bits());
+            step_both(&mut a, &mut b, (k as f64).sin());
         }
     }
 
@@ -136,25 +148,15 @@ mod tests {
     /// still predict + update to the bit.
     #[test]
     fn a_failed_update_restores_the_epoch_before() {
-        let (phi, q, h, r) = model();
-        let (mut a, mut b) = (filter(), filter());
-        a.set_model(phi.clone(), q.clone(), h.clone(), r.clone())
-            .unwrap();
+        let (mut a, mut b) = twins();
         for k in 0..3 {
-            let z = DVector::from_element(1, k as f64);
-            a.step(&z).unwrap();
-            b.predict(&phi, &q, 1.0).unwrap();
-            b.update(&z, &h, &r).unwrap();
+            step_both(&mut a, &mut b, k as f64);
         }
         let (x, p) = (a.x().clone(), a.p().clone());
         assert!(a.step(&DVector::from_element(1, 1e300)).is_err());
         assert_eq!((a.x(), a.p()), (&x, &p));
         for k in 0..3 {
-            let z = DVector::from_element(1, -(k as f64));
-            a.step(&z).unwrap();
-            b.predict(&phi, &q, 1.0).unwrap();
-            b.update(&z, &h, &r).unwrap();
-            assert_eq!((a.x(), a.p()), (b.x(), b.p()));
+            step_both(&mut a, &mut b, -(k as f64));
         }
     }
 
