@@ -68,22 +68,24 @@ def day_file(path: Path, copies: int = 10, source: Path = DATA / "rover.obs.gz",
     return copies * len(epochs)
 
 
-def peak_mb(cmd: list[str]) -> float:
-    """Peak resident set size (MB) of a command, by ``/usr/bin/time -v``."""
-    out = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True, check=True)
-    kb = next(int(line.split(":")[1]) for line in out.stderr.splitlines() if "Maximum resident set size" in line)
-    return kb / 1024
-
-
 def stopped_peak_mb(cmd: list[str]) -> tuple[float, bool]:
-    """Peak RSS (MB) of ``cmd`` and whether it stopped with ``navfdi gnss``'s "no epoch solved"
-    error (a day file whose geometry is not a receiver's: it is read and solved, its tables
-    built, and the run stops before its summary and outputs)."""
+    """Peak resident set size (MB) of a command, by ``/usr/bin/time -v``, and whether it
+    stopped with ``navfdi gnss``'s "no epoch solved" error (a day file whose geometry is not a
+    receiver's: it is read and solved, its tables built, and the run stops before its summary
+    and outputs); any other failure raises."""
     out = subprocess.run(["/usr/bin/time", "-v", *cmd], capture_output=True, text=True)
     if out.returncode and "no epoch solved" not in out.stderr:
         raise subprocess.CalledProcessError(out.returncode, cmd, out.stdout, out.stderr)
     kb = next(int(line.split(":")[1]) for line in out.stderr.splitlines() if "Maximum resident set size" in line)
     return kb / 1024, bool(out.returncode)
+
+
+def peak_mb(cmd: list[str]) -> float:
+    """Peak resident set size (MB) of a command that must succeed."""
+    mb, stopped = stopped_peak_mb(cmd)
+    if stopped:
+        raise RuntimeError(f"{' '.join(cmd)}: no epoch solved")
+    return mb
 
 
 def main() -> None:
