@@ -29,7 +29,7 @@
 //!
 //! Availability: `P_unmonitored ≤ P_THRES` and every PL finite.
 
-use super::subsets::{Downdate, Subsets};
+use super::subsets::{Downdate, EachRow, Subsets};
 use crate::error::{Error, Result};
 use nalgebra::DMatrix;
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -285,6 +285,48 @@ fn for_each_combination(m: usize, r: usize, f: &mut dyn FnMut(&[usize])) {
     rec(0, m, r, &mut Vec::with_capacity(r), f);
 }
 
+/// A mode's sums over the satellites of its gain rows `S⁽ᵏ⁾[:, i]`, against the all-in-view
+/// rows `S⁽⁰⁾[:, i]` (`s0_t[i]`): `σ_ss²` (with `C_acc`), the bias bound (with `b_nom`) and,
+/// given residuals `y`, the solution separation; east, north, up.
+struct ModeSums<'a> {
+    s0_t: &'a [[f64; 3]],
+    c_acc: &'a [f64],
+    b_nom: &'a [f64],
+    y: Option<&'a [f64]>,
+    ss2: [f64; 3],
+    bias: [f64; 3],
+    separation: [f64; 3],
+}
+
+impl EachRow for ModeSums<'_> {
+    /// Satellite i's row, inlined into the rows' loop (a closure body this size is not).
+    #[inline(always)]
+    fn row(&mut self, i: usize, sk: [f64; 3]) {
+        let s0i = self.s0_t[i];
+        let (c, b) = (self.c_acc[i], self.b_nom[i]);
+        for q in 0..3 {
+            let d = sk[q] - s0i[q];
+            self.ss2[q] += d * d * c;
+            self.bias[q] += sk[q].abs() * b;
+        }
+        if let Some(y) = self.y {
+            for q in 0..3 {
+                self.separation[q] += (sk[q] - s0i[q]) * y[i];
+            }
+        }
+    }
+}
+
+/// The indices of the bits set in `mask`, increasing.
+fn set_bits(mut mask: u128) -> Vec<usize> {
+    let mut out = Vec::with_capacity(mask.count_ones() as usize);
+    while mask != 0 {
+        out.push(mask.trailing_zeros() as usize);
+        mask &= mask - 1;
+    }
+    out
+}
+
 /// A fault mode's removed satellites: a bit mask up to 128 satellites, else the list.
 #[derive(PartialEq, Eq, Hash)]
 enum ModeKey {
@@ -351,8 +393,21 @@ fn solve_level(fd: impl Fn(f64) -> (f64, f64), target: f64, mut lo: f64, mut hi:
 /// p = 2), where one term alone reaches the target; above, the largest
 /// `shift + σ max(0, Q⁻¹(target/(N p)))` over the N terms, where each holds at most target/N —
 /// until the bracket is at most `tol` (m) wide; its upper end is returned, a level within
-/// `tol` above the root. `terms`: (prior, shift, 1/σ).
-fn add_level(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64, tol: f64) -> f64 {
+/// `tol` above the root. `terms`: (prior, shift, 1/σ); `fd(L)`: `(f, f')`.
+///
+/// The search is replayed rather than evaluated: the root is found first by [`solve_level`]
+/// (a few evaluations), and each midpoint goes to the side the root is on; `f` itself is
+/// evaluated only for a midpoint within 10 µm of the root, where that is not certain. The
+/// returned level is the ADD search's, bit for bit (`f` falls by ≈ 10⁻⁵ of itself over 10 µm,
+/// far beyond its rounding), at a third of its evaluations.
+fn add_level(
+    bias0: f64,
+    sigma0: f64,
+    terms: &[(f64, f64, f64)],
+    target: f64,
+    tol: f64,
+    fd: impl Fn(f64) -> (f64, f64),
+) -> f64 {
     let all = || std::iter::once((2.0, bias0, 1.0 / sigma0)).chain(terms.iter().copied());
     let n = (terms.len() + 1) as f64;
     let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
@@ -368,10 +423,18 @@ fn add_level(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64, to
         return f64::INFINITY;
     }
     let f = |l: f64| -> f64 { all().map(|(p, shift, inv)| p * q((l - shift) * inv)).sum() };
+    let root = solve_level(fd, target, lo, hi);
+    let above = |l: f64| -> bool {
+        if (l - root).abs() > 1e-5 {
+            l < root
+        } else {
+            f(l) > target
+        }
+    };
     let mut count = 0;
     while hi - lo > tol && count < 200 {
         let half = 0.5 * (lo + hi);
-        if f(half) > target {
+        if above(half) {
             lo = half;
         } else {
             hi = half;
@@ -435,7 +498,7 @@ pub(crate) fn protection_levels(
             (f, d)
         };
         if alloc.tol_pl > 0.0 {
-            return add_level(bias0[qd], sigma0[qd], &terms, target, alloc.tol_pl);
+            return add_level(bias0[qd], sigma0[qd], &terms, target, alloc.tol_pl, fd);
         }
         let share = target / (terms.len() + 1) as f64;
         let lo = bias0[qd] + sigma0[qd] * q_inv(0.5 * target);
@@ -535,8 +598,15 @@ pub(crate) fn araim_inner(
     let mut p_unmonitored = tail(n_max);
     // Candidate modes: combinations of up to n_max events, normalised (a constellation event
     // absorbs its own satellites), deduplicated.
-    let mut seen: std::collections::HashMap<ModeKey, usize> = std::collections::HashMap::new();
-    let mut modes_raw: Vec<(Vec<usize>, Vec<usize>, f64)> = Vec::new();
+    // Sized for every combination at once (growing them costs copies and page faults).
+    let combos = (1..=n_max).fold((0usize, 1usize), |(sum, c), k| {
+        let c = c.saturating_mul(events.len() + 1 - k) / k;
+        (sum.saturating_add(c), c)
+    });
+    let capacity = combos.0.min(1 << 16);
+    let mut seen: rustc_hash::FxHashMap<ModeKey, usize> =
+        rustc_hash::FxHashMap::with_capacity_and_hasher(capacity, Default::default());
+    let mut modes_raw: Vec<(Vec<usize>, Vec<usize>, f64)> = Vec::with_capacity(capacity);
     let small = n <= 128;
     let const_mask: Vec<u128> = (0..nc)
         .map(|c| {
@@ -573,7 +643,7 @@ pub(crate) fn araim_inner(
             std::collections::hash_map::Entry::Occupied(e) => modes_raw[*e.get()].2 += prior,
             std::collections::hash_map::Entry::Vacant(e) => {
                 let removed: Vec<usize> = match e.key() {
-                    ModeKey::Mask(mask) => (0..n).filter(|&i| mask >> i & 1 == 1).collect(),
+                    ModeKey::Mask(mask) => set_bits(*mask),
                     ModeKey::List(list) => list.clone(),
                 };
                 let consts: Vec<usize> =
@@ -584,38 +654,50 @@ pub(crate) fn araim_inner(
         }
     });
     let down = Downdate::new(&int, cov0.clone());
-    // Every mode's statistics from its gain rows (one buffer, rewritten per mode).
-    let mut sbuf = vec![[0.0; 3]; n];
+    // Every mode's statistics in the same pass as its gain rows; the thresholds once the
+    // number of monitored modes is known.
     let s0_t: Vec<[f64; 3]> = (0..n)
         .map(|i| [s0[(0, i)], s0[(1, i)], s0[(2, i)]])
         .collect();
-    let mut solved = Vec::with_capacity(modes_raw.len());
+    let mut modes: Vec<FaultMode> = Vec::with_capacity(modes_raw.len());
     for (removed, consts, prior) in modes_raw {
-        let Some(var) = down.rows_into(&removed, &mut sbuf) else {
+        let mut sums = ModeSums {
+            s0_t: &s0_t,
+            c_acc: &ism.c_acc,
+            b_nom: &ism.b_nom,
+            y: residuals,
+            ss2: [0.0; 3],
+            bias: [0.0; 3],
+            separation: [0.0; 3],
+        };
+        let Some(var) = down.rows_each(&removed, &mut sums) else {
             p_unmonitored += prior;
             continue;
         };
-        let mut ss2 = [0.0; 3];
-        let mut bias = [0.0; 3];
-        let mut separation = [0.0; 3];
-        for (i, (sk, s0i)) in sbuf.iter().zip(&s0_t).enumerate() {
-            for q in 0..3 {
-                let d = sk[q] - s0i[q];
-                ss2[q] += d * d * ism.c_acc[i];
-                bias[q] += sk[q].abs() * ism.b_nom[i];
-            }
-            if let Some(y) = residuals {
-                for q in 0..3 {
-                    separation[q] += (sk[q] - s0i[q]) * y[i];
-                }
-            }
-        }
+        let ModeSums {
+            ss2,
+            bias,
+            mut separation,
+            ..
+        } = sums;
         if residuals.is_none() {
             separation = [f64::NAN; 3];
         }
-        solved.push((removed, consts, prior, var, ss2, bias, separation));
+        modes.push(FaultMode {
+            satellites: removed,
+            constellations: consts,
+            prior,
+            sigma: var.map(|v| v.max(0.0).sqrt()),
+            sigma_ss: ss2.map(|v| v.max(0.0).sqrt()),
+            bias,
+            threshold: [0.0; 3],
+            separation,
+        });
     }
-    let k_fa = k_fa(solved.len(), alloc);
+    let k_fa = k_fa(modes.len(), alloc);
+    for m in &mut modes {
+        m.threshold = [0, 1, 2].map(|q| k_fa[q] * m.sigma_ss[q]);
+    }
     let bias_of = |s: &DMatrix<f64>, qd: usize| -> f64 {
         (0..n).map(|i| s[(qd, i)].abs() * ism.b_nom[i]).sum()
     };
@@ -625,23 +707,6 @@ pub(crate) fn araim_inner(
         cov0[(2, 2)].sqrt(),
     ];
     let bias0 = [bias_of(&s0, 0), bias_of(&s0, 1), bias_of(&s0, 2)];
-    let modes: Vec<FaultMode> = solved
-        .into_iter()
-        .map(|(removed, consts, prior, var, ss2, bias, separation)| {
-            let sigma = var.map(|v| v.max(0.0).sqrt());
-            let sigma_ss = ss2.map(|v| v.max(0.0).sqrt());
-            FaultMode {
-                satellites: removed,
-                constellations: consts,
-                prior,
-                sigma,
-                sigma_ss,
-                bias,
-                threshold: [0, 1, 2].map(|q| k_fa[q] * sigma_ss[q]),
-                separation,
-            }
-        })
-        .collect();
     let terms: Vec<ModeTerm> = modes
         .iter()
         .map(|m| ModeTerm {
@@ -798,6 +863,80 @@ pub(crate) mod tests {
                 r.hpl >= root.hpl - 1e-6 && r.hpl <= root.hpl + tol * std::f64::consts::SQRT_2,
                 "{tol}: {}",
                 r.hpl
+            );
+        }
+    }
+
+    #[test]
+    fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
+        // add_level replays the half-interval search from the root instead of evaluating f at
+        // every midpoint; the plain search (f at every midpoint, as the ADD writes it) must
+        // end on the same bits, for modes of every size, including a midpoint that lands
+        // next to the root (tol chosen so), and brackets the root is outside of.
+        let plain = |b0: f64, s0: f64, terms: &[(f64, f64, f64)], target: f64, tol: f64| {
+            // add_level as it was before the replay.
+            let all = || std::iter::once((2.0, b0, 1.0 / s0)).chain(terms.iter().copied());
+            let n = (terms.len() + 1) as f64;
+            let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
+            for (p, shift, inv) in all() {
+                let r = target / p;
+                if r < 1.0 {
+                    lo = lo.max(shift + q_inv(r) / inv);
+                }
+                let r = target / (n * p);
+                hi = hi.max(shift + if r < 0.5 { q_inv(r) / inv } else { 0.0 });
+            }
+            let f = |l: f64| -> f64 { all().map(|(p, shift, inv)| p * q((l - shift) * inv)).sum() };
+            let mut count = 0;
+            while hi - lo > tol && count < 200 {
+                let half = 0.5 * (lo + hi);
+                if f(half) > target {
+                    lo = half;
+                } else {
+                    hi = half;
+                }
+                count += 1;
+            }
+            hi
+        };
+        let mut seed = 7_u64;
+        let mut uniform = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..300 {
+            let k = 1 + case % 40;
+            let terms: Vec<(f64, f64, f64)> = (0..k)
+                .map(|_| {
+                    (
+                        10f64.powf(-3.0 - 8.0 * uniform()),
+                        10.0 * uniform(),
+                        1.0 / (0.3 + 3.0 * uniform()),
+                    )
+                })
+                .collect();
+            let (b0, s0) = (uniform(), 0.5 + uniform());
+            let target = 10f64.powf(-9.0 + 3.0 * uniform());
+            let tol = [0.05, 0.5, 1e-4, 2.0][case % 4];
+            let inv0 = 1.0 / s0;
+            let fd = |l: f64| {
+                let x0 = (l - b0) * inv0;
+                let (mut f, mut d) = (2.0 * q(x0), -2.0 * phi(x0) * inv0);
+                for &(p, shift, inv) in &terms {
+                    let x = (l - shift) * inv;
+                    f += p * q(x);
+                    d -= p * phi(x) * inv;
+                }
+                (f, d)
+            };
+            let got = add_level(b0, s0, &terms, target, tol, fd);
+            let want = plain(b0, s0, &terms, target, tol);
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "case {case}: {got} against {want}"
             );
         }
     }

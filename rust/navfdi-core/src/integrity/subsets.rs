@@ -50,9 +50,13 @@ impl<'a> Subsets<'a> {
             }
         }
         // Clock columns with no satellite left; at least as many satellites as unknowns.
+        let mut kept = vec![true; n];
+        for &i in removed {
+            kept[i] = false;
+        }
         let mut unknowns = 3;
         for c in 3..m {
-            let used = (0..n).any(|i| self.g[(i, c)] != 0.0 && !removed.contains(&i));
+            let used = (0..n).any(|i| self.g[(i, c)] != 0.0 && kept[i]);
             if used {
                 unknowns += 1;
             } else {
@@ -71,7 +75,7 @@ impl<'a> Subsets<'a> {
             return None;
         }
         let mut s = DMatrix::zeros(3, n);
-        for i in (0..n).filter(|i| !removed.contains(i)) {
+        for i in (0..n).filter(|&i| kept[i]) {
             for q in 0..3 {
                 let mut v = 0.0;
                 for a in 0..m {
@@ -104,6 +108,13 @@ pub(crate) struct Downdate<'a> {
     a_t: Vec<[f64; 3]>,
 }
 
+/// What takes a subset's gain rows from [`Downdate::rows_each`], one satellite at a time (a
+/// trait rather than a closure, so that its `#[inline(always)]` body joins the rows' loop).
+pub(crate) trait EachRow {
+    /// Satellite `i`'s position rows `S_k[q, i]`, east, north, up.
+    fn row(&mut self, i: usize, s: [f64; 3]);
+}
+
 /// Position rows of a subset's gain: `σ_q²` (east, north, up) and `S_k[q, i]` for every
 /// satellite (zero for the removed ones), stored as `s[i][q]`.
 pub(crate) struct SubsetRows {
@@ -134,13 +145,22 @@ impl<'a> Downdate<'a> {
     /// The subset without `removed` (sorted, distinct); None when it cannot be solved.
     #[cfg(test)]
     fn rows(&self, removed: &[usize]) -> Option<SubsetRows> {
-        let mut s = vec![[0.0; 3]; self.a_t.len()];
-        let var = self.rows_into(removed, &mut s)?;
-        Some(SubsetRows { var, s })
+        let s = vec![[0.0; 3]; self.a_t.len()];
+        struct Keep(Vec<[f64; 3]>);
+        impl EachRow for Keep {
+            fn row(&mut self, i: usize, s: [f64; 3]) {
+                self.0[i] = s;
+            }
+        }
+        let mut keep = Keep(s);
+        let var = self.rows_each(removed, &mut keep)?;
+        Some(SubsetRows { var, s: keep.0 })
     }
 
-    /// [`Downdate::rows`] into `s` (n; rewritten whole): returns `σ_q²`.
-    pub(crate) fn rows_into(&self, removed: &[usize], s: &mut [[f64; 3]]) -> Option<[f64; 3]> {
+    /// [`Downdate::rows`] handed to `each.row(i, S_k[:, i])` for every satellite i in order
+    /// (zero rows for the removed ones), without a buffer: the caller's statistics run in the
+    /// same pass. Returns `σ_q²`; None (and no call) when the subset cannot be solved.
+    pub(crate) fn rows_each(&self, removed: &[usize], each: &mut impl EachRow) -> Option<[f64; 3]> {
         let g = self.subsets.g;
         let w = self.subsets.w;
         let (n, m) = g.shape();
@@ -158,7 +178,7 @@ impl<'a> Downdate<'a> {
             }
         }
         if clock_lost {
-            return self.direct_into(removed, s);
+            return self.direct_each(removed, each);
         }
         if n - removed.len() < unknowns {
             return None;
@@ -184,7 +204,7 @@ impl<'a> Downdate<'a> {
             1 => {
                 let m00 = m_entry(0, 0);
                 if !pivot_ok(m00, 1.0 / w[removed[0]]) {
-                    return self.direct_into(removed, s);
+                    return self.direct_each(removed, each);
                 }
                 for (q, v) in var.iter_mut().enumerate() {
                     let a0 = self.a[(q, removed[0])];
@@ -198,7 +218,7 @@ impl<'a> Downdate<'a> {
                 let det = m00 * m11 - m01 * m01;
                 if !pivot_ok(m00, 1.0 / w[removed[0]]) || !pivot_ok(det / m00, 1.0 / w[removed[1]])
                 {
-                    return self.direct_into(removed, s);
+                    return self.direct_each(removed, each);
                 }
                 for (q, v) in var.iter_mut().enumerate() {
                     let (a0, a1) = (self.a[(q, removed[0])], self.a[(q, removed[1])]);
@@ -213,7 +233,7 @@ impl<'a> Downdate<'a> {
                 let diag: Vec<f64> = (0..r).map(|x| mm[(x, x)]).collect();
                 let chol = match nalgebra::Cholesky::new(mm) {
                     Some(c) if (0..r).all(|x| pivot_ok(c.l_dirty()[(x, x)].powi(2), diag[x])) => c,
-                    _ => return self.direct_into(removed, s),
+                    _ => return self.direct_each(removed, each),
                 };
                 let mut sols = Vec::with_capacity(3);
                 for (q, v) in var.iter_mut().enumerate() {
@@ -231,35 +251,38 @@ impl<'a> Downdate<'a> {
         // P is symmetric: P[j, i] is column j of P, contiguous.
         let ps = self.p.as_slice();
         let col = |x: usize| &ps[removed[x] * n..(removed[x] + 1) * n];
+        let (c0, c1) = (col(0), col(r.min(2) - 1));
         let mut next = 0;
-        for (i, si) in s.iter_mut().enumerate() {
-            if next < r && removed[next] == i {
+        for (i, (&a, &wi)) in self.a_t.iter().zip(w).enumerate() {
+            let row = if next < r && removed[next] == i {
                 next += 1;
-                *si = [0.0; 3];
-                continue;
-            }
-            let a = self.a_t[i];
-            *si = match r {
-                1 => {
-                    let p0 = col(0)[i];
-                    [0, 1, 2].map(|q| (a[q] + u[q][0] * p0) * w[i])
+                [0.0; 3]
+            } else {
+                match r {
+                    1 => {
+                        let p0 = c0[i];
+                        [0, 1, 2].map(|q| (a[q] + u[q][0] * p0) * wi)
+                    }
+                    2 => {
+                        let (p0, p1) = (c0[i], c1[i]);
+                        [0, 1, 2].map(|q| (a[q] + u[q][0] * p0 + u[q][1] * p1) * wi)
+                    }
+                    _ => [0, 1, 2].map(|q| {
+                        let d: f64 = (0..r).map(|x| big[q][x] * col(x)[i]).sum();
+                        (a[q] + d) * wi
+                    }),
                 }
-                2 => {
-                    let (p0, p1) = (col(0)[i], col(1)[i]);
-                    [0, 1, 2].map(|q| (a[q] + u[q][0] * p0 + u[q][1] * p1) * w[i])
-                }
-                _ => [0, 1, 2].map(|q| {
-                    let d: f64 = (0..r).map(|x| big[q][x] * col(x)[i]).sum();
-                    (a[q] + d) * w[i]
-                }),
             };
+            each.row(i, row);
         }
         Some(var)
     }
 
-    fn direct_into(&self, removed: &[usize], s: &mut [[f64; 3]]) -> Option<[f64; 3]> {
+    fn direct_each(&self, removed: &[usize], each: &mut impl EachRow) -> Option<[f64; 3]> {
         let d = self.direct(removed)?;
-        s.copy_from_slice(&d.s);
+        for (i, &row) in d.s.iter().enumerate() {
+            each.row(i, row);
+        }
         Some(d.var)
     }
 
