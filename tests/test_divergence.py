@@ -62,7 +62,7 @@ def test_the_console_says_when_the_ins_was_moved_back(burst_log: Callable[[int],
     r = burst_log(4)
     c = consistency(r.runs["fde"])
     assert c["reanchored"] and all(40.0 < t < 600.0 for t in c["reanchored"])
-    assert "the INS ran away from the fixes it held out and was moved back onto them" in "\n".join(format_consistency(c))
+    assert "the INS ran away from (or stayed off) the fixes it held out and was moved back onto them" in "\n".join(format_consistency(c))
     ev = r.runs["fde"].events()
     moved = ev[ev["detector"] == "reanchored"]
     assert list(moved["alarm_start"]) == c["reanchored"] and (moved["subfilter"] == "navigation").all()

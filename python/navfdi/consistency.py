@@ -99,8 +99,10 @@ def consistency(run: RunRecord) -> dict[str, Any]:
     * ``converged_at``: time (s) from which the filter counted as converged (every tested
       GNSS channel's predicted σ within ``loosely_coupled.convergence`` times its own σ;
       before it only gross innovations exclude), NaN when it never did;
-    * ``reanchored``: times (s) at which the INS, running away from the fixes it held out
-      (their distance growing faster than 3 m/s over 10 s), was moved back onto them.
+    * ``reanchored``: times (s) at which the INS was moved back onto the fixes it held out:
+      running away from them (their distance growing faster than 3 m/s over 10 s), or held
+      off them longer than the fixes it agreed with before plus 30 s (it had started from a
+      fault's fixes at the alignment).
     """
     rec = run.record
     if "nav" not in rec:
@@ -172,7 +174,7 @@ def format_consistency(c: dict[str, Any]) -> list[str]:
     nav = "never navigated" if not math.isfinite(c["navigating_from"]) else f"navigating from {c['navigating_from']:g} s"
     re = c.get("reanchored", [])
     if re:
-        conv += "; the INS ran away from the fixes it held out and was moved back onto them " + (f"{len(re)} times, first" if len(re) > 1 else "once,") + f" at {re[0]:g} s"
+        conv += "; the INS ran away from (or stayed off) the fixes it held out and was moved back onto them " + (f"{len(re)} times, first" if len(re) > 1 else "once,") + f" at {re[0]:g} s"
     lines = [f"filter consistency (its own innovations outside fault windows; {nav}, {conv};",
              "  consistent: mean λ/m in the interval, median λ over χ²(m)'s median 1, lag-1 ρ within ±white):"]
     lines.append(f"  {'channel':<10} {'tests':>6} {'mean λ/m':>9} {'consistent':>13} {'median':>7} {'lag-1 ρ':>8} {'white':>7} {'excluded':>9}")

@@ -241,7 +241,8 @@ class ScenarioRun(RunRecord):
         intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``, ``receiver``:
         the tested epochs at which the channel, or some of its components, was left out for
         that reason); and each time the loosely coupled INS, run away from the fixes it held
-        out, was moved back onto them as subfilter ``navigation``, detector ``reanchored``
+        out or held off them longer than it had agreed with them, was moved back onto them as
+        subfilter ``navigation``, detector ``reanchored``
         (``alarm_start = alarm_end`` its time, no fault). Returns a pandas DataFrame."""
         import pandas as pd
 

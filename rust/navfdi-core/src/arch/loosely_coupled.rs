@@ -273,7 +273,15 @@ fn run<const NS: usize>(
     // Per GNSS channel: the position hold (faults held to their end) and the time of its
     // last fix, against its nominal interval (a longer gap forgets the jump reference).
     let mut holds: Vec<hold::PositionHold> = vec![hold::PositionHold::default(); aids.len()];
-    let mut diverged = vec![diverge::Divergence::default(); aids.len()];
+    // The INS watched per channel, from its first fix (before the alignment too).
+    let mut watch: Vec<diverge::InsWatch> = aids
+        .iter()
+        .map(|aid| {
+            let first =
+                (0..epochs).find(|&k| aid.pos.is_some() && measure(aid, k, aid.pos).is_some());
+            diverge::InsWatch::new(first.map(|k| models.t[k]))
+        })
+        .collect();
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
     // Time-correlated position errors: in the update each fix's position variance is
     // multiplied by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent
@@ -513,7 +521,12 @@ fn run<const NS: usize>(
                 }
                 // Held fixes the INS runs away from: the INS is moved back onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
-                let uses = match diverged[a].push(tk, [d[0], d[1]], held) {
+                // Or held out longer than the fixes before agreed (not as a held ramp: that
+                // ends by its own rules): the INS started from a fault's fixes.
+                let step = !holds[a].comps[..2]
+                    .iter()
+                    .any(|c| matches!(c, hold::Comp::Drift { .. }));
+                let uses = match watch[a].push(tk, [d[0], d[1]], held, step) {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();

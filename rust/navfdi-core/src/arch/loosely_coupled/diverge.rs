@@ -10,7 +10,9 @@
 //! steadily faster than [`DIVERGE_RATE`] over [`DIVERGE_WINDOW`] — in each third of the
 //! window, the same way, so a burst's jump, or a step's end and a burst's start, is not a
 //! rate — is the one that is wrong: it is moved back onto the fixes ([`Divergence::push`]
-//! says when and at what rate, [`reanchor`] moves it).
+//! says when and at what rate, [`reanchor`] moves it). A held step that outlasts every fix
+//! the INS agreed with before it is the INS's error too ([`Outlast`]): the alignment's fixes
+//! were in a fault.
 
 use super::shift;
 use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
@@ -92,6 +94,91 @@ impl Divergence {
         } else {
             None
         }
+    }
+}
+
+/// Seconds beyond the spell of fixes before it that a held step must last to be taken as the
+/// INS's error ([`Outlast`]).
+pub const OUTLAST_MARGIN: f64 = 30.0;
+
+/// A held step that outlasts the fixes the INS agreed with before it.
+///
+/// The INS takes its position from the fixes at the alignment. When those fixes were in a
+/// fault (a multipath burst or an injected step under way at the first fix, or a burst across
+/// the alignment), the fault's end is a jump of every later fix, which the hold takes for a
+/// step's onset and holds, the INS carried off the truth by its velocity, for the rest of the
+/// log (simulated, 15–30 m to 40–60 s: the error 16–31 m RMS to the end, 2–3 m without FDE).
+/// A step and a fault's end look alike at the jump; what tells them apart is how long each
+/// side lasts. The fixes the INS agreed with run from the channel's first fix (or the onset
+/// of the last step this rule ended) to the hold's onset; a step held longer than that spell
+/// plus [`OUTLAST_MARGIN`] is taken as the INS's error: it is moved onto the fixes, and the
+/// fixes since the onset become the spell. A fault injected after a spell of agreeing fixes
+/// is held for that spell plus 30 s at least (60 s into a log, a 90 s fault).
+#[derive(Debug, Clone)]
+pub struct Outlast {
+    /// Start (s) of the spell of fixes the INS agreed with.
+    spell: f64,
+    /// Onset (s) of the hold in progress.
+    onset: Option<f64>,
+}
+
+impl Outlast {
+    /// From the channel's first fix at `first_fix` (s; before the alignment too).
+    pub fn new(first_fix: f64) -> Self {
+        Outlast {
+            spell: first_fix,
+            onset: None,
+        }
+    }
+
+    /// The fix at `t` (s): `held` a horizontal component held (step or ramp), `step` one held
+    /// as a step. True when the step has outlasted the spell before it (the INS is to be
+    /// moved onto the fix).
+    pub fn push(&mut self, t: f64, held: bool, step: bool) -> bool {
+        match (held, self.onset) {
+            (false, _) => self.onset = None,
+            (true, None) => self.onset = Some(t),
+            (true, Some(t0)) => {
+                if step && t - t0 > (t0 - self.spell) + OUTLAST_MARGIN {
+                    self.spell = t0;
+                    self.onset = None;
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+/// One GNSS position channel's two watches on the INS: a runaway ([`Divergence`]) and a held
+/// step that outlasts the fixes before it ([`Outlast`]; none for a channel without a fix).
+#[derive(Debug, Clone)]
+pub struct InsWatch {
+    runaway: Divergence,
+    outlast: Option<Outlast>,
+}
+
+impl InsWatch {
+    /// For a channel whose first fix is at `first_fix` (s; None: no fix).
+    pub fn new(first_fix: Option<f64>) -> Self {
+        InsWatch {
+            runaway: Divergence::default(),
+            outlast: first_fix.map(Outlast::new),
+        }
+    }
+
+    /// The fix at `t` (s) with horizontal innovation `d` (INS − fix, east and north, m):
+    /// `held` a horizontal component held out or used relative to an offset, `step` none of
+    /// them a held ramp. The rate (m/s, INS − fix, east and north; zero for an outlasting
+    /// step) to move the INS onto the fix with, when it is to be moved.
+    pub fn push(&mut self, t: f64, d: [f64; 2], held: bool, step: bool) -> Option<[f64; 2]> {
+        let outlasted = self.outlast.as_mut().is_some_and(|o| o.push(t, held, step));
+        let rate = self.runaway.push(t, d, held);
+        let rate = rate.or(outlasted.then_some([0.0; 2]));
+        if rate.is_some() {
+            self.runaway = Divergence::default();
+        }
+        rate
     }
 }
 
@@ -185,6 +272,29 @@ mod tests {
     /// The INS is put on the fix, its velocity moved by the rate and its heading turned by
     /// the change of course; the position and horizontal velocity variances reopened with
     /// their correlations dropped, the heading's raised to (5°)².
+    #[test]
+    fn a_held_step_that_outlasts_the_fixes_before_it_is_the_ins() {
+        // First fix at 2 s, fixes agree until a hold at 60 s: held out more than 60 − 2 + 30
+        // s (at 149 s, not at 148 s) it is the INS's error, once; the fixes since the hold's
+        // onset are then the spell.
+        let mut o = Outlast::new(2.0);
+        for t in 30..60 {
+            assert!(!o.push(t as f64, false, false));
+        }
+        let fired: Vec<u32> = (60..400)
+            .filter(|&t| o.push(t as f64, true, true))
+            .collect();
+        assert_eq!(fired[0], 149, "{fired:?}");
+        // After firing the held fixes since 60 s are the spell: a hold again from 150 s must
+        // outlast 150 − 60 + 30 s.
+        assert_eq!(fired[1], 150 + 120 + 1, "{fired:?}");
+        // A hold that ends before that is forgotten; a held ramp never fires.
+        let mut o = Outlast::new(0.0);
+        assert!((100..129).all(|t| !o.push(t as f64, true, true)));
+        assert!(!o.push(129.0, false, false));
+        assert!((130..400).all(|t| !o.push(t as f64, true, false)));
+    }
+
     #[test]
     fn reanchoring_puts_the_ins_on_the_fix() {
         use crate::ins::error_filter::tests::noise;
