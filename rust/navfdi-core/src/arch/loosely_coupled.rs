@@ -276,10 +276,11 @@ fn run<const NS: usize>(
     // The INS watched per channel, from its first fix (before the alignment too).
     let mut watch: Vec<diverge::InsWatch> = aids
         .iter()
-        .map(|aid| {
-            let first =
-                (0..epochs).find(|&k| aid.pos.is_some() && measure(aid, k, aid.pos).is_some());
-            diverge::InsWatch::new(first.map(|k| models.t[k]))
+        .zip(&fix_interval)
+        .map(|(aid, &dt)| {
+            let fix = |k: usize| measure(aid, k, aid.pos).map(|p| (models.t[k], [p.x, p.y]));
+            let first = (0..epochs).find_map(fix).map(|f| f.0);
+            diverge::InsWatch::new(first, dt, (0..ka).filter_map(fix))
         })
         .collect();
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
@@ -526,7 +527,8 @@ fn run<const NS: usize>(
                 let step = !holds[a].comps[..2]
                     .iter()
                     .any(|c| matches!(c, hold::Comp::Drift { .. }));
-                let uses = match watch[a].push(tk, [d[0], d[1]], held, step) {
+                let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
+                let uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, converged) {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();

@@ -101,45 +101,191 @@ impl Divergence {
 /// INS's error ([`Outlast`]).
 pub const OUTLAST_MARGIN: f64 = 30.0;
 
+/// A jump of the fixes is a second difference of the horizontal position beyond this (m),
+/// beyond [`JUMP_ACCEL`] × the fix interval² (a car's hardest braking: 8 m at 1 Hz) and beyond
+/// [`JUMP_SIGMAS`] σ of the last [`JUMP_WINDOW`] second differences (σ per component from
+/// their median size; a Gaussian's size passes 5σ once in 270 000).
+pub const JUMP_M: f64 = 8.0;
+/// See [`JUMP_M`] (m/s²).
+pub const JUMP_ACCEL: f64 = 8.0;
+/// See [`JUMP_M`].
+pub const JUMP_SIGMAS: f64 = 5.0;
+/// See [`JUMP_M`] (fixes).
+pub const JUMP_WINDOW: usize = 120;
+/// Seconds a jump the filter took in is remembered for a jump back to undo.
+pub const JUMP_MEMORY: f64 = 120.0;
+/// How close (m, or a quarter of the jump where larger) two horizontal offsets must be to be
+/// one jump.
+pub const MATCH_TOLERANCE: f64 = 3.0;
+/// Seconds a hold that undoes a jump the filter took in lasts before the INS is moved.
+pub const MATCH_CONFIRM: f64 = 5.0;
+
+/// Whether the horizontal offset `d` (m) is the jump `e` (m): within [`MATCH_TOLERANCE`] or a
+/// quarter of the jump.
+fn same(e: [f64; 2], d: [f64; 2]) -> bool {
+    (d[0] - e[0]).hypot(d[1] - e[1]) <= MATCH_TOLERANCE.max(0.25 * e[0].hypot(e[1]))
+}
+
 /// A held step that outlasts the fixes the INS agreed with before it.
 ///
 /// The INS takes its position from the fixes at the alignment. When those fixes were in a
-/// fault (a multipath burst or an injected step under way at the first fix, or a burst across
-/// the alignment), the fault's end is a jump of every later fix, which the hold takes for a
-/// step's onset and holds, the INS carried off the truth by its velocity, for the rest of the
-/// log (simulated, 15–30 m to 40–60 s: the error 16–31 m RMS to the end, 2–3 m without FDE).
-/// A step and a fault's end look alike at the jump; what tells them apart is how long each
-/// side lasts. The fixes the INS agreed with run from the channel's first fix (or the onset
-/// of the last step this rule ended) to the hold's onset; a step held longer than that spell
-/// plus [`OUTLAST_MARGIN`] is taken as the INS's error: it is moved onto the fixes, and the
-/// fixes since the onset become the spell. A fault injected after a spell of agreeing fixes
-/// is held for that spell plus 30 s at least (60 s into a log, a 90 s fault).
+/// fault (a multipath burst or an injected step under way at the first fix), the fault's end
+/// is a jump of every later fix, which the hold takes for a step's onset and holds, the INS
+/// carried off the truth by its velocity, for the rest of the log (simulated, 15–30 m to
+/// 40–60 s: the error 16–31 m RMS to the end, 2–3 m without FDE). A step and a fault's end
+/// look alike at the jump; what tells them apart is how long each side lasts. The fixes the
+/// INS agreed with run from the channel's first fix (or the onset of the last step this rule
+/// ended) to the hold's onset; a step held longer than that spell plus [`OUTLAST_MARGIN`] is
+/// taken as the INS's error: it is moved onto the fixes, and the fixes since the onset become
+/// the spell. A fault injected after a spell of agreeing fixes is held for that spell plus
+/// 30 s at least (60 s into a log, a 90 s fault).
+///
+/// The fixes themselves can say more: a jump of theirs the filter took in before it had
+/// converged (before the alignment, or while only gross innovations exclude), undone by
+/// the jump that starts the hold — the fix jumping back by what it jumped, and the INS off
+/// the fix that way (within 45°) by at most as much (it followed the fault, or part of it) —
+/// makes the hold the end of a fault the INS followed: it is moved after [`MATCH_CONFIRM`] s.
 #[derive(Debug, Clone)]
 pub struct Outlast {
     /// Start (s) of the spell of fixes the INS agreed with.
     spell: f64,
-    /// Onset (s) of the hold in progress.
-    onset: Option<f64>,
+    /// Onset (s) of the hold in progress, and whether it undoes a jump taken in.
+    onset: Option<(f64, bool)>,
+    /// The fix interval (s).
+    interval: f64,
+    /// The last two fixes (time s, east and north m).
+    last: [Option<(f64, [f64; 2])>; 2],
+    /// The last fix's jump (its second difference comes back at the next fix).
+    prev_jump: Option<[f64; 2]>,
+    /// The last second differences' sizes (m).
+    sizes: std::collections::VecDeque<f64>,
+    /// Jumps the filter took in and no later jump undid: time (s), size (m).
+    open: Vec<(f64, [f64; 2])>,
 }
 
 impl Outlast {
-    /// From the channel's first fix at `first_fix` (s; before the alignment too).
-    pub fn new(first_fix: f64) -> Self {
+    /// From the channel's first fix at `first_fix` (s; before the alignment too), its fixes
+    /// `interval` s apart.
+    pub fn new(first_fix: f64, interval: f64) -> Self {
         Outlast {
             spell: first_fix,
             onset: None,
+            interval,
+            last: [None; 2],
+            prev_jump: None,
+            sizes: std::collections::VecDeque::new(),
+            open: Vec::new(),
         }
     }
 
-    /// The fix at `t` (s): `held` a horizontal component held (step or ramp), `step` one held
-    /// as a step. True when the step has outlasted the spell before it (the INS is to be
-    /// moved onto the fix).
-    pub fn push(&mut self, t: f64, held: bool, step: bool) -> bool {
-        match (held, self.onset) {
-            (false, _) => self.onset = None,
-            (true, None) => self.onset = Some(t),
-            (true, Some(t0)) => {
-                if step && t - t0 > (t0 - self.spell) + OUTLAST_MARGIN {
+    /// The fix `p` (east, north, m) at `t` (s): its jump ([`JUMP_M`]), if any.
+    fn jump(&mut self, t: f64, p: [f64; 2]) -> Option<[f64; 2]> {
+        let gap = 1.5 * self.interval;
+        let e = match self.last {
+            [Some((t1, p1)), Some((t0, p0))] if t - t1 <= gap && t1 - t0 <= gap => {
+                Some([0, 1].map(|j| p[j] - 2.0 * p1[j] + p0[j]))
+            }
+            _ => None,
+        };
+        self.last = [Some((t, p)), self.last[0]];
+        let e = e?;
+        let mut sorted: Vec<f64> = self.sizes.iter().copied().collect();
+        sorted.sort_by(f64::total_cmp);
+        // σ per component of a 2D Gaussian from the median size (Rayleigh: 1.1774 σ).
+        let spread = sorted.get(sorted.len() / 2).map_or(0.0, |m| m / 1.1774);
+        if self.sizes.len() == JUMP_WINDOW {
+            self.sizes.pop_front();
+        }
+        self.sizes.push_back(e[0].hypot(e[1]));
+        let bound = JUMP_M
+            .max(JUMP_ACCEL * self.interval * self.interval)
+            .max(JUMP_SIGMAS * spread);
+        let back = self
+            .prev_jump
+            .is_some_and(|e0| e[0] * e0[0] + e[1] * e0[1] < 0.0);
+        let jump = (e[0].hypot(e[1]) > bound && !back).then_some(e);
+        self.prev_jump = jump;
+        jump
+    }
+
+    /// A fix the filter took in (used as measured, or before the alignment) at `t` (s), `p`
+    /// (east, north, m), `d` its horizontal `INS − fix` (m; None before the alignment): a
+    /// jump of it away from the INS (the fix off the INS along the jump by half of it at
+    /// least: not a held fault's end, which jumps back onto the INS) is remembered, or
+    /// forgets the one it undoes.
+    pub fn taken(&mut self, t: f64, p: [f64; 2], d: Option<[f64; 2]>) {
+        self.open.retain(|&(t0, _)| t - t0 <= JUMP_MEMORY);
+        let Some(e) = self.jump(t, p) else {
+            return;
+        };
+        match self.open.last() {
+            Some(&(_, e0)) if same(e0, [-e[0], -e[1]]) => {
+                self.open.pop();
+            }
+            _ => {
+                let away = d.is_none_or(|d| {
+                    -(d[0] * e[0] + d[1] * e[1]) >= 0.5 * (e[0] * e[0] + e[1] * e[1])
+                });
+                if away {
+                    self.open.push((t, e));
+                }
+            }
+        }
+    }
+
+    /// The fix at `t` (s), `p` (east, north, m; None: no fix): `d` its horizontal `INS − fix`
+    /// (m), `held` a horizontal component held (step or ramp), `step` none held as a ramp,
+    /// `converged` the filter has converged (from then on its tests, not gross innovations
+    /// only, decide: a jump taken in then is no fault's start). True when the step has
+    /// outlasted the spell before it, or undone a jump taken in (the INS is to be moved onto
+    /// the fix).
+    pub fn push(
+        &mut self,
+        t: f64,
+        p: Option<[f64; 2]>,
+        d: [f64; 2],
+        held: bool,
+        step: bool,
+        converged: bool,
+    ) -> bool {
+        if !held {
+            self.onset = None;
+            match p {
+                Some(p) if !converged => self.taken(t, p, Some(d)),
+                // The jump reference follows the fixes.
+                Some(p) => _ = self.jump(t, p),
+                None => {}
+            }
+            return false;
+        }
+        let jump = p.and_then(|p| self.jump(t, p));
+        match self.onset {
+            None => {
+                self.open.retain(|&(t0, _)| t - t0 <= JUMP_MEMORY);
+                // The fix jumps back by what it jumped, and the INS is off it that way
+                // (within 45°), by at most as much (it followed the fault, or part of it).
+                let followed = |e0: [f64; 2]| {
+                    let (nd, ne) = (d[0].hypot(d[1]), e0[0].hypot(e0[1]));
+                    d[0] * e0[0] + d[1] * e0[1] > std::f64::consts::FRAC_1_SQRT_2 * nd * ne
+                        && nd <= ne + MATCH_TOLERANCE
+                };
+                let undone = jump.and_then(|e| {
+                    self.open
+                        .iter()
+                        .rposition(|&(_, e0)| same(e0, [-e[0], -e[1]]) && followed(e0))
+                });
+                if let Some(i) = undone {
+                    self.open.remove(i);
+                }
+                self.onset = Some((t, undone.is_some()));
+            }
+            Some((t0, undone)) => {
+                let wait = if undone {
+                    MATCH_CONFIRM
+                } else {
+                    (t0 - self.spell) + OUTLAST_MARGIN
+                };
+                if step && t - t0 > wait {
                     self.spell = t0;
                     self.onset = None;
                     return true;
@@ -159,20 +305,40 @@ pub struct InsWatch {
 }
 
 impl InsWatch {
-    /// For a channel whose first fix is at `first_fix` (s; None: no fix).
-    pub fn new(first_fix: Option<f64>) -> Self {
+    /// For a channel whose first fix is at `first_fix` (s; None: no fix), its fixes
+    /// `interval` s apart, and its fixes before the alignment `(t, [east, north])` (s, m).
+    pub fn new(
+        first_fix: Option<f64>,
+        interval: f64,
+        before: impl IntoIterator<Item = (f64, [f64; 2])>,
+    ) -> Self {
+        let mut outlast = first_fix.map(|t| Outlast::new(t, interval));
+        if let Some(o) = outlast.as_mut() {
+            before.into_iter().for_each(|(t, p)| o.taken(t, p, None));
+        }
         InsWatch {
             runaway: Divergence::default(),
-            outlast: first_fix.map(Outlast::new),
+            outlast,
         }
     }
 
-    /// The fix at `t` (s) with horizontal innovation `d` (INS − fix, east and north, m):
-    /// `held` a horizontal component held out or used relative to an offset, `step` none of
-    /// them a held ramp. The rate (m/s, INS − fix, east and north; zero for an outlasting
-    /// step) to move the INS onto the fix with, when it is to be moved.
-    pub fn push(&mut self, t: f64, d: [f64; 2], held: bool, step: bool) -> Option<[f64; 2]> {
-        let outlasted = self.outlast.as_mut().is_some_and(|o| o.push(t, held, step));
+    /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
+    /// east and north, m): `held` a horizontal component held out or used relative to an
+    /// offset, `step` none of them a held ramp, `converged` the filter converged. The rate (m/s, INS − fix, east and north; zero
+    /// for an outlasting step) to move the INS onto the fix with, when it is to be moved.
+    pub fn push(
+        &mut self,
+        t: f64,
+        p: Option<[f64; 2]>,
+        d: [f64; 2],
+        held: bool,
+        step: bool,
+        converged: bool,
+    ) -> Option<[f64; 2]> {
+        let outlasted = self
+            .outlast
+            .as_mut()
+            .is_some_and(|o| o.push(t, p, d, held, step, converged));
         let rate = self.runaway.push(t, d, held);
         let rate = rate.or(outlasted.then_some([0.0; 2]));
         if rate.is_some() {
@@ -277,22 +443,74 @@ mod tests {
         // First fix at 2 s, fixes agree until a hold at 60 s: held out more than 60 − 2 + 30
         // s (at 149 s, not at 148 s) it is the INS's error, once; the fixes since the hold's
         // onset are then the spell.
-        let mut o = Outlast::new(2.0);
-        for t in 30..60 {
-            assert!(!o.push(t as f64, false, false));
-        }
-        let fired: Vec<u32> = (60..400)
-            .filter(|&t| o.push(t as f64, true, true))
-            .collect();
+        let push = |o: &mut Outlast, t: u32, held: bool, step: bool| {
+            o.push(
+                t as f64,
+                Some([10.0 * t as f64, 0.0]),
+                [0.0; 2],
+                held,
+                step,
+                true,
+            )
+        };
+        let mut o = Outlast::new(2.0, 1.0);
+        assert!((30..60).all(|t| !push(&mut o, t, false, false)));
+        let fired: Vec<u32> = (60..400).filter(|&t| push(&mut o, t, true, true)).collect();
         assert_eq!(fired[0], 149, "{fired:?}");
         // After firing the held fixes since 60 s are the spell: a hold again from 150 s must
         // outlast 150 − 60 + 30 s.
         assert_eq!(fired[1], 150 + 120 + 1, "{fired:?}");
         // A hold that ends before that is forgotten; a held ramp never fires.
-        let mut o = Outlast::new(0.0);
-        assert!((100..129).all(|t| !o.push(t as f64, true, true)));
-        assert!(!o.push(129.0, false, false));
-        assert!((130..400).all(|t| !o.push(t as f64, true, false)));
+        let mut o = Outlast::new(0.0, 1.0);
+        assert!((100..129).all(|t| !push(&mut o, t, true, true)));
+        assert!(!push(&mut o, 129, false, false));
+        assert!((130..400).all(|t| !push(&mut o, t, true, false)));
+    }
+
+    #[test]
+    fn a_hold_that_undoes_a_jump_taken_in_moves_the_ins_at_once() {
+        // A car at 10 m/s east with 0.3 m of noise; a 15 m north burst over 38–45 s that the
+        // filter took in (the alignment at 36 s, not converged yet): at 46 s the fix jumps
+        // back, and the INS is 14 m north of it.
+        let noise = |k: u32| 0.3 * ((k * 7919 % 13) as f64 / 6.0 - 1.0);
+        let fix = |k: u32, burst: f64| Some([10.0 * k as f64 + noise(k), noise(k + 5) + burst]);
+        let run_with = |d: [f64; 2], back: f64, off: f64, converged: bool| {
+            let mut o = Outlast::new(0.0, 1.0);
+            for k in 0..46 {
+                let burst = if (38..46).contains(&k) { 15.0 } else { 0.0 };
+                // At its jump the fix is `off` m off the INS (INS − fix), then followed.
+                let d = if k == 38 { [0.0, off] } else { [0.0; 2] };
+                assert!(!o.push(k as f64, fix(k, burst), d, false, false, converged));
+            }
+            (46..200).find(|&k| o.push(k as f64, fix(k, 15.0 - back), d, true, true, false))
+        };
+        let run = |d: [f64; 2], back: f64| run_with(d, back, -15.0, false);
+        // Moved after 5 s of hold, not after 46 + 30.
+        assert_eq!(run([0.5, 14.0], 15.0), Some(52));
+        // The INS that followed part of it (8 m) too.
+        assert_eq!(run([0.5, 8.0], 15.0), Some(52));
+        // An INS off further, or the other way, or a fix that did not jump back, is not that
+        // burst's end: the spell rule (46 + 30 s from 46 s) decides.
+        assert_eq!(run([0.5, 25.0], 15.0), Some(123));
+        assert_eq!(run([12.0, 0.0], 15.0), Some(123));
+        assert_eq!(run([0.5, -14.0], 15.0), Some(123));
+        assert_eq!(run([0.5, 14.0], 0.0), Some(123));
+        // A jump onto the INS (a held fault's end, taken in) is not a fault's start.
+        assert_eq!(run_with([0.5, 14.0], 15.0, 0.0, false), Some(123));
+        // Nor is a jump a converged filter took in (its tests, not gross innovations, decide).
+        assert_eq!(run_with([0.5, 14.0], 15.0, -15.0, true), Some(123));
+        // Smooth driving with braking at 6 m/s² is no jump.
+        let mut o = Outlast::new(0.0, 1.0);
+        for k in 0..20u32 {
+            let t = k as f64;
+            let x = if k < 10 {
+                20.0 * t
+            } else {
+                200.0 + 20.0 * (t - 10.0) - 3.0 * (t - 10.0).powi(2)
+            };
+            o.taken(t, [x, 0.0], None);
+        }
+        assert!(o.open.is_empty());
     }
 
     #[test]
