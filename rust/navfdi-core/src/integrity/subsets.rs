@@ -251,7 +251,11 @@ impl<'a> Downdate<'a> {
         // P is symmetric: P[j, i] is column j of P, contiguous.
         let ps = self.p.as_slice();
         let col = |x: usize| &ps[removed[x] * n..(removed[x] + 1) * n];
-        let (c0, c1) = (col(0), col(r.min(2) - 1));
+        // The first two removed satellites' columns (none removed: unused, empty).
+        let (c0, c1) = match r {
+            0 => (&ps[..0], &ps[..0]),
+            _ => (col(0), col(r.min(2) - 1)),
+        };
         let mut next = 0;
         for (i, (&a, &wi)) in self.a_t.iter().zip(w).enumerate() {
             let row = if next < r && removed[next] == i {
@@ -336,6 +340,10 @@ mod tests {
         }
         removals.push(vec![8, 9, 10, 11]);
         removals.push(vec![0, 8, 9, 10, 11]);
+        // Nothing removed: the all-in-view rows.
+        removals.push(vec![]);
+        // Three removed: the Cholesky path.
+        removals.push(vec![1, 4, 9]);
         let mut compared = 0;
         for removed in &removals {
             let fast = down.rows(removed);

@@ -324,8 +324,9 @@ impl InsWatch {
 
     /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
     /// east and north, m): `held` a horizontal component held out or used relative to an
-    /// offset, `step` none of them a held ramp, `converged` the filter converged. The rate (m/s, INS − fix, east and north; zero
-    /// for an outlasting step) to move the INS onto the fix with, when it is to be moved.
+    /// offset, `step` none of them a held ramp, `converged` the filter converged. The rate
+    /// (m/s, INS − fix, east and north; zero for an outlasting step or a followed fault's
+    /// end) to move the INS onto the fix with, when it is to be moved.
     pub fn push(
         &mut self,
         t: f64,
@@ -435,9 +436,6 @@ mod tests {
         assert!(!caught);
     }
 
-    /// The INS is put on the fix, its velocity moved by the rate and its heading turned by
-    /// the change of course; the position and horizontal velocity variances reopened with
-    /// their correlations dropped, the heading's raised to (5°)².
     #[test]
     fn a_held_step_that_outlasts_the_fixes_before_it_is_the_ins() {
         // First fix at 2 s, fixes agree until a hold at 60 s: held out more than 60 − 2 + 30
@@ -513,6 +511,9 @@ mod tests {
         assert!(o.open.is_empty());
     }
 
+    /// The INS is put on the fix, its velocity moved by the rate and its heading turned by
+    /// the change of course; the position and horizontal velocity variances reopened with
+    /// their correlations dropped, the heading's raised to (5°)².
     #[test]
     fn reanchoring_puts_the_ins_on_the_fix() {
         use crate::ins::error_filter::tests::noise;
