@@ -387,6 +387,24 @@ fn solve_level(fd: impl Fn(f64) -> (f64, f64), target: f64, mut lo: f64, mut hi:
     }
 }
 
+/// The bracket of [`add_level`]'s search: below, the largest `shift + σ Q⁻¹(min(1, target/p))`
+/// over the terms and the fault-free one (p = 2); above, the largest `shift + σ max(0,
+/// Q⁻¹(target/(N p)))` over the N terms.
+fn add_bracket(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64) -> (f64, f64) {
+    let all = std::iter::once((2.0, bias0, 1.0 / sigma0)).chain(terms.iter().copied());
+    let n = (terms.len() + 1) as f64;
+    let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
+    for (p, shift, inv) in all {
+        let r = target / p;
+        if r < 1.0 {
+            lo = lo.max(shift + q_inv(r) / inv);
+        }
+        let r = target / (n * p);
+        hi = hi.max(shift + if r < 0.5 { q_inv(r) / inv } else { 0.0 });
+    }
+    (lo, hi)
+}
+
 /// The ADD's protection-level search (Appendix A): half-interval search on
 /// `f(L) = 2Q((L − b_0)/σ_0) + Σ_k p_k Q((L − shift_k)/σ_k)` between the ADD's bounds — below,
 /// the largest `shift + σ Q⁻¹(min(1, target/p))` over the terms (the fault-free one with
@@ -408,20 +426,11 @@ fn add_level(
     tol: f64,
     fd: impl Fn(f64) -> (f64, f64),
 ) -> f64 {
-    let all = || std::iter::once((2.0, bias0, 1.0 / sigma0)).chain(terms.iter().copied());
-    let n = (terms.len() + 1) as f64;
-    let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
-    for (p, shift, inv) in all() {
-        let r = target / p;
-        if r < 1.0 {
-            lo = lo.max(shift + q_inv(r) / inv);
-        }
-        let r = target / (n * p);
-        hi = hi.max(shift + if r < 0.5 { q_inv(r) / inv } else { 0.0 });
-    }
+    let (mut lo, mut hi) = add_bracket(bias0, sigma0, terms, target);
     if !(lo.is_finite() && hi.is_finite()) {
         return f64::INFINITY;
     }
+    let all = || std::iter::once((2.0, bias0, 1.0 / sigma0)).chain(terms.iter().copied());
     let f = |l: f64| -> f64 { all().map(|(p, shift, inv)| p * q((l - shift) * inv)).sum() };
     let root = solve_level(fd, target, lo, hi);
     let above = |l: f64| -> bool {

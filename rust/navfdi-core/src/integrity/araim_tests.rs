@@ -126,18 +126,9 @@ fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
     // end on the same bits, for modes of every size, including a midpoint that lands
     // next to the root (tol chosen so), and brackets the root is outside of.
     let plain = |b0: f64, s0: f64, terms: &[(f64, f64, f64)], target: f64, tol: f64| {
-        // add_level as it was before the replay.
+        // add_level's search as it was before the replay, from the same bracket.
         let all = || std::iter::once((2.0, b0, 1.0 / s0)).chain(terms.iter().copied());
-        let n = (terms.len() + 1) as f64;
-        let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
-        for (p, shift, inv) in all() {
-            let r = target / p;
-            if r < 1.0 {
-                lo = lo.max(shift + q_inv(r) / inv);
-            }
-            let r = target / (n * p);
-            hi = hi.max(shift + if r < 0.5 { q_inv(r) / inv } else { 0.0 });
-        }
+        let (mut lo, mut hi) = add_bracket(b0, s0, terms, target);
         let f = |l: f64| -> f64 { all().map(|(p, shift, inv)| p * q((l - shift) * inv)).sum() };
         let mut count = 0;
         while hi - lo > tol && count < 200 {
