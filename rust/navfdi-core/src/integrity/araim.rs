@@ -387,6 +387,22 @@ fn solve_level(fd: impl Fn(f64) -> (f64, f64), target: f64, mut lo: f64, mut hi:
     }
 }
 
+/// The left side of the protection-level equation and its derivative at a level `L` (m):
+/// `(2Q((L − b₀)/σ₀) + Σ p Q((L − shift)/σ), its derivative)`, `terms` (prior, shift, 1/σ).
+fn level_fd(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)]) -> impl Fn(f64) -> (f64, f64) + '_ {
+    let inv0 = 1.0 / sigma0;
+    move |l: f64| {
+        let x0 = (l - bias0) * inv0;
+        let (mut f, mut d) = (2.0 * q(x0), -2.0 * phi(x0) * inv0);
+        for &(p, shift, inv) in terms {
+            let x = (l - shift) * inv;
+            f += p * q(x);
+            d -= p * phi(x) * inv;
+        }
+        (f, d)
+    }
+}
+
 /// The bracket of [`add_level`]'s search: below, the largest `shift + σ Q⁻¹(min(1, target/p))`
 /// over the terms and the fault-free one (p = 2); above, the largest `shift + σ max(0,
 /// Q⁻¹(target/(N p)))` over the N terms.
@@ -411,21 +427,15 @@ fn add_bracket(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64) 
 /// p = 2), where one term alone reaches the target; above, the largest
 /// `shift + σ max(0, Q⁻¹(target/(N p)))` over the N terms, where each holds at most target/N —
 /// until the bracket is at most `tol` (m) wide; its upper end is returned, a level within
-/// `tol` above the root. `terms`: (prior, shift, 1/σ); `fd(L)`: `(f, f')`.
+/// `tol` above the root. `terms`: (prior, shift, 1/σ).
 ///
 /// The search is replayed rather than evaluated: the root is found first by [`solve_level`]
 /// (a few evaluations), and each midpoint goes to the side the root is on; `f` itself is
 /// evaluated only for a midpoint within 10 µm of the root, where that is not certain. The
 /// returned level is the ADD search's, bit for bit (`f` falls by ≈ 10⁻⁵ of itself over 10 µm,
 /// far beyond its rounding), at a third of its evaluations.
-fn add_level(
-    bias0: f64,
-    sigma0: f64,
-    terms: &[(f64, f64, f64)],
-    target: f64,
-    tol: f64,
-    fd: impl Fn(f64) -> (f64, f64),
-) -> f64 {
+fn add_level(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64, tol: f64) -> f64 {
+    let fd = level_fd(bias0, sigma0, terms);
     let (mut lo, mut hi) = add_bracket(bias0, sigma0, terms, target);
     if !(lo.is_finite() && hi.is_finite()) {
         return f64::INFINITY;
@@ -495,19 +505,9 @@ pub(crate) fn protection_levels(
             .iter()
             .map(|m| (m.prior, m.shift[qd], 1.0 / m.sigma[qd]))
             .collect();
-        let inv0 = 1.0 / sigma0[qd];
-        let fd = |l: f64| {
-            let x0 = (l - bias0[qd]) * inv0;
-            let (mut f, mut d) = (2.0 * q(x0), -2.0 * phi(x0) * inv0);
-            for &(p, shift, inv) in &terms {
-                let x = (l - shift) * inv;
-                f += p * q(x);
-                d -= p * phi(x) * inv;
-            }
-            (f, d)
-        };
+        let fd = level_fd(bias0[qd], sigma0[qd], &terms);
         if alloc.tol_pl > 0.0 {
-            return add_level(bias0[qd], sigma0[qd], &terms, target, alloc.tol_pl, fd);
+            return add_level(bias0[qd], sigma0[qd], &terms, target, alloc.tol_pl);
         }
         let share = target / (terms.len() + 1) as f64;
         let lo = bias0[qd] + sigma0[qd] * q_inv(0.5 * target);

@@ -213,7 +213,7 @@ impl Outlast {
     /// jump of it away from the INS (the fix off the INS along the jump by half of it at
     /// least: not a held fault's end, which jumps back onto the INS) is remembered, or
     /// forgets the one it undoes.
-    pub fn taken(&mut self, t: f64, p: [f64; 2], d: Option<[f64; 2]>) {
+    fn taken(&mut self, t: f64, p: [f64; 2], d: Option<[f64; 2]>) {
         self.open.retain(|&(t0, _)| t - t0 <= JUMP_MEMORY);
         let Some(e) = self.jump(t, p) else {
             return;
