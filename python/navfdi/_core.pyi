@@ -568,7 +568,8 @@ def run_variants(spec_jsons: list[str], seed: int, stream: int = 0) -> list[dict
     """Simulate one run of the first scenario (noise from ``(seed, stream)``) and filter the
     same measurements with every scenario of ``spec_jsons`` (variants; only ``architecture``,
     ``federated`` and ``centralized`` may differ), isolation active. One record per variant
-    (as :func:`run_scenario`). Loop in Rust with the GIL released; Ctrl-C stops it."""
+    (as :func:`run_scenario`). Loop in Rust with the GIL released, the variants in parallel
+    (the same records to the bit as one by one); Ctrl-C stops it."""
 
 def simulate_logs(
     trajectory_json: str, duration: float, noise: dict[str, Any], seed: int, run: int
@@ -1039,7 +1040,8 @@ class LoggedSource:
     def run(self, spec_jsons: list[str], isolation: bool = True) -> list[dict[str, Any]]:
         """Run each scenario (the prepared one and its variants) on the recorded measurements
         with the prepared scenario's faults injected; one record dict per scenario, with
-        ``nav`` (T, 21) and ``nav_columns``. GIL released; Ctrl-C stops it."""
+        ``nav`` (T, 21) and ``nav_columns``. GIL released, the scenarios run in parallel (the
+        same records to the bit as one by one); Ctrl-C stops it."""
     def to_bytes(self) -> bytes:
         """The prepared source as bytes (``NAVFDISR``, the navfdi version, then the scenario,
         time 0, the fault-free datum of protection-level scoring — computed now if needed —

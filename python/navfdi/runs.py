@@ -194,6 +194,8 @@ class ScenarioRun(RunRecord):
         return [f"  range errors: white-noise overbound of their time correlation, pseudorange variance x {f:.3g} (sigma x {math.sqrt(f):.2f})"]
 
     def _satellite_lines(self) -> list[str]:
+        if self.record.get("satellites") is None:
+            return []  # no satellite FDE (and no pandas import for the console's sake)
         tab = self.satellite_table()
         if not len(tab):
             return []
@@ -668,11 +670,13 @@ class VariantRuns:
             parts.append(f"== variant {name} ==\n" + "\n".join(kept))
         if any(r.fault_table() for r in self.runs.values()):
             parts.append("\n".join(FAULT_TABLE_LEGEND) + "\n")
-        err = self.errors()
-        if "hor_rms" in err.columns and not (err["scored"] > 0).any():
+        # errors()'s rows as dicts (no pandas for the console), each with every variant's keys.
+        err = [{"variant": name, **r.errors()} for name, r in self.runs.items()]
+        err = [{k: row.get(k, float("nan")) for row2 in err for k in row2} for row in err]
+        if "hor_rms" in err[0] and not any(row["scored"] > 0 for row in err):
             parts.append(no_reference_line(self.scenario) + "\n")
             return fit("\n".join(parts))
-        if "hor_rms" in err.columns:
+        if "hor_rms" in err[0]:
             first = next(iter(self.runs.values()))
             lines = [f"navigation error per variant against the reference epochs {first.scored_label()}: RMS / max"]
             lines.append(f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'vertical [m]':>18}")
@@ -680,7 +684,7 @@ class VariantRuns:
             if steady:
                 lines[0] += "; horizontal also with each run's mean offset removed"
                 lines[1] = f"  {'variant':<14} {'window':<22} {'horizontal [m]':>18} {'offset removed':>18} {'vertical [m]':>16}"
-            for _, row in err.iterrows():
+            for row in err:
                 for name in ["", *[w[0] + "." for w in first.windows()]]:
                     head = f"  {row['variant']:<14} {(name[:-1] or 'whole run'):<22} {row[name + 'hor_rms']:>8.3f} / {row[name + 'hor_max']:<7.3f}"
                     rel = f" {(row['hor_rel_rms'] if not name else float('nan')):>8.3f} / {row[name + 'hor_rel_max']:<7.3f}" if steady else ""
@@ -689,7 +693,7 @@ class VariantRuns:
             return fit("\n".join(parts))
         lines = ["navigation error per variant (whole run): RMS / max"]
         lines.append(f"  {'variant':<14} {'lat [m]':>16} {'east [m]':>16} {'up [m]':>16} {'vel N [m/s]':>16}")
-        for _, row in err.iterrows():
+        for row in err:
             lines.append(
                 f"  {row['variant']:<14} {row['lat_m_rms']:>7.3f} / {row['lat_m_max']:<6.2f} {row['pos_e_rms']:>7.3f} / {row['pos_e_max']:<6.2f}"
                 f" {row['pos_u_rms']:>7.3f} / {row['pos_u_max']:<6.2f} {row['vel_n_rms']:>7.4f} / {row['vel_n_max']:<6.3f}"
@@ -700,9 +704,9 @@ class VariantRuns:
         rms = ", ".join(f"{name} {r.attitude_rms(t0, t1) * arcsec:.2f}" for name, r in self.runs.items())
         span = "first fault to end of run" if first.scenario.faults() else "whole run: no faults"
         lines.append(f"master attitude error RMS over {t0:g}–{first.t[-1]:g} s ({span}), arcsec: {rms}")
-        if "fused_alt_rms" in err.columns:
+        if "fused_alt_rms" in err[0]:
             lines.append("fused altitude error per variant: RMS / max [m], share of epochs predicting only in height")
-            for _, row in err.iterrows():
+            for row in err:
                 lines.append(f"  {row['variant']:<14} {row['fused_alt_rms']:>7.3f} / {row['fused_alt_max']:<6.2f} {row['fused_alt_predict_only']:>6.1%}")
         parts.append("\n".join(lines) + "\n")
         return fit("\n".join(parts))

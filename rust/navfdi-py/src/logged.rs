@@ -6,7 +6,7 @@ use crate::convert::{matrix, read};
 use crate::errors::IntoPyResult;
 use crate::scenario::record_to_py;
 use nalgebra::{DMatrix, Vector3};
-use navfdi_core::arch::run_architecture;
+use navfdi_core::arch::run_variants;
 use navfdi_core::logs::{GnssLog, LoggedSource};
 use navfdi_core::record::RunRecord;
 use navfdi_core::spec::ScenarioSpec;
@@ -281,8 +281,8 @@ impl PyLoggedSource {
     /// Run each scenario of ``spec_jsons`` (the prepared one and its variants: only the
     /// filter may differ) on the recorded measurements with the prepared scenario's faults
     /// injected; ``isolation`` False makes every detector report only. Returns one record dict
-    /// per scenario (as ``run_scenario``'s, plus ``nav`` (T, 21) and ``nav_columns``); the GIL
-    /// is released and Ctrl-C stops the run.
+    /// per scenario (as ``run_scenario``'s, plus ``nav`` (T, 21) and ``nav_columns``), run in
+    /// parallel; the GIL is released and Ctrl-C stops the run.
     #[pyo3(signature = (spec_jsons, isolation=true))]
     fn run<'py>(
         &self,
@@ -307,15 +307,11 @@ impl PyLoggedSource {
                     seed: 0,
                     stream: 0,
                 };
-                specs
-                    .iter()
-                    .map(|s| {
-                        base.check_variant(s)?;
-                        let rec = run_architecture(s, &streams, isolation, true, cancel)?;
-                        let datum = navfdi_core::montecarlo::logged_datum(src, s, cancel)?;
-                        Ok(RunRecord { datum, ..rec })
-                    })
-                    .collect()
+                let datum = |s: &ScenarioSpec, rec: RunRecord| {
+                    let datum = navfdi_core::montecarlo::logged_datum(src, s, cancel)?;
+                    Ok(RunRecord { datum, ..rec })
+                };
+                run_variants(base, &specs, &streams, isolation, cancel, datum)
             })?;
         let out = PyList::empty(py);
         for r in records {

@@ -236,7 +236,8 @@ pub fn run_scenario<'py>(
 
 /// Simulate one run of the first scenario (noise from `(seed, stream)`) and filter it with each
 /// scenario of `spec_jsons` (variants: only the filter may differ), isolation active. Returns
-/// one record per variant, in order; the GIL is released and Ctrl-C stops the run.
+/// one record per variant, in order (run in parallel); the GIL is released and Ctrl-C stops
+/// the run.
 #[pyfunction]
 #[pyo3(signature = (spec_jsons, seed, stream = 0))]
 pub fn run_variants<'py>(
@@ -266,12 +267,8 @@ pub fn run_variants<'py>(
             cancel.check()?;
             let sim = simulate(&prep, seed, stream);
             let src = sim.streams(&prep);
-            let mut out = vec![run_architecture(&prep.spec, &src, true, true, cancel)?];
-            for spec in specs {
-                prep.spec.check_variant(&spec)?;
-                out.push(run_architecture(&spec, &src, true, true, cancel)?);
-            }
-            Ok(out)
+            let all: Vec<ScenarioSpec> = std::iter::once(prep.spec.clone()).chain(specs).collect();
+            navfdi_core::arch::run_variants(&prep.spec, &all, &src, true, cancel, |_, rec| Ok(rec))
         })?;
     let out = PyList::empty(py);
     for r in records {

@@ -55,3 +55,32 @@ pub fn run_architecture(
         }
     }
 }
+
+/// Run every scenario of `specs` over the same streams, everything recorded (`isolation` as
+/// in [`run_architecture`]): the variants of one run (only the filter may differ from `base`, which made the streams;
+/// each is checked by [`ScenarioSpec::check_variant`] before any runs). `then` finishes each
+/// record (e.g. a logged run's datum). The variants run in parallel on rayon's pool; each is
+/// the same computation as alone, so the records (returned in `specs`' order) are the same
+/// to the bit whatever the number of threads. With several failures, the error of the first
+/// failing variant in order is returned.
+pub fn run_variants<F>(
+    base: &ScenarioSpec,
+    specs: &[ScenarioSpec],
+    src: &Streams,
+    isolation: bool,
+    cancel: &Cancel,
+    then: F,
+) -> Result<Vec<RunRecord>>
+where
+    F: Fn(&ScenarioSpec, RunRecord) -> Result<RunRecord> + Sync,
+{
+    use rayon::prelude::*;
+    for s in specs {
+        base.check_variant(s)?;
+    }
+    let each: Vec<Result<RunRecord>> = specs
+        .par_iter()
+        .map(|s| then(s, run_architecture(s, src, isolation, true, cancel)?))
+        .collect();
+    each.into_iter().collect()
+}
