@@ -33,6 +33,7 @@ __all__ = [
     "FileFormatError",
     "read_rinex_obs",
     "read_imu_csv",
+    "pos_rows",
     "simulate_logs",
     "read_rinex_nav",
     "GnssRun",
@@ -604,6 +605,15 @@ def read_imu_csv(
     value, time not increasing, a gap, a sample beyond any IMU's range, implausible units,
     no samples, a gzip that inflates over 200 times its size); ``OSError`` a path that is not a
     readable regular file; ``MemoryError`` a file beyond the memory limit."""
+
+def pos_rows(text: str, n_fields: int) -> tuple[NDArray[np.float64], NDArray[np.uint64]] | None:
+    """The data rows of an RTKLIB ``.pos`` file's ``text`` in one pass, GIL released:
+    ``(values, lines)`` — ``values`` (N, 1 + n_fields): the GPST time as GPS seconds since
+    1980-01-06, then the first ``n_fields`` numbers of the row; ``lines`` (N,) their 1-based
+    line numbers — or None where any line is not in the regular form (the time as
+    zero-padded ``yyyy/mm/dd hh:mm:ss.sss`` or GPS week and seconds, then at least
+    ``n_fields`` plain numbers; header lines ``%…`` and blank lines skipped):
+    :func:`navfdi.logs.read_pos` then reads it line by line and words the error."""
 
 def match_alarms(t: ArrayLike, alarm: list[bool], windows: list[tuple[float, float]], tested: list[bool] | None = None) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
     """The one event-matching rule (used by ``run``, ``montecarlo`` and ``demo``): alarm

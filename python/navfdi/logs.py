@@ -1,8 +1,8 @@
 """Recorded logs as a scenario source: IMU CSV logs and RTKLIB ``.pos`` solutions.
 
 A scenario's ``[source]`` table names the files (relative paths resolve against the TOML
-file's folder); :func:`read_imu` and :func:`read_pos` read them with pandas and check them,
-naming the file, line and column of bad input; :func:`load_source` turns them into the arrays
+file's folder); :func:`read_imu` and :func:`read_pos` read them (in one pass in Rust where the
+file has the regular form) and check them, naming the file, line and column of bad input; :func:`load_source` turns them into the arrays
 :class:`navfdi._core.LoggedSource` takes. Time 0 of a logged run is the first epoch of the
 GNSS file. All times are GPS time (GPST); heights are whatever the GNSS file holds.
 """
@@ -86,7 +86,12 @@ MAX_INFLATION = 200
 
 
 def _open_text(path: Path) -> list[str]:
-    """The lines of a text log (``.gz`` by its magic bytes, a UTF-8 byte-order mark skipped).
+    """The lines of a text log (:func:`_read_text`)."""
+    return _read_text(path).splitlines()
+
+
+def _read_text(path: Path) -> str:
+    """The text of a log (``.gz`` by its magic bytes, a UTF-8 byte-order mark skipped).
     The path must be a regular file (a device or pipe could stream forever or block); a gzip
     that inflates beyond :data:`MAX_INFLATION` times its size (a compression bomb) is refused
     while it is being read."""
@@ -124,7 +129,7 @@ def _open_text(path: Path) -> list[str]:
             raise ScenarioError(f"{path}: not a readable gzip file ({e})") from None
         raw = b"".join(parts)
     try:
-        return raw.decode("utf-8-sig").splitlines()
+        return raw.decode("utf-8-sig")
     except UnicodeDecodeError as e:
         raise ScenarioError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
 
@@ -216,7 +221,8 @@ def read_pos(path: str | Path) -> PosLog:
     the velocity columns. Raises :class:`~navfdi.ScenarioError` naming the file, line and
     column of bad input."""
     path = Path(path)
-    lines = _open_text(path)
+    text = _read_text(path)
+    lines = text.splitlines()
     head = [ln for ln in lines if ln.startswith("%")]
     names = None
     for ln in head:
@@ -231,31 +237,14 @@ def read_pos(path: str | Path) -> PosLog:
     if "latitude(d'\")" in names or any("'" in n for n in names[1:3]):
         raise ScenarioError(f"{path}: latitude and longitude in degrees-minutes-seconds; write them in decimal degrees (out-degform = deg)")
     fields = names[1:]
-    data = []
-    line_of: list[int] = []
-    first = None
-    for i, ln in enumerate(lines):
-        if ln.startswith("%") or not ln.strip():
-            continue
-        tok = ln.split()
-        if first is None:
-            first = i + 1
-        if len(tok) < 2 + len(fields):
-            raise ScenarioError(f"{path}, line {i + 1}: {len(tok)} fields, the header names {2 + len(fields)}")
-        try:
-            t = pos_time(tok[0], tok[1])
-        except ValueError:
-            raise ScenarioError(f"{path}, line {i + 1}, column 'GPST': {tok[0]} {tok[1]!r} is not a GPST time") from None
-        try:
-            vals = [float(x) for x in tok[2:2 + len(fields)]]
-        except ValueError:
-            j = next(j for j, x in enumerate(tok[2:2 + len(fields)]) if not _isfloat(x))
-            raise ScenarioError(f"{path}, line {i + 1}, column {fields[j]!r}: {tok[2 + j]!r} is not a number") from None
-        data.append([t, *vals])
-        line_of.append(i + 1)
-    if not data:
+    # The regular form in one pass in Rust (the same numbers to the bit); anything else, and
+    # every error, line by line here.
+    from . import _core
+
+    fast = _core.pos_rows(text, len(fields))
+    a, line_of = (fast[0], fast[1].tolist()) if fast is not None else _pos_rows(path, lines, fields)
+    if not len(a):
         raise ScenarioError(f"{path}: no solution epochs")
-    a = np.asarray(data)
     col = {n: a[:, j + 1] for j, n in enumerate(fields)}
     _check_pos_values(path, fields, a[:, 1:], line_of)
 
@@ -277,6 +266,32 @@ def read_pos(path: str | Path) -> PosLog:
     height = get("height") if any(k.split("(")[0] == "height" for k in col) else get("ellh")
     return PosLog(times, get("latitude"), get("longitude"), height, get("Q", 0), vel,
                   np.column_stack([get("sde"), get("sdn"), get("sdu")]), sd_vel, str(path), get("ns"))
+
+
+def _pos_rows(path: Path, lines: Sequence[str], fields: Sequence[str]) -> tuple[np.ndarray, list[int]]:
+    """The data rows of a ``.pos`` file's ``lines`` one by one (:func:`read_pos`'s reader for
+    what the Rust pass does not take, and its errors): ``(values, line numbers)``, values
+    (N, 1 + len(fields)): GPS seconds, then the fields."""
+    data = []
+    line_of: list[int] = []
+    for i, ln in enumerate(lines):
+        if ln.startswith("%") or not ln.strip():
+            continue
+        tok = ln.split()
+        if len(tok) < 2 + len(fields):
+            raise ScenarioError(f"{path}, line {i + 1}: {len(tok)} fields, the header names {2 + len(fields)}")
+        try:
+            t = pos_time(tok[0], tok[1])
+        except ValueError:
+            raise ScenarioError(f"{path}, line {i + 1}, column 'GPST': {tok[0]} {tok[1]!r} is not a GPST time") from None
+        try:
+            vals = [float(x) for x in tok[2:2 + len(fields)]]
+        except ValueError:
+            j = next(j for j, x in enumerate(tok[2:2 + len(fields)]) if not _isfloat(x))
+            raise ScenarioError(f"{path}, line {i + 1}, column {fields[j]!r}: {tok[2 + j]!r} is not a number") from None
+        data.append([t, *vals])
+        line_of.append(i + 1)
+    return np.asarray(data, float).reshape(len(data), 1 + len(fields)), line_of
 
 
 def _pos_limit(name: str) -> tuple[float, float] | None:

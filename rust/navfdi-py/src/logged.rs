@@ -378,6 +378,32 @@ pub fn read_imu_csv<'py>(
     ))
 }
 
+/// The data rows of an RTKLIB `.pos` file's text (`navfdi_core::logs::pos_text::pos_rows`, GIL
+/// released): `n_fields` numbers after the GPST time. Returns `(values, lines)` — `values`
+/// (N, 1 + n_fields): GPS seconds, then the numbers; `lines` (N,) their 1-based line numbers
+/// — or None where the text is not in the regular form (the caller's reader then decides).
+#[pyfunction]
+pub fn pos_rows<'py>(
+    py: Python<'py>,
+    text: &str,
+    n_fields: usize,
+) -> PyResult<Option<PosRows<'py>>> {
+    let Some((values, lines)) = py.detach(|| navfdi_core::logs::pos_text::pos_rows(text, n_fields))
+    else {
+        return Ok(None);
+    };
+    let n = lines.len();
+    Ok(Some((
+        crate::convert::to_numpy(py, values, &[n, 1 + n_fields])?,
+        crate::convert::to_numpy(py, lines, &[n])?,
+    )))
+}
+
+type PosRows<'py> = (
+    Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
+    Bound<'py, numpy::PyArray<u64, numpy::IxDyn>>,
+);
+
 /// `log` as a (M, 13) table of the column layout [`gnss_log`] reads: time (s), latitude,
 /// longitude (rad), height (m), velocity east, north, up (m/s), σ position, σ velocity.
 fn gnss_table(log: &GnssLog) -> Vec<f64> {

@@ -4,8 +4,9 @@
 //! injected into the recorded measurements with [`crate::stream::inject`] (the same step as
 //! the simulator's) and outages remove them, so a scenario's `[[faults]]`, `outages` and
 //! `[[variants]]` work on logged data as on simulated data. Parsing files is the caller's
-//! (Python reads them with pandas and names the file, line and column of bad input); this
-//! layer checks the arrays again (finite, increasing, overlapping) before anything runs.
+//! (the IMU CSV reader [`imu_csv`] and the `.pos` rows [`pos_text`] are here, the checks that
+//! name the file, line and column of bad input partly in Python); this layer checks the
+//! arrays again (finite, increasing, overlapping) before anything runs.
 //!
 //! The record epochs are the GNSS log's epochs (time 0 = its first epoch). A GNSS sensor of
 //! the scenario takes a measurement at every n-th log epoch (its `rate` the log's divided by
@@ -13,6 +14,7 @@
 //! The reference is scored only at epochs where no GNSS measurement was an input.
 
 pub mod imu_csv;
+pub mod pos_text;
 pub mod ranges;
 pub mod shipped;
 
