@@ -75,13 +75,42 @@ def test_solved_epochs_turn_the_error_into_a_warning():
 def test_a_file_with_no_epoch_solved_says_why():
     """The shared RINEX 2 pair: its navigation file covers two or three of the satellites in
     view in the observations' hour, so no epoch has four. The run says so — satellite-epochs
-    per status, the most any epoch had against the four needed — instead of NaN rates; the
+    per status, the most any epoch had against the five needed — instead of NaN rates; the
     σ model's estimate adds no warning of its own (nothing could be tested)."""
     obs, nav = DATA / "rinex_formats" / "delf0010.21o.gz", DATA / "rinex_formats" / "cbw10010.21n.gz"
     with warnings.catch_warnings(record=True) as seen:
         warnings.simplefilter("always")
         with pytest.raises(ValueError, match=r"no epoch solved in .*delf0010\.21o\.gz \(105 epochs\): satellite-epochs no_ephemeris 1030, "
-                                             r"unsolved 217; at most 3 satellite\(s\) with a usable ephemeris above the mask at any epoch, 4 needed"):
+                                             r"unsolved 217; at most 3 satellite\(s\) with a usable ephemeris above the mask at any epoch, 5 needed \(position, "
+                                             r"one clock per system and one more to test\)$"):
             navfdi.gnss_solve(obs, nav, systems="G")
     assert [type(w.message) for w in seen] == [navfdi.PartialLogWarning]
     assert main(["gnss", str(obs), str(nav), "--systems", "G", "--no-figures"]) == 2
+
+
+def test_no_epoch_solved_names_the_systems_left_out():
+    """The walk's u-blox file with GPS alone: four GPS satellites with ephemerides, one short
+    of a solution and its test; the error says so and that the files also have Galileo (the
+    systems option to use; BeiDou is observed only on B2/B3 codes, so it is not offered),
+    where a new user's first run would otherwise end at the count."""
+    d = Path(navfdi.__file__).parent / "data" / "walk_0827"
+    obs, nav = d / "gnss_1730.obs.gz", d / "gnss_1730.nav"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with pytest.raises(ValueError, match=r"at most 4 satellite\(s\) .* 5 needed .*; the files also have Galileo: ask for G,E "
+                                             r"\(--systems, systems=, or source\.gnss\.systems in a scenario\)$"):
+            navfdi.gnss_solve(obs, nav, systems="G")
+        assert len(navfdi.gnss_solve(obs, nav, systems="G,E").solution)
+
+
+def test_console_names_systems_left_out(capsys):
+    """The static rover file solved on GPS alone: the console and the summary say which
+    systems the files also have (G + E + C + J there), and the option that adds them."""
+    assert main(["gnss", str(OBS), str(NAV), "--systems", "G", "--no-figures"]) == 0
+    out = capsys.readouterr().out
+    assert "the files also have Galileo, BeiDou, QZSS, not used: --systems G,E,C,J uses them" in out
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        s = navfdi.gnss_solve(OBS, NAV, systems="G,E,C,J")
+    assert s.config["systems_in_files"] == ["G", "E", "C", "J"]
+    assert "the files also have" not in s.format_summary()

@@ -1138,6 +1138,11 @@ class GnssRun:
     @property
     def receiver(self) -> str:
         """Receiver type from the observation header."""
+    @property
+    def systems_in_files(self) -> list[str]:
+        """Letters of the systems both files let a solution use (pseudoranges on a first-band
+        code in the observation file, ephemerides in the navigation file), asked for or not,
+        in column order."""
 
 def dll_variance(cn0_dbhz: float, t: float = 0.02, spacing: float = 1.0) -> float:
     """Variance (chips²) of one output of a noncoherent early-minus-late power delay

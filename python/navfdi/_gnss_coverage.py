@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import os
 import warnings
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 import numpy as np
 
@@ -68,17 +68,22 @@ def _nav_spans(records: pd.DataFrame) -> dict[str, tuple[str, str]]:
     return {str(s): (lo[s].strftime("%Y-%m-%d %H:%M:%S"), hi[s].strftime("%Y-%m-%d %H:%M:%S")) for s in lo.index}
 
 
-def raise_if_nothing_solved(sats: pd.DataFrame, n_epochs: int, solved: int, obs: str | os.PathLike[str], n_systems: int) -> None:
+def raise_if_nothing_solved(sats: pd.DataFrame, n_epochs: int, solved: int, obs: str | os.PathLike[str], systems: Sequence[str], in_files: Sequence[str] = ()) -> None:
     """``ValueError`` when not one of the ``n_epochs`` epochs of ``obs`` has a solution: the
     satellite-epochs per status (``sats``: the run's satellite table) and the most satellites
-    any epoch had that could enter a solution, against the ``3 + n_systems`` unknowns' need
-    (position and one clock per system) — rather than a run of NaN rates."""
+    any epoch had that could enter a solution, against the ``4 + len(systems)`` a solution
+    and its test need (position, one clock per system and one more), and the systems of
+    ``in_files`` (those both files let a solution use) that were not asked for — rather than
+    a run of NaN rates."""
     if solved or not n_epochs:
         return
     counts = list(sats["status"].value_counts().items()) if len(sats) else []
     usable = sats[sats["status"].isin(["used", "excluded", "unsolved"])] if len(sats) else sats
     most = int(usable.groupby("epoch").size().max()) if len(usable) else 0
-    need = 3 + n_systems
+    need = 4 + len(systems)
     text = ", ".join(f"{k} {int(v)}" for k, v in counts) or "none observed on the systems and codes asked for"
+    others = [s for s in in_files if s not in systems]
+    hint = (f"; the files also have {', '.join(_NAMES.get(s, s) for s in others)}: ask for {','.join([*systems, *others])} "
+            "(--systems, systems=, or source.gnss.systems in a scenario)") if others else ""
     raise ValueError(f"no epoch solved in {os.fspath(obs)} ({n_epochs} epochs): satellite-epochs {text}; at most {most} satellite(s) with a "
-                     f"usable ephemeris above the mask at any epoch, {need} needed (position and one clock per system)")
+                     f"usable ephemeris above the mask at any epoch, {need} needed (position, one clock per system and one more to test){hint}")

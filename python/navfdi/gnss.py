@@ -439,6 +439,9 @@ class GnssSolution:
         s = self.summary()
         codes = ", ".join(f"{k} {v}" for k, v in self.config.get("codes", {}).items())
         lines = [f"epochs {s['epochs']}, solved {s['solved']} ({codes or ', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
+        if others := [x for x in self.config.get("systems_in_files", []) if x not in self.config["systems"]]:
+            left_out = ", ".join({"G": "GPS", "E": "Galileo", "C": "BeiDou", "J": "QZSS"}.get(x, x) for x in others)
+            lines.append(f"the files also have {left_out}, not used: --systems {','.join([*self.config['systems'], *others])} uses {'it' if len(others) == 1 else 'them'}")
         if "horizontal_rms" in s:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
         ig = s.get("integrity")
@@ -773,7 +776,7 @@ def gnss_solve(
     # imported and the tables are built (peak memory).
     vel = run.velocity((float(doppler_noise[0]), float(doppler_noise[1])))
     st = run.satellite_table()
-    used_codes, dropped, receiver = dict(run.codes), run.dropped, run.receiver
+    used_codes, dropped, receiver, in_files = dict(run.codes), run.dropped, run.receiver, run.systems_in_files
     del run
     _release_freed_memory()
     import pandas as pd
@@ -825,7 +828,7 @@ def gnss_solve(
     if len(sol):
         solved = int((sol["status"] != "no_solution").sum())
         check_ephemeris_coverage(sats, solved, obs, nav, tuple(gps_time(ep["time"][[0, -1]])), read_rinex)
-        raise_if_nothing_solved(sats, len(sol), solved, obs, len(systems))
+        raise_if_nothing_solved(sats, len(sol), solved, obs, systems, in_files)
     sd = enu_sigma(sats, len(sol))
     at = sol.columns.get_loc("height") + 1
     for j, c in enumerate(("sd_e", "sd_n", "sd_u")):
@@ -857,6 +860,7 @@ def gnss_solve(
         "power": float(power),
         "dropped_observation_types": dropped,
         "receiver": receiver,
+        "systems_in_files": list(in_files),
         **estimated,
     }
     out = GnssSolution(sol, sats, t_ecef, config, parsed)

@@ -701,6 +701,15 @@ impl PyGnssRun {
         Ok(d)
     }
 
+    /// Letters of the systems both files let a solution use, asked for or not.
+    #[getter]
+    fn systems_in_files(&self) -> Vec<String> {
+        navfdi_core::gnss::spp::systems_in_files(&self.obs, &self.nav)
+            .into_iter()
+            .map(|s| s.letter().to_string())
+            .collect()
+    }
+
     /// Observation types dropped while reading (e.g. ``G:X1``).
     #[getter]
     fn dropped(&self) -> Vec<String> {

@@ -493,6 +493,22 @@ struct Candidate {
     row: usize,
 }
 
+/// The systems both files let a solution use, whether asked for or not: with pseudoranges
+/// on a first-band code ([`super::signals::priority`]) in the observation file and with
+/// ephemerides in the navigation file, in column order.
+pub fn systems_in_files(obs: &ObsData, nav: &NavData) -> Vec<Sys> {
+    let n = super::signals::counts(obs);
+    Sys::POSITIONING
+        .into_iter()
+        .filter(|s| {
+            super::signals::priority(*s)
+                .iter()
+                .any(|c| n.contains_key(&(s.letter(), c.to_string())))
+        })
+        .filter(|s| nav.ephemerides.keys().any(|sat| sat.sys == *s))
+        .collect()
+}
+
 /// Solve the epochs `epochs` (ascending indices; those past the file's end are ignored) of
 /// `obs` with `nav`, appending to `out`. `t0` is the first epoch's
 /// time (faults count from it); `state` carries the start position across calls.
