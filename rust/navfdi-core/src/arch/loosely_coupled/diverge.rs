@@ -158,7 +158,7 @@ pub struct Outlast {
     /// The last fix's jump (its second difference comes back at the next fix).
     prev_jump: Option<[f64; 2]>,
     /// The last second differences' sizes (m).
-    sizes: std::collections::VecDeque<f64>,
+    sizes: super::noise_scale::Rolling<JUMP_WINDOW>,
     /// Jumps the filter took in and no later jump undid: time (s), size (m).
     open: Vec<(f64, [f64; 2])>,
 }
@@ -173,7 +173,7 @@ impl Outlast {
             interval,
             last: [None; 2],
             prev_jump: None,
-            sizes: std::collections::VecDeque::new(),
+            sizes: Default::default(),
             open: Vec::new(),
         }
     }
@@ -189,14 +189,13 @@ impl Outlast {
         };
         self.last = [Some((t, p)), self.last[0]];
         let e = e?;
-        let mut sorted: Vec<f64> = self.sizes.iter().copied().collect();
-        sorted.sort_by(f64::total_cmp);
         // σ per component of a 2D Gaussian from the median size (Rayleigh: 1.1774 σ).
-        let spread = sorted.get(sorted.len() / 2).map_or(0.0, |m| m / 1.1774);
-        if self.sizes.len() == JUMP_WINDOW {
-            self.sizes.pop_front();
-        }
-        self.sizes.push_back(e[0].hypot(e[1]));
+        let spread = if self.sizes.len() > 0 {
+            self.sizes.median() / 1.1774
+        } else {
+            0.0
+        };
+        self.sizes.push(e[0].hypot(e[1]));
         let bound = JUMP_M
             .max(JUMP_ACCEL * self.interval * self.interval)
             .max(JUMP_SIGMAS * spread);

@@ -2,7 +2,6 @@
 //! ([`NoiseScale`], `[loosely_coupled] noise_scale = "auto"`), and the window lengths the
 //! receiver's consistency ([`super::receiver::ReceiverConsistency`]) shares with it.
 
-use super::window::median_of;
 use std::collections::VecDeque;
 
 /// The scale `c` of a GNSS channel's measurement σ, estimated from its own innovations: over
@@ -14,18 +13,51 @@ use std::collections::VecDeque;
 /// [`SCALE_MIN`] samples are in.
 #[derive(Debug, Clone)]
 pub struct NoiseScale {
-    d2: VecDeque<f64>,
-    hph: VecDeque<f64>,
-    r: VecDeque<f64>,
+    d2: Rolling<SCALE_WINDOW>,
+    hph: Rolling<SCALE_WINDOW>,
+    r: Rolling<SCALE_WINDOW>,
     /// Fixed scale (no estimation) when set.
     fixed: Option<f64>,
     lo: f64,
     hi: f64,
 }
 
-/// The (upper) median of a window; NaN when empty.
-pub(super) fn median(v: &VecDeque<f64>) -> f64 {
-    median_of(&mut v.iter().copied().collect::<Vec<_>>())
+/// A window of the last `CAP` values that keeps a sorted copy beside them, so that its median
+/// costs a look-up instead of a selection over a copy at every fix (the same value: the
+/// element of rank `len / 2` in `f64::total_cmp`'s order, as [`super::window::median_of`]
+/// selects it).
+#[derive(Debug, Clone, Default)]
+pub(super) struct Rolling<const CAP: usize> {
+    fifo: VecDeque<f64>,
+    sorted: Vec<f64>,
+}
+
+impl<const CAP: usize> Rolling<CAP> {
+    /// Add `x`, dropping the oldest value when full.
+    pub fn push(&mut self, x: f64) {
+        if self.fifo.len() == CAP {
+            if let Some(old) = self.fifo.pop_front() {
+                let i = self.sorted.partition_point(|v| v.total_cmp(&old).is_lt());
+                self.sorted.remove(i);
+            }
+        }
+        self.fifo.push_back(x);
+        let i = self.sorted.partition_point(|v| v.total_cmp(&x).is_le());
+        self.sorted.insert(i, x);
+    }
+
+    /// Values in the window.
+    pub fn len(&self) -> usize {
+        self.fifo.len()
+    }
+
+    /// The (upper) median; NaN when empty.
+    pub fn median(&self) -> f64 {
+        self.sorted
+            .get(self.sorted.len() / 2)
+            .copied()
+            .unwrap_or(f64::NAN)
+    }
 }
 
 /// Components (3 per fix) the scale is estimated over.
@@ -37,9 +69,9 @@ impl NoiseScale {
     /// An estimated scale clamped to `[lo, hi]`, or a `fixed` one.
     pub fn new(fixed: Option<f64>, lo: f64, hi: f64) -> Self {
         NoiseScale {
-            d2: Default::default(),
-            hph: Default::default(),
-            r: Default::default(),
+            d2: Rolling::default(),
+            hph: Rolling::default(),
+            r: Rolling::default(),
             fixed,
             lo,
             hi,
@@ -56,14 +88,9 @@ impl NoiseScale {
             if !(d2[j].is_finite() && hph[j].is_finite() && r[j] > 0.0) {
                 continue;
             }
-            if self.d2.len() == SCALE_WINDOW {
-                self.d2.pop_front();
-                self.hph.pop_front();
-                self.r.pop_front();
-            }
-            self.d2.push_back(d2[j]);
-            self.hph.push_back(hph[j].max(0.0));
-            self.r.push_back(r[j]);
+            self.d2.push(d2[j]);
+            self.hph.push(hph[j].max(0.0));
+            self.r.push(r[j]);
         }
     }
 
@@ -75,14 +102,14 @@ impl NoiseScale {
         if self.d2.len() < SCALE_MIN {
             return 1.0;
         }
-        let med = |v: &VecDeque<f64>| median(v);
-        let c2 = (med(&self.d2) / 0.454_936_4 - med(&self.hph)) / med(&self.r);
+        let c2 = (self.d2.median() / 0.454_936_4 - self.hph.median()) / self.r.median();
         c2.max(self.lo * self.lo).sqrt().clamp(self.lo, self.hi)
     }
 }
 
 #[cfg(test)]
 mod scale_tests {
+    use super::super::window::median_of;
     use super::*;
 
     #[test]
@@ -102,5 +129,29 @@ mod scale_tests {
         let c = s.scale();
         assert!((c - (0.36f64 - 0.04).sqrt() / 2.0).abs() < 0.06, "{c}");
         assert_eq!(NoiseScale::new(Some(2.0), 0.1, 10.0).scale(), 2.0);
+    }
+
+    /// The rolling window's median is the selection's over the same values, to the bit,
+    /// through ties, signed zeros and the window's turnover.
+    #[test]
+    fn the_rolling_median_is_the_selected_one() {
+        let mut w = Rolling::<7>::default();
+        let mut plain = VecDeque::new();
+        for k in 0..60u32 {
+            let x = match k % 5 {
+                0 => 0.0,
+                1 => -0.0,
+                _ => f64::from((k * 37) % 11) * 0.25 - 1.0,
+            };
+            w.push(x);
+            if plain.len() == 7 {
+                plain.pop_front();
+            }
+            plain.push_back(x);
+            let mut v: Vec<f64> = plain.iter().copied().collect();
+            assert_eq!(w.median().to_bits(), median_of(&mut v).to_bits(), "{k}");
+            assert_eq!(w.len(), plain.len());
+        }
+        assert!(Rolling::<3>::default().median().is_nan());
     }
 }

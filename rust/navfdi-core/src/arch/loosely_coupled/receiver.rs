@@ -2,7 +2,7 @@
 //! fixes against its velocity, the sequential tests on it (CUSUM and drift windows), and what
 //! it reports per fix ([`Consistency`]) to the position hold ([`super::hold`]).
 
-use super::noise_scale::{median, SCALE_MIN, SCALE_WINDOW};
+use super::noise_scale::{SCALE_MIN, SCALE_WINDOW};
 use nalgebra::Vector3;
 
 /// INS motion (m) between two identical fixes that marks the second as stale.
@@ -27,7 +27,7 @@ pub(super) fn repeated(fix: &Vector3<f64>, last: &Vector3<f64>, motion: f64) -> 
 #[derive(Debug, Clone, Default)]
 pub struct ReceiverConsistency {
     prev: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-    abs_e: [std::collections::VecDeque<f64>; 3],
+    abs_e: [super::noise_scale::Rolling<SCALE_WINDOW>; 3],
     up: [f64; 3],
     down: [f64; 3],
     /// The sums of `e` (m) and their count since each CUSUM side was last at zero: the
@@ -179,7 +179,7 @@ impl ReceiverConsistency {
             self.hist[j].push_back(e[j]);
             let w = &mut self.abs_e[j];
             let med = if w.len() >= RECEIVER_MIN {
-                median(w)
+                w.median()
             } else {
                 f64::NAN
             };
@@ -188,10 +188,7 @@ impl ReceiverConsistency {
             } else {
                 f64::NAN
             };
-            if w.len() == SCALE_WINDOW {
-                w.pop_front();
-            }
-            w.push_back(e[j].abs());
+            w.push(e[j].abs());
             // A jump or a fault's drift does not teach the latency.
             if !(sigma[j].is_finite() && e[j].abs() <= 4.0 * sigma[j]) {
                 pending = None;
