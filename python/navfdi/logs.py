@@ -2,7 +2,8 @@
 
 A scenario's ``[source]`` table names the files (relative paths resolve against the TOML
 file's folder); :func:`read_imu` and :func:`read_pos` read them (in one pass in Rust where the
-file has the regular form) and check them, naming the file, line and column of bad input; :func:`load_source` turns them into the arrays
+file has the regular form) and check them, naming the file, line and column of bad input;
+:func:`load_source` turns them into the arrays
 :class:`navfdi._core.LoggedSource` takes. Time 0 of a logged run is the first epoch of the
 GNSS file. All times are GPS time (GPST); heights are whatever the GNSS file holds.
 """

@@ -57,12 +57,12 @@ pub fn run_architecture(
 }
 
 /// Run every scenario of `specs` over the same streams, everything recorded (`isolation` as
-/// in [`run_architecture`]): the variants of one run (only the filter may differ from `base`, which made the streams;
-/// each is checked by [`ScenarioSpec::check_variant`] before any runs). `then` finishes each
-/// record (e.g. a logged run's datum). The variants run in parallel on rayon's pool; each is
-/// the same computation as alone, so the records (returned in `specs`' order) are the same
-/// to the bit whatever the number of threads. With several failures, the error of the first
-/// failing variant in order is returned.
+/// in [`run_architecture`]): the variants of one run. Only the filter may differ from `base`,
+/// which made the streams; each is checked by [`ScenarioSpec::check_variant`] before any runs.
+/// `then` finishes each record (e.g. a logged run's datum). The variants run in parallel on
+/// rayon's pool; each is the same computation as alone, so the records (returned in `specs`'
+/// order) are the same to the bit whatever the number of threads. With several failures, the
+/// error of the first failing variant in order is returned.
 pub fn run_variants<F>(
     base: &ScenarioSpec,
     specs: &[ScenarioSpec],
