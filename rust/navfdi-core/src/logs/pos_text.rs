@@ -84,44 +84,25 @@ fn digits(s: &str) -> bool {
     !s.is_empty() && s.len() <= 9 && s.bytes().all(|b| b.is_ascii_digit())
 }
 
-/// GPS seconds of 00:00 on a zero-padded `yyyy/mm/dd` date.
+/// GPS seconds of 00:00 GPST on a zero-padded `yyyy/mm/dd` date (the calendar is hifitime's,
+/// through the rinex crate; an impossible date is None).
 fn day_start(date: &str) -> Option<f64> {
+    use rinex::prelude::{Epoch, TimeScale};
     let b = date.as_bytes();
     if b.len() != 10 || b[4] != b'/' || b[7] != b'/' {
         return None;
     }
-    let num = |r: std::ops::Range<usize>| -> Option<i64> {
+    let num = |r: std::ops::Range<usize>| -> Option<u16> {
         let s = &date[r];
         digits(s).then(|| s.parse().ok())?
     };
     let (y, m, d) = (num(0..4)?, num(5..7)?, num(8..10)?);
-    let leap = (y % 4 == 0 && y % 100 != 0) || y % 400 == 0;
-    let month_days = [
-        31,
-        if leap { 29 } else { 28 },
-        31,
-        30,
-        31,
-        30,
-        31,
-        31,
-        30,
-        31,
-        30,
-        31,
-    ];
-    if y < 1 || !(1..=12).contains(&m) || d < 1 || d > month_days[(m - 1) as usize] {
-        return None;
+    if y == 0 {
+        return None; // Python's calendar starts at year 1
     }
-    // Days from 1970-01-01 (H. Hinnant's days_from_civil), then from the GPS epoch 1980-01-06.
-    let yy = if m <= 2 { y - 1 } else { y };
-    let era = yy.div_euclid(400);
-    let yoe = yy - era * 400;
-    let mp = (m + 9) % 12;
-    let doy = (153 * mp + 2) / 5 + d - 1;
-    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
-    let days = era * 146_097 + doe - 719_468 - 3_657;
-    Some(days as f64 * 86_400.0)
+    let (m, d) = (u8::try_from(m).ok()?, u8::try_from(d).ok()?);
+    let day = Epoch::maybe_from_gregorian(i32::from(y), m, d, 0, 0, 0, 0, TimeScale::GPST).ok()?;
+    Some(day.to_gpst_seconds())
 }
 
 #[cfg(test)]
