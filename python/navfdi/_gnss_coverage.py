@@ -68,6 +68,13 @@ def _nav_spans(records: pd.DataFrame) -> dict[str, tuple[str, str]]:
     return {str(s): (lo[s].strftime("%Y-%m-%d %H:%M:%S"), hi[s].strftime("%Y-%m-%d %H:%M:%S")) for s in lo.index}
 
 
+def left_out_systems(systems: Sequence[str], in_files: Sequence[str]) -> tuple[list[str], str]:
+    """The systems of ``in_files`` (those both files let a solution use) not in ``systems``,
+    as letters and as names for messages (``"Galileo, BeiDou"``; empty when none)."""
+    others = [s for s in in_files if s not in systems]
+    return others, ", ".join(_NAMES.get(s, s) for s in others)
+
+
 def raise_if_nothing_solved(sats: pd.DataFrame, n_epochs: int, solved: int, obs: str | os.PathLike[str], systems: Sequence[str], in_files: Sequence[str] = ()) -> None:
     """``ValueError`` when not one of the ``n_epochs`` epochs of ``obs`` has a solution: the
     satellite-epochs per status (``sats``: the run's satellite table) and the most satellites
@@ -82,8 +89,8 @@ def raise_if_nothing_solved(sats: pd.DataFrame, n_epochs: int, solved: int, obs:
     most = int(usable.groupby("epoch").size().max()) if len(usable) else 0
     need = 4 + len(systems)
     text = ", ".join(f"{k} {int(v)}" for k, v in counts) or "none observed on the systems and codes asked for"
-    others = [s for s in in_files if s not in systems]
-    hint = (f"; the files also have {', '.join(_NAMES.get(s, s) for s in others)}: ask for {','.join([*systems, *others])} "
+    others, names = left_out_systems(systems, in_files)
+    hint = (f"; the files also have {names}: ask for {','.join([*systems, *others])} "
             "(--systems, systems=, or source.gnss.systems in a scenario)") if others else ""
     raise ValueError(f"no epoch solved in {os.fspath(obs)} ({n_epochs} epochs): satellite-epochs {text}; at most {most} satellite(s) with a "
                      f"usable ephemeris above the mask at any epoch, {need} needed (position, one clock per system and one more to test){hint}")

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from navfdi import _core, _json
-from navfdi._gnss_coverage import check_ephemeris_coverage, raise_if_nothing_solved
+from navfdi._gnss_coverage import check_ephemeris_coverage, left_out_systems, raise_if_nothing_solved
 from navfdi._gnss_geometry import enu_sigma
 from navfdi._gnss_auto import MAX_NOISE_SCALE, new_run, resolve_auto, scaled_factors
 from navfdi._gnss_noise import by_system_text, robust_sd, robust_sd_by
@@ -439,8 +439,8 @@ class GnssSolution:
         s = self.summary()
         codes = ", ".join(f"{k} {v}" for k, v in self.config.get("codes", {}).items())
         lines = [f"epochs {s['epochs']}, solved {s['solved']} ({codes or ', '.join(self.config['systems'])}; mask {self.config['mask_deg']:g} deg; alpha {s['alpha']:g})"]
-        if others := [x for x in self.config.get("systems_in_files", []) if x not in self.config["systems"]]:
-            left_out = ", ".join({"G": "GPS", "E": "Galileo", "C": "BeiDou", "J": "QZSS"}.get(x, x) for x in others)
+        others, left_out = left_out_systems(self.config["systems"], self.config.get("systems_in_files", []))
+        if others:
             lines.append(f"the files also have {left_out}, not used: --systems {','.join([*self.config['systems'], *others])} uses {'it' if len(others) == 1 else 'them'}")
         if "horizontal_rms" in s:
             lines.append(f"error vs truth: horizontal RMS {s['horizontal_rms']:.3f} m (max {s['horizontal_max']:.2f}), vertical RMS {s['vertical_rms']:.3f} m (max {s['vertical_max']:.2f})")
