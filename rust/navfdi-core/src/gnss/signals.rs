@@ -23,13 +23,20 @@ pub fn priority(sys: Sys) -> &'static [&'static str] {
 
 /// Pseudorange observations per system letter and code in `obs` (codes starting with `C`).
 pub fn counts(obs: &ObsData) -> BTreeMap<(char, String), usize> {
-    let mut out: BTreeMap<(char, String), usize> = BTreeMap::new();
+    // Counted by code index (no string per observation), named at the end.
+    let mut by_index: BTreeMap<(char, u16), usize> = BTreeMap::new();
     for ep in &obs.epochs {
         for o in &ep.obs {
-            let code = &obs.codes[o.code as usize];
-            if code.starts_with('C') && o.value > 1e6 && o.value < 1e8 {
-                *out.entry((o.sat.sys.letter(), code.clone())).or_default() += 1;
+            if o.value > 1e6 && o.value < 1e8 {
+                *by_index.entry((o.sat.sys.letter(), o.code)).or_default() += 1;
             }
+        }
+    }
+    let mut out: BTreeMap<(char, String), usize> = BTreeMap::new();
+    for ((l, c), k) in by_index {
+        let code = &obs.codes[c as usize];
+        if code.starts_with('C') {
+            *out.entry((l, code.clone())).or_default() += k;
         }
     }
     out
