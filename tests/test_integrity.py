@@ -74,6 +74,39 @@ def test_the_adds_elevation_models_give_the_published_variances():
     assert r.vpl == pytest.approx(EXP["VPL_m"], abs=0.05)
 
 
+def test_the_elevation_models_equal_the_adds_formulas():
+    """The models (in Rust) against the ADD's formulas written out in numpy, from below the
+    horizon to the zenith, on arrays of any shape and on a scalar."""
+    el = np.linspace(-0.1, np.pi / 2, 2001).reshape(23, 87)
+    d = np.degrees(el)
+    k = (1575.42**4 + 1176.45**4) / (1575.42**2 - 1176.45**2) ** 2
+    tropo, user = elevation_variances(el)
+    assert tropo.shape == user.shape == el.shape
+    np.testing.assert_allclose(tropo, (0.12 * 1.001 / np.sqrt(0.002001 + np.sin(el) ** 2)) ** 2, rtol=4e-15, atol=0)
+    np.testing.assert_allclose(user, k * ((0.13 + 0.53 * np.exp(-d / 10)) ** 2 + (0.15 + 0.43 * np.exp(-d / 6.9)) ** 2), rtol=4e-15, atol=0)
+    t0, u0 = elevation_variances(0.3)
+    t1, u1 = elevation_variances(np.array([0.3]))
+    assert np.ndim(t0) == np.ndim(u0) == 0 and (t0, u0) == (t1[0], u1[0])
+
+
+def test_default_variances_equal_the_same_variances_given():
+    """``araim`` with the ISM's σ and the elevation models (computed in Rust) gives the bits of
+    the same call with ``c_int`` / ``c_acc`` given from :func:`elevation_variances`; per-satellite
+    ISM arrays equal their scalar."""
+    los = -ROWS
+    tropo, user = elevation_variances(np.arcsin(los[:, 2]))
+    a = navfdi.araim(los, SYSTEMS)
+    b = navfdi.araim(los, SYSTEMS, c_int=0.75**2 + tropo + user, c_acc=0.5**2 + tropo + user)
+    c = navfdi.araim(los, SYSTEMS, ism=navfdi.integrity.Ism(sigma_ura=[0.75] * 10, b_nom=np.full(10, 0.5), p_sat=[1e-5] * 10))
+    for r in (b, c):
+        assert (r.vpl, r.hpl, r.emt, r.sigma_acc_v) == (a.vpl, a.hpl, a.emt, a.sigma_acc_v)
+        np.testing.assert_array_equal(r.mode_table["sigma"], a.mode_table["sigma"])
+    # Lines of sight in Fortran order or as lists read the same.
+    d = navfdi.araim(np.asfortranarray(los), SYSTEMS)
+    e = navfdi.araim(los.tolist(), SYSTEMS)
+    assert (d.vpl, d.hpl) == (e.vpl, e.hpl) == (a.vpl, a.hpl)
+
+
 def test_thirty_satellites_in_two_constellations_are_available():
     i = np.arange(30)
     az = i * 2.399963
@@ -95,6 +128,9 @@ def test_thirty_satellites_in_two_constellations_are_available():
         ({"systems": ["G"] * 5 + ["C"] * 5}, r"no constellation prior for system\(s\) C"),
         ({"c_int": -C_INT}, r"c_int\[0\] = -3.8865: a variance must be positive"),
         ({"c_acc": C_ACC[:3]}, r"c_acc: expected a scalar or \(10,\) values"),
+        ({"los_enu": np.where(np.arange(30).reshape(10, 3) == 7, np.nan, -ROWS)}, r"los_enu: element \[2, 1\] is NaN; only finite"),
+        ({"los_enu": np.where(np.arange(30).reshape(10, 3) == 2, np.inf, -ROWS)}, r"los_enu: element \[0, 2\] is inf"),
+        ({"ism": navfdi.integrity.Ism(b_nom=[0.5] * 4)}, r"ism.b_nom: expected a scalar or \(10,\) values"),
     ],
 )
 def test_bad_input_is_named(kwargs, match):

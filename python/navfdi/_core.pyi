@@ -55,6 +55,8 @@ __all__ = [
     "mdb",
     "validate_scenario",
     "araim_epoch",
+    "araim_los",
+    "araim_variances",
     "snapshot_pl",
     "window_alarm",
     "scenario_trajectory",
@@ -1252,3 +1254,26 @@ def araim_epoch(
     ``separation`` (N, 3), ``satellites``/``constellations`` flat with ``*_count`` (N,)) and
     with residuals ``fde`` (``detected, test_ratio, excluded, tried, passed, vpl, hpl,
     vpl_any, hpl_any, alarm, available``)."""
+
+def araim_los(
+    los_enu: Any,
+    constellation: list[int],
+    sigma_ura: list[float],
+    sigma_ure: list[float],
+    c_int: list[float] | None,
+    c_acc: list[float] | None,
+    b_nom: list[float],
+    p_sat: list[float],
+    p_const: list[float],
+    allocation: tuple[float, float, float, float, float, float, float],
+    residuals: list[float] | None = None,
+) -> dict[str, Any]:
+    """:func:`araim_epoch` from unit lines of sight ``los_enu`` (n, 3; east, north, up), with
+    the ADD's variances ``σ_URA² (σ_URE²) + σ_tropo² + σ_user²`` where ``c_int`` / ``c_acc``
+    are None; use :func:`navfdi.integrity.araim`. ``sigma_ura``, ``sigma_ure`` (m),
+    ``b_nom`` (m), ``p_sat``, ``c_int``, ``c_acc`` (m²): one value for every satellite or n.
+    The same dict; ValueError for a wrong shape, a non-finite or non-unit line of sight."""
+
+def araim_variances(elevation: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The ADD's ``(σ_tropo², σ_user²)`` (m²) at elevations (rad), each of the input's shape;
+    use :func:`navfdi.integrity.elevation_variances`."""

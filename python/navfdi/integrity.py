@@ -20,9 +20,9 @@ from numpy.typing import ArrayLike
 
 from navfdi import _core
 
-#: GPS L1 and L5 carrier frequencies (MHz), for the dual-frequency user-error model.
+#: GPS L1 and L5 carrier frequencies (MHz) of the dual-frequency user-error model
+#: (:func:`elevation_variances`; the model runs in Rust).
 F_L1, F_L5 = 1575.42, 1176.45
-
 
 @dataclass(frozen=True)
 class Ism:
@@ -168,17 +168,15 @@ class AraimResult:
         ]
 
 
-def elevation_variances(elevation: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(σ_tropo², σ_user²)`` (m²) at elevations (rad) by the ADD's models: the troposphere
-    ``0.12 · 1.001 / sqrt(0.002001 + sin² el)`` and the dual-frequency (L1/L5) user term
-    ``(f1⁴ + f5⁴)/(f1² − f5²)² · (σ_MP² + σ_noise²)`` with ``σ_MP = 0.13 + 0.53 e^(−el/10°)`` and
-    ``σ_noise = 0.15 + 0.43 e^(−el/6.9°)`` (the airborne GPS model, used for every system)."""
-    el_deg = np.degrees(elevation)
-    tropo = (0.12 * 1.001 / np.sqrt(0.002001 + np.sin(elevation) ** 2)) ** 2
-    mp = 0.13 + 0.53 * np.exp(-el_deg / 10.0)
-    noise = 0.15 + 0.43 * np.exp(-el_deg / 6.9)
-    k = (F_L1**4 + F_L5**4) / (F_L1**2 - F_L5**2) ** 2
-    return tropo, k * (mp**2 + noise**2)
+def elevation_variances(elevation: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+    """``(σ_tropo², σ_user²)`` (m², each of ``elevation``'s shape) at elevations (rad) by the
+    ADD's models: the troposphere ``0.12 · 1.001 / sqrt(0.002001 + sin² el)`` and the
+    dual-frequency (L1/L5) user term ``(f1⁴ + f5⁴)/(f1² − f5²)² · (σ_MP² + σ_noise²)`` with
+    ``σ_MP = 0.13 + 0.53 e^(−el/10°)`` and ``σ_noise = 0.15 + 0.43 e^(−el/6.9°)`` (the airborne
+    GPS model, used for every system). In Rust
+    (``navfdi_core::integrity::araim_model``), as :func:`araim` uses them."""
+    tropo, user = _core.araim_variances(elevation)
+    return tropo[()], user[()]
 
 
 def araim(
@@ -228,32 +226,25 @@ def araim(
     if los.ndim != 2 or los.shape[1] != 3 or los.shape[0] == 0:
         raise ValueError(f"los_enu: expected shape (n, 3), got {los.shape}")
     n = los.shape[0]
-    if not np.all(np.isfinite(los)):
-        raise ValueError("los_enu: only finite values are allowed")
-    norms = np.linalg.norm(los, axis=1)
-    if np.any(np.abs(norms - 1.0) > 1e-3):
-        i = int(np.argmax(np.abs(norms - 1.0)))
-        raise ValueError(f"los_enu[{i}]: norm {norms[i]:.4g}; give unit vectors")
     systems = [str(s).upper() for s in systems]
     if len(systems) != n:
         raise ValueError(f"systems: {len(systems)} letters for {n} satellites")
-    letters = sorted(set(systems), key=systems.index)
-    missing = [s for s in letters if s not in ism.p_const]
+    index = {s: k for k, s in enumerate(dict.fromkeys(systems))}
+    missing = [s for s in index if s not in ism.p_const]
     if missing:
         raise ValueError(f"ism.p_const: no constellation prior for system(s) {', '.join(missing)}")
-    per_sat = lambda v, name: _per_satellite(v, name, n)  # noqa: E731
-    elevation = np.arcsin(np.clip(los[:, 2], -1.0, 1.0))
-    tropo, user = elevation_variances(elevation)
-    ci = per_sat(ism.sigma_ura, "ism.sigma_ura") ** 2 + tropo + user if c_int is None else per_sat(c_int, "c_int")
-    ca = per_sat(ism.sigma_ure, "ism.sigma_ure") ** 2 + tropo + user if c_acc is None else per_sat(c_acc, "c_acc")
-    r = _core.araim_epoch(
-        (-los).tolist(),
-        [letters.index(s) for s in systems],
-        ci.tolist(),
-        ca.tolist(),
-        per_sat(ism.b_nom, "ism.b_nom").tolist(),
-        per_sat(ism.p_sat, "ism.p_sat").tolist(),
-        [float(ism.p_const[s]) for s in letters],
+    # The lines of sight are checked (finite, unit) and the ADD's variances computed in Rust
+    # (``_core.araim_los``); scalars go as one value for every satellite.
+    r = _core.araim_los(
+        los,
+        [index[s] for s in systems],
+        _values(ism.sigma_ura, "ism.sigma_ura", n),
+        _values(ism.sigma_ure, "ism.sigma_ure", n),
+        None if c_int is None else _values(c_int, "c_int", n),
+        None if c_acc is None else _values(c_acc, "c_acc", n),
+        _values(ism.b_nom, "ism.b_nom", n),
+        _values(ism.p_sat, "ism.p_sat", n),
+        [float(ism.p_const[s]) for s in index],
         (allocation.p_hmi_vert, allocation.p_hmi_hor, allocation.p_fa_vert, allocation.p_fa_hor, allocation.p_thres, allocation.p_emt, allocation.tol_pl),
         None if residuals is None else _residuals(residuals, n),
     )
@@ -291,10 +282,11 @@ def _residuals(v: ArrayLike, n: int) -> list[float]:
     return [float(x) for x in y]
 
 
-def _per_satellite(v: Any, name: str, n: int) -> np.ndarray:
-    """``v`` (a scalar or (n,) values) as (n,) floats; ``ValueError`` naming ``name`` otherwise."""
+def _values(v: Any, name: str, n: int) -> list[float]:
+    """``v`` (a scalar or (n,) values) as one float (for every satellite) or n floats;
+    ``ValueError`` naming ``name`` otherwise."""
     if isinstance(v, (int, float)):
-        return np.full(n, float(v))
+        return [float(v)]
     if np.ndim(v) != 0 and np.size(v) != n:
         raise ValueError(f"{name}: expected a scalar or ({n},) values")
-    return np.broadcast_to(np.asarray(v, dtype=float), (n,)).copy()
+    return np.broadcast_to(np.asarray(v, dtype=float), (n,)).tolist()

@@ -4,6 +4,7 @@ use crate::convert::to_numpy;
 use crate::errors::IntoPyResult;
 use navfdi_core::integrity::araim::{araim, Allocation, FaultMode, Ism};
 use navfdi_core::integrity::araim_fde::araim_fde;
+use navfdi_core::integrity::araim_model as model;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -36,6 +37,98 @@ pub fn araim_epoch<'py>(
     residuals: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     finite_rows(&rows)?;
+    let ism = Ism {
+        c_int,
+        c_acc,
+        b_nom,
+        p_sat,
+        p_const,
+    };
+    run_araim(py, rows, constellation, ism, allocation, residuals)
+}
+
+/// [`araim_epoch`] from unit lines of sight `los_enu` (n, 3; east, north, up; any array-like)
+/// with the ADD's default variances where `c_int` / `c_acc` are None
+/// (`navfdi_core::integrity::araim_model`: `σ_URA² (σ_URE²) + σ_tropo² + σ_user²` at each
+/// satellite's elevation). `sigma_ura`, `sigma_ure`, `b_nom`, `p_sat`, `c_int`, `c_acc`: one
+/// value for every satellite or n. The same dict as [`araim_epoch`]; ValueError naming the
+/// argument for a wrong shape, a non-finite or non-unit line of sight.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (los_enu, constellation, sigma_ura, sigma_ure, c_int, c_acc, b_nom, p_sat, p_const, allocation, residuals=None))]
+pub fn araim_los<'py>(
+    py: Python<'py>,
+    los_enu: &Bound<'py, PyAny>,
+    constellation: Vec<usize>,
+    sigma_ura: Vec<f64>,
+    sigma_ure: Vec<f64>,
+    c_int: Option<Vec<f64>>,
+    c_acc: Option<Vec<f64>>,
+    b_nom: Vec<f64>,
+    p_sat: Vec<f64>,
+    p_const: Vec<f64>,
+    allocation: (f64, f64, f64, f64, f64, f64, f64),
+    residuals: Option<Vec<f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let a = crate::convert::read("los_enu", los_enu)?;
+    if a.shape.len() != 2 || a.shape[1] != 3 || a.shape[0] == 0 {
+        return Err(PyValueError::new_err(format!(
+            "los_enu: expected shape (n, 3), got {:?}",
+            a.shape
+        )));
+    }
+    let n = a.shape[0];
+    let los: Vec<[f64; 3]> = a.data.chunks_exact(3).map(|r| [r[0], r[1], r[2]]).collect();
+    let each = |name: &str, v: Vec<f64>| model::per_satellite(name, v, n).py();
+    let (ura, ure) = (
+        each("ism.sigma_ura", sigma_ura)?,
+        each("ism.sigma_ure", sigma_ure)?,
+    );
+    let m = model::los_rows_and_variances(&los, &ura, &ure).py()?;
+    let ism = Ism {
+        c_int: match c_int {
+            Some(v) => each("c_int", v)?,
+            None => m.c_int,
+        },
+        c_acc: match c_acc {
+            Some(v) => each("c_acc", v)?,
+            None => m.c_acc,
+        },
+        b_nom: each("ism.b_nom", b_nom)?,
+        p_sat: each("ism.p_sat", p_sat)?,
+        p_const,
+    };
+    run_araim(py, m.rows, constellation, ism, allocation, residuals)
+}
+
+/// The ADD's `(σ_tropo², σ_user²)` (m²) at elevations `elevation` (rad, any shape), each an
+/// array of that shape (`navfdi_core::integrity::araim_model::elevation_variances`).
+#[pyfunction]
+pub fn araim_variances<'py>(
+    py: Python<'py>,
+    elevation: &Bound<'py, PyAny>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let a = crate::convert::read("elevation", elevation)?;
+    let (t, u): (Vec<f64>, Vec<f64>) = a
+        .data
+        .iter()
+        .map(|&e| model::elevation_variances(e))
+        .unzip();
+    Ok((
+        to_numpy(py, t, &a.shape)?.into_any(),
+        to_numpy(py, u, &a.shape)?.into_any(),
+    ))
+}
+
+/// ARAIM (or, with residuals, its FDE) on the GIL-free side, and the result dict.
+fn run_araim<'py>(
+    py: Python<'py>,
+    rows: Vec<[f64; 3]>,
+    constellation: Vec<usize>,
+    ism: Ism,
+    allocation: (f64, f64, f64, f64, f64, f64, f64),
+    residuals: Option<Vec<f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
     let (p_hmi_vert, p_hmi_hor, p_fa_vert, p_fa_hor, p_thres, p_emt, tol_pl) = allocation;
     let alloc = Allocation {
         p_hmi_vert,
@@ -45,13 +138,6 @@ pub fn araim_epoch<'py>(
         p_thres,
         p_emt,
         tol_pl,
-    };
-    let ism = Ism {
-        c_int,
-        c_acc,
-        b_nom,
-        p_sat,
-        p_const,
     };
     let (r, fde) = py
         .detach(move || match residuals {

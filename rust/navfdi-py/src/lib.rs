@@ -165,6 +165,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(gnss::snapshot_fde, m)?)?;
     m.add_function(wrap_pyfunction!(gnss::py_ls_test, m)?)?;
     m.add_function(wrap_pyfunction!(integrity::araim_epoch, m)?)?;
+    m.add_function(wrap_pyfunction!(integrity::araim_los, m)?)?;
+    m.add_function(wrap_pyfunction!(integrity::araim_variances, m)?)?;
     m.add_function(wrap_pyfunction!(integrity::snapshot_pl, m)?)?;
     m.add_function(wrap_pyfunction!(rinex::read_rinex_obs, m)?)?;
     m.add_function(wrap_pyfunction!(logged::read_imu_csv, m)?)?;
