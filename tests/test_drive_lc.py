@@ -172,7 +172,10 @@ def test_pos_reader_and_its_errors(tmp_path: Path) -> None:
     with pytest.raises(ScenarioError, match=r"does not come after"):
         read_pos(p)
     p.write_text("% GPST x-ecef(m) y-ecef(m) z-ecef(m)\n")
-    with pytest.raises(ScenarioError, match=r"ECEF or ENU"):
+    with pytest.raises(ScenarioError, match=r"no solution epochs"):
+        read_pos(p)
+    p.write_text("% GPST e-baseline(m) n-baseline(m) u-baseline(m)\n")
+    with pytest.raises(ScenarioError, match=r"baselines"):
         read_pos(p)
 
 

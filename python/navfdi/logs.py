@@ -217,27 +217,20 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
 
 
 def read_pos(path: str | Path) -> PosLog:
-    """Read an RTKLIB solution file (``.pos``, ``.gz`` accepted) in latitude/longitude/height
-    form, GPST time as ``yyyy/mm/dd hh:mm:ss.sss`` or GPS week and seconds, with or without
-    the velocity columns. Raises :class:`~navfdi.ScenarioError` naming the file, line and
+    """Read an RTKLIB solution file (``.pos``, ``.gz`` accepted): time in GPST, UTC or JST as
+    ``yyyy/mm/dd hh:mm:ss.sss`` or GPS week and seconds (UTC and JST turned into GPST with the
+    leap seconds); positions as latitude/longitude/height in decimal degrees or
+    degrees-minutes-seconds, or as ECEF x/y/z (turned into latitude/longitude/height, σ and
+    velocities rotated to east/north/up); with or without the velocity columns
+    (:mod:`navfdi._pos_forms`). Raises :class:`~navfdi.ScenarioError` naming the file, line and
     column of bad input."""
+    from ._pos_forms import pos_form
+
     path = Path(path)
     text = _read_text(path)
     lines = text.splitlines()
-    head = [ln for ln in lines if ln.startswith("%")]
-    names = None
-    for ln in head:
-        if "latitude" in ln and "longitude" in ln:
-            names = ln[1:].split()
-    if names is None:
-        if any("x-ecef" in ln or "e-baseline" in ln for ln in head):
-            raise ScenarioError(f"{path}: positions in ECEF or ENU form; write the solution as latitude/longitude/height (RTKLIB out-solformat = llh)")
-        raise ScenarioError(f"{path}: no '% ... latitude(deg) longitude(deg) height(m)' header line: not an RTKLIB llh solution file")
-    if "GPST" not in names[0]:
-        raise ScenarioError(f"{path}: time column {names[0]!r}; GPST is required (RTKLIB out-timesys = gpst)")
-    if "latitude(d'\")" in names or any("'" in n for n in names[1:3]):
-        raise ScenarioError(f"{path}: latitude and longitude in degrees-minutes-seconds; write them in decimal degrees (out-degform = deg)")
-    fields = names[1:]
+    form = pos_form(path, [ln for ln in lines if ln.startswith("%")])
+    fields = form.tokens
     # The regular form in one pass in Rust (the same numbers to the bit); anything else, and
     # every error, line by line here.
     from . import _core
@@ -246,8 +239,11 @@ def read_pos(path: str | Path) -> PosLog:
     a, line_of = (fast[0], fast[1].tolist()) if fast is not None else _pos_rows(path, lines, fields)
     if not len(a):
         raise ScenarioError(f"{path}: no solution epochs")
-    col = {n: a[:, j + 1] for j, n in enumerate(fields)}
     _check_pos_values(path, fields, a[:, 1:], line_of)
+    col = form.columns(path, {n: a[:, j + 1] for j, n in enumerate(fields)}, line_of)
+    if form.angles == "xyz":
+        names = [n for n in col if n.split("(")[0] in ("latitude", "longitude", "height", "sde", "sdn", "sdu", "ve", "vn", "vu", "sdve", "sdvn", "sdvu")]
+        _check_pos_values(path, names, np.column_stack([col[n] for n in names]), line_of)
 
     def get(name: str, default: float = np.nan) -> np.ndarray:
         # Exact names without their unit ("sdu(m)" is sdu, never sdun's).
@@ -256,7 +252,7 @@ def read_pos(path: str | Path) -> PosLog:
                 return v
         return np.full(len(a), default)
 
-    times = a[:, 0]
+    times = form.gpst(a[:, 0])
     steps = np.diff(times)
     if (steps <= 0).any():
         i = int(np.argmax(steps <= 0))
@@ -299,7 +295,7 @@ def _pos_limit(name: str) -> tuple[float, float] | None:
     """The range of values a receiver on or near the Earth reports in a ``.pos`` column (by its
     name's prefix): heights to 100 km, speeds to 10 km/s, σ to 100 km and 1 km/s (the
     off-diagonal ``sdne``… terms signed); None for the other columns (Q, ns, age, ratio)."""
-    cross = name.startswith(("sdne", "sdeu", "sdun", "sdvne", "sdveu", "sdvun"))
+    cross = name.startswith(("sdne", "sdeu", "sdun", "sdue", "sdxy", "sdyz", "sdzx", "sdvne", "sdveu", "sdvun", "sdvxy", "sdvyz", "sdvzx"))
     for prefix, lim in (("latitude", (-90.0, 90.0)), ("longitude", (-180.0, 360.0)), ("height", (-1e4, 1e5)), ("ellh", (-1e4, 1e5)),
                         ("sdv", (-1e3 if cross else 0.0, 1e3)), ("sd", (-1e5 if cross else 0.0, 1e5)), ("v", (-1e4, 1e4))):
         if name.startswith(prefix):
