@@ -20,7 +20,8 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps"]
+__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps", "unix_to_gps",
+           "TIME_UNITS", "time_unit"]
 
 GPS_EPOCH = _dt.datetime(1980, 1, 6)
 _WEEK = 604800.0
@@ -36,6 +37,30 @@ def utc_to_gps(d: _dt.datetime) -> float:
     """GPS seconds since 1980-01-06 of the UTC date-time ``d`` (the leap seconds of its date)."""
     leap = next((n for since, n in reversed(LEAP_SECONDS) if d >= since), 13)
     return (d - GPS_EPOCH).total_seconds() + leap
+
+
+#: Seconds per unit of a numeric time column (``time_unit``).
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+#: Unix time (s since 1970-01-01 UTC) of the GPS epoch.
+_UNIX_GPS_EPOCH = 315_964_800.0
+
+
+def unix_to_gps(t: np.ndarray) -> np.ndarray:
+    """GPS seconds since 1980-01-06 of Unix times ``t`` (s since 1970-01-01 UTC, leap seconds
+    not counted), with the leap seconds of each time's date (:data:`LEAP_SECONDS`)."""
+    utc = np.asarray(t, dtype=float) - _UNIX_GPS_EPOCH
+    leap = np.full(utc.shape, 13.0)
+    for since, n in LEAP_SECONDS:
+        leap[utc >= (since - GPS_EPOCH).total_seconds()] = n
+    return utc + leap
+
+
+def time_unit(value: Any, field: str) -> float:
+    """Seconds per unit of ``value`` (``"s"``, ``"ms"``, ``"us"``, ``"ns"``); ScenarioError
+    naming ``field`` otherwise."""
+    if not isinstance(value, str) or value not in TIME_UNITS:
+        raise ScenarioError(f"{field} = {value!r}: one of {', '.join(TIME_UNITS)}")
+    return TIME_UNITS[value]
 
 
 @functools.lru_cache(maxsize=64)

@@ -51,7 +51,7 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 from navfdi._schema import SECTIONS, keys
-from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, utc_to_gps
+from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, time_unit, unix_to_gps, utc_to_gps
 from navfdi.logs import PosLog, _gpst, read_pos
 
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
@@ -421,15 +421,22 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
 
     tc = cols.get("time")
     scale = str(cfg.get("time_scale", "gpst")).lower()
-    if scale not in ("gpst", "utc"):
-        raise ScenarioError(f"source.gnss.time_scale = {scale!r}: 'gpst' or 'utc'")
+    if scale not in ("gpst", "utc", "unix"):
+        raise ScenarioError(f"source.gnss.time_scale = {scale!r}: 'gpst', 'utc' (ISO date-times) or 'unix' (a numeric column of Unix time)")
+    unit = time_unit(cfg.get("time_unit", "s"), "source.gnss.time_unit")
     if isinstance(tc, list) and len(tc) == 2:
+        if scale == "unix" or "time_unit" in cfg:
+            raise ScenarioError("source.gnss: time_scale = 'unix' and time_unit are for a single numeric time column; [week, seconds] is GPS time in seconds")
         t = num(tc[0], "time") * 604800.0 + num(tc[1], "time")
     elif isinstance(tc, str):
         vals = col(tc, "time")
         try:
-            t = np.array([float(v) for v in vals])
+            t = np.array([float(v) for v in vals]) * unit
+            if scale == "unix":
+                t = unix_to_gps(t)
         except ValueError:
+            if scale == "unix":
+                raise ScenarioError(f"source.gnss.columns.time = {tc!r}: time_scale = 'unix' needs numbers (Unix time in {cfg.get('time_unit', 's')})") from None
             try:
                 ds = [_dt.datetime.fromisoformat(v.replace("Z", "")) for v in vals]
             except ValueError:

@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 from ._errors import ScenarioError
 from ._schema import SECTIONS as _SECTIONS
-from ._logtime import GPS_EPOCH, pos_time
+from ._logtime import GPS_EPOCH, TIME_UNITS, pos_time, time_unit, unix_to_gps
 from .frames import check_gravity, check_turns
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "range_error_process", "resolve_range_errors", "solve_rinex_source"]
@@ -157,6 +157,12 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     for k in ("week", "seconds", "time"):
         if k in columns and not isinstance(columns[k], str):
             raise ScenarioError(f"{where}.{k}: a column name is required, got {columns[k]!r}")
+    scale = columns.get("time_scale", "gpst")
+    if scale not in ("gpst", "unix"):
+        raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds) or 'unix' (Unix time, UTC)")
+    if "time" not in columns and (scale != "gpst" or "time_unit" in columns):
+        raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …); week and seconds are GPS time in seconds")
+    time_unit(columns.get("time_unit", "s"), f"{where}.time_unit")
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     if gu not in _GYRO_UNITS:
         raise ScenarioError(f"{where}.gyro_unit: {gu!r} is not one of {', '.join(_GYRO_UNITS)}")
@@ -185,7 +191,9 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
     seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
     ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
-    ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
+    ``time_scale`` ``"gpst"`` (default) or ``"unix"`` (Unix time, UTC: turned into GPS time
+    with the leap seconds) and ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
+    for a ``time`` column; ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
     increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
     the largest interval between samples (s) accepted (default 0.1; the argument overrides
     the table's). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
@@ -208,11 +216,13 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         t, gyro, accel = _core.read_imu_csv(
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
-            ["source.imu.gyro_unit", "source.imu.accel_unit"])
+            ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")])
     except OSError as e:
         raise ScenarioError(str(e)) from None
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+    if columns.get("time_scale", "gpst") == "unix":
+        t = unix_to_gps(t)
     return ImuLog(t, gyro, accel, str(path))
 
 

@@ -330,12 +330,13 @@ type ImuArrays<'py> = (
 /// Read an IMU CSV log (`navfdi_core::logs::imu_csv::read_imu_csv`, GIL released): `time` is
 /// one column name (GPS seconds) or `(week, seconds)`; `gyro`, `accel` three column names
 /// each; `gyro_scale` to rad/s and `accel_scale` to m/s²; `increments`: per-sample increments;
-/// `max_gap` (s); `unit_fields`: the unit fields' names for messages. Returns `t` (N,) GPS s,
+/// `max_gap` (s); `unit_fields`: the unit fields' names for messages; `time_unit`: seconds per
+/// unit of a single time column (default 1). Returns `t` (N,) in seconds of that column's count,
 /// `gyro` (N, 3) rad/s and `accel` (N, 3) m/s². FileFormatError names the file, line and
 /// column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields))]
+#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0))]
 pub fn read_imu_csv<'py>(
     py: Python<'py>,
     path: String,
@@ -347,6 +348,7 @@ pub fn read_imu_csv<'py>(
     increments: bool,
     max_gap: f64,
     unit_fields: [String; 2],
+    time_unit: f64,
 ) -> PyResult<ImuArrays<'py>> {
     use navfdi_core::logs::imu_csv::{read_imu_csv as read, ImuCsvSpec, TimeColumns};
     let time = match time.as_slice() {
@@ -366,6 +368,7 @@ pub fn read_imu_csv<'py>(
         accel_scale,
         increments,
         max_gap,
+        time_unit,
         unit_fields,
     };
     let table = crate::interrupt::run(py, move |_| read(&path, &spec))?;

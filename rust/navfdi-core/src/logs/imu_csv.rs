@@ -24,7 +24,8 @@ pub const MAX_MEDIAN_RATE: f64 = 1.0;
 pub enum TimeColumns {
     /// GPS week and seconds of week.
     WeekSeconds(String, String),
-    /// GPS seconds since the GPS epoch (1980-01-06).
+    /// One time column in units of [`ImuCsvSpec::time_unit`] (GPS seconds since the GPS epoch,
+    /// 1980-01-06, or another count the caller converts, e.g. Unix time).
     Seconds(String),
 }
 
@@ -45,6 +46,9 @@ pub struct ImuCsvSpec {
     pub increments: bool,
     /// Largest interval between samples accepted (s).
     pub max_gap: f64,
+    /// Seconds per unit of a single time column (1; 1e-3 for milliseconds, 1e-9 for
+    /// nanoseconds); week and seconds of week are in seconds.
+    pub time_unit: f64,
     /// Names of the unit fields, for messages (e.g. `source.imu.gyro_unit`).
     pub unit_fields: [String; 2],
 }
@@ -207,7 +211,7 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
         };
         let t = match (tcols.first(), tcols.get(1)) {
             (Some(&w), Some(&s)) => num(w)? * 604_800.0 + num(s)?,
-            (Some(&s), None) => num(s)?,
+            (Some(&s), None) => num(s)? * spec.time_unit,
             _ => return Err(format_err(path, Some(line), "no time column")),
         };
         let gv = [num(g[0])?, num(g[1])?, num(g[2])?];
@@ -394,6 +398,7 @@ mod tests {
             accel_scale: 1.0,
             increments: false,
             max_gap: 0.1,
+            time_unit: 1.0,
             unit_fields: ["gyro_unit".into(), "accel_unit".into()],
         }
     }
