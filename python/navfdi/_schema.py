@@ -360,6 +360,8 @@ SECTIONS: dict[str, Section] = {
         ("time", "column", "— (or seconds)", "GPS seconds since 1980-01-06 (or Unix time with time_scale = \"unix\")"),
         ("time_scale", "gpst, unix", "gpst", "the time column's count: GPS seconds, or Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds)"),
         ("time_unit", "s, ms, us, ns", "s", "the time column's unit"),
+        ("header", "true, false", "true", "the first line names the columns; false: columns are numbered from 1 (time = 1, gyro = [5, 6, 7])"),
+        ("delimiter", "one character or tab", ",", "the field separator (\";\", \"tab\", \" \", …)"),
         ("gyro", "three columns", REQ, "rates (or increments) in the IMU's x, y, z"),
         ("accel", "three columns", REQ, "specific forces (or increments) in the IMU's x, y, z"),
         ("gyro_unit", "rad/s, deg/s", "rad/s", "gyro column unit"),

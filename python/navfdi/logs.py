@@ -150,13 +150,29 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
 
         hints = [f"{u!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(u, IMU_KEYS, 1)) else repr(u) for u in unknown]
         raise ScenarioError(f"{where}: unknown key(s) {', '.join(hints)}; the keys are {', '.join(IMU_KEYS)}")
+    header = columns.get("header", True)
+    if not isinstance(header, bool):
+        raise ScenarioError(f"{where}.header = {header!r}: true (the first line names the columns) or false")
+    delim = columns.get("delimiter", ",")
+    if not (isinstance(delim, str) and (delim == "tab" or (len(delim) == 1 and delim.isascii() and delim not in "\"\r\n"))):
+        raise ScenarioError(f"{where}.delimiter = {delim!r}: one ASCII character (\",\", \";\", \" \") or \"tab\"")
+
+    def is_col(c: Any) -> bool:
+        # Names with a header line; without one, numbers from 1 (or their text).
+        if header:
+            return isinstance(c, str)
+        return (isinstance(c, int) and not isinstance(c, bool) and c >= 1) or (isinstance(c, str) and c.isdigit() and int(c) >= 1)
+
+    what = "column names" if header else "column numbers (from 1; header = false)"
     for k in ("gyro", "accel"):
         v = columns.get(k)
-        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(isinstance(c, str) for c in v)):
-            raise ScenarioError(f"{where}.{k}: three column names (x, y, z) are required, got {v!r}")
+        if not (isinstance(v, (list, tuple)) and len(v) == 3 and all(is_col(c) for c in v)):
+            raise ScenarioError(f"{where}.{k}: three {what} (x, y, z) are required, got {v!r}")
     for k in ("week", "seconds", "time"):
-        if k in columns and not isinstance(columns[k], str):
-            raise ScenarioError(f"{where}.{k}: a column name is required, got {columns[k]!r}")
+        if k in columns and not is_col(columns[k]):
+            raise ScenarioError(f"{where}.{k}: a {what[:-1]} is required, got {columns[k]!r}")
+    if not header and not ("time" in columns or ("week" in columns and "seconds" in columns)):
+        raise ScenarioError(f"{where}: without a header line the time column's number is required (time = …, or week and seconds)")
     scale = columns.get("time_scale", "gpst")
     if scale not in ("gpst", "unix"):
         raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds) or 'unix' (Unix time, UTC)")
@@ -193,7 +209,9 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
     ``time_scale`` ``"gpst"`` (default) or ``"unix"`` (Unix time, UTC: turned into GPS time
     with the leap seconds) and ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
-    for a ``time`` column; ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
+    for a ``time`` column; ``header`` (default true; false: every line is a sample and the
+    columns are numbered from 1) and ``delimiter`` (default ``","``; one character or
+    ``"tab"``); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
     increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
     the largest interval between samples (s) accepted (default 0.1; the argument overrides
     the table's). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
@@ -216,7 +234,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         t, gyro, accel = _core.read_imu_csv(
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
-            ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")])
+            ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")],
+            bool(columns.get("header", True)), "\t" if columns.get("delimiter", ",") == "tab" else columns.get("delimiter", ","))
     except OSError as e:
         raise ScenarioError(str(e)) from None
     except ValueError as e:

@@ -331,12 +331,13 @@ type ImuArrays<'py> = (
 /// one column name (GPS seconds) or `(week, seconds)`; `gyro`, `accel` three column names
 /// each; `gyro_scale` to rad/s and `accel_scale` to m/s²; `increments`: per-sample increments;
 /// `max_gap` (s); `unit_fields`: the unit fields' names for messages; `time_unit`: seconds per
-/// unit of a single time column (default 1). Returns `t` (N,) in seconds of that column's count,
+/// unit of a single time column (default 1); `header`: the first line names the columns (else
+/// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character. Returns `t` (N,) in seconds of that column's count,
 /// `gyro` (N, 3) rad/s and `accel` (N, 3) m/s². FileFormatError names the file, line and
 /// column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0))]
+#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ','))]
 pub fn read_imu_csv<'py>(
     py: Python<'py>,
     path: String,
@@ -349,7 +350,14 @@ pub fn read_imu_csv<'py>(
     max_gap: f64,
     unit_fields: [String; 2],
     time_unit: f64,
+    header: bool,
+    delimiter: char,
 ) -> PyResult<ImuArrays<'py>> {
+    if !delimiter.is_ascii() || delimiter == '"' || delimiter == '\n' || delimiter == '\r' {
+        return Err(PyValueError::new_err(format!(
+            "source.imu.delimiter = {delimiter:?}: one ASCII character other than a quote or a line end"
+        )));
+    }
     use navfdi_core::logs::imu_csv::{read_imu_csv as read, ImuCsvSpec, TimeColumns};
     let time = match time.as_slice() {
         [s] => TimeColumns::Seconds(s.clone()),
@@ -369,6 +377,8 @@ pub fn read_imu_csv<'py>(
         increments,
         max_gap,
         time_unit,
+        header,
+        delimiter: delimiter as u8,
         unit_fields,
     };
     let table = crate::interrupt::run(py, move |_| read(&path, &spec))?;

@@ -49,6 +49,11 @@ pub struct ImuCsvSpec {
     /// Seconds per unit of a single time column (1; 1e-3 for milliseconds, 1e-9 for
     /// nanoseconds); week and seconds of week are in seconds.
     pub time_unit: f64,
+    /// The first line names the columns; false: every line is a sample and the columns are
+    /// named by their position, `"1"`, `"2"`, … (from 1).
+    pub header: bool,
+    /// The field separator (`b','`; `b';'`, `b'\t'`, `b' '`, …).
+    pub delimiter: u8,
     /// Names of the unit fields, for messages (e.g. `source.imu.gyro_unit`).
     pub unit_fields: [String; 2],
 }
@@ -109,7 +114,8 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
     }
     let reader = open_bounded(path)?;
     let mut rdr = csv::ReaderBuilder::new()
-        .has_headers(true)
+        .has_headers(spec.header)
+        .delimiter(spec.delimiter)
         .flexible(true)
         .trim(csv::Trim::Headers)
         .from_reader(reader);
@@ -123,26 +129,38 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
             _ => format_err(path, line, e),
         }
     };
-    let header: Vec<String> = rdr
+    let first: Vec<String> = rdr
         .headers()
         .map_err(io)?
         .iter()
         .map(|h| h.trim_start_matches('\u{feff}').trim().to_string())
         .collect();
-    if header.iter().all(|h| h.is_empty()) {
-        return Err(format_err(
-            path,
-            Some(1),
-            "empty file: a header line naming the columns is expected",
-        ));
+    if first.iter().all(|h| h.is_empty()) {
+        let what = if spec.header {
+            "a header line naming the columns is expected"
+        } else {
+            "no samples"
+        };
+        return Err(format_err(path, Some(1), format!("empty file: {what}")));
     }
+    // Without a header the columns are named by their position (from 1), and the first line
+    // (read again below as a record) is a sample.
+    let header: Vec<String> = if spec.header {
+        first
+    } else {
+        (1..=first.len()).map(|k| k.to_string()).collect()
+    };
     let col = |name: &str| -> Result<usize> {
         header.iter().position(|h| h == name).ok_or_else(|| {
-            format_err(
-                path,
-                Some(1),
-                format!("no column '{name}' (the header has {})", header.join(", ")),
-            )
+            let has = if spec.header {
+                format!("the header has {}", header.join(", "))
+            } else {
+                format!(
+                    "the first line has {} columns, numbered from 1",
+                    header.len()
+                )
+            };
+            format_err(path, Some(1), format!("no column '{name}' ({has})"))
         })
     };
     let tcols: Vec<usize> = match &spec.time {
@@ -183,10 +201,15 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
             } else {
                 ""
             };
+            let first = if spec.header {
+                "the header"
+            } else {
+                "the first line"
+            };
             return Err(format_err(
                 path,
                 Some(line),
-                format!("{} fields, the header has {width}{hint}", rec.len()),
+                format!("{} fields, {first} has {width}{hint}", rec.len()),
             ));
         }
         let num = |c: usize| -> Result<f64> {
@@ -399,6 +422,8 @@ mod tests {
             increments: false,
             max_gap: 0.1,
             time_unit: 1.0,
+            header: true,
+            delimiter: b',',
             unit_fields: ["gyro_unit".into(), "accel_unit".into()],
         }
     }
