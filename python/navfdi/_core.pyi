@@ -33,6 +33,7 @@ __all__ = [
     "FileFormatError",
     "read_rinex_obs",
     "read_imu_csv",
+    "read_ubx",
     "pos_rows",
     "simulate_logs",
     "read_rinex_nav",
@@ -585,6 +586,15 @@ def simulate_logs(
     velocity east/north/up m/s, σ position, σ velocity m, m/s), ``attitude`` (M, 4:
     body-to-NED quaternion w, x, y, z), ``gnss_error`` (M, 3: east, north, up m), ``stale``
     and ``burst`` (M,) bool. ``ValueError`` names a bad noise field."""
+
+def read_ubx(path: str) -> dict[str, Any]:
+    """The UBX-NAV-PVT solutions of a u-blox binary log (plain or gzip), GIL released: a dict
+    of columns, one row per message — ``t`` (N,) GPS seconds, ``llh`` (N, 4) latitude,
+    longitude (deg), height above the ellipsoid and above mean sea level (m), ``acc`` (N, 3)
+    horizontal, vertical (m) and speed (m/s) accuracy estimates, ``vel_ned`` (N, 3) m/s,
+    ``status`` (N, 3) uint8 satellites, fix type, fix flags — and ``corrupt`` (packets
+    skipped). ``FileFormatError`` for a file that is not a UBX log, has no NAV-PVT or no valid
+    UTC date; ``OSError`` for an unreadable path."""
 
 def read_imu_csv(
     path: str,

@@ -21,6 +21,8 @@
   longitude and altitude). Times are UTC, turned into GPST with the leap seconds; a log without
   ``RMC`` needs ``date = "YYYY-MM-DD"`` in the table. Sentences with a bad checksum are
   refused with their line;
+* ``ubx`` — a u-blox binary log (``.ubx``, ``.ubx.gz``): the receiver's UBX-NAV-PVT solutions
+  (:func:`read_ubx`; other messages skipped);
 * ``csv`` — any CSV with a ``columns`` mapping: ``time`` (one column of GPS seconds, or
   ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
   ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
@@ -32,7 +34,8 @@ Every format: fixes from fewer than four satellites (where the log gives the cou
 ``GGA`` fixes of quality 6–8 (dead reckoning, manual, simulator), each with a
 :class:`~navfdi.LeftOutFixesWarning` saying how many and from when.
 
-Without a ``format`` it is told from the file: ``.pos`` / ``.pos.gz``, a CSV whose header has
+Without a ``format`` it is told from the file: ``.pos`` / ``.pos.gz``, ``.ubx`` / ``.ubx.gz`` or
+UBX sync bytes at the start, a CSV whose header has
 ``gps_seconds`` and ``lat`` (``solution``), lines that start with ``$`` (``nmea``).
 """
 
@@ -57,7 +60,7 @@ from navfdi.logs import PosLog, _gpst, read_pos
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
 
 #: The formats ``[source] gnss`` accepts.
-FORMATS = ("pos", "solution", "nmea", "csv", "rinex")
+FORMATS = ("pos", "solution", "nmea", "csv", "rinex", "ubx")
 #: The keys of ``format = "rinex"`` beside ``format`` (:data:`navfdi._schema.SECTIONS`).
 RINEX_KEYS = tuple(k for k in SECTIONS["source.gnss.rinex"].keys if k != "format")
 
@@ -70,6 +73,62 @@ def _text(path: Path) -> str:
     if raw[:2] == b"\x1f\x8b":
         raw = gzip.decompress(raw)
     return raw.decode("utf-8-sig", errors="replace")
+
+
+def _starts_with_ubx(path: Path) -> bool:
+    """The file (or its gzip content) starts with the UBX sync bytes 0xB5 0x62."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(2)
+        if head == b"\x1f\x8b":
+            with gzip.open(path, "rb") as g:
+                head = g.read(2)
+    except OSError:
+        return False
+    return head == b"\xb5\x62"
+
+
+def read_ubx(path: str | Path) -> PosLog:
+    """The UBX-NAV-PVT solutions of a u-blox binary log (``.ubx``, ``.gz`` accepted; in Rust,
+    ``navfdi_core::logs::ubx``): GPS time from the time of week and the UTC date's week,
+    latitude, longitude, height above the ellipsoid, velocity east/north/up (``−velD`` up),
+    σ east = σ north = ``hAcc/√2``, σ up = ``vAcc``, σ of each velocity axis ``sAcc/√3``,
+    quality 1 (carrier fixed), 2 (float), 4 (differential) or 5 (single), the satellites
+    used. Solutions that are not a 3-D fix (fix type other than 3-D or GNSS + dead reckoning)
+    or that the receiver does not mark valid (``gnssFixOK``) are left out, and packets with a
+    bad checksum skipped, each with a :class:`~navfdi.LeftOutFixesWarning`. Raises
+    :class:`~navfdi.ScenarioError` for a file that is not a UBX log, has no NAV-PVT, or no
+    valid fix."""
+    from navfdi import _core
+
+    path = Path(path)
+    try:
+        d = _core.read_ubx(str(path))
+    except (OSError, ValueError) as e:
+        raise ScenarioError(f"source.gnss: {e}") from None
+    if d["corrupt"]:
+        import warnings
+
+        from navfdi._errors import LeftOutFixesWarning
+
+        warnings.warn(f"source.gnss: {path}: {d['corrupt']} UBX packet(s) with a bad checksum or length skipped", LeftOutFixesWarning, stacklevel=2)
+    t, llh, acc, vel, st = d["t"], d["llh"], d["acc"], d["vel_ned"], d["status"].astype(int)
+    fix, flags = st[:, 1], st[:, 2]
+    three_d = (fix == 3) | (fix == 4)
+    ok = three_d & (flags & 1 == 1)
+    if not ok.any():
+        raise ScenarioError(f"source.gnss: {path}: no NAV-PVT solution is a valid 3-D fix ({len(t)} messages)")
+    if (~three_d).any():
+        _left_out(path, t[~three_d], "without a 3-D fix (no fix, dead reckoning only, 2-D or time only)")
+    if (three_d & ~ok).any():
+        _left_out(path, t[three_d & ~ok], "not marked valid by the receiver (gnssFixOK off: outside its accuracy masks)")
+    carr = (flags >> 6) & 3
+    q = np.where(carr == 2, 1, np.where(carr == 1, 2, np.where(flags & 2 == 2, 4, 5))).astype(float)
+    h = acc[:, 0] / math.sqrt(2.0)
+    sd_pos = np.column_stack([h, h, acc[:, 1]])
+    sd_vel = np.repeat(acc[:, 2:3] / math.sqrt(3.0), 3, axis=1)
+    v_enu = np.column_stack([vel[:, 1], vel[:, 0], -vel[:, 2]])
+    return PosLog(t[ok], llh[ok, 0], llh[ok, 1], llh[ok, 2], q[ok], v_enu[ok], sd_pos[ok], sd_vel[ok], str(path), st[ok, 0].astype(float))
 
 
 def _guess(path: Path, text: str) -> str:
@@ -142,6 +201,8 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
         raise ScenarioError(f"source.gnss.format = {fmt!r}: one of {', '.join(FORMATS)}")
     if fmt == "pos" or (fmt is None and path.name.lower().endswith((".pos", ".pos.gz"))):
         return read_pos(path)
+    if fmt == "ubx" or (fmt is None and (path.name.lower().endswith((".ubx", ".ubx.gz")) or _starts_with_ubx(path))):
+        return read_ubx(path)
     text = _text(path)
     fmt = fmt or _guess(path, text)
     if fmt == "pos":

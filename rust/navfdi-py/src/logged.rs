@@ -412,6 +412,38 @@ pub fn pos_rows<'py>(
     )))
 }
 
+/// The NAV-PVT solutions of a u-blox binary log (`navfdi_core::logs::ubx::read_ubx_pvt`, GIL
+/// released): a dict of numpy columns, one row per message — `t` (N,) GPS s, `llh` (N, 4)
+/// latitude, longitude (deg), height above the ellipsoid and mean sea level (m), `acc` (N, 3)
+/// horizontal, vertical (m) and speed (m/s) accuracy estimates, `vel_ned` (N, 3) m/s, `status`
+/// (N, 3) satellites, fix type, fix flags; and `corrupt`, the packets skipped. FileFormatError
+/// for a file that is not a UBX log or has no NAV-PVT; OSError for an unreadable path.
+#[pyfunction]
+pub fn read_ubx<'py>(py: Python<'py>, path: String) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+    let tab = crate::interrupt::run(py, move |_| navfdi_core::logs::ubx::read_ubx_pvt(&path))?;
+    let n = tab.t.len();
+    let d = pyo3::types::PyDict::new(py);
+    d.set_item("t", crate::convert::to_numpy(py, tab.t, &[n])?)?;
+    d.set_item(
+        "llh",
+        crate::convert::to_numpy(py, tab.llh.concat(), &[n, 4])?,
+    )?;
+    d.set_item(
+        "acc",
+        crate::convert::to_numpy(py, tab.acc.concat(), &[n, 3])?,
+    )?;
+    d.set_item(
+        "vel_ned",
+        crate::convert::to_numpy(py, tab.vel_ned.concat(), &[n, 3])?,
+    )?;
+    d.set_item(
+        "status",
+        crate::convert::to_numpy(py, tab.status.concat(), &[n, 3])?,
+    )?;
+    d.set_item("corrupt", tab.corrupt)?;
+    Ok(d)
+}
+
 type PosRows<'py> = (
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<u64, numpy::IxDyn>>,

@@ -4,7 +4,8 @@
 //! injected into the recorded measurements with [`crate::stream::inject`] (the same step as
 //! the simulator's) and outages remove them, so a scenario's `[[faults]]`, `outages` and
 //! `[[variants]]` work on logged data as on simulated data. Parsing files is the caller's
-//! (the IMU CSV reader [`imu_csv`] and the `.pos` rows [`pos_text`] are here, the checks that
+//! (the IMU CSV reader [`imu_csv`], the `.pos` rows [`pos_text`] and u-blox NAV-PVT
+//! solutions [`ubx`] are here, the checks that
 //! name the file, line and column of bad input partly in Python); this layer checks the
 //! arrays again (finite, increasing, overlapping) before anything runs.
 //!
@@ -17,6 +18,7 @@ pub mod imu_csv;
 pub mod pos_text;
 pub mod ranges;
 pub mod shipped;
+pub mod ubx;
 
 use crate::error::{Error, Result};
 use crate::spec::{ScenarioSpec, SensorKind};
