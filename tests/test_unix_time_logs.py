@@ -105,3 +105,30 @@ def test_bad_gnss_time_settings_are_named(tmp_path):
         read_gnss({"file": "f.csv", "format": "csv", "time_unit": "h", "columns": cols}, tmp_path)
     with pytest.raises(ScenarioError, match=r"'gpst', 'utc' \(ISO date-times\) or 'unix'"):
         read_gnss({"file": "f.csv", "format": "csv", "time_scale": "local", "columns": cols}, tmp_path)
+
+
+def test_a_reference_in_another_format_scores_as_the_pos(unix_log, tmp_path):
+    """``[source] reference`` in any solution format: the simulated truth as a CSV (columns
+    mapped; no quality column: every epoch is the reference) scores the run as the ``.pos``
+    reference does."""
+    ref = read_pos(unix_log.reference)
+    csv = Path(unix_log.folder) / "truth_ref.csv"
+    with open(csv, "w") as f:
+        f.write("gps_s,lat,lon,h,ve,vn,vu\n")
+        for k in range(len(ref.t)):
+            f.write(f"{float(ref.t[k])!r},{float(ref.lat[k])!r},{float(ref.lon[k])!r},{float(ref.height[k])!r},"
+                    f"{float(ref.vel[k, 0])!r},{float(ref.vel[k, 1])!r},{float(ref.vel[k, 2])!r}\n")
+    raw = dict(load_scenario(str(unix_log.scenario)).raw)
+    base = navfdi.run_scenario(from_dict(raw, source=str(unix_log.scenario))).runs["fde"].errors()
+    raw["source"] = {**raw["source"], "reference": {"file": "truth_ref.csv", "format": "csv",
+                                                    "columns": {"time": "gps_s", "lat": "lat", "lon": "lon", "height": "h", "vel": ["ve", "vn", "vu"]}}}
+    e = navfdi.run_scenario(from_dict(raw, source=str(unix_log.scenario))).runs["fde"].errors()
+    assert e["scored"] == base["scored"] > 150
+    assert e["hor_rms"] == pytest.approx(base["hor_rms"], rel=1e-9)
+    raw["source"]["reference_quality"] = [1]
+    with pytest.raises(ScenarioError, match="source.reference_quality: the reference is a CSV"):
+        navfdi.run_scenario(from_dict(raw, source=str(unix_log.scenario)))
+    raw["source"] = {**raw["source"], "reference": {"file": "nope.csv", "format": "csv", "columns": {}}}
+    del raw["source"]["reference_quality"]
+    with pytest.raises(ScenarioError, match="source.reference"):
+        navfdi.run_scenario(from_dict(raw, source=str(unix_log.scenario)))

@@ -323,15 +323,15 @@ SECTIONS: dict[str, Section] = {
     "source.loosely_coupled": _s("[source] (loosely coupled)", "Recorded logs of a loosely coupled scenario.", [
         ("gnss", "path or table", REQ, "the GNSS solution log ([source.gnss])"),
         ("imu", "table", REQ, "the IMU log ([source.imu])"),
-        ("reference", "path (RTKLIB .pos)", "none", "positions to score against"),
-        ("reference_quality", "list of integers", "[1]", "the reference's solution qualities used (1 RTK fixed)"),
+        ("reference", "path or table (as gnss)", "none", "positions to score against: an RTKLIB .pos, or any solution format [source.gnss] takes (NMEA, UBX, navfdi solution.csv, a CSV with columns)"),
+        ("reference_quality", "list of integers", "[1]", "the reference's solution qualities used (1 RTK fixed); not for a CSV reference (every epoch used)"),
         ("reference_epochs", "auto, held_out, inputs", "auto", "where the reference is scored"),
     ]),
     "source.tight": _s("[source] (tight)", "Recorded logs of a tight scenario with [tight.strapdown].", [
         ("rinex_obs", "path", REQ, "RINEX observations"),
         ("rinex_nav", "path", REQ, "RINEX navigation data"),
         ("imu", "table", REQ, "the IMU log ([source.imu])"),
-        ("reference", "path (RTKLIB .pos)", "none", "positions to score against"),
+        ("reference", "path or table (as gnss)", "none", "positions to score against (as the loosely coupled source's)"),
         ("reference_quality", "list of integers", "[1]", "the reference's solution qualities used"),
     ]),
     "source.gnss": _s("[source.gnss]", "A GNSS solution log (`gnss = \"file\"` is `{ file = \"file\" }`).", [

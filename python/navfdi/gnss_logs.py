@@ -154,6 +154,30 @@ def read_gnss(spec: Any, base: Path) -> PosLog:
     return three_d_fixes(_read_gnss(spec, base))
 
 
+def read_reference(spec: Any, base: Path) -> tuple[PosLog, bool]:
+    """Read ``[source] reference``: an RTKLIB ``.pos`` path as before, or any GNSS log format
+    as ``[source] gnss`` takes it (a path told by its content, or a table with ``file``,
+    ``format`` and its options; not ``rinex``: a reference is a solution). Returns the log and
+    whether its qualities mean anything (False for a ``csv``, which has no quality column: all
+    its epochs are the reference). Messages and warnings name ``source.reference``."""
+    import warnings
+
+    if isinstance(spec, str) and spec.lower().endswith((".pos", ".pos.gz")):
+        return read_pos(spec if Path(spec).is_absolute() else base / spec), True
+    cfg: Mapping[str, Any] = spec if isinstance(spec, Mapping) else {"file": spec}
+    if cfg.get("format") == "rinex":
+        raise ScenarioError("source.reference: format = \"rinex\" is a solve, not a reference; give the reference's solution (a .pos, NMEA, UBX or CSV log)")
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        try:
+            log = _read_gnss(cfg, base)
+        except ScenarioError as e:
+            raise ScenarioError(str(e).replace("source.gnss", "source.reference")) from None
+    for w in said:
+        warnings.warn_explicit(str(w.message).replace("source.gnss", "source.reference"), w.category, w.filename, w.lineno)
+    return log, cfg.get("format") != "csv"
+
+
 #: Fewest satellites of a 3-D fix (three coordinates and the receiver clock).
 MIN_SATELLITES = 4
 

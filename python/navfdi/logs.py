@@ -368,9 +368,13 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg)
     ref = None
     if "reference" in source:
-        ref = read_pos(file_in(source, base, "source.reference", "reference"))
+        from .gnss_logs import read_reference
+
+        ref, has_quality = read_reference(source["reference"], base)
         quality = source.get("reference_quality", [1])
-        keep = np.isin(ref.q, quality)
+        if not has_quality and "reference_quality" in source:
+            raise ScenarioError("source.reference_quality: the reference is a CSV, which has no solution quality; leave it out (every epoch is the reference)")
+        keep = np.isin(ref.q, quality) if has_quality else np.ones(len(ref.t), bool)
         if not keep.any():
             have = ", ".join(str(int(q)) for q in np.unique(ref.q))
             raise ScenarioError(
