@@ -410,13 +410,26 @@ fn add_bracket(bias0: f64, sigma0: f64, terms: &[(f64, f64, f64)], target: f64) 
     let all = std::iter::once((2.0, bias0, 1.0 / sigma0)).chain(terms.iter().copied());
     let n = (terms.len() + 1) as f64;
     let (mut lo, mut hi) = (0.0_f64, 0.0_f64);
+    // The modes' priors take a few values (a satellite, a pair, a constellation and a
+    // satellite, …): each quantile is computed once per prior (the same bits).
+    let mut memo: Vec<(u64, [f64; 2])> = Vec::with_capacity(8);
     for (p, shift, inv) in all {
-        let r = target / p;
-        if r < 1.0 {
-            lo = lo.max(shift + q_inv(r) / inv);
+        let [q_lo, q_hi] = match memo.iter().find(|m| m.0 == p.to_bits()) {
+            Some(m) => m.1,
+            None => {
+                let (r_lo, r_hi) = (target / p, target / (n * p));
+                let v = [
+                    if r_lo < 1.0 { q_inv(r_lo) } else { f64::NAN },
+                    if r_hi < 0.5 { q_inv(r_hi) } else { 0.0 },
+                ];
+                memo.push((p.to_bits(), v));
+                v
+            }
+        };
+        if !q_lo.is_nan() {
+            lo = lo.max(shift + q_lo / inv);
         }
-        let r = target / (n * p);
-        hi = hi.max(shift + if r < 0.5 { q_inv(r) / inv } else { 0.0 });
+        hi = hi.max(shift + q_hi / inv);
     }
     (lo, hi)
 }
