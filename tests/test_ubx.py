@@ -99,3 +99,14 @@ def test_the_walk_runs_loosely_coupled_from_the_ubx(tmp_path: Path):
         runs[name] = navfdi.run_scenario(_scenario(tmp_path / name, gnss)).runs["fde"].errors()
     assert runs["ubx"]["scored"] == runs["pos"]["scored"] > 300
     assert abs(runs["ubx"]["hor_rms"] - runs["pos"]["hor_rms"]) < 0.01
+
+
+def test_a_log_that_cannot_be_read_says_why_when_the_duration_is_taken_from_it(tmp_path: Path):
+    """``duration`` and ``dt`` left to the log: the reader's own reason, not only that the
+    epochs could not be read."""
+    from test_lc_rinex import _scenario
+
+    (tmp_path / "bad.ubx").write_text("hello\n")
+    sc = _scenario(tmp_path, '"bad.ubx"')
+    with pytest.raises(ScenarioError, match=r"could not be read to take them from .*: source.gnss: .*bad.ubx: no UBX packet"):
+        navfdi.run_scenario(sc)

@@ -124,24 +124,24 @@ def _folder(source: str) -> Path:
     return p.parent if p.suffix == ".toml" else Path.cwd()
 
 
-def log_epochs(src: Mapping[str, Any], source: str) -> np.ndarray | None:
+def log_epochs(src: Mapping[str, Any], source: str) -> tuple[np.ndarray | None, str]:
     """GPS seconds of the GNSS log's epochs (``[source] gnss`` in any format
-    :mod:`navfdi.gnss_logs` reads, through :data:`EPOCH_READERS`; or ``rinex_obs``), or None
-    when the file cannot be read here (the run's reader then names the problem)."""
+    :mod:`navfdi.gnss_logs` reads, through :data:`EPOCH_READERS`; or ``rinex_obs``), and ``""``;
+    or None and the reader's reason when the file cannot be read."""
     base = _folder(source)
     if src.get("gnss") is not None and EPOCH_READERS:
         try:
-            return np.asarray(EPOCH_READERS[0](src["gnss"], base), dtype=float)
-        except ScenarioError:
-            return None
+            return np.asarray(EPOCH_READERS[0](src["gnss"], base), dtype=float), ""
+        except ScenarioError as e:
+            return None, str(e)
     if isinstance(src.get("rinex_obs"), str):
         from navfdi import _core
 
         try:
-            return np.asarray(_core.read_rinex_obs(str(base / src["rinex_obs"]))["epoch_times"], dtype=float)
-        except (OSError, ValueError):
-            return None
-    return None
+            return np.asarray(_core.read_rinex_obs(str(base / src["rinex_obs"]))["epoch_times"], dtype=float), ""
+        except (OSError, ValueError) as e:
+            return None, str(e)
+    return None, "no [source] gnss or rinex_obs"
 
 
 def _windows(raw: Mapping[str, Any]) -> list[tuple[list[Any], int, str]]:
@@ -173,12 +173,13 @@ def resolve_log_times(raw: Mapping[str, Any], source: str) -> Mapping[str, Any]:
     missing = [k for k in ("duration", "dt") if k not in raw]
     if not gps and not missing:
         return raw
-    t = log_epochs(src, source)
+    t, why = log_epochs(src, source)
     if t is None or len(t) < 2:
+        why = why or f"{0 if t is None else len(t)} epoch(s)"
         if missing:
             raise ScenarioError(f"{', '.join(missing)}: not given, and the GNSS log's epochs could not be read to take "
-                                f"{'them' if len(missing) > 1 else 'it'} from (give {' and '.join(missing)} or check [source])")
-        raise ScenarioError(f"{gps[0][2]}: a GPS time, but the GNSS log's epochs could not be read to place it")
+                                f"{'them' if len(missing) > 1 else 'it'} from (give {' and '.join(missing)} or check [source]): {why}")
+        raise ScenarioError(f"{gps[0][2]}: a GPS time, but the GNSS log's epochs could not be read to place it: {why}")
     out = {k: v for k, v in raw.items()}
     t0 = float(t[0])
     span = float(t[-1] - t0)
