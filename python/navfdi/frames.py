@@ -199,17 +199,7 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     wg = np.interp(grid, imu_t, w)
 
     def corr_at(lags: np.ndarray) -> np.ndarray:
-        idx = np.rint((tg[None, :] + lags[:, None] - grid[0]) / 0.1).astype(np.int64)
-        m = ((idx >= 0) & (idx < len(grid))).astype(float)
-        y = wg[np.clip(idx, 0, len(grid) - 1)] * m
-        x = rate[None, :] * m
-        n = m.sum(axis=1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            mx, my = x.sum(axis=1) / n, y.sum(axis=1) / n
-            sxy = (x * y).sum(axis=1) - n * mx * my
-            sxx = (x * x).sum(axis=1) - n * mx * mx
-            syy = (y * y).sum(axis=1) - n * my * my
-            return np.where((n >= 30) & (sxx > 0) & (syy > 0), sxy / np.sqrt(sxx * syy), np.nan)
+        return _lag_correlation(tg, rate, float(grid[0]), wg, lags)[0]
 
     # ±40 s in 0.5 s steps, then ±0.5 s about the best in 0.1 s steps.
     coarse = np.arange(-_MAX_LAG_S, _MAX_LAG_S + 1e-9, 0.5)
@@ -240,6 +230,73 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
         f"{'GNSS' if lag < 0 else 'IMU'} log than in the {'IMU' if lag < 0 else 'GNSS'} log (the GNSS course's rate against the "
         f"IMU's rotation rate: correlation {r_best:.2f} at that lag, {r0:.2f} at none).{hint} Fix the time stamps, or if the "
         f"IMU's clock really is offset, set {field}.imu_time_offset = \"{-lag:+.1f} s\" (added to the IMU's times)")
+
+
+def _lag_correlation(tg: np.ndarray, rate: np.ndarray, grid0: float, wg: np.ndarray, lags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Correlation of the course's ``rate`` at the GNSS epochs ``tg`` with the IMU's rotation
+    rate ``wg`` (on a 0.1 s grid from ``grid0``) read at ``tg + lag``, for each of ``lags``
+    (s), over the epochs inside the IMU log; and the number of those epochs. NaN where fewer
+    than 30."""
+    idx = np.rint((tg[None, :] + lags[:, None] - grid0) / 0.1).astype(np.int64)
+    m = ((idx >= 0) & (idx < len(wg))).astype(float)
+    y = wg[np.clip(idx, 0, len(wg) - 1)] * m
+    x = rate[None, :] * m
+    n = m.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mx, my = x.sum(axis=1) / n, y.sum(axis=1) / n
+        sxy = (x * y).sum(axis=1) - n * mx * my
+        sxx = (x * x).sum(axis=1) - n * mx * mx
+        syy = (y * y).sum(axis=1) - n * my * my
+        return np.where((n >= 30) & (sxx > 0) & (syy > 0), sxy / np.sqrt(sxx * syy), np.nan), n
+
+
+def imu_clock_offset(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, field: str = "source.imu") -> tuple[float, float, float]:
+    """The offset (s) that puts IMU times stamped on the IMU's own clock (seconds since power-up,
+    or any clock with an unknown origin) on the GNSS log's GPS time: the lag that best lines up
+    the IMU's rotation-rate magnitude with the GNSS course's rate of change (the signals of
+    :func:`check_turns`), searched over every placement of the IMU log that covers at least half
+    of the GNSS epochs it can, in 0.5 s steps, then refined in 0.1 s steps (the loosely coupled
+    filter's ``imu_time_offset`` refines further). Returns ``(offset, correlation, next)``:
+    the offset to add to the IMU's times, the correlation there and the best one at least 10 s
+    away.
+
+    Raises :class:`~navfdi.ScenarioError` naming ``field`` when the logs do not say it clearly:
+    no turns at speed (σ of the course's rate below 1 deg/s, or fewer than 30 epochs above
+    3 m/s), a best correlation below 0.5, or another placement within 0.15 of it."""
+    imu_t = np.asarray(imu_t, float)
+    sig = _turn_signals(imu_t, gyro, gnss.t, gnss.vel, gnss.lat, gnss.lon)
+    why = (f"{field}.time_scale = \"boot\": the IMU's clock cannot be placed on GPS time from the turns"
+           f" (its turn rate is matched to the GNSS track's)")
+    if sig is None or not np.std(sig[1]) >= math.radians(1.0):
+        raise ScenarioError(f"{why}: the GNSS log has too few turns at speed (above 3 m/s); give the IMU's times in GPS time")
+    tg, rate, w = sig
+    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
+    wg = np.interp(grid, imu_t, w)
+    # Lags that put some IMU sample at some GNSS epoch, in chunks (lags × epochs floats).
+    lags = np.arange(np.floor(imu_t[0] - tg[-1]), np.ceil(imu_t[-1] - tg[0]) + 0.5, 0.5)
+    if len(lags) > 2_000_000:
+        raise ScenarioError(f"{why}: the IMU log spans {imu_t[-1] - imu_t[0]:.0f} s; give the IMU's times in GPS time")
+    r, n = np.empty(len(lags)), np.empty(len(lags))
+    step = max(1, 4_000_000 // max(len(tg), 1))
+    for k in range(0, len(lags), step):
+        r[k:k + step], n[k:k + step] = _lag_correlation(tg, rate, float(grid[0]), wg, lags[k:k + step])
+    r[n < 0.5 * n.max()] = np.nan
+    if not np.isfinite(r).any():
+        raise ScenarioError(f"{why}: the logs never overlap by enough epochs")
+    b = int(np.nanargmax(r))
+    fine = lags[b] + np.arange(-0.5, 0.5 + 1e-9, 0.1)
+    rf = _lag_correlation(tg, rate, float(grid[0]), wg, fine)[0]
+    lag = float(fine[int(np.nanargmax(rf))]) if np.isfinite(rf).any() else float(lags[b])
+    best = float(np.nanmax(rf)) if np.isfinite(rf).any() else float(r[b])
+    far = np.abs(lags - lags[b]) >= 10.0
+    nxt = float(np.nanmax(r[far])) if np.isfinite(r[far]).any() else float("nan")
+    if not best >= 0.5:
+        raise ScenarioError(f"{why}: the best placement lines the turns up with a correlation of {best:.2f} only (0.5 needed); give the IMU's times in GPS time")
+    if math.isfinite(nxt) and best - nxt < 0.15:
+        raise ScenarioError(f"{why}: two placements {abs(lags[b] - lags[int(np.nanargmax(np.where(far, r, np.nan)))]):.0f} s apart line the turns up "
+                            f"about as well (correlations {best:.2f} and {nxt:.2f}); give the IMU's times in GPS time")
+    # The GNSS epoch tg turns with the IMU sample stamped tg + lag: add −lag to the IMU's times.
+    return -lag, best, nxt
 
 
 def _check_turn_size(tg: np.ndarray, rate: np.ndarray, imu_t: np.ndarray, w: np.ndarray, lag: float, field: str) -> None:

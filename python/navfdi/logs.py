@@ -174,8 +174,9 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     if not header and not ("time" in columns or ("week" in columns and "seconds" in columns)):
         raise ScenarioError(f"{where}: without a header line the time column's number is required (time = …, or week and seconds)")
     scale = columns.get("time_scale", "gpst")
-    if scale not in ("gpst", "unix"):
-        raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds) or 'unix' (Unix time, UTC)")
+    if scale not in ("gpst", "unix", "boot"):
+        raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds), 'unix' (Unix time, UTC) or 'boot' (the IMU's own clock, "
+                            f"placed on GPS time by the turns)")
     if "time" not in columns and (scale != "gpst" or "time_unit" in columns):
         raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …); week and seconds are GPS time in seconds")
     time_unit(columns.get("time_unit", "s"), f"{where}.time_unit")
@@ -207,8 +208,10 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
     seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
     ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
-    ``time_scale`` ``"gpst"`` (default) or ``"unix"`` (Unix time, UTC: turned into GPS time
-    with the leap seconds) and ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
+    ``time_scale`` ``"gpst"`` (default), ``"unix"`` (Unix time, UTC: turned into GPS time
+    with the leap seconds) or ``"boot"`` (the IMU's own clock: left as read here, placed on GPS
+    time by :func:`load_source` from the turns, :func:`navfdi.frames.imu_clock_offset`) and
+    ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
     for a ``time`` column; ``header`` (default true; false: every line is a sample and the
     columns are numbered from 1) and ``delimiter`` (default ``","``; one character or
     ``"tab"``); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
@@ -382,6 +385,9 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
                 f"RTK fixed); the file's qualities are {have}: set reference_quality = [{have}] to score against them")
         ref = ref.select(keep)
     if "rinex_obs" in source:
+        if imu_cfg.get("time_scale") == "boot":
+            raise ScenarioError("source.imu.time_scale = \"boot\": the IMU's clock is placed by the GNSS log's turns ([source] gnss); "
+                                "a tight scenario's RINEX has none: give the IMU's times in GPS time")
         obs = file_in(source, base, "source.rinex_obs", "rinex_obs")
         nav = file_in(source, base, "source.rinex_nav", "rinex_nav")
         for p, name in ((obs, "source.rinex_obs"), (nav, "source.rinex_nav")):
@@ -395,6 +401,16 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     from .gnss_logs import read_gnss
 
     pos = read_gnss(source.get("gnss"), base)
+    if imu_cfg.get("time_scale") == "boot":
+        import warnings
+
+        from ._errors import ScenarioWarning
+        from .frames import imu_clock_offset
+
+        off, r, nxt = imu_clock_offset(imu.t, imu.gyro, pos)
+        imu = ImuLog(imu.t + off, imu.gyro, imu.accel, imu.path)
+        warnings.warn(f"source.imu: time_scale = \"boot\": the IMU's clock placed on GPS time by its turns, {off:+.1f} s added to its times "
+                      f"(correlation {r:.2f}; the best placement at least 10 s away {nxt:.2f})", ScenarioWarning, stacklevel=2)
     t0 = float(pos.t[0])
     if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
         raise ScenarioError(
