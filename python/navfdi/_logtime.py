@@ -20,7 +20,7 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps", "unix_to_gps",
+__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps", "unix_to_gps", "utc_count_to_gps",
            "TIME_UNITS", "time_unit"]
 
 GPS_EPOCH = _dt.datetime(1980, 1, 6)
@@ -48,7 +48,13 @@ _UNIX_GPS_EPOCH = 315_964_800.0
 def unix_to_gps(t: np.ndarray) -> np.ndarray:
     """GPS seconds since 1980-01-06 of Unix times ``t`` (s since 1970-01-01 UTC, leap seconds
     not counted), with the leap seconds of each time's date (:data:`LEAP_SECONDS`)."""
-    utc = np.asarray(t, dtype=float) - _UNIX_GPS_EPOCH
+    return utc_count_to_gps(np.asarray(t, dtype=float) - _UNIX_GPS_EPOCH)
+
+
+def utc_count_to_gps(utc: np.ndarray) -> np.ndarray:
+    """GPS seconds of UTC times ``utc`` counted in seconds from 1980-01-06 00:00 UTC (a UTC
+    calendar time read as if it were GPST): plus the leap seconds of each time's date."""
+    utc = np.asarray(utc, dtype=float)
     leap = np.full(utc.shape, 13.0)
     for since, n in LEAP_SECONDS:
         leap[utc >= (since - GPS_EPOCH).total_seconds()] = n

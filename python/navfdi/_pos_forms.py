@@ -3,7 +3,7 @@
 east/north/up):
 
 * time in GPST, UTC or JST (RTKLIB ``out-timesys``; ``rnx2rtkp -u``): UTC and JST become GPST
-  with the leap seconds of their date (:data:`navfdi._logtime.LEAP_SECONDS`);
+  with the leap seconds of their date (:func:`navfdi._logtime.utc_count_to_gps`);
 * positions as latitude/longitude/height in decimal degrees, in degrees-minutes-seconds
   (``out-degform = dms``, ``rnx2rtkp -g``: three tokens per angle, the sign on the degrees,
   ``-0`` included) or as ECEF x/y/z (``out-solformat = xyz``, ``rnx2rtkp -e``): converted on
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from navfdi._errors import ScenarioError
-from navfdi._logtime import GPS_EPOCH, LEAP_SECONDS
+from navfdi._logtime import utc_count_to_gps
 
 __all__ = ["PosForm", "pos_form"]
 
@@ -48,11 +48,7 @@ class PosForm:
         time scale)."""
         if self.scale == "GPST":
             return t
-        utc = t - _TIME_SCALES[self.scale]
-        leap = np.full(len(utc), 13.0)
-        for since, n in LEAP_SECONDS:
-            leap[utc >= (since - GPS_EPOCH).total_seconds()] = n
-        return utc + leap
+        return utc_count_to_gps(t - _TIME_SCALES[self.scale])
 
     def columns(self, path: Path, col: dict[str, np.ndarray], line_of: Sequence[int]) -> dict[str, np.ndarray]:
         """The columns by the names of the latitude/longitude form (``latitude(deg)``, ``sde(m)``,

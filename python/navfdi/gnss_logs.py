@@ -90,8 +90,8 @@ def _starts_with_ubx(path: Path) -> bool:
 
 def read_ubx(path: str | Path) -> PosLog:
     """The UBX-NAV-PVT solutions of a u-blox binary log (``.ubx``, ``.gz`` accepted; in Rust,
-    ``navfdi_core::logs::ubx``): GPS time from the time of week and the UTC date's week,
-    latitude, longitude, height above the ellipsoid, velocity east/north/up (``−velD`` up),
+    ``navfdi_core::logs::ubx``): GPS time from the receiver's UTC time (to the nanosecond)
+    where it marks it valid and resolved, else its time of week in that week; latitude, longitude, height above the ellipsoid, velocity east/north/up (``−velD`` up),
     σ east = σ north = ``hAcc/√2``, σ up = ``vAcc``, σ of each velocity axis ``sAcc/√3``,
     quality 1 (carrier fixed), 2 (float), 4 (differential) or 5 (single), the satellites
     used. Solutions that are not a 3-D fix (fix type other than 3-D or GNSS + dead reckoning)
