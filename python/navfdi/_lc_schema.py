@@ -107,10 +107,11 @@ def _mounting(t: Any, p: str) -> list[float]:
 
 #: ``[loosely_coupled]`` fields that may be ``"auto"``: estimated from the log before the run
 #: (:func:`navfdi.calibrate.resolve_auto`, the same estimates as ``navfdi calibrate``).
-AUTO_FIELDS = ("imu.gyro_noise", "imu.accel_noise", "boresight", "imu_time_offset")
+AUTO_FIELDS = ("imu.gyro_noise", "imu.accel_noise", "boresight", "imu_time_offset", "imu_axes")
 # What an "auto" field holds in the SI form until it is resolved (never run: an unresolved
 # scenario is refused by navfdi.logs.scored_source).
-_AUTO_PLACEHOLDER: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": "0 deg", "imu_time_offset": "0 s"}
+_AUTO_PLACEHOLDER: dict[str, Any] = {"imu.gyro_noise": "0.01 deg/s/sqrt(Hz)", "imu.accel_noise": "0.1 mg/sqrt(Hz)", "boresight": "0 deg", "imu_time_offset": "0 s",
+                                     "imu_axes": ["forward", "right", "down"]}
 
 
 def auto_fields(raw: Mapping[str, Any]) -> list[str]:

@@ -252,7 +252,7 @@ SECTIONS: dict[str, Section] = {
     ]),
     "strapdown": _s("[loosely_coupled] / [tight.strapdown]", "The strapdown INS on a recorded IMU (the keys both share; [loosely_coupled] adds its own below).", [
         ("imu", "table", REQ, "IMU noise figures"),
-        ("imu_axes", "three of forward, back, right, left, down, up", "— (or mounting)", "body frame: where the IMU's x, y, z axes point"),
+        ("imu_axes", "three of forward, back, right, left, down, up, or \"auto\"", "— (or mounting)", "body frame: where the IMU's x, y, z axes point; \"auto\": from the log (gravity, and the accelerations along and across the GNSS track; a ground vehicle)"),
         ("mounting", "angle×3", "— (or imu_axes)", "roll, pitch, yaw of the IMU axes in the body (forward-right-down)"),
         ("boresight", "angle×3, or \"auto\"", "0", "small misalignment (roll, pitch, yaw) on top of imu_axes or mounting; \"auto\": pitch and yaw from the log (loosely coupled)"),
         ("lever_arm", "length×3", REQ, "antenna from the IMU, body frame"),

@@ -71,7 +71,11 @@ class Calibration:
     force), before they are combined; ``section`` the scenario table the values belong to
     (``loosely_coupled`` or ``tight.strapdown``); ``gnss_sigma_scale`` per GNSS channel the
     factor on the receiver's σ the calibrated filter finds from its innovations (median, 10th
-    and 90th percentile; informative: ``noise_scale = "auto"`` estimates it in every run)."""
+    and 90th percentile; informative: ``noise_scale = "auto"`` estimates it in every run);
+    ``imu_axes`` where the IMU's x, y, z point (asked as ``"auto"`` only) with ``imu_axes_fit``
+    (the fit of those axes and of the next best, each at most 2:
+    :func:`navfdi.frames.estimate_imu_axes`); ``asked`` the fields estimated (None: all),
+    the only ones the console report speaks of."""
 
     gyro_noise: list[float] | None
     gyro_noise_sigma: list[float] | None
@@ -88,11 +92,18 @@ class Calibration:
     yaw_parts: dict[str, tuple[float, float]] = field(default_factory=dict)
     section: str = "loosely_coupled"
     gnss_sigma_scale: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    imu_axes: list[str] | None = None
+    imu_axes_fit: tuple[float, float] | None = None
+    asked: tuple[str, ...] | None = None
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
         f3 = lambda v, s, u: ", ".join(f"{a:.4g} ± {b:.2g}" for a, b in zip(v, s)) + f" {u}"  # noqa: E731
-        if self.gyro_noise is None or self.accel_noise is None or self.gyro_bias is None:
+        asked = set(self.asked) if self.asked is not None else None
+        out: list[str]
+        if asked is not None and not asked & {"imu.gyro_noise", "imu.accel_noise"}:
+            out = []
+        elif self.gyro_noise is None or self.accel_noise is None or self.gyro_bias is None:
             out = [f"rest intervals: none of {MIN_REST:g} s (speed below the static speed): IMU noise and gyro bias not estimated"]
         else:
             out = [f"rest intervals: {len(self.rest)} ({sum(b - a for a, b in self.rest):.1f} s): "
@@ -100,10 +111,15 @@ class Calibration:
                    f"gyro white noise (x, y, z): {f3(self.gyro_noise, self.gyro_noise_sigma or [], 'deg/s/sqrt(Hz)')}",
                    f"accel white noise (x, y, z): {f3(self.accel_noise, self.accel_noise_sigma or [], 'mg/sqrt(Hz)')}",
                    f"gyro bias at rest (x, y, z): {f3(self.gyro_bias, self.gyro_bias_sigma or [], 'deg/h')}"]
+        if self.imu_axes is not None and self.imu_axes_fit is not None:
+            out.append(f"IMU axes (x, y, z): {', '.join(self.imu_axes)} (the accelerations along and across the track fit them "
+                       f"{self.imu_axes_fit[0]:.2f} of 2, the next best axes {self.imu_axes_fit[1]:.2f})")
         if self.section != "loosely_coupled":
             out.append(f"boresight and IMU time offset: not estimated for [{self.section}] (read through the loosely coupled filter's constraint and innovations)")
             return out
-        if self.boresight is None or self.boresight_sigma is None:
+        if asked is not None and "boresight" not in asked:
+            pass
+        elif self.boresight is None or self.boresight_sigma is None:
             out.append(f"boresight: not estimated (less than {MIN_STRAIGHT:g} s at {MIN_SPEED:g} m/s or more without turning)")
         else:
             b, bs = self.boresight, self.boresight_sigma
@@ -111,7 +127,9 @@ class Calibration:
                        f"(from {self.straight:.0f} s of driving)")
             if len(self.yaw_parts) > 1:
                 out.append("  yaw from " + ", from ".join(f"the {k} {v:+.3f} ± {e:.3f}" for k, (v, e) in self.yaw_parts.items()) + " deg (combined by their variances)")
-        if self.imu_time_offset is None:
+        if asked is not None and "imu_time_offset" not in asked:
+            pass
+        elif self.imu_time_offset is None:
             out.append("IMU time offset: not estimated (too few turns while moving)")
         else:
             out.append(f"IMU time offset: {self.imu_time_offset:+.3f} ± {self.imu_time_offset_sigma:.3f} s")
@@ -133,6 +151,8 @@ class Calibration:
             v["loosely_coupled.boresight"] = [f"{x:.4f} deg" for x in self.boresight]
         if self.imu_time_offset is not None:
             v["loosely_coupled.imu_time_offset"] = f"{self.imu_time_offset:.3f} s"
+        if self.imu_axes is not None:
+            v["loosely_coupled.imu_axes"] = list(self.imu_axes)
         return v
 
 
@@ -167,7 +187,8 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
         return _calibrate_tight(sc, fields)
     if "loosely_coupled" not in sc.core or "source" not in sc.raw:
         raise ScenarioError("calibrate: a loosely coupled scenario, or a tight one with [tight.strapdown], on recorded logs is needed")
-    asked = set(AUTO_FIELDS if fields is None else fields)
+    # The IMU's axes only where asked: a scenario's own axes or mounting are the user's.
+    asked = set(AUTO_FIELDS if fields is None else fields) - ({"imu_axes"} - set(auto_fields(sc.raw)) if fields is None else set())
     unknown = asked - set(AUTO_FIELDS)
     if unknown:
         raise ScenarioError(f"calibrate: cannot estimate {sorted(unknown)}; the fields are {list(AUTO_FIELDS)}")
@@ -182,6 +203,14 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
     from navfdi import logs
 
     data = logs.load_source(sc.raw["source"], logs.scenario_folder(sc))
+    axes = None
+    if "imu_axes" in asked:
+        from navfdi.frames import estimate_imu_axes
+
+        if data.get("gnss_log") is None:
+            raise ScenarioError("calibrate: loosely_coupled.imu_axes = \"auto\" needs a GNSS solution log ([source] gnss)")
+        axes = estimate_imu_axes(data["imu_log"].t, data["imu_log"].accel, data["gnss_log"])
+        base = base.with_values({"loosely_coupled.imu_axes": axes[0]}, create=True)
     rest, noise = [], None
     if asked & {"imu.gyro_noise", "imu.accel_noise"}:
         rest = _rest_intervals(base.core["loosely_coupled"]["alignment"]["static_speed"], data)
@@ -217,6 +246,9 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
             noise["gyro_noise"], noise["accel_noise"], noise["gyro_bias"])
     if bore is not None:
         cal.boresight, cal.boresight_sigma, cal.straight, cal.yaw_parts = bore
+    if axes is not None:
+        cal.imu_axes, cal.imu_axes_fit = axes[0], (axes[1], axes[2])
+    cal.asked = None if fields is None else tuple(sorted(asked))
     if fields is None:
         cal.gnss_sigma_scale = _sigma_scales(base, src)
     return cal
@@ -504,8 +536,8 @@ def resolve_from_log(sc: Any) -> tuple[Any, Calibration | None]:
 
 def write_calibrated(source_toml: str | Path, cal: Calibration, out: str | Path) -> Path:
     """Write a copy of the scenario file ``source_toml`` with the calibrated values set (the
-    lines of ``gyro_noise``, ``accel_noise``, ``boresight`` and ``imu_time_offset`` replaced
-    or added, commented)."""
+    lines of ``gyro_noise``, ``accel_noise``, ``boresight``, ``imu_time_offset`` and
+    ``imu_axes`` replaced or added, commented)."""
     text = Path(source_toml).read_text(encoding="utf-8")
     vals = cal.values()
 
@@ -525,6 +557,8 @@ def write_calibrated(source_toml: str | Path, cal: Calibration, out: str | Path)
         text = put(text, "boresight", vals["loosely_coupled.boresight"], "loosely_coupled")
     if "loosely_coupled.imu_time_offset" in vals:
         text = put(text, "imu_time_offset", vals["loosely_coupled.imu_time_offset"], "loosely_coupled")
+    if "loosely_coupled.imu_axes" in vals:
+        text = put(text, "imu_axes", vals["loosely_coupled.imu_axes"], "loosely_coupled")
     out = Path(out)
     out.write_text(text, encoding="utf-8")
     return out

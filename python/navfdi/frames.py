@@ -299,6 +299,81 @@ def imu_clock_offset(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, field: str 
     return -lag, best, nxt
 
 
+#: The body axes an IMU axis may point along (forward-right-down body frame).
+_BODY = {"forward": (1, 0, 0), "back": (-1, 0, 0), "right": (0, 1, 0), "left": (0, -1, 0), "down": (0, 0, 1), "up": (0, 0, -1)}
+
+
+def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: str = "loosely_coupled") -> tuple[list[str], float, float]:
+    """Where the IMU's x, y, z axes point in a ground vehicle (``imu_axes``: forward, back,
+    right, left, down, up), from the log alone: the IMU axis nearest the median specific
+    force is up (refused beyond 30°); of the four axes across it, the one whose specific force
+    follows the GNSS along-track acceleration (the speed's rate) and whose right-hand
+    neighbour follows the centripetal acceleration (speed × the course's rate), 2 s averages at
+    the GNSS epochs above 3 m/s, is forward. Returns ``(axes, score, next)``: the sum of the two
+    correlations for the axes chosen and for the next best choice (each at most 2).
+
+    Raises :class:`~navfdi.ScenarioError` naming ``field`` when the log does not say it: no
+    axis within 30° of gravity, fewer than 30 epochs at speed, or a score below 1 or within
+    0.5 of the next."""
+    accel = np.asarray(accel, float)
+    why = f"{field}.imu_axes = \"auto\": the IMU's axes cannot be told from the log"
+    up = np.median(accel, axis=0)
+    up = up / np.linalg.norm(up)
+    k = int(np.argmax(np.abs(up)))
+    if not abs(up[k]) >= math.cos(math.radians(30.0)):
+        raise ScenarioError(f"{why}: the median specific force {np.round(up, 2).tolist()} (IMU x, y, z) is more than 30° from every axis; "
+                            "give imu_axes (or mounting) by hand")
+    down = np.zeros(3)
+    down[k] = -np.sign(up[k])  # the IMU axis vector (in IMU axes) that points down in the body
+    t = np.asarray(gnss.t, float)
+    ve, vn = np.asarray(gnss.vel, float)[:, 0], np.asarray(gnss.vel, float)[:, 1]
+    if not np.isfinite(ve).mean() > 0.5:
+        r = 6_371_000.0
+        n_ = np.radians(np.asarray(gnss.lat, float)) * r
+        e_ = np.radians(np.asarray(gnss.lon, float)) * r * np.cos(np.radians(np.nanmedian(gnss.lat)))
+        ve, vn = _over_two_seconds(e_, t), _over_two_seconds(n_, t)
+    speed = np.hypot(ve, vn)
+    a_long = _over_two_seconds(speed, t)
+    a_lat = speed * _over_two_seconds(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t)
+    ok = np.isfinite(a_long) & np.isfinite(a_lat) & (speed > 3.0) & (t >= imu_t[0] + 1.0) & (t <= imu_t[-1] - 1.0)
+    if ok.sum() < 30:
+        raise ScenarioError(f"{why}: fewer than 30 GNSS epochs above 3 m/s inside the IMU log; give imu_axes (or mounting) by hand")
+    # The IMU's specific force averaged over 2 s about each epoch (cumulative sums).
+    dt = float(imu_t[-1] - imu_t[0]) / max(len(imu_t) - 1, 1)
+    half = max(1, int(round(1.0 / dt)))
+    c = np.vstack([np.zeros(3), np.cumsum(accel, axis=0)])
+    i = np.searchsorted(imu_t, t[ok])
+    lo, hi = np.clip(i - half, 0, len(imu_t)), np.clip(i + half, 0, len(imu_t))
+    f = (c[hi] - c[lo]) / np.maximum(hi - lo, 1)[:, None]
+
+    def corr(x: np.ndarray, y: np.ndarray) -> float:
+        x, y = x - x.mean(), y - y.mean()
+        d = math.sqrt(float((x * x).sum() * (y * y).sum()))
+        return float((x * y).sum()) / d if d > 0 else -1.0
+
+    scored = []
+    for j in range(3):
+        if j == k:
+            continue
+        for sgn in (1.0, -1.0):
+            fwd = np.zeros(3)
+            fwd[j] = sgn
+            right = np.cross(down, fwd)  # forward × right = down in a right-handed frame
+            scored.append((corr(f @ fwd, a_long[ok]) + corr(f @ right, a_lat[ok]), fwd, right))
+    scored.sort(key=lambda s: -s[0])
+    best, fwd, right = scored[0]
+    nxt = scored[1][0]
+    if not best >= 1.0 or best - nxt < 0.5:
+        raise ScenarioError(f"{why}: the forward axis is not clear (the accelerations along and across the track fit the best choice "
+                            f"with {best:.2f} and the next with {nxt:.2f} of 2); give imu_axes (or mounting) by hand")
+    names = []
+    for a in range(3):
+        # IMU axis a points along body direction (forward, right, down components).
+        v = (fwd[a], right[a], down[a])
+        names.append(next(n for n, u in _BODY.items() if u == tuple(int(round(x)) for x in v)))
+    return names, float(best), float(nxt)
+
+
 def _check_turn_size(tg: np.ndarray, rate: np.ndarray, imu_t: np.ndarray, w: np.ndarray, lag: float, field: str) -> None:
     """The IMU's rotation-rate magnitude ``w`` against the course's ``rate`` (rad/s) at the
     GNSS epochs ``tg`` shifted by ``lag`` (s): refused when their slope is off 1 by more than
