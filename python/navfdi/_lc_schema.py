@@ -90,7 +90,9 @@ def _mounting(t: Any, p: str) -> list[float]:
     optional ``boresight`` (roll, pitch, yaw, small angles) on top: the mounting angles (rad)."""
     given = [k for k in ("mounting", "imu_axes") if k in t]
     if len(given) != 1:
-        raise ScenarioError(f"{p}: give the IMU's orientation as imu_axes (e.g. [\"right\", \"forward\", \"up\"]: where its x, y, z axes point) or as mounting (roll, pitch, yaw angles), {'not both' if given else 'one of them'}")
+        raise ScenarioError(f"{p}: give the IMU's orientation as imu_axes (e.g. [\"right\", \"forward\", \"up\"]: where its x, y, z axes point; "
+                            f"or \"auto\", a ground vehicle's estimated from its recorded log) or as mounting (roll, pitch, yaw angles), "
+                            f"{'not both' if given else 'one of them'}")
     bore = [math.degrees(v) for v in _axes(t["boresight"], "angle", f"{p}.boresight")] if "boresight" in t else [0.0, 0.0, 0.0]
     if "imu_axes" in t:
         axes = _list(t["imu_axes"], f"{p}.imu_axes")
