@@ -1,5 +1,6 @@
-"""IMU CSV logs without a header line and with other separators (semicolon, tab, space), as
-loggers write them: columns numbered from 1, the same samples as the headed comma file."""
+"""IMU CSV logs without a header line and with other separators (semicolon, tab, space, runs
+of whitespace as column-aligned text such as KF-GINS's), as loggers write them: columns
+numbered from 1, the same samples as the headed comma file."""
 
 from __future__ import annotations
 
@@ -25,13 +26,15 @@ def drive_rows() -> list[str]:
     return lines[1:2001]
 
 
-@pytest.mark.parametrize("delimiter, sep", [(",", ","), (";", ";"), ("tab", "\t"), (" ", " ")])
+@pytest.mark.parametrize("delimiter, sep", [(",", ","), (";", ";"), ("tab", "\t"), (" ", " "), ("whitespace", "   \t ")])
 def test_headerless_files_read_as_the_headed_one(tmp_path: Path, drive_rows, delimiter, sep):
     headed = tmp_path / "headed.csv"
     headed.write_text(",".join(["gps_week", "gps_sow_s", "acc_x_g", "acc_y_g", "acc_z_g", "gyro_x_dps", "gyro_y_dps", "gyro_z_dps", "imu_counter_ms"]) + "\n"
                       + "\n".join(drive_rows) + "\n")
     bare = tmp_path / "bare.txt"
-    bare.write_text("\n".join(r.replace(",", sep) for r in drive_rows) + "\n")
+    # Column-aligned text (the whitespace case) also starts and ends its lines with spaces.
+    pad = "  " if delimiter == "whitespace" else ""
+    bare.write_text("\n".join(pad + r.replace(",", sep) + pad for r in drive_rows) + "\n")
     a = read_imu(headed, HEADED)
     b = read_imu(bare, {**NUMBERED, "delimiter": delimiter})
     assert len(b.t) == len(drive_rows)

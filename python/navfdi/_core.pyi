@@ -613,7 +613,8 @@ def read_imu_csv(
     """Read an IMU CSV log (plain or gzip) in one streaming pass, GIL released: ``time`` one
     column name (GPS seconds, or another count: ``time_unit`` seconds per unit, default 1) or
     ``[week, seconds_of_week]``; ``header`` false: no header line, the columns named ``"1"``,
-    ``"2"``, … by position; ``delimiter`` one ASCII character; ``gyro``, ``accel`` three column
+    ``"2"``, … by position; ``delimiter`` one ASCII character or ``"whitespace"`` (runs of
+    spaces and tabs); ``gyro``, ``accel`` three column
     names each; ``gyro_scale`` to rad/s and ``accel_scale`` to m/s² (rad and m/s for
     ``increments``, which are divided by the sample interval); ``max_gap`` the largest sample
     interval accepted (s); ``unit_fields`` the two unit fields' names for messages. Returns

@@ -361,7 +361,7 @@ SECTIONS: dict[str, Section] = {
         ("time_scale", "gpst, unix, boot", "gpst", "the time column's count: GPS seconds; Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds); or boot: the IMU's own clock (e.g. since power-up), placed on GPS time by matching its turn rate to the GNSS track's (said in a warning)"),
         ("time_unit", "s, ms, us, ns", "s", "the time column's unit"),
         ("header", "true, false", "true", "the first line names the columns; false: columns are numbered from 1 (time = 1, gyro = [5, 6, 7])"),
-        ("delimiter", "one character or tab", ",", "the field separator (\";\", \"tab\", \" \", …)"),
+        ("delimiter", "one character, tab or whitespace", ",", "the field separator (\";\", \"tab\", \" \", …; \"whitespace\": runs of spaces and tabs, as column-aligned text)"),
         ("gyro", "three columns", REQ, "rates (or increments) in the IMU's x, y, z"),
         ("accel", "three columns", REQ, "specific forces (or increments) in the IMU's x, y, z"),
         ("gyro_unit", "rad/s, deg/s", "rad/s", "gyro column unit"),

@@ -154,8 +154,8 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     if not isinstance(header, bool):
         raise ScenarioError(f"{where}.header = {header!r}: true (the first line names the columns) or false")
     delim = columns.get("delimiter", ",")
-    if not (isinstance(delim, str) and (delim == "tab" or (len(delim) == 1 and delim.isascii() and delim not in "\"\r\n"))):
-        raise ScenarioError(f"{where}.delimiter = {delim!r}: one ASCII character (\",\", \";\", \" \") or \"tab\"")
+    if not (isinstance(delim, str) and (delim in ("tab", "whitespace") or (len(delim) == 1 and delim.isascii() and delim not in "\"\r\n"))):
+        raise ScenarioError(f"{where}.delimiter = {delim!r}: one ASCII character (\",\", \";\", \" \"), \"tab\" or \"whitespace\" (runs of spaces and tabs)")
 
     def is_col(c: Any) -> bool:
         # Names with a header line; without one, numbers from 1 (or their text).
@@ -213,8 +213,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     time by :func:`load_source` from the turns, :func:`navfdi.frames.imu_clock_offset`) and
     ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
     for a ``time`` column; ``header`` (default true; false: every line is a sample and the
-    columns are numbered from 1) and ``delimiter`` (default ``","``; one character or
-    ``"tab"``); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
+    columns are numbered from 1) and ``delimiter`` (default ``","``; one character,
+    ``"tab"``, or ``"whitespace"``: runs of spaces and tabs, as column-aligned text); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
     increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
     the largest interval between samples (s) accepted (default 0.1; the argument overrides
     the table's). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the

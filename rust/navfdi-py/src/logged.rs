@@ -332,12 +332,13 @@ type ImuArrays<'py> = (
 /// each; `gyro_scale` to rad/s and `accel_scale` to m/s²; `increments`: per-sample increments;
 /// `max_gap` (s); `unit_fields`: the unit fields' names for messages; `time_unit`: seconds per
 /// unit of a single time column (default 1); `header`: the first line names the columns (else
-/// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character. Returns `t` (N,) in seconds of that column's count,
+/// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character, or `"whitespace"`
+/// (runs of spaces and tabs). Returns `t` (N,) in seconds of that column's count,
 /// `gyro` (N, 3) rad/s and `accel` (N, 3) m/s². FileFormatError names the file, line and
 /// column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ','))]
+#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ","))]
 pub fn read_imu_csv<'py>(
     py: Python<'py>,
     path: String,
@@ -351,13 +352,18 @@ pub fn read_imu_csv<'py>(
     unit_fields: [String; 2],
     time_unit: f64,
     header: bool,
-    delimiter: char,
+    delimiter: &str,
 ) -> PyResult<ImuArrays<'py>> {
-    if !delimiter.is_ascii() || delimiter == '"' || delimiter == '\n' || delimiter == '\r' {
-        return Err(PyValueError::new_err(format!(
-            "source.imu.delimiter = {delimiter:?}: one ASCII character other than a quote or a line end"
-        )));
-    }
+    use navfdi_core::logs::imu_csv::Delimiter;
+    let delimiter = match delimiter.as_bytes() {
+        b"whitespace" => Delimiter::Whitespace,
+        [b] if b.is_ascii() && !matches!(b, b'"' | b'\n' | b'\r') => Delimiter::Byte(*b),
+        _ => {
+            return Err(PyValueError::new_err(format!(
+                "source.imu.delimiter = {delimiter:?}: one ASCII character other than a quote or a line end, or \"whitespace\""
+            )))
+        }
+    };
     use navfdi_core::logs::imu_csv::{read_imu_csv as read, ImuCsvSpec, TimeColumns};
     let time = match time.as_slice() {
         [s] => TimeColumns::Seconds(s.clone()),
@@ -378,7 +384,7 @@ pub fn read_imu_csv<'py>(
         max_gap,
         time_unit,
         header,
-        delimiter: delimiter as u8,
+        delimiter,
         unit_fields,
     };
     let table = crate::interrupt::run(py, move |_| read(&path, &spec))?;

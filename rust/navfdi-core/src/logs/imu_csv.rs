@@ -29,6 +29,72 @@ pub enum TimeColumns {
     Seconds(String),
 }
 
+/// How the fields of a line are separated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Delimiter {
+    /// One byte (`b','`, `b';'`, `b'\t'`, `b' '`, …).
+    Byte(u8),
+    /// Runs of spaces and tabs, leading and trailing ones ignored (column-aligned text, as
+    /// KF-GINS's IMU files are written).
+    Whitespace,
+}
+
+/// A reader that turns runs of spaces and tabs into one space and drops them at the start and
+/// end of each line, newlines kept (so line numbers stay the file's): whitespace-separated
+/// text as single-space-separated for the CSV reader.
+struct Squeeze<R> {
+    inner: R,
+    buf: Vec<u8>,
+    pos: usize,
+    /// A space is owed before the next field (a run seen after a field on this line).
+    pending: bool,
+    /// At the start of a line (no field yet).
+    start: bool,
+}
+
+impl<R: std::io::Read> std::io::Read for Squeeze<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        let mut n = 0;
+        while n < out.len() {
+            if self.pos == self.buf.len() {
+                self.buf.resize(1 << 16, 0);
+                let got = self.inner.read(&mut self.buf)?;
+                self.buf.truncate(got);
+                self.pos = 0;
+                if got == 0 {
+                    break;
+                }
+            }
+            let b = self.buf[self.pos];
+            match b {
+                b' ' | b'\t' => {
+                    self.pos += 1;
+                    self.pending = !self.start;
+                }
+                b'\n' | b'\r' => {
+                    out[n] = b;
+                    n += 1;
+                    self.pos += 1;
+                    self.pending = false;
+                    self.start = true;
+                }
+                _ if self.pending => {
+                    out[n] = b' ';
+                    n += 1;
+                    self.pending = false;
+                }
+                _ => {
+                    out[n] = b;
+                    n += 1;
+                    self.pos += 1;
+                    self.start = false;
+                }
+            }
+        }
+        Ok(n)
+    }
+}
+
 /// How to read an IMU CSV log.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ImuCsvSpec {
@@ -52,8 +118,8 @@ pub struct ImuCsvSpec {
     /// The first line names the columns; false: every line is a sample and the columns are
     /// named by their position, `"1"`, `"2"`, … (from 1).
     pub header: bool,
-    /// The field separator (`b','`; `b';'`, `b'\t'`, `b' '`, …).
-    pub delimiter: u8,
+    /// The field separator.
+    pub delimiter: Delimiter,
     /// Names of the unit fields, for messages (e.g. `source.imu.gyro_unit`).
     pub unit_fields: [String; 2],
 }
@@ -112,10 +178,23 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
             });
         }
     }
-    let reader = open_bounded(path)?;
+    let mut reader = open_bounded(path)?;
+    let delimiter = match spec.delimiter {
+        Delimiter::Byte(b) => b,
+        Delimiter::Whitespace => {
+            reader = Box::new(Squeeze {
+                inner: reader,
+                buf: Vec::new(),
+                pos: 0,
+                pending: false,
+                start: true,
+            });
+            b' '
+        }
+    };
     let mut rdr = csv::ReaderBuilder::new()
         .has_headers(spec.header)
-        .delimiter(spec.delimiter)
+        .delimiter(delimiter)
         .flexible(true)
         .trim(csv::Trim::Headers)
         .from_reader(reader);
@@ -412,6 +491,22 @@ mod tests {
     use super::*;
     use std::io::Write;
 
+    #[test]
+    fn whitespace_runs_become_one_separator_and_lines_stay() {
+        use std::io::Read;
+        let text = b"  t   gx\tgy \n\n 1.5  2 \t 3  \r\n4 5 6";
+        let mut s = Squeeze {
+            inner: &text[..],
+            buf: Vec::new(),
+            pos: 0,
+            pending: false,
+            start: true,
+        };
+        let mut out = String::new();
+        s.read_to_string(&mut out).unwrap();
+        assert_eq!(out, "t gx gy\n\n1.5 2 3\r\n4 5 6");
+    }
+
     fn spec() -> ImuCsvSpec {
         ImuCsvSpec {
             time: TimeColumns::Seconds("t".into()),
@@ -423,7 +518,7 @@ mod tests {
             max_gap: 0.1,
             time_unit: 1.0,
             header: true,
-            delimiter: b',',
+            delimiter: Delimiter::Byte(b','),
             unit_fields: ["gyro_unit".into(), "accel_unit".into()],
         }
     }
