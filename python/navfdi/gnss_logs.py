@@ -474,37 +474,62 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
     unknown = sorted(set(cols) - allowed)
     if unknown:
         raise ScenarioError(f"source.gnss.columns: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
-    reader = csv.reader(io.StringIO(text))
-    try:
-        header = [h.strip() for h in next(reader)]
-    except StopIteration:
-        raise ScenarioError(f"source.gnss: {path}: empty file") from None
-    data = [r for r in reader if r and any(x.strip() for x in r)]
+    cmap: dict[str, Any] = dict(cols)
+    has_header = cfg.get("header", True)
+    if not isinstance(has_header, bool):
+        raise ScenarioError(f"source.gnss.header = {has_header!r}: true (the first line names the columns) or false")
+    delim = cfg.get("delimiter", ",")
+    if delim == "whitespace":
+        rows = [(i + 1, ln.split()) for i, ln in enumerate(text.splitlines())]
+    elif isinstance(delim, str) and (delim == "tab" or (len(delim) == 1 and delim not in "\"\r\n")):
+        rows = list(enumerate(csv.reader(io.StringIO(text), delimiter="\t" if delim == "tab" else delim), start=1))
+    else:
+        raise ScenarioError(f"source.gnss.delimiter = {delim!r}: one character (\",\", \";\", \" \"), \"tab\" or \"whitespace\" (runs of spaces and tabs)")
+    rows = [(i, r) for i, r in rows if r and any(x.strip() for x in r)]
+    if not rows:
+        raise ScenarioError(f"source.gnss: {path}: empty file")
+    if has_header:
+        header = [h.strip() for h in rows[0][1]]
+        rows = rows[1:]
+    else:
+        # Columns by their number from 1 (names "1", "2", …; integers in the mapping too).
+        header = [str(k) for k in range(1, len(rows[0][1]) + 1)]
+    data = [r for _, r in rows]
+    line_of = [i for i, _ in rows]
 
-    def col(name: str, key: str) -> list[str]:
+    def col(name: Any, key: str) -> list[str]:
+        name = str(name)
         if name not in header:
-            raise ScenarioError(f"source.gnss.columns.{key} = {name!r}: no such column in {path} (columns: {', '.join(header)})")
+            where = f"columns: {', '.join(header)}" if has_header else f"the first line has {len(header)} columns, numbered from 1"
+            raise ScenarioError(f"source.gnss.columns.{key} = {name!r}: no such column in {path} ({where})")
         j = header.index(name)
         return [r[j].strip() if j < len(r) else "" for r in data]
 
-    def num(name: str, key: str) -> np.ndarray:
+    def num(name: Any, key: str) -> np.ndarray:
         out = []
         for i, v in enumerate(col(name, key)):
             try:
                 out.append(float(v) if v else math.nan)
             except ValueError:
-                raise ScenarioError(f"source.gnss: {path}, line {i + 2}, column {name!r}: {v!r} is not a number") from None
+                raise ScenarioError(f"source.gnss: {path}, line {line_of[i]}, column {str(name)!r}: {v!r} is not a number") from None
         return np.array(out)
 
     def three(key: str) -> np.ndarray:
-        v = cols.get(key)
+        v = cmap.get(key)
         if v is None:
             return np.full((len(data), 3), np.nan)
         if not (isinstance(v, list) and len(v) == 3):
             raise ScenarioError(f"source.gnss.columns.{key}: three column names (east, north, up)")
         return np.column_stack([num(c, key) for c in v])
 
-    tc = cols.get("time")
+    tc = cmap.get("time")
+    if not has_header:
+        # Column numbers may be given as integers.
+        cmap = {k: ([str(x) for x in v] if isinstance(v, list) else str(v) if isinstance(v, int) and not isinstance(v, bool) else v) for k, v in cmap.items()}
+        tc = cmap.get("time")
+    week = cfg.get("gps_week")
+    if week is not None and not (isinstance(week, int) and not isinstance(week, bool) and 0 <= week <= 9999):
+        raise ScenarioError(f"source.gnss.gps_week = {week!r}: the GPS week number (0–9999) of a seconds-of-week time column")
     scale = str(cfg.get("time_scale", "gpst")).lower()
     if scale not in ("gpst", "utc", "unix"):
         raise ScenarioError(f"source.gnss.time_scale = {scale!r}: 'gpst', 'utc' (ISO date-times) or 'unix' (a numeric column of Unix time)")
@@ -529,23 +554,27 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
             t = np.array([utc_to_gps(d) if scale == "utc" else (d - GPS_EPOCH).total_seconds() for d in ds])
     else:
         raise ScenarioError("source.gnss.columns.time: a column name (GPS seconds or ISO date-time) or [week, seconds]")
+    if week is not None:
+        if not isinstance(tc, str) or scale != "gpst" or "time_unit" in cfg:
+            raise ScenarioError("source.gnss.gps_week: for a single time column of GPS seconds of week (time = …, time_scale \"gpst\")")
+        t = t + week * 604800.0
     for k in ("lat", "lon"):
-        if not isinstance(cols.get(k), str):
+        if not isinstance(cmap.get(k), str):
             raise ScenarioError(f"source.gnss.columns.{k}: the column name is required")
-    if isinstance(cols.get("height"), str):
-        h = num(cols["height"], "height")
-    elif isinstance(cols.get("height_msl"), str):
+    if isinstance(cmap.get("height"), str):
+        h = num(cmap["height"], "height")
+    elif isinstance(cmap.get("height_msl"), str):
         und = cfg.get("undulation")
         if not isinstance(und, (int, float)) or isinstance(und, bool):
             raise ScenarioError("source.gnss.undulation: the geoid undulation (m) that turns height_msl into a height above the ellipsoid")
-        h = num(cols["height_msl"], "height_msl") + float(und)
+        h = num(cmap["height_msl"], "height_msl") + float(und)
     else:
         raise ScenarioError("source.gnss.columns: height (above the ellipsoid) or height_msl with source.gnss.undulation")
-    sats = cols.get("satellites")
+    sats = cmap.get("satellites")
     if sats is not None and not isinstance(sats, str):
         raise ScenarioError("source.gnss.columns.satellites: a column name (the satellites the receiver used)")
     ns = None if sats is None else num(sats, "satellites")
-    return _log(path, t, num(cols["lat"], "lat"), num(cols["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"), ns=ns)
+    return _log(path, t, num(cmap["lat"], "lat"), num(cmap["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"), ns=ns)
 
 
 EPOCH_READERS.append(lambda spec, base: read_gnss(spec, base).t)

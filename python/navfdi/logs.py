@@ -171,7 +171,13 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     for k in ("week", "seconds", "time"):
         if k in columns and not is_col(columns[k]):
             raise ScenarioError(f"{where}.{k}: a {what[:-1]} is required, got {columns[k]!r}")
-    if not header and not ("time" in columns or ("week" in columns and "seconds" in columns)):
+    week = columns.get("gps_week")
+    if week is not None:
+        if not (isinstance(week, int) and not isinstance(week, bool) and 0 <= week <= 9999):
+            raise ScenarioError(f"{where}.gps_week = {week!r}: the GPS week number (0–9999) of a seconds-of-week column")
+        if "seconds" not in columns or "week" in columns or "time" in columns or "time_scale" in columns or "time_unit" in columns:
+            raise ScenarioError(f"{where}.gps_week: with a seconds-of-week column (seconds = …) alone, no week, time, time_scale or time_unit")
+    if not header and not ("time" in columns or ("seconds" in columns and ("week" in columns or week is not None))):
         raise ScenarioError(f"{where}: without a header line the time column's number is required (time = …, or week and seconds)")
     scale = columns.get("time_scale", "gpst")
     if scale not in ("gpst", "unix", "boot"):
@@ -208,7 +214,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
     seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
     ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
-    ``time_scale`` ``"gpst"`` (default), ``"unix"`` (Unix time, UTC: turned into GPS time
+    ``gps_week`` (an integer: the week of a ``seconds`` column of seconds of week, with no
+    ``week`` column); ``time_scale`` ``"gpst"`` (default), ``"unix"`` (Unix time, UTC: turned into GPS time
     with the leap seconds) or ``"boot"`` (the IMU's own clock: left as read here, placed on GPS
     time by :func:`load_source` from the turns, :func:`navfdi.frames.imu_clock_offset`) and
     ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
@@ -231,7 +238,10 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     if max_gap is not None:
         gap = float(max_gap)
     path = Path(path)
-    time = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
+    if "gps_week" in columns:
+        time = [columns["seconds"]]
+    else:
+        time = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     try:
         t, gyro, accel = _core.read_imu_csv(
@@ -245,6 +255,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         raise ScenarioError(str(e)) from None
     if columns.get("time_scale", "gpst") == "unix":
         t = unix_to_gps(t)
+    if "gps_week" in columns:
+        t = t + columns["gps_week"] * 604800.0
     return ImuLog(t, gyro, accel, str(path))
 
 
