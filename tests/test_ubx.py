@@ -110,3 +110,9 @@ def test_a_log_that_cannot_be_read_says_why_when_the_duration_is_taken_from_it(t
     sc = _scenario(tmp_path, '"bad.ubx"')
     with pytest.raises(ScenarioError, match=r"could not be read to take them from .*: source.gnss: .*bad.ubx: no UBX packet"):
         navfdi.run_scenario(sc)
+
+
+@pytest.mark.parametrize("key, value", [("header", False), ("columns", {"time": 1}), ("date", "2025-08-28")])
+def test_a_key_another_format_reads_is_refused_not_ignored(key, value):
+    with pytest.raises(ScenarioError, match=rf"source.gnss.{key}: read for format = .* only; this log is read as ubx"):
+        read_gnss({"file": str(UBX), key: value}, Path("."))

@@ -224,18 +224,32 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
     if fmt is not None and fmt not in FORMATS:
         raise ScenarioError(f"source.gnss.format = {fmt!r}: one of {', '.join(FORMATS)}")
     if fmt == "pos" or (fmt is None and path.name.lower().endswith((".pos", ".pos.gz"))):
-        return read_pos(path)
+        return _only(cfg, "pos", read_pos(path))
     if fmt == "ubx" or (fmt is None and (path.name.lower().endswith((".ubx", ".ubx.gz")) or _starts_with_ubx(path))):
-        return read_ubx(path)
+        return _only(cfg, "ubx", read_ubx(path))
     text = _text(path)
     fmt = fmt or _guess(path, text)
     if fmt == "pos":
-        return read_pos(path)
+        return _only(cfg, "pos", read_pos(path))
     if fmt == "solution":
-        return read_solution_csv(path, text)
+        return _only(cfg, "solution", read_solution_csv(path, text))
     if fmt == "nmea":
-        return read_nmea(path, text, cfg.get("date"))
+        return _only(cfg, "nmea", read_nmea(path, text, cfg.get("date")))
     return read_gnss_csv(path, text, cfg)
+
+
+#: ``[source.gnss]`` keys that only one format reads.
+_FORMAT_KEYS = {"columns": "csv", "time_scale": "csv", "time_unit": "csv", "gps_week": "csv", "header": "csv", "delimiter": "csv",
+                "undulation": "csv", "date": "nmea"}
+
+
+def _only(cfg: Mapping[str, Any], fmt: str, log: PosLog) -> PosLog:
+    """``log``, or an error for a key of ``cfg`` that another format reads (it would be ignored)."""
+    for k, owner in _FORMAT_KEYS.items():
+        if k in cfg and owner != fmt:
+            raise ScenarioError(f"source.gnss.{k}: read for format = \"{owner}\" only; this log is read as {fmt} (give format = \"{owner}\" "
+                                f"if the file is one, or leave {k} out)")
+    return log
 
 
 def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndarray, vel: np.ndarray, sd: np.ndarray, sd_vel: np.ndarray,
