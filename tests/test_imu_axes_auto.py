@@ -36,6 +36,17 @@ def test_simulated_mountings_are_told(tmp_path: Path, axes):
     assert tuple(found) == axes and fit > 1.8 and nxt < 0.5
 
 
+@pytest.mark.parametrize("axes", [("right", "forward", "up"), ("down", "right", "back")])
+def test_meter_level_positions_alone_tell_them_too(tmp_path: Path, axes):
+    """No receiver velocities, fixes with 2 m Gauss-Markov errors, white noise and multipath
+    bursts: the accelerations from the positions (over 6 s) still tell the axes."""
+    log = simulate_log(tmp_path, duration=600, seed=4, imu_axes=axes, gnss_rate=1.0, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=1.0,
+                       gnss_velocity=False, burst_rate=0.01, burst_size=15.0, burst_duration=10.0)
+    d = _data(log.scenario)
+    found, fit, nxt = estimate_imu_axes(d["imu_log"].t, d["imu_log"].accel, d["gnss_log"])
+    assert tuple(found) == axes and fit > 1.5 and nxt < 0.5
+
+
 def _nearest_axes(mounting_deg):
     c = _rot(*[math.radians(x) for x in mounting_deg]).T  # columns: the IMU's axes in the body
     return [max(_AXES, key=lambda n: float(np.dot(_AXES[n], c[:, a]))) for a in range(3)]

@@ -102,10 +102,10 @@ TURN_RATE_RATIO = 2.0
 _MAX_LAG_S = 40.0
 
 
-def _over_two_seconds(x: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The rate of ``x`` at times ``t`` (s) from the samples about 1 s either side, or one
-    sample when they are further apart; NaN at the ends."""
-    m = max(1, int(round(1.0 / float(np.median(np.diff(t))))))
+def _over_two_seconds(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarray:
+    """The rate of ``x`` at times ``t`` (s) from the samples about ``half`` s (default 1 s)
+    either side, or one sample when they are further apart; NaN at the ends."""
+    m = max(1, int(round(half / float(np.median(np.diff(t))))))
     out = np.full(len(t), np.nan)
     if len(t) > 2 * m:
         out[m:-m] = (x[2 * m:] - x[:-2 * m]) / (t[2 * m:] - t[:-2 * m])
@@ -309,7 +309,7 @@ def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: st
     force is up (refused beyond 30°); of the four axes across it, the one whose specific force
     follows the GNSS along-track acceleration (the speed's rate) and whose right-hand
     neighbour follows the centripetal acceleration (speed × the course's rate), 2 s averages at
-    the GNSS epochs above 3 m/s, is forward. Returns ``(axes, score, next)``: the sum of the two
+    the GNSS epochs above 3 m/s (6 s from positions alone), is forward. Returns ``(axes, score, next)``: the sum of the two
     correlations for the axes chosen and for the next best choice (each at most 2).
 
     Raises :class:`~navfdi.ScenarioError` naming ``field`` when the log does not say it: no
@@ -327,23 +327,27 @@ def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: st
     down[k] = -np.sign(up[k])  # the IMU axis vector (in IMU axes) that points down in the body
     t = np.asarray(gnss.t, float)
     ve, vn = np.asarray(gnss.vel, float)[:, 0], np.asarray(gnss.vel, float)[:, 1]
+    # With velocities, rates over 2 s; from positions alone (differenced twice: metres of
+    # noise) over 6 s, the vehicle's accelerations lasting that long.
+    half = 1.0
     if not np.isfinite(ve).mean() > 0.5:
+        half = 3.0
         r = 6_371_000.0
         n_ = np.radians(np.asarray(gnss.lat, float)) * r
         e_ = np.radians(np.asarray(gnss.lon, float)) * r * np.cos(np.radians(np.nanmedian(gnss.lat)))
-        ve, vn = _over_two_seconds(e_, t), _over_two_seconds(n_, t)
+        ve, vn = _over_two_seconds(e_, t, half), _over_two_seconds(n_, t, half)
     speed = np.hypot(ve, vn)
-    a_long = _over_two_seconds(speed, t)
-    a_lat = speed * _over_two_seconds(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t)
-    ok = np.isfinite(a_long) & np.isfinite(a_lat) & (speed > 3.0) & (t >= imu_t[0] + 1.0) & (t <= imu_t[-1] - 1.0)
+    a_long = _over_two_seconds(speed, t, half)
+    a_lat = speed * _over_two_seconds(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t, half)
+    ok = np.isfinite(a_long) & np.isfinite(a_lat) & (speed > 3.0) & (t >= imu_t[0] + half) & (t <= imu_t[-1] - half)
     if ok.sum() < 30:
         raise ScenarioError(f"{why}: fewer than 30 GNSS epochs above 3 m/s inside the IMU log; give imu_axes (or mounting) by hand")
     # The IMU's specific force averaged over 2 s about each epoch (cumulative sums).
     dt = float(imu_t[-1] - imu_t[0]) / max(len(imu_t) - 1, 1)
-    half = max(1, int(round(1.0 / dt)))
+    m = max(1, int(round(half / dt)))
     c = np.vstack([np.zeros(3), np.cumsum(accel, axis=0)])
     i = np.searchsorted(imu_t, t[ok])
-    lo, hi = np.clip(i - half, 0, len(imu_t)), np.clip(i + half, 0, len(imu_t))
+    lo, hi = np.clip(i - m, 0, len(imu_t)), np.clip(i + m, 0, len(imu_t))
     f = (c[hi] - c[lo]) / np.maximum(hi - lo, 1)[:, None]
 
     def corr(x: np.ndarray, y: np.ndarray) -> float:
