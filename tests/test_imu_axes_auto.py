@@ -88,3 +88,11 @@ def test_logs_that_do_not_say_are_refused(tmp_path: Path):
     d = _data(tilted.scenario)
     with pytest.raises(ScenarioError, match=r"more than 30° from every axis"):
         estimate_imu_axes(d["imu_log"].t, d["imu_log"].accel, d["gnss_log"])
+
+
+def test_a_word_that_is_not_auto_is_named(tmp_path: Path):
+    log = simulate_log(tmp_path, duration=60, seed=1, gnss_rate=1.0)
+    text = re.sub(r"mounting = \[.*?\]", 'imu_axes = "sideways"', Path(log.scenario).read_text())
+    (tmp_path / "s.toml").write_text(text)
+    with pytest.raises(ScenarioError, match=r"imu_axes = 'sideways': three of forward, back, .* or \"auto\""):
+        load_scenario(str(tmp_path / "s.toml"))

@@ -95,6 +95,9 @@ def _mounting(t: Any, p: str) -> list[float]:
                             f"{'not both' if given else 'one of them'}")
     bore = [math.degrees(v) for v in _axes(t["boresight"], "angle", f"{p}.boresight")] if "boresight" in t else [0.0, 0.0, 0.0]
     if "imu_axes" in t:
+        if isinstance(t["imu_axes"], str):
+            raise ScenarioError(f"{p}.imu_axes = {t['imu_axes']!r}: three of {', '.join(_AXES)} (where the IMU's x, y, z point), "
+                                f"or \"auto\" (estimated from a recorded log)")
         axes = _list(t["imu_axes"], f"{p}.imu_axes")
         try:
             return list(true_mounting([str(a) for a in axes], bore))
