@@ -102,7 +102,7 @@ TURN_RATE_RATIO = 2.0
 _MAX_LAG_S = 40.0
 
 
-def _over_two_seconds(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarray:
+def _windowed_rate(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarray:
     """The rate of ``x`` at times ``t`` (s) from the samples about ``half`` s (default 1 s)
     either side, or one sample when they are further apart; NaN at the ends."""
     m = max(1, int(round(half / float(np.median(np.diff(t))))))
@@ -127,14 +127,14 @@ def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.nd
         r = 6_371_000.0
         n = np.radians(np.asarray(lat, float)) * r
         e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
-        ve, vn = _over_two_seconds(e, t), _over_two_seconds(n, t)
+        ve, vn = _windowed_rate(e, t), _windowed_rate(n, t)
     fin = np.isfinite(ve) & np.isfinite(vn)
     if fin.sum() < 30:
         return None
     t, ve, vn = t[fin], ve[fin], vn[fin]
     # Its rate over about 2 s as well (a noisy course differenced over one fix interval
     # swamps the turns).
-    rate = np.abs(_over_two_seconds(np.unwrap(np.arctan2(ve, vn)), t))
+    rate = np.abs(_windowed_rate(np.unwrap(np.arctan2(ve, vn)), t))
     ok = np.isfinite(rate) & (np.hypot(ve, vn) > 3.0)
     if ok.sum() < 30:
         return None
@@ -335,10 +335,10 @@ def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: st
         r = 6_371_000.0
         n_ = np.radians(np.asarray(gnss.lat, float)) * r
         e_ = np.radians(np.asarray(gnss.lon, float)) * r * np.cos(np.radians(np.nanmedian(gnss.lat)))
-        ve, vn = _over_two_seconds(e_, t, half), _over_two_seconds(n_, t, half)
+        ve, vn = _windowed_rate(e_, t, half), _windowed_rate(n_, t, half)
     speed = np.hypot(ve, vn)
-    a_long = _over_two_seconds(speed, t, half)
-    a_lat = speed * _over_two_seconds(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t, half)
+    a_long = _windowed_rate(speed, t, half)
+    a_lat = speed * _windowed_rate(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t, half)
     ok = np.isfinite(a_long) & np.isfinite(a_lat) & (speed > 3.0) & (t >= imu_t[0] + half) & (t <= imu_t[-1] - half)
     if ok.sum() < 30:
         raise ScenarioError(f"{why}: fewer than 30 GNSS epochs above 3 m/s inside the IMU log; give imu_axes (or mounting) by hand")
