@@ -67,8 +67,21 @@ def test_a_velocity_sensor_on_a_log_without_velocities_is_named(folder: Path) ->
     path = _log(str(folder / "pos"), False)
     raw = dict(load_scenario(str(path)).raw)
     raw["sensors"] = [*raw["sensors"], {"name": "gnss_vel", "kind": "gnss_velocity", "noise": "0.1 m/s", "rate": "1 Hz"}]
+    lc = dict(raw["loosely_coupled"])
+    lc["sensors"] = [*lc["sensors"], {"sensor": "gnss_vel", "detectors": [{"name": "chi2", "kind": "chi2", "pf": 1e-4}], "decision": "chi2"}]
+    raw["loosely_coupled"] = lc
     with pytest.raises(ScenarioError, match=r"gnss_vel.*no velocity"):
         navfdi.run_scenario(from_dict(raw, source=str(path)))
+
+
+def test_a_gnss_sensor_the_ins_is_not_given_is_named(folder: Path) -> None:
+    """A GNSS sensor in ``[[sensors]]`` but not in ``[[loosely_coupled.sensors]]`` would be
+    unused (the run then on positions alone): refused by name."""
+    path = _log(str(folder / "pos"), False)
+    raw = dict(load_scenario(str(path)).raw)
+    raw["sensors"] = [*raw["sensors"], {"name": "gnss_vel", "kind": "gnss_velocity", "noise": "0.1 m/s", "rate": "1 Hz"}]
+    with pytest.raises(ScenarioError, match=r'"gnss_vel" \(kind gnss_velocity\) is not in \[\[loosely_coupled.sensors\]\], so the INS would not use it'):
+        from_dict(raw, source=str(path))
 
 
 def test_nmea_gga_without_rmc_runs_as_the_positions_only_pos(folder: Path, clean: navfdi.ScenarioRun) -> None:

@@ -414,15 +414,7 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
 
     pos = read_gnss(source.get("gnss"), base)
     if imu_cfg.get("time_scale") == "boot":
-        import warnings
-
-        from ._errors import ScenarioWarning
-        from .frames import imu_clock_offset
-
-        off, r, nxt = imu_clock_offset(imu.t, imu.gyro, pos)
-        imu = ImuLog(imu.t + off, imu.gyro, imu.accel, imu.path)
-        warnings.warn(f"source.imu: time_scale = \"boot\": the IMU's clock placed on GPS time by its turns, {off:+.1f} s added to its times "
-                      f"(correlation {r:.2f}; the best placement at least 10 s away {nxt:.2f})", ScenarioWarning, stacklevel=2)
+        imu = ImuLog(imu.t + _boot_offset(imu, pos), imu.gyro, imu.accel, imu.path)
     t0 = float(pos.t[0])
     if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
         raise ScenarioError(
@@ -432,6 +424,30 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
         "imu": imu_rows, "gnss": pos.rows(t0), "reference": None if ref is None else ref.rows(t0), "rinex": None,
         "t0": t0, "imu_log": imu, "gnss_log": pos, "reference_log": ref,
     }
+
+
+#: Placements of IMU logs on their own clock already found in this process (a run reads its
+#: logs again after estimating its "auto" fields): said once, computed once.
+_BOOT_OFFSETS: dict[tuple[Any, ...], float] = {}
+
+
+def _boot_offset(imu: ImuLog, pos: PosLog) -> float:
+    """The offset (s) that puts ``imu``'s own clock on GPS time (:func:`navfdi.frames.imu_clock_offset`),
+    said in a :class:`~navfdi.ScenarioWarning` the first time."""
+    import warnings
+
+    from ._errors import ScenarioWarning
+    from .frames import imu_clock_offset
+
+    key = (imu.path, len(imu.t), float(imu.t[0]), float(imu.t[-1]), pos.path, len(pos.t), float(pos.t[0]))
+    if key not in _BOOT_OFFSETS:
+        off, r, nxt = imu_clock_offset(imu.t, imu.gyro, pos)
+        warnings.warn(f"source.imu: time_scale = \"boot\": the IMU's clock placed on GPS time by its turns, {off:+.1f} s added to its times "
+                      f"(correlation {r:.2f}; the best placement at least 10 s away {nxt:.2f})", ScenarioWarning, stacklevel=3)
+        if len(_BOOT_OFFSETS) > 64:
+            _BOOT_OFFSETS.clear()
+        _BOOT_OFFSETS[key] = off
+    return _BOOT_OFFSETS[key]
 
 
 def file_in(cfg: Mapping[str, Any], base: Path, name: str, key: str = "file") -> Path:

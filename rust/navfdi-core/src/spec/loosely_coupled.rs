@@ -213,6 +213,24 @@ impl ScenarioSpec {
             self.validate_detectors(&q, &a.detectors, false)?;
             check_decision(&q, &a.decision, &a.detectors)?;
         }
+        // A GNSS sensor the INS is not given would be silently unused (a receiver's velocities
+        // left out turn the run into one on positions alone).
+        if let Some((i, s)) = self.sensors.iter().enumerate().find(|(_, s)| {
+            matches!(
+                s.kind,
+                SensorKind::Gnss | SensorKind::GnssPosition | SensorKind::GnssVelocity
+            ) && !l.sensors.iter().any(|a| a.sensor == s.name)
+        }) {
+            return Err(bad(
+                format!("sensors[{i}]"),
+                format!(
+                    "{:?} (kind {}) is not in [[{p}.sensors]], so the INS would not use it: add {{ sensor = {:?}, detectors = [...], decision = \"exclude\" }} there, or remove it",
+                    s.name,
+                    serde_json::to_string(&s.kind).unwrap_or_default().trim_matches('"'),
+                    s.name
+                ),
+            ));
+        }
         for (name, c, dim) in [(ZUPT, &l.zupt, 3), (NHC, &l.nhc, 2)] {
             let Some(c) = c else { continue };
             let q = format!("{p}.{name}");
