@@ -41,6 +41,10 @@ GRAVITY_TOLERANCE_DEG = 30.0
 HEADING_TOLERANCE_DEG = 30.0
 #: Share of GNSS velocity tests left out beyond which the frames are suspect.
 VELOCITY_EXCLUSION_SHARE = 0.2
+#: Share of a positions-only receiver's tested fixes left out above which a run warns: the
+#: displacement checks and this INS do not agree (on the recorded drive with FDE and positions
+#: alone, 99 %, against none without FDE).
+POSITION_EXCLUSION_SHARE = 0.5
 
 _NAMES = ("x", "y", "z")
 
@@ -419,6 +423,20 @@ def frame_warnings(run: Any, consistency: dict[str, Any]) -> list[str]:
         out.append(
             f"the heading differs from the velocity's course by {med:.0f}° (median over {h['epochs']} epochs above 5 m/s): "
             f"the IMU's forward axis is likely wrong; check {sec}.imu_axes (which IMU axis points forward) or the yaw of {sec}.mounting")
+    from navfdi._lc_schema import positions_only_channels
+
+    only = positions_only_channels(run.scenario.raw)
+    for s in run.record["subfilters"]:
+        if s["sensor"] not in only or "noise_scale" not in s:
+            continue
+        tested = np.asarray(s["dof"]) > 0
+        left = (np.asarray(s["reason"]) > 0) & tested
+        if tested.sum() >= 20 and left.sum() > POSITION_EXCLUSION_SHARE * tested.sum():
+            out.append(
+                f"{s['sensor']}: {left.sum() / tested.sum():.0%} of the GNSS positions were left out. On positions alone FDE checks the "
+                f"fixes' displacement against the INS's, and here the two disagree (the IMU's noise, mounting or time offset, or an "
+                f"IMU these checks do not fit): compare with the run without FDE ({sec}.isolate = false), and give the receiver's "
+                f"velocities (a gnss or gnss_velocity sensor) if it writes them")
     for s in run.record["subfilters"]:
         if "noise_scale" not in s or s["sensor"] not in _velocity_sensors(run):
             continue
