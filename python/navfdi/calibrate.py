@@ -187,8 +187,9 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
         return _calibrate_tight(sc, fields)
     if "loosely_coupled" not in sc.core or "source" not in sc.raw:
         raise ScenarioError("calibrate: a loosely coupled scenario, or a tight one with [tight.strapdown], on recorded logs is needed")
-    # The IMU's axes only where asked: a scenario's own axes or mounting are the user's.
-    asked = set(AUTO_FIELDS if fields is None else fields) - ({"imu_axes"} - set(auto_fields(sc.raw)) if fields is None else set())
+    asked = set(AUTO_FIELDS if fields is None else fields)
+    if fields is None and "imu_axes" not in auto_fields(sc.raw):
+        asked.discard("imu_axes")  # the scenario's own axes or mounting are the user's
     unknown = asked - set(AUTO_FIELDS)
     if unknown:
         raise ScenarioError(f"calibrate: cannot estimate {sorted(unknown)}; the fields are {list(AUTO_FIELDS)}")

@@ -116,6 +116,20 @@ def _windowed_rate(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarra
     return out
 
 
+def _east_north_velocity(t: np.ndarray, vel: np.ndarray, lat: np.ndarray, lon: np.ndarray,
+                         half: float) -> tuple[np.ndarray, np.ndarray, bool]:
+    """East and north velocity (m/s) at the GNSS epochs ``t``: the receiver's where it writes
+    them (more than half finite), else the positions (deg) differenced over ``half`` s either
+    side (:func:`_windowed_rate`); and whether they came from the positions."""
+    ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
+    if np.isfinite(ve).mean() > 0.5:
+        return ve, vn, False
+    r = 6_371_000.0
+    n = np.radians(np.asarray(lat, float)) * r
+    e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
+    return _windowed_rate(e, t, half), _windowed_rate(n, t, half), True
+
+
 def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.ndarray, lat: np.ndarray,
                   lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """The GNSS epochs (s) at speed, the course's rate there (rad/s, magnitude; velocity, or
@@ -124,14 +138,9 @@ def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.nd
     t = np.asarray(t, float)
     if len(t) < 30 or len(imu_t) < 100:
         return None
-    ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
-    if not np.isfinite(ve).mean() > 0.5:
-        # No velocities: the positions' differences over about 2 s (one fix's noise would
-        # swamp a course over a fraction of a second).
-        r = 6_371_000.0
-        n = np.radians(np.asarray(lat, float)) * r
-        e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
-        ve, vn = _windowed_rate(e, t), _windowed_rate(n, t)
+    # Without velocities the positions' differences over about 2 s (one fix's noise would
+    # swamp a course over a fraction of a second).
+    ve, vn, _ = _east_north_velocity(t, vel, lat, lon, 1.0)
     fin = np.isfinite(ve) & np.isfinite(vn)
     if fin.sum() < 30:
         return None
@@ -330,16 +339,10 @@ def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: st
     down = np.zeros(3)
     down[k] = -np.sign(up[k])  # the IMU axis vector (in IMU axes) that points down in the body
     t = np.asarray(gnss.t, float)
-    ve, vn = np.asarray(gnss.vel, float)[:, 0], np.asarray(gnss.vel, float)[:, 1]
     # With velocities, rates over 2 s; from positions alone (differenced twice: metres of
     # noise) over 6 s, the vehicle's accelerations lasting that long.
-    half = 1.0
-    if not np.isfinite(ve).mean() > 0.5:
-        half = 3.0
-        r = 6_371_000.0
-        n_ = np.radians(np.asarray(gnss.lat, float)) * r
-        e_ = np.radians(np.asarray(gnss.lon, float)) * r * np.cos(np.radians(np.nanmedian(gnss.lat)))
-        ve, vn = _windowed_rate(e_, t, half), _windowed_rate(n_, t, half)
+    ve, vn, from_positions = _east_north_velocity(t, gnss.vel, gnss.lat, gnss.lon, 3.0)
+    half = 3.0 if from_positions else 1.0
     speed = np.hypot(ve, vn)
     a_long = _windowed_rate(speed, t, half)
     a_lat = speed * _windowed_rate(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t, half)

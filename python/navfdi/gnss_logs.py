@@ -55,7 +55,7 @@ import numpy as np
 from navfdi._errors import ScenarioError
 from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, time_unit, unix_to_gps, utc_to_gps
-from navfdi.logs import PosLog, _gpst, read_pos
+from navfdi.logs import PosLog, _gpst, read_pos, text_layout
 
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
 
@@ -489,16 +489,11 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
     if unknown:
         raise ScenarioError(f"source.gnss.columns: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
     cmap: dict[str, Any] = dict(cols)
-    has_header = cfg.get("header", True)
-    if not isinstance(has_header, bool):
-        raise ScenarioError(f"source.gnss.header = {has_header!r}: true (the first line names the columns) or false")
-    delim = cfg.get("delimiter", ",")
+    has_header, delim = text_layout(cfg, "source.gnss")
     if delim == "whitespace":
         rows = [(i + 1, ln.split()) for i, ln in enumerate(text.splitlines())]
-    elif isinstance(delim, str) and (delim == "tab" or (len(delim) == 1 and delim not in "\"\r\n")):
-        rows = list(enumerate(csv.reader(io.StringIO(text), delimiter="\t" if delim == "tab" else delim), start=1))
     else:
-        raise ScenarioError(f"source.gnss.delimiter = {delim!r}: one character (\",\", \";\", \" \"), \"tab\" or \"whitespace\" (runs of spaces and tabs)")
+        rows = list(enumerate(csv.reader(io.StringIO(text), delimiter=delim), start=1))
     rows = [(i, r) for i, r in rows if r and any(x.strip() for x in r)]
     if not rows:
         raise ScenarioError(f"source.gnss: {path}: empty file")

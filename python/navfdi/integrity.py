@@ -238,12 +238,12 @@ def araim(
     r = _core.araim_los(
         los,
         [index[s] for s in systems],
-        _values(ism.sigma_ura, "ism.sigma_ura", n),
-        _values(ism.sigma_ure, "ism.sigma_ure", n),
-        None if c_int is None else _values(c_int, "c_int", n),
-        None if c_acc is None else _values(c_acc, "c_acc", n),
-        _values(ism.b_nom, "ism.b_nom", n),
-        _values(ism.p_sat, "ism.p_sat", n),
+        _values(ism.sigma_ura, "ism.sigma_ura"),
+        _values(ism.sigma_ure, "ism.sigma_ure"),
+        None if c_int is None else _values(c_int, "c_int"),
+        None if c_acc is None else _values(c_acc, "c_acc"),
+        _values(ism.b_nom, "ism.b_nom"),
+        _values(ism.p_sat, "ism.p_sat"),
         [float(ism.p_const[s]) for s in index],
         (allocation.p_hmi_vert, allocation.p_hmi_hor, allocation.p_fa_vert, allocation.p_fa_hor, allocation.p_thres, allocation.p_emt, allocation.tol_pl),
         None if residuals is None else _residuals(residuals, n),
@@ -282,11 +282,14 @@ def _residuals(v: ArrayLike, n: int) -> list[float]:
     return [float(x) for x in y]
 
 
-def _values(v: Any, name: str, n: int) -> list[float]:
-    """``v`` (a scalar or (n,) values) as one float (for every satellite) or n floats;
-    ``ValueError`` naming ``name`` otherwise."""
+def _values(v: Any, name: str) -> list[float]:
+    """``v`` (a scalar or one value per satellite) as a list of floats: one for every satellite,
+    or each's (their count is checked against the satellites in Rust,
+    ``navfdi_core::integrity::araim_model::per_satellite``); ``ValueError`` naming ``name`` for
+    more than one dimension."""
     if isinstance(v, (int, float)):
         return [float(v)]
-    if np.ndim(v) != 0 and np.size(v) != n:
-        raise ValueError(f"{name}: expected a scalar or ({n},) values")
-    return np.broadcast_to(np.asarray(v, dtype=float), (n,)).tolist()
+    a = np.asarray(v, dtype=float)
+    if a.ndim > 1:
+        raise ValueError(f"{name}: expected a scalar or one value per satellite, got shape {a.shape}")
+    return a.reshape(-1).tolist()

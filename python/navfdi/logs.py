@@ -139,6 +139,20 @@ def _read_text(path: Path) -> str:
 IMU_KEYS = tuple(_SECTIONS["source.imu"].keys)
 
 
+def text_layout(cfg: Mapping[str, Any], where: str) -> tuple[bool, str]:
+    """``header`` and ``delimiter`` of a text log's table ``cfg`` (IMU or CSV GNSS): whether the
+    first line names the columns (default true), and the separator — one ASCII character
+    (default ``","``; ``"tab"`` gives a tab) or ``"whitespace"`` (runs of spaces and tabs).
+    :class:`~navfdi.ScenarioError` naming ``where`` otherwise."""
+    header = cfg.get("header", True)
+    if not isinstance(header, bool):
+        raise ScenarioError(f"{where}.header = {header!r}: true (the first line names the columns) or false")
+    delim = cfg.get("delimiter", ",")
+    if not (isinstance(delim, str) and (delim in ("tab", "whitespace") or (len(delim) == 1 and delim.isascii() and delim not in "\"\r\n"))):
+        raise ScenarioError(f"{where}.delimiter = {delim!r}: one ASCII character (\",\", \";\", \" \"), \"tab\" or \"whitespace\" (runs of spaces and tabs)")
+    return header, "\t" if delim == "tab" else delim
+
+
 def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> float:
     """Check a ``[source.imu]`` table before any file is read: unknown keys (a typo such as
     ``gyro_units`` would otherwise be ignored), the column lists, the units and ``kind``, and
@@ -150,12 +164,7 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
 
         hints = [f"{u!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(u, IMU_KEYS, 1)) else repr(u) for u in unknown]
         raise ScenarioError(f"{where}: unknown key(s) {', '.join(hints)}; the keys are {', '.join(IMU_KEYS)}")
-    header = columns.get("header", True)
-    if not isinstance(header, bool):
-        raise ScenarioError(f"{where}.header = {header!r}: true (the first line names the columns) or false")
-    delim = columns.get("delimiter", ",")
-    if not (isinstance(delim, str) and (delim in ("tab", "whitespace") or (len(delim) == 1 and delim.isascii() and delim not in "\"\r\n"))):
-        raise ScenarioError(f"{where}.delimiter = {delim!r}: one ASCII character (\",\", \";\", \" \"), \"tab\" or \"whitespace\" (runs of spaces and tabs)")
+    header, _ = text_layout(columns, where)
 
     def is_col(c: Any) -> bool:
         # Names with a header line; without one, numbers from 1 (or their text).
@@ -248,7 +257,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
             ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")],
-            bool(columns.get("header", True)), "\t" if columns.get("delimiter", ",") == "tab" else columns.get("delimiter", ","))
+            *text_layout(columns, "source.imu"))
     except OSError as e:
         raise ScenarioError(str(e)) from None
     except ValueError as e:
