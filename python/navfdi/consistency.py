@@ -102,7 +102,7 @@ def consistency(run: RunRecord) -> dict[str, Any]:
     * ``reanchored``: times (s) at which the INS was moved back onto the fixes it held out:
       running away from them (their distance growing faster than 3 m/s over 10 s), or held
       off them longer than the fixes it agreed with before plus 30 s (it had started from a
-      fault's fixes at the alignment).
+      fault's fixes at the alignment; a held height alone moves the height alone).
     """
     rec = run.record
     if "nav" not in rec:

@@ -515,20 +515,16 @@ fn run<const NS: usize>(
                     l.accommodate,
                     Some(&pull),
                 );
-                // A held step the receiver's jump back ended: that jump is the step test's, not
-                // a drift of the receiver — its sequential tests start again after it.
+                // A held step the receiver's jump back ended: its sequential tests start anew.
                 for j in (0..3).filter(|&j| holds[a].step_ended_at(j, tk)) {
                     receivers[a].forget(j);
                 }
-                // Held fixes the INS runs away from: the INS is moved back onto them.
+                // Held fixes the INS runs away from, or held out longer than the fixes before
+                // agreed (not a held ramp: it ends by its own rules): the INS is moved onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
-                // Or held out longer than the fixes before agreed (not as a held ramp: that
-                // ends by its own rules): the INS started from a fault's fixes.
-                let step = !holds[a].comps[..2]
-                    .iter()
-                    .any(|c| matches!(c, hold::Comp::Drift { .. }));
+                let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
-                let uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, converged) {
+                let mut uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, converged) {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();
@@ -537,6 +533,11 @@ fn run<const NS: usize>(
                     }
                     None => uses,
                 };
+                if watch[a].vertical(tk, holds[a].up_step(), converged) {
+                    diverge::reanchor_up(&mut s, &mut kf, d.z, sd.z, &mut holds[a]);
+                    rec.reanchored.push(tk);
+                    uses[2] = hold::Use::Raw;
+                }
                 keep.retain(|&i| i < off || i >= off + 3);
                 for (j, u) in uses.iter().enumerate() {
                     match *u {

@@ -301,6 +301,8 @@ impl Outlast {
 pub struct InsWatch {
     runaway: Divergence,
     outlast: Option<Outlast>,
+    /// The same watch on the up component's held steps ([`InsWatch::vertical`]).
+    up: Option<Outlast>,
 }
 
 impl InsWatch {
@@ -312,13 +314,29 @@ impl InsWatch {
         before: impl IntoIterator<Item = (f64, [f64; 2])>,
     ) -> Self {
         let mut outlast = first_fix.map(|t| Outlast::new(t, interval));
+        let up = outlast.clone();
         if let Some(o) = outlast.as_mut() {
             before.into_iter().for_each(|(t, p)| o.taken(t, p, None));
         }
         InsWatch {
             runaway: Divergence::default(),
             outlast,
+            up,
         }
+    }
+
+    /// The fix at `t` (s) with its up component held as a step (`held`), `converged` the
+    /// filter converged: true when that step has outlasted the spell of fixes before it by
+    /// [`OUTLAST_MARGIN`] ([`Outlast`], without the horizontal jumps' evidence) — the INS's
+    /// height was wrong, not the fixes: it is moved onto them ([`reanchor_up`]).
+    ///
+    /// On drive_0708 on positions alone, float fixes 3 s after the alignment pulled the INS's
+    /// height 0.35 m off; the RTK-fixed heights after them were held as a step for the rest
+    /// of the drive, the height 0.36 m RMS off (0.025 m without FDE).
+    pub fn vertical(&mut self, t: f64, held: bool, converged: bool) -> bool {
+        self.up
+            .as_mut()
+            .is_some_and(|o| o.push(t, None, [0.0; 2], held, true, converged))
     }
 
     /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
@@ -394,6 +412,26 @@ pub fn reanchor<const NS: usize>(
     }
     let h = PHI + 2;
     kf.p[(h, h)] = kf.p[(h, h)].max(REANCHOR_HEADING_VAR);
+}
+
+/// Move the INS's height onto the fix ([`InsWatch::vertical`]): by the up innovation `d_up`
+/// (INS − fix, m), its variance reopened to the innovation's `var` (m²) and its correlations
+/// with the other states dropped. The vertical velocity stays: the relative fixes of the held
+/// step kept aiding it; only the offset they could not see was wrong. `hold` uses the up
+/// component as measured from the next fix.
+pub fn reanchor_up<const NS: usize>(
+    s: &mut NavState,
+    kf: &mut ErrorFilter<NS>,
+    d_up: f64,
+    var: f64,
+    hold: &mut super::hold::PositionHold,
+) {
+    shift(s, &Vector3::new(0.0, 0.0, d_up));
+    let i = R + 2;
+    kf.p.row_mut(i).fill(0.0);
+    kf.p.column_mut(i).fill(0.0);
+    kf.p[(i, i)] = var;
+    hold.restart(2);
 }
 
 #[cfg(test)]
@@ -560,5 +598,63 @@ mod tests {
         assert_eq!((kf.p[(V, V)], kf.p[(V + 1, V + 1)]), (1.0, 101.0));
         assert_eq!((kf.p[(R, PHI)], kf.p[(PHI, R)]), (0.0, 0.0));
         assert!((kf.p[(PHI + 2, PHI + 2)] - REANCHOR_HEADING_VAR).abs() < 1e-15);
+    }
+
+    /// A held up step is watched as a horizontal one: it is the INS's height when it outlasts
+    /// the fixes before it by 30 s; the re-anchoring then moves the height alone.
+    #[test]
+    fn an_up_step_that_outlasts_the_fixes_before_it_moves_the_height_alone() {
+        use crate::ins::error_filter::tests::noise;
+        use crate::ins::error_filter::N;
+        let mut w = InsWatch::new(Some(0.0), 1.0, std::iter::empty());
+        assert!((0..44).all(|t| !w.vertical(t as f64, false, true)));
+        // Held from 44 s: it must outlast 44 − 0 + 30 s (fires at 119 s, not at 118 s).
+        let fired: Vec<u32> = (44..200)
+            .filter(|&t| w.vertical(t as f64, true, true))
+            .collect();
+        assert_eq!(fired.first(), Some(&119), "{fired:?}");
+        // A hold that ends in time is forgotten.
+        let mut w = InsWatch::new(Some(0.0), 1.0, std::iter::empty());
+        assert!((44..100).all(|t| !w.vertical(t as f64, true, true)));
+        assert!(!w.vertical(100.0, false, true));
+        // Holds of under a minute from 101 s on: each would have to outlast 131 s.
+        assert!((101..400).all(|t| !w.vertical(t as f64, t % 60 != 0, true)));
+
+        let mut s = NavState {
+            lat: 0.7,
+            lon: 0.2,
+            h: 100.0,
+            v: Vector3::new(10.0, 0.0, 0.3),
+            q: UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 0.3),
+        };
+        let mut kf =
+            ErrorFilter::<N>::new(1.0, 0.1, Vector3::repeat(0.001), Vector3::zeros(), noise());
+        kf.p[(R + 2, V + 2)] = 0.01;
+        kf.p[(V + 2, R + 2)] = 0.01;
+        let (before, p0) = (s, kf.p);
+        // INS − fix 0.4 m up: the INS comes down 0.4 m.
+        let mut hold = super::super::hold::PositionHold::default();
+        hold.comps[2] = super::super::hold::Comp::Step {
+            b: 0.4,
+            var: 0.01,
+            back: false,
+            agree: 0,
+            quiet: 0,
+            base: None,
+        };
+        reanchor_up(&mut s, &mut kf, 0.4, 0.003, &mut hold);
+        assert!(!hold.up_step());
+        assert!((s.h - 99.6).abs() < 1e-12);
+        assert_eq!(
+            (s.lat, s.lon, s.v, s.q),
+            (before.lat, before.lon, before.v, before.q)
+        );
+        assert_eq!(kf.p[(R + 2, R + 2)], 0.003);
+        assert_eq!((kf.p[(R + 2, V + 2)], kf.p[(V + 2, R + 2)]), (0.0, 0.0));
+        for i in (0..kf.p.nrows()).filter(|&i| i != R + 2) {
+            for j in (0..kf.p.ncols()).filter(|&j| j != R + 2) {
+                assert_eq!(kf.p[(i, j)], p0[(i, j)]);
+            }
+        }
     }
 }

@@ -642,6 +642,30 @@ impl PositionHold {
         self.ended[j].is_some_and(|(t0, _)| t0 == t)
     }
 
+    /// Whether a horizontal component is held as a ramp.
+    pub fn ramp_held(&self) -> bool {
+        self.comps[..2]
+            .iter()
+            .any(|c| matches!(c, Comp::Drift { .. }))
+    }
+
+    /// Whether the up component is held as a step (the INS's height is then watched:
+    /// [`super::diverge::InsWatch::vertical`]).
+    pub fn up_step(&self) -> bool {
+        matches!(self.comps[2], Comp::Step { .. })
+    }
+
+    /// Component `j` used as measured again after the INS was moved onto its fix (this fix's
+    /// innovation is then zero: the next jump is measured from there).
+    pub fn restart(&mut self, j: usize) {
+        self.comps[j] = Comp::Normal;
+        self.ended[j] = None;
+        self.lag[j] = None;
+        if let Some((d, _)) = self.prev.as_mut() {
+            d[j] = 0.0;
+        }
+    }
+
     /// Forget the jump reference (after an outage: no fix to measure a jump from).
     pub fn gap(&mut self) {
         self.prev = None;

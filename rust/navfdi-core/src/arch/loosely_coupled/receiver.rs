@@ -209,12 +209,19 @@ impl ReceiverConsistency {
                 self.acc_up[j] = acc(self.acc_up[j], self.up[j]);
                 self.acc_down[j] = acc(self.acc_down[j], self.down[j]);
                 let window = self.windows[j].add(t, e[j], sigma[j]);
-                let fired = if self.up[j] > CUSUM_H {
+                // Against the INS's displacement (no velocity of the receiver's own) `e`
+                // carries the INS's velocity error, correlated over tens of seconds — on
+                // drive_0708, an accelerometer scale error while the car gathers speed: 7 cm/s
+                // for 15 s at σ_e 3.7 cm — which a test built for white `e` reads as a ramp
+                // (held out, the INS coasted 58 m off). There only the window test, whose
+                // sums' spread is measured from the data, flags ramps.
+                let cusum = own_velocity;
+                let fired = if cusum && self.up[j] > CUSUM_H {
                     Some((
                         self.acc_up[j].0,
                         f64::from(self.acc_up[j].1) * sigma[j] * sigma[j],
                     ))
-                } else if self.down[j] > CUSUM_H {
+                } else if cusum && self.down[j] > CUSUM_H {
                     Some((
                         self.acc_down[j].0,
                         f64::from(self.acc_down[j].1) * sigma[j] * sigma[j],
@@ -280,5 +287,49 @@ mod consistency_tests {
         }
         assert!(flagged.iter().all(|&k| k >= 120), "{flagged:?}");
         assert!(flagged.first().is_some_and(|&k| k <= 150), "{flagged:?}");
+    }
+
+    /// Against the INS's displacement (no receiver velocity) `e` carries the INS's own
+    /// velocity error, correlated over many fixes (here Gauss-Markov, 5 cm/s, τ 15 s, beside
+    /// 3.7 cm of white displacement noise): the CUSUM, built for white `e`, takes it for ramps
+    /// against the receiver's own velocity, and is not run against the INS's; there the window
+    /// test, whose spread is measured from the same `e`, stays quiet — and still flags a 1 m/s
+    /// ramp within 40 s (36 s here: each `e` clipped at 4σ_e, its sums rise over that
+    /// spread slowly).
+    #[test]
+    fn a_correlated_ins_velocity_error_is_no_ramp_against_the_ins() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let run = |own: bool, ramp: f64| {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+            let mut rc = ReceiverConsistency::default();
+            let v = Vector3::new(10.0, 0.0, 0.0);
+            let (mut north, mut dv) = (0.0, 0.0);
+            let a = (-1.0_f64 / 15.0).exp();
+            let mut flagged = Vec::new();
+            for k in 0..400 {
+                let t = k as f64;
+                let n: [f64; 2] = [
+                    StandardNormal.sample(&mut rng),
+                    StandardNormal.sample(&mut rng),
+                ];
+                dv = a * dv + 0.05 * (1.0 - a * a).sqrt() * n[0];
+                north += 0.037 * n[1] + dv + if k >= 300 { ramp } else { 0.0 };
+                let p = Vector3::new(10.0 * t, north, 0.0);
+                if rc.step(t, &p, &v, 2.5, own).is_some_and(|c| c.ramp[1]) {
+                    flagged.push(k);
+                }
+            }
+            flagged
+        };
+        assert!(!run(true, 0.0).is_empty());
+        assert!(run(false, 0.0).is_empty(), "{:?}", run(false, 0.0));
+        assert!(
+            run(false, 1.0)
+                .first()
+                .is_some_and(|&k| (300..340).contains(&k)),
+            "{:?}",
+            run(false, 1.0)
+        );
     }
 }
