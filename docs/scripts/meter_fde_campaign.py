@@ -11,7 +11,8 @@ the share of fault fixes excluded, the largest horizontal error in the fault (wi
 without), runs with an exclusion left standing more than 5 s after the end, the largest error 20-60 s
 after the end (with FDE and without), and false
 exclusions per clean tested epoch (Wilson 95 % interval).
-Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|meter|meter_pos|urban] [step|ramp] [TAU]
+drive_pos: drive_lc's fixes alone, its velocity channel removed.
+Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|drive_pos|meter|meter_pos|urban] [step|ramp] [TAU]
 (TAU: ``[loosely_coupled] position_correlation`` in s, default 0: white)"""
 
 from __future__ import annotations
@@ -33,8 +34,18 @@ from navfdi.simlog import simulate_log
 def _base(which: str, folder: str) -> navfdi.Scenario:
     if which == "drive":
         return load_scenario("drive_lc")
+    if which == "drive_pos":
+        # The drive's RTK fixes alone (its velocity channel removed): rnx2rtkp's default output
+        # on a consumer IMU.
+        sc = load_scenario("drive_lc")
+        raw = dict(sc.raw)
+        raw["sensors"] = [s for s in raw["sensors"] if s["kind"] != "gnss_velocity"]
+        lc = dict(raw["loosely_coupled"])
+        lc["sensors"] = [s for s in lc["sensors"] if s["sensor"] != "gnss_vel"]
+        raw["loosely_coupled"] = lc
+        return from_dict(raw, source=sc.source)
     if which not in ("meter", "meter_pos", "urban"):
-        raise SystemExit(f"data set {which!r}: drive, meter, meter_pos or urban")
+        raise SystemExit(f"data set {which!r}: drive, drive_pos, meter, meter_pos or urban")
     # urban: the meter-level receiver at 1 Hz with 15 m multipath bursts of 8 s once a minute
     # and 4 s stale spells every two minutes (natural errors up to about 60 m).
     urban = which == "urban"
