@@ -96,6 +96,9 @@ pub fn velocity_from_positions(
     out
 }
 
+/// IMU samples a static start must hold for the alignment to level on it.
+pub const MIN_LEVEL_SAMPLES: usize = 50;
+
 /// The speed, in σ of the GNSS velocity, from which the alignment reads the heading from the
 /// velocity's direction (its σ then at most 1/5 rad, 11.5°: the error filter's small-angle
 /// regime).
@@ -147,30 +150,63 @@ pub fn align(
     // The last static stretch before ka: speeds below the static speed or 2.5 times the
     // receiver's velocity σ (a meter-level receiver at rest reports decimetres per second);
     // it ends at the third consecutive epoch above (one or two noisy speeds do not cut it).
-    let mut end = None;
-    let mut start = None;
-    let mut moving = 0;
-    for k in (0..ka).rev() {
-        match speed_at(k) {
-            Some(s)
-                if s < a
-                    .static_speed
-                    .max(if rest_by_sigma { 2.5 * sig_v(k) } else { 0.0 }) =>
-            {
-                end.get_or_insert(k);
-                start = Some(k);
-                moving = 0;
-            }
-            Some(_) if end.is_some() => {
-                moving += 1;
-                if moving >= 3 {
-                    break;
+    // A stretch with too few IMU samples to level on is no rest but a slow or noisy moment
+    // of the drive (speeds differenced from meter-level fixes, σ 1.4 m/s, fall below 2.5σ in
+    // motion): the search goes on before it.
+    let stretch = |from: usize| {
+        let mut end = None;
+        let mut start = None;
+        let mut moving = 0;
+        for k in (0..from).rev() {
+            match speed_at(k) {
+                Some(s)
+                    if s < a
+                        .static_speed
+                        .max(if rest_by_sigma { 2.5 * sig_v(k) } else { 0.0 }) =>
+                {
+                    end.get_or_insert(k);
+                    start = Some(k);
+                    moving = 0;
                 }
+                Some(_) if end.is_some() => {
+                    moving += 1;
+                    if moving >= 3 {
+                        break;
+                    }
+                }
+                _ => {}
             }
-            _ => {}
         }
+        start.zip(end)
+    };
+    let samples = |k0: usize, k1: usize| -> Vec<usize> {
+        (0..imu.t.len())
+            .filter(|&i| imu.t[i] >= t[k0] && imu.t[i] <= t[k1])
+            .collect()
+    };
+    let mut from = ka;
+    let mut found = None;
+    let mut short = None;
+    while let Some((k0, k1)) = stretch(from) {
+        if samples(k0, k1).len() >= MIN_LEVEL_SAMPLES {
+            found = Some((k0, k1));
+            break;
+        }
+        short.get_or_insert((k0, k1));
+        from = k0;
     }
-    let (Some(k0), Some(k1)) = (start, end) else {
+    let Some((k0, k1)) = found else {
+        if let Some((k0, k1)) = short {
+            // Only stretches too short to level on: in motion if the log allows, else say so.
+            return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
+                Error::Invalid(format!(
+                    "alignment: the static start {:.2}–{:.2} s holds {} IMU samples; levelling needs at least {MIN_LEVEL_SAMPLES}",
+                    t[k0],
+                    t[k1],
+                    samples(k0, k1).len()
+                ))
+            });
+        }
         // No rest before moving: align in motion (a car's velocity is along its forward axis).
         return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
             Error::Invalid(format!(
@@ -179,16 +215,7 @@ pub fn align(
             ))
         });
     };
-    let (t0, t1) = (t[k0], t[k1]);
-    let idx: Vec<usize> = (0..imu.t.len())
-        .filter(|&i| imu.t[i] >= t0 && imu.t[i] <= t1)
-        .collect();
-    if idx.len() < 50 {
-        return Err(Error::Invalid(format!(
-            "alignment: the static start {t0:.2}–{t1:.2} s holds {} IMU samples; levelling needs at least 50",
-            idx.len()
-        )));
-    }
+    let idx = samples(k0, k1);
     let mean =
         |v: &[Vector3<f64>]| idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len() as f64;
     let f_mean = mean(&imu.acc);
@@ -542,5 +569,62 @@ mod tests {
             }
         }
         assert!(out.iter().filter(|o| o.is_some()).count() > 50);
+    }
+
+    /// Speeds differenced from meter-level fixes (σ 1.4 m/s) dip below 2.5σ in motion: a
+    /// single slow epoch before the heading's speed is no static start (it held one IMU sample,
+    /// and the alignment failed); the search goes on to the rest before it, whose mean rate is
+    /// the gyro bias.
+    #[test]
+    fn a_slow_moment_in_motion_is_no_static_start() {
+        use super::{align, BodyImu};
+        use crate::spec::AlignmentSpec;
+        use crate::stream::Nominal;
+        let n = 6001;
+        let ti: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+        // At rest to 30 s (gyro bias 0.01 rad/s on x), turning and shaking after.
+        let gyro = ti
+            .iter()
+            .map(|&x| Vector3::new(if x <= 30.0 { 0.01 } else { 0.3 }, 0.0, 0.0))
+            .collect();
+        let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
+        let imu = BodyImu { t: ti, gyro, acc };
+        let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
+        // 5 m/s from 30 s with a dip to 0.5 m/s at 35 s, 8 m/s (above 5σ) from 40 s.
+        let speed = |x: f64| match x {
+            x if x <= 30.0 => 0.0,
+            35.0 => 0.5,
+            x if x < 40.0 => 5.0,
+            _ => 8.0,
+        };
+        let a = AlignmentSpec {
+            speed: 1.0,
+            heading: None,
+            static_speed: 0.05,
+            gyro_bias: true,
+            sigma_level: 0.02,
+            sigma_heading: 0.1,
+            sigma_position: 2.0,
+            sigma_velocity: 1.0,
+        };
+        let origin = Nominal {
+            lat: 0.7,
+            lon: 0.2,
+            h: 100.0,
+        };
+        let al = align(
+            &a,
+            "loosely_coupled",
+            &imu,
+            &t,
+            &origin,
+            |k| Some(Vector3::new(speed(t[k]), 0.0, 0.0)),
+            |k| Some(Vector3::new(5.0 * t[k], 0.0, 0.0)),
+            |_| 1.4,
+            true,
+        )
+        .expect("aligned on the rest before the slow moment");
+        assert_eq!(t[al.epoch], 40.0);
+        assert!((al.bg0.x - 0.01).abs() < 1e-4, "{:?}", al.bg0);
     }
 }
