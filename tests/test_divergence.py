@@ -49,13 +49,15 @@ def test_an_ins_running_from_held_fixes_is_brought_back(burst_log: Callable[[int
 def test_the_rtk_set_up_on_positions_only_no_longer_runs_away(tmp_path: Path) -> None:
     """docs/meter_fde.md's seed 6 with bursts under drive_lc's settings: a ramp held after a
     step, an INS velocity already off, 301 m RMS fault-free (94 m after the held ramp's line,
-    no FDE 9.8 m). The INS is moved back onto the held fixes instead of coasting away."""
+    no FDE 9.8 m); then 10.9 m, the INS moved back onto the held fixes instead of coasting
+    away. Since the alignment's static start is checked by the IMU and the velocities'
+    mean (the "rest" had run into the drive on these 2 m fixes), the INS starts right and is
+    not moved at all (10.6 m, no FDE 10.5 m); the moving back is tested on other logs here."""
     from test_positions_only import _rtk_set_up_on
 
     r = _rtk_set_up_on(tmp_path / "log", 6, 15.0)
     rms = {v: _rms(x) for v, x in r.runs.items()}
     assert rms["fde"] <= 1.5 * rms["no_fde"] and rms["fde"] < 20.0, rms
-    assert r.runs["fde"].record.get("reanchored")
 
 
 def test_the_console_says_when_the_ins_was_moved_back(burst_log: Callable[[int], navfdi.VariantRuns]) -> None:

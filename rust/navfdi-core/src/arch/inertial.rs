@@ -99,6 +99,87 @@ pub fn velocity_from_positions(
 /// IMU samples a static start must hold for the alignment to level on it.
 pub const MIN_LEVEL_SAMPLES: usize = 50;
 
+/// Seconds per window of the IMU's own rest check ([`imu_rest`]).
+pub const REST_WINDOW: f64 = 1.0;
+/// A window whose mean angular rate or specific force is this many robust σ (of the windows'
+/// means over the stretch) from their median is not at rest ([`imu_rest`]).
+pub const REST_SIGMAS: f64 = 6.0;
+/// ... and at least this far (rad/s; m/s² for [`REST_FLOOR_ACC`]): a vehicle moving off turns
+/// at degrees per second and accelerates at tenths of g, while at rest the means of 1 s of a
+/// consumer IMU scatter by a fraction of that (0.26°/s, a few mg on drive_0708's).
+pub const REST_FLOOR_GYRO: f64 = 0.5 * std::f64::consts::PI / 180.0;
+/// See [`REST_FLOOR_GYRO`].
+pub const REST_FLOOR_ACC: f64 = 0.05;
+/// Windows in a row not at rest that mark the vehicle moving off ([`imu_rest`]).
+pub const REST_MOVING: usize = 3;
+
+/// The samples of `idx` (a static start found from the GNSS speed) before the IMU itself
+/// shows the vehicle moving: [`REST_MOVING`] [`REST_WINDOW`] windows in a row with a
+/// component of the window's mean rate or specific force beyond [`REST_SIGMAS`] robust σ
+/// (and the floors) from the median over the windows. Speeds differenced from meter-level fixes
+/// (σ 1.4 m/s) stay below the rest threshold (2.5σ) while a car moves off at 3–5 m/s and
+/// turns: on the bundled drive with 2 m fixes the "rest" ran 13 s into the drive and its
+/// turn, and its mean rate, taken as the gyro bias, turned the heading 70° off in 4 minutes.
+/// Fewer than three windows: `idx` as it is.
+pub fn imu_rest(imu: &BodyImu, idx: &[usize]) -> Vec<usize> {
+    let Some(&first) = idx.first() else {
+        return Vec::new();
+    };
+    let t0 = imu.t[first];
+    let mut wins: Vec<&[usize]> = Vec::new();
+    let mut start = 0;
+    for j in 1..=idx.len() {
+        let cut = j == idx.len()
+            || ((imu.t[idx[j]] - t0) / REST_WINDOW).floor()
+                > ((imu.t[idx[start]] - t0) / REST_WINDOW).floor();
+        if cut {
+            wins.push(&idx[start..j]);
+            start = j;
+        }
+    }
+    if wins.len() < 3 {
+        return idx.to_vec();
+    }
+    let means: Vec<[f64; 6]> = wins
+        .iter()
+        .map(|w| {
+            let n = w.len() as f64;
+            let g = w.iter().map(|&i| imu.gyro[i]).sum::<Vector3<f64>>() / n;
+            let f = w.iter().map(|&i| imu.acc[i]).sum::<Vector3<f64>>() / n;
+            [g.x, g.y, g.z, f.x, f.y, f.z]
+        })
+        .collect();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    };
+    let mut moving = vec![false; wins.len()];
+    for c in 0..6 {
+        let med = median(means.iter().map(|m| m[c]).collect());
+        let mad = median(means.iter().map(|m| (m[c] - med).abs()).collect());
+        let floor = if c < 3 {
+            REST_FLOOR_GYRO
+        } else {
+            REST_FLOOR_ACC
+        };
+        let bound = (REST_SIGMAS * mad / 0.674_489_75).max(floor);
+        for (w, m) in moving.iter_mut().zip(&means) {
+            *w |= (m[c] - med).abs() > bound;
+        }
+    }
+    // Cut where the vehicle moves off: the first [`REST_MOVING`] windows in a row not at
+    // rest (a door shut or a passenger getting in is a window or two, and stays in).
+    let cut = (0..wins.len())
+        .find(|&w| w + REST_MOVING <= wins.len() && moving[w..w + REST_MOVING].iter().all(|&m| m))
+        .unwrap_or(wins.len());
+    wins[..cut].concat()
+}
+
 /// The speed, in σ of the GNSS velocity, from which the alignment reads the heading from the
 /// velocity's direction (its σ then at most 1/5 rad, 11.5°: the error filter's small-angle
 /// regime).
@@ -184,18 +265,46 @@ pub fn align(
             .filter(|&i| imu.t[i] >= t[k0] && imu.t[i] <= t[k1])
             .collect()
     };
+    // At rest the velocities average to zero: a slow stretch of a turn (speeds from 2 m fixes
+    // below 2.5σ for seconds) moves on average by more than 3σ of the mean of its velocities,
+    // counted as one independent value per 2 s (velocities differenced over 2 s overlap).
+    let still = |k0: usize, k1: usize| {
+        let vs: Vec<(Vector3<f64>, f64)> = (k0..=k1)
+            .filter_map(|k| vel(k).map(|v| (v, sig_v(k))))
+            .collect();
+        let n = vs.len().max(1) as f64;
+        let mean = vs
+            .iter()
+            .map(|(v, _)| v.xy())
+            .sum::<nalgebra::Vector2<f64>>()
+            / n;
+        let sig = vs.iter().map(|(_, s)| *s).fold(0.0, f64::max);
+        let n_eff = ((t[k1] - t[k0]) / 2.0).max(1.0);
+        mean.norm() <= 3.0 * sig / n_eff.sqrt()
+    };
+    // Of the stretches before ka that are at rest by both tests, the longest: with speeds
+    // from meter-level fixes a slow moment of the drive can pass them for seconds (on the
+    // bundled drive with 2 m fixes, 6 s of a 2 m/s crawl through a turn), the vehicle's real
+    // rest before it lasts longer (34 s there).
     let mut from = ka;
-    let mut found = None;
+    let mut found: Option<Vec<usize>> = None;
     let mut short = None;
     while let Some((k0, k1)) = stretch(from) {
-        if samples(k0, k1).len() >= MIN_LEVEL_SAMPLES {
-            found = Some((k0, k1));
-            break;
+        let rest = if still(k0, k1) {
+            imu_rest(imu, &samples(k0, k1))
+        } else {
+            Vec::new()
+        };
+        if rest.len() >= MIN_LEVEL_SAMPLES {
+            if found.as_ref().is_none_or(|f| rest.len() > f.len()) {
+                found = Some(rest);
+            }
+        } else {
+            short.get_or_insert((k0, k1));
         }
-        short.get_or_insert((k0, k1));
         from = k0;
     }
-    let Some((k0, k1)) = found else {
+    let Some(idx) = found else {
         if let Some((k0, k1)) = short {
             // Only stretches too short to level on: in motion if the log allows, else say so.
             return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
@@ -215,7 +324,6 @@ pub fn align(
             ))
         });
     };
-    let idx = samples(k0, k1);
     let mean =
         |v: &[Vector3<f64>]| idx.iter().map(|&i| v[i]).sum::<Vector3<f64>>() / idx.len() as f64;
     let f_mean = mean(&imu.acc);
@@ -626,5 +734,44 @@ mod tests {
         .expect("aligned on the rest before the slow moment");
         assert_eq!(t[al.epoch], 40.0);
         assert!((al.bg0.x - 0.01).abs() < 1e-4, "{:?}", al.bg0);
+    }
+
+    /// The IMU's own rest check cuts a static start where the vehicle moves off (three
+    /// seconds in a row turning), not at a bump at rest (a door shut: one second).
+    #[test]
+    fn the_imu_says_where_the_rest_ends() {
+        use super::{imu_rest, BodyImu};
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut noise = |s: f64| -> f64 {
+            let n: f64 = StandardNormal.sample(&mut rng);
+            s * n
+        };
+        let t: Vec<f64> = (0..5000).map(|i| i as f64 * 0.01).collect();
+        // At rest to 40 s with a bump at 20.3–20.8 s; turning at 10°/s and accelerating after.
+        let gyro = t
+            .iter()
+            .map(|&x| {
+                let turn = if x >= 40.0 { 10f64.to_radians() } else { 0.0 };
+                let bump = if (20.3..20.8).contains(&x) { 0.2 } else { 0.0 };
+                Vector3::new(0.002 + noise(0.02) + bump, noise(0.04), turn + noise(0.002))
+            })
+            .collect();
+        let acc = t
+            .iter()
+            .map(|&x| {
+                let a = if x >= 40.0 { 1.0 } else { 0.0 };
+                Vector3::new(a + noise(0.05), noise(0.05), -9.8 + noise(0.13))
+            })
+            .collect();
+        let imu = BodyImu { t, gyro, acc };
+        let idx: Vec<usize> = (0..5000).collect();
+        let rest = imu_rest(&imu, &idx);
+        let end = imu.t[*rest.last().unwrap()];
+        assert!(rest[0] == 0 && (39.0..40.0).contains(&end), "{end}");
+        // At rest throughout: every sample.
+        let idx: Vec<usize> = (0..4000).collect();
+        assert_eq!(imu_rest(&imu, &idx), idx);
     }
 }
