@@ -260,10 +260,11 @@ pub fn align(
         }
         start.zip(end)
     };
+    // The IMU's samples within [t_k0, t_k1] (its times strictly increase).
     let samples = |k0: usize, k1: usize| -> Vec<usize> {
-        (0..imu.t.len())
-            .filter(|&i| imu.t[i] >= t[k0] && imu.t[i] <= t[k1])
-            .collect()
+        let a = imu.t.partition_point(|&x| x < t[k0]);
+        let b = imu.t.partition_point(|&x| x <= t[k1]);
+        (a..b.max(a)).collect()
     };
     // At rest the velocities average to zero: a slow stretch of a turn (speeds from 2 m fixes
     // below 2.5σ for seconds) moves on average by more than 3σ of the mean of its velocities,
