@@ -268,7 +268,8 @@ pub fn align(
     };
     // At rest the velocities average to zero: a slow stretch of a turn (speeds from 2 m fixes
     // below 2.5σ for seconds) moves on average by more than 3σ of the mean of its velocities,
-    // counted as one independent value per 2 s (velocities differenced over 2 s overlap).
+    // counted as one independent value per 2 s (velocities differenced over 2 s overlap), and
+    // by more than the static speed.
     let still = |k0: usize, k1: usize| {
         let vs: Vec<(Vector3<f64>, f64)> = (k0..=k1)
             .filter_map(|k| vel(k).map(|v| (v, sig_v(k))))
@@ -281,7 +282,9 @@ pub fn align(
             / n;
         let sig = vs.iter().map(|(_, s)| *s).fold(0.0, f64::max);
         let n_eff = ((t[k1] - t[k0]) / 2.0).max(1.0);
-        mean.norm() <= 3.0 * sig / n_eff.sqrt()
+        // Never stricter than the static speed: where every speed of the stretch is below it
+        // (a receiver whose velocity σ is small), the stretch is rest as before.
+        mean.norm() <= (3.0 * sig / n_eff.sqrt()).max(a.static_speed)
     };
     // Of the stretches before ka that are at rest by both tests, the longest: with speeds
     // from meter-level fixes a slow moment of the drive can pass them for seconds (on the
