@@ -113,10 +113,10 @@ pub const REST_FLOOR_ACC: f64 = 0.05;
 /// Windows in a row not at rest that mark the vehicle moving off ([`imu_rest`]).
 pub const REST_MOVING: usize = 3;
 
-/// The samples of `idx` (a static start found from the GNSS speed) before the IMU itself
-/// shows the vehicle moving: [`REST_MOVING`] [`REST_WINDOW`] windows in a row with a
-/// component of the window's mean rate or specific force beyond [`REST_SIGMAS`] robust σ
-/// (and the floors) from the median over the windows. Speeds differenced from meter-level fixes
+/// The samples of `idx` (a static start found from the GNSS speed) where the IMU itself is
+/// at rest: the longest piece between runs of [`REST_MOVING`] or more [`REST_WINDOW`]
+/// windows with a component of the window's mean rate or specific force beyond
+/// [`REST_SIGMAS`] robust σ (and the floors) from the median over the windows. Speeds differenced from meter-level fixes
 /// (σ 1.4 m/s) stay below the rest threshold (2.5σ) while a car moves off at 3–5 m/s and
 /// turns: on the bundled drive with 2 m fixes the "rest" ran 13 s into the drive and its
 /// turn, and its mean rate, taken as the gyro bias, turned the heading 70° off in 4 minutes.
@@ -172,12 +172,34 @@ pub fn imu_rest(imu: &BodyImu, idx: &[usize]) -> Vec<usize> {
             *w |= (m[c] - med).abs() > bound;
         }
     }
-    // Cut where the vehicle moves off: the first [`REST_MOVING`] windows in a row not at
-    // rest (a door shut or a passenger getting in is a window or two, and stays in).
-    let cut = (0..wins.len())
-        .find(|&w| w + REST_MOVING <= wins.len() && moving[w..w + REST_MOVING].iter().all(|&m| m))
-        .unwrap_or(wins.len());
-    wins[..cut].concat()
+    // Cut where the vehicle moves: every window in a run of [`REST_MOVING`] or more not at
+    // rest (a door shut or a passenger getting in is a window or two, and stays in). Of the
+    // pieces left, the longest (the later one of equal length): the vehicle moving off ends
+    // the rest, luggage loaded for seconds splits it.
+    let mut sustained = vec![false; wins.len()];
+    let mut w = 0;
+    while w < wins.len() {
+        let run = moving[w..].iter().take_while(|&&m| m).count();
+        if run >= REST_MOVING {
+            sustained[w..w + run].iter_mut().for_each(|x| *x = true);
+        }
+        w += run.max(1);
+    }
+    let (mut best, mut start) = ((0, 0), None);
+    let flags = sustained.iter().map(|&x| !x).chain(std::iter::once(false));
+    for (w, quiet) in flags.enumerate() {
+        match (quiet, start) {
+            (true, None) => start = Some(w),
+            (false, Some(a)) => {
+                if w - a >= best.1 - best.0 {
+                    best = (a, w);
+                }
+                start = None;
+            }
+            _ => {}
+        }
+    }
+    wins[best.0..best.1].concat()
 }
 
 /// The speed, in σ of the GNSS velocity, from which the alignment reads the heading from the
@@ -777,5 +799,17 @@ mod tests {
         // At rest throughout: every sample.
         let idx: Vec<usize> = (0..4000).collect();
         assert_eq!(imu_rest(&imu, &idx), idx);
+        // Rocked for 4 s at 5–9 s (luggage loaded): the longer rest after it.
+        let mut rocked = BodyImu {
+            t: imu.t.clone(),
+            gyro: imu.gyro.clone(),
+            acc: imu.acc.clone(),
+        };
+        for i in 500..900 {
+            rocked.acc[i].x += 0.3;
+        }
+        let rest = imu_rest(&rocked, &idx);
+        let (a, b) = (rocked.t[rest[0]], rocked.t[*rest.last().unwrap()]);
+        assert!((9.0..10.0).contains(&a) && b > 39.9, "{a} {b}");
     }
 }
