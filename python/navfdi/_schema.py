@@ -283,7 +283,7 @@ SECTIONS: dict[str, Section] = {
     "strapdown.alignment": _s("[loosely_coupled.alignment] / [tight.strapdown.alignment]", "Initial alignment.", [
         ("speed", "velocity", REQ, "GNSS speed above which heading is taken from the course and navigation starts (and at least 5× the velocity's σ, where the log reaches it)"),
         ("heading", "angle", "from the course", "a known initial heading"),
-        ("static_speed", "velocity", "0.05 m/s", "rest below this (or 2.5× the receiver's velocity σ)"),
+        ("static_speed", "velocity", "0.05 m/s", "rest below this (or 2.5× the receiver's velocity σ), where the velocities average to zero and the IMU is at rest too (the longest such stretch before the alignment)"),
         ("gyro_bias", "bool", "true", "gyro biases from the static start"),
         ("sigma_level", "angle", REQ, "initial roll and pitch σ"),
         ("sigma_heading", "angle", REQ, "initial heading σ"),
