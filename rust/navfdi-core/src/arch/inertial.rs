@@ -116,11 +116,12 @@ pub const REST_MOVING: usize = 3;
 /// The samples of `idx` (a static start found from the GNSS speed) where the IMU itself is
 /// at rest: the longest piece between runs of [`REST_MOVING`] or more [`REST_WINDOW`]
 /// windows with a component of the window's mean rate or specific force beyond
-/// [`REST_SIGMAS`] robust σ (and the floors) from the median over the windows. Speeds differenced from meter-level fixes
-/// (σ 1.4 m/s) stay below the rest threshold (2.5σ) while a car moves off at 3–5 m/s and
-/// turns: on the bundled drive with 2 m fixes the "rest" ran 13 s into the drive and its
-/// turn, and its mean rate, taken as the gyro bias, turned the heading 70° off in 4 minutes.
-/// Fewer than three windows: `idx` as it is.
+/// [`REST_SIGMAS`] robust σ (and the floors) from the median over the windows. Speeds
+/// differenced from meter-level fixes (σ 1.4 m/s) stay below the rest threshold (2.5σ) while
+/// a car moves off at 3–5 m/s and turns: on the bundled drive with 2 m fixes the "rest" ran
+/// 13 s into the drive and its turn, and its mean rate, taken as the gyro bias, turned the
+/// heading 15° off (70° in 4 minutes without the non-holonomic constraint). Fewer than three
+/// windows: `idx` as it is.
 pub fn imu_rest(imu: &BodyImu, idx: &[usize]) -> Vec<usize> {
     let Some(&first) = idx.first() else {
         return Vec::new();
