@@ -4,6 +4,7 @@
 //! * [`sprt_threshold`]: `T(H1) = ln((1 − Pm)/Pf)` (improved SPRT).
 //! * [`noncentrality`]: `λ0` with `F_{χ²(dof, λ0)}(T_D) = Pm` (non-central chi-square).
 //! * [`mdb`]: minimal detectable bias per measurement component, `sqrt(λ0 / (A⁻¹)_ii)`.
+//! * [`median_of`]: the median the robust scales (MAD) use.
 //!
 //! The central chi-square distribution comes from `statrs`; the non-central CDF is the
 //! Poisson mixture `Σ_j e^{−λ/2}(λ/2)^j/j! · P(χ²(dof + 2j) ≤ x)` with the central terms from
@@ -24,6 +25,16 @@ fn check_dof(dof: usize) -> Result<()> {
         });
     }
     Ok(())
+}
+
+/// The median of `v` (reordered; the upper one of an even count); NaN when empty.
+pub fn median_of(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mid = v.len() / 2;
+    let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
 }
 
 /// Chi-square detection threshold `T_D` with false-alarm probability `pf` and `dof` degrees of

@@ -150,15 +150,7 @@ pub fn imu_rest(imu: &BodyImu, idx: &[usize]) -> Vec<usize> {
             [g.x, g.y, g.z, f.x, f.y, f.z]
         })
         .collect();
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let n = v.len();
-        if n % 2 == 1 {
-            v[n / 2]
-        } else {
-            0.5 * (v[n / 2 - 1] + v[n / 2])
-        }
-    };
+    let median = |mut v: Vec<f64>| crate::stats::median_of(&mut v);
     let mut moving = vec![false; wins.len()];
     for c in 0..6 {
         let med = median(means.iter().map(|m| m[c]).collect());

@@ -406,9 +406,7 @@ pub fn reanchor<const NS: usize>(
         (V + 1, rate[0] * rate[0] + 1.0),
     ];
     for &(i, v) in &diag {
-        kf.p.row_mut(i).fill(0.0);
-        kf.p.column_mut(i).fill(0.0);
-        kf.p[(i, i)] = v;
+        reopen(kf, i, v);
     }
     let h = PHI + 2;
     kf.p[(h, h)] = kf.p[(h, h)].max(REANCHOR_HEADING_VAR);
@@ -427,11 +425,15 @@ pub fn reanchor_up<const NS: usize>(
     hold: &mut super::hold::PositionHold,
 ) {
     shift(s, &Vector3::new(0.0, 0.0, d_up));
-    let i = R + 2;
+    reopen(kf, R + 2, var);
+    hold.restart(2);
+}
+
+/// Error state `i`'s variance set to `var` (its correlations with the other states dropped).
+fn reopen<const NS: usize>(kf: &mut ErrorFilter<NS>, i: usize, var: f64) {
     kf.p.row_mut(i).fill(0.0);
     kf.p.column_mut(i).fill(0.0);
     kf.p[(i, i)] = var;
-    hold.restart(2);
 }
 
 #[cfg(test)]

@@ -83,15 +83,7 @@ pub fn drift_var(structure: &[f64; LAGS.len()], lag: f64) -> Option<f64> {
     }
 }
 
-/// The median of `v` (reordered; the upper one of an even count); NaN when empty.
-pub(super) fn median_of(v: &mut [f64]) -> f64 {
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    let mid = v.len() / 2;
-    let (_, m, _) = v.select_nth_unstable_by(mid, f64::total_cmp);
-    *m
-}
+pub(super) use crate::stats::median_of;
 
 impl DriftWindow {
     /// Forget the record (a gap, a stop: sums across it mean nothing); the pooled sums and
