@@ -430,18 +430,13 @@ pub fn read_ubx<'py>(py: Python<'py>, path: String) -> PyResult<Bound<'py, pyo3:
     let n = tab.t.len();
     let d = pyo3::types::PyDict::new(py);
     d.set_item("t", crate::convert::to_numpy(py, tab.t, &[n])?)?;
-    d.set_item(
-        "llh",
-        crate::convert::to_numpy(py, tab.llh.concat(), &[n, 4])?,
-    )?;
-    d.set_item(
-        "acc",
-        crate::convert::to_numpy(py, tab.acc.concat(), &[n, 3])?,
-    )?;
-    d.set_item(
-        "vel_ned",
-        crate::convert::to_numpy(py, tab.vel_ned.concat(), &[n, 3])?,
-    )?;
+    for (name, col, width) in [
+        ("llh", tab.llh.concat(), 4),
+        ("acc", tab.acc.concat(), 3),
+        ("vel_ned", tab.vel_ned.concat(), 3),
+    ] {
+        d.set_item(name, crate::convert::to_numpy(py, col, &[n, width])?)?;
+    }
     d.set_item(
         "status",
         crate::convert::to_numpy(py, tab.status.concat(), &[n, 3])?,
