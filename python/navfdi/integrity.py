@@ -24,6 +24,7 @@ from navfdi import _core
 #: (:func:`elevation_variances`; the model runs in Rust).
 F_L1, F_L5 = 1575.42, 1176.45
 
+
 @dataclass(frozen=True)
 class Ism:
     """Integrity support message: ``sigma_ura`` (m, integrity) and ``sigma_ure`` (m, accuracy)
