@@ -174,6 +174,49 @@ fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
 }
 
 #[test]
+fn the_root_search_leaves_out_only_terms_below_its_floor() {
+    // Priors of satellites, pairs and constellations; shifts and σ of 40-satellite modes.
+    let mut seed = 11_u64;
+    let mut uniform = || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (mut dropped, mut total) = (0, 0);
+    for _ in 0..50 {
+        let terms: Vec<(f64, f64, f64)> = (0..200)
+            .map(|_| {
+                (
+                    [1e-5, 1e-10, 1e-4, 1e-9][(4.0 * uniform()) as usize],
+                    4.0 * uniform(),
+                    1.0 / (0.3 + 1.2 * uniform()),
+                )
+            })
+            .collect();
+        let target = 10f64.powf(-9.0 + 3.0 * uniform());
+        let lo = 4.0 + 5.0 * uniform();
+        let kept = root_terms(&terms, target, lo);
+        total += terms.len();
+        dropped += terms.len() - kept.len();
+        for t in &terms {
+            if kept.contains(t) {
+                continue;
+            }
+            let (p, shift, inv) = *t;
+            for l in [lo, lo + 0.5, lo + 5.0] {
+                let v = p * q((l - shift) * inv);
+                assert!(v <= 1e-16 * target, "{t:?} at {l}: {v:e} above the floor");
+            }
+        }
+    }
+    // The rule does leave terms out (else the test above proves nothing).
+    assert!(dropped > total / 10, "{dropped} of {total} left out");
+    // NaN is kept.
+    assert_eq!(root_terms(&[(1e-10, f64::NAN, 1.0)], 1e-7, 5.0).len(), 1);
+}
+
+#[test]
 fn a_bad_allocation_is_refused_by_name() {
     let (rows, cons, ism, _) = add_example();
     for (alloc, name) in [
