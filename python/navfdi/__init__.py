@@ -38,6 +38,25 @@ Errors
     failures such as a covariance that is not positive definite.
 """
 
+import os as _os
+import sys as _sys
+
+
+def _command_line() -> bool:
+    """Whether this process is navfdi's command line (the ``navfdi`` script, or ``python -m
+    navfdi`` while the package is found: ``sys.argv[0]`` is ``-m`` then)."""
+    argv = getattr(_sys, "argv", None) or [""]
+    return argv[0] == "-m" or _os.path.basename(argv[0]) in ("navfdi", "navfdi.exe")
+
+
+# The command line's own process does its work in Rust and gives numpy's BLAS nothing large,
+# but OpenBLAS starts a thread per core when numpy loads and each spins for about 0.1 s of CPU
+# before it sleeps (`import numpy` alone: 0.18 s CPU, 0.08 s with one thread, on 2 cores):
+# one BLAS thread there, before numpy loads. A user's setting wins, and the library imported
+# by a user's own program leaves BLAS alone.
+if "numpy" not in _sys.modules and _command_line():
+    _os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 from navfdi._core import (
     Aime,
     Decision,
