@@ -228,6 +228,25 @@ def test_the_drive_on_positions_alone_runs_with_fde_near_the_run_without() -> No
     assert len(fde.record["reanchored"]) == 1, fde.record["reanchored"]
 
 
+def test_a_car_rolling_to_its_stop_is_not_stopped_early_on_positions_alone() -> None:
+    """At the end of the recorded drive the car rolls smoothly to a stop, its IMU as quiet as
+    at rest. On positions alone the INS's velocity σ let the zero-velocity update pass at
+    530 s while the car still rolled at 0.5 m/s: the INS stopped 0.4 m short, and the fixes,
+    right, were held out as a step to the end of the log (18 s). A rest now starts only where
+    the last two fixes agree with standing still: every fix of the stop is used, the error at
+    the end is the run without FDE's, and the update still holds the stopped car."""
+    sc = load_scenario("drive_lc")
+    runs = navfdi.run_scenario(from_dict(_drive_positions_only(), source=sc.source)).runs
+    x, y = runs["fde"], runs["no_fde"]
+    gp = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
+    zu = next(s for s in x.record["subfilters"] if s["sensor"] == "zupt")
+    end = x.t >= 528.0
+    tested = end & (np.asarray(gp["dof"]) > 0)
+    assert tested.sum() >= 20 and not (np.asarray(gp["reason"])[tested] > 0).any()
+    assert np.nanmax(_hor(x)[end]) <= np.nanmax(_hor(y)[end]) + 0.05
+    assert np.asarray(zu["fused"])[x.t >= 535.0].sum() >= 40
+
+
 def test_positions_only_fde_that_leaves_most_fixes_out_warns() -> None:
     """Where FDE leaves more than half of a positions-only receiver's tested fixes out, the run
     says so, naming the comparison to make (isolate = false) and what to give (velocities)."""

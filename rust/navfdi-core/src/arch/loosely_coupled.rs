@@ -21,6 +21,7 @@ mod hold;
 mod noise_scale;
 mod pull;
 mod receiver;
+mod rest;
 mod window;
 
 use super::common::make_detector;
@@ -34,7 +35,9 @@ use crate::ins::strapdown::{mounting, skew, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
-use checks::{antenna, correlation_weight, diag, enu, isolate, rows, shift, still, three, Meas};
+use checks::{
+    antenna, correlation_weight, diag, enu, isolate, rows, shift, sigma_h, still, three, Meas,
+};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
@@ -178,20 +181,10 @@ fn run<const NS: usize>(
         None => {
             let aid = &aids[pos_aid];
             let interval = aid.sensor.map_or(1.0, |si| 1.0 / spec.sensors[si].rate);
-            let sig_p = |k: usize| {
-                let rec = aid
-                    .sensor
-                    .and_then(|si| logged.sigma.get(si))
-                    .and_then(|s| s.get(k))
-                    .zip(aid.pos)
-                    .map(|(s, o)| s[o].max(s[o + 1]))
-                    .filter(|x| x.is_finite() && *x > 0.0);
-                rec.unwrap_or(0.0).max(aid.floor[0].max(aid.floor[1]))
-            };
             Some(velocity_from_positions(
                 &models.t,
                 |k| measure(aid, k, aid.pos),
-                sig_p,
+                |k| sigma_h(logged, aid, k),
                 interval.max(1.0),
                 interval,
             ))
@@ -300,6 +293,7 @@ fn run<const NS: usize>(
     let mut blame = blame::VelocityBlame::default();
     // How far the GNSS updates moved the INS lately (one history: it is the filter's).
     let mut pull = pull::PullHistory::default();
+    let (mut fix_rest, mut resting) = (rest::FixRest::default(), false);
     // The INS antenna in the log's east, north, up frame (m).
     let antenna_enu = |s: &NavState| {
         let a = antenna(s, &lever);
@@ -323,10 +317,15 @@ fn run<const NS: usize>(
         mech.advance(&imu, &mut s, &mut kf, tk);
         let (i, w_last) = (mech.i, mech.w_last);
         outcomes.iter_mut().for_each(|o| *o = NOT_MEASURED.clone());
-        // Constraints first, then GNSS in configuration order.
+        // Constraints first, then GNSS; on positions alone a rest starts where the fixes stand.
+        let ap = &aids[pos_aid];
+        if let (true, Some(p)) = (vel_aid_none, measure(ap, k, ap.pos)) {
+            fix_rest.push(tk, p, sigma_h(logged, ap, k), fix_interval[pos_aid]);
+        }
+        let moving = !resting && fix_rest.moving(tk, fix_interval[pos_aid], s.v.xy().norm());
         let mut at_rest = false;
         if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
-            if still(&imu.t, &imu.acc, &imu.gyro, &kf.bg, i, tk, c) {
+            if !moving && still(&imu.t, &imu.acc, &imu.gyro, &kf.bg, i, tk, c) {
                 at_rest = true;
                 let mut h = DMatrix::zeros(3, NS);
                 for j in 0..3 {
@@ -340,6 +339,7 @@ fn run<const NS: usize>(
                 outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
         }
+        resting = at_rest;
         if let (Some(ch), Some(c)) = (nhc_ch, l.nhc.as_ref()) {
             if !at_rest && s.v.norm() >= c.threshold && w_last.z.abs() <= c.rate_threshold {
                 let cbn = s.q.to_rotation_matrix().into_inner();

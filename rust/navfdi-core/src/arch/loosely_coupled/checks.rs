@@ -4,6 +4,7 @@
 pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
 use crate::spec::ConstraintSpec;
+use crate::stream::Logged;
 use nalgebra::{DMatrix, DVector, Vector3};
 
 /// A measurement ready for the filter, components in the channel's order.
@@ -86,6 +87,19 @@ pub(super) fn correlation_weight(dt: f64, tau: f64) -> f64 {
     let x = dt / tau;
     // (1 + e^(−x))/(1 − e^(−x)) = coth(x/2), written without cancellation for small x.
     1.0 / (0.5 * x).tanh()
+}
+
+/// The larger horizontal σ (m) of the position fix of `aid` at epoch `k` as recorded, floored
+/// at the sensor's `noise` (the floor alone where none is recorded).
+pub(super) fn sigma_h(logged: &Logged, aid: &super::Aid, k: usize) -> f64 {
+    let rec = aid
+        .sensor
+        .and_then(|si| logged.sigma.get(si))
+        .and_then(|s| s.get(k))
+        .zip(aid.pos)
+        .map(|(s, o)| s[o].max(s[o + 1]))
+        .filter(|x| x.is_finite() && *x > 0.0);
+    rec.unwrap_or(0.0).max(aid.floor[0].max(aid.floor[1]))
 }
 
 /// Rest over the window before `tk`: σ of the specific-force magnitude and mean
