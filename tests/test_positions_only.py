@@ -247,6 +247,57 @@ def test_a_car_rolling_to_its_stop_is_not_stopped_early_on_positions_alone() -> 
     assert np.asarray(zu["fused"])[x.t >= 535.0].sum() >= 40
 
 
+def _float_stretch(folder: Path, start: float, end: float, sigma_h: float, sigma_v: float, seed: int = 0) -> Path:
+    """The drive's ``.pos`` with its fixes over ``[start, end)`` s (from the first) turned into a
+    float solution (quality 2) that is off by a Gauss-Markov error (τ 20 s, σ ``sigma_h``
+    horizontal, ``sigma_v`` vertical; m) while its σ stay as recorded (cm): a receiver whose
+    float fixes are as optimistic as RTKLIB's often are."""
+    import gzip
+
+    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
+    rng = np.random.default_rng(seed)
+    out, e, first, last = [], np.zeros(3), None, None
+    for ln in gzip.open(data / "gnss_1934_sf.pos.gz", "rt").read().splitlines():
+        f = ln.split()
+        if ln.startswith("%") or len(f) < 6:
+            out.append(ln)
+            continue
+        hh, mm, ss = f[1].split(":")
+        t = int(hh) * 3600 + int(mm) * 60 + float(ss)
+        first = t if first is None else first
+        if start <= t - first < end:
+            a = np.exp(-(0.25 if last is None else t - last) / 20.0)
+            e = a * e + np.sqrt(1 - a * a) * rng.normal(size=3) * np.array([sigma_h, sigma_h, sigma_v])
+            lat = float(f[2]) + np.degrees(e[1] / 6378137.0)
+            lon = float(f[3]) + np.degrees(e[0] / (6378137.0 * np.cos(np.radians(lat))))
+            f[2], f[3], f[4], f[5] = f"{lat:.9f}", f"{lon:.9f}", f"{float(f[4]) + e[2]:.4f}", "2"
+            ln, last = " ".join(f), t
+        out.append(ln)
+    path = folder / "float.pos"
+    path.write_text("\n".join(out) + "\n")
+    return path
+
+
+def test_a_float_stretch_on_positions_alone_does_not_run_the_height_away(tmp_path: Path) -> None:
+    """60 s of float fixes 0.3 m / 0.5 m off (σ as recorded, cm) on the drive without its
+    velocity channel: the window test, against the INS's displacement, flagged the height as
+    a ramp, and the INS's height, unaided while held (only the heights and, through the pitch,
+    the non-holonomic constraint aid it), drifted 22 m by the end of the log — the fix never
+    met it again. The height is no longer held as a ramp on positions alone (jumps still are
+    steps)."""
+    raw = _drive_positions_only()
+    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
+    src = dict(raw["source"])
+    src["gnss"] = str(_float_stretch(tmp_path, 200.0, 260.0, 0.3, 0.5))
+    src["reference"] = str(data / "gnss_1934_sf.pos.gz")
+    src["imu"] = {**src["imu"], "file": str(data / "imu_1934_gpst.csv.gz")}
+    raw["source"] = src
+    runs = navfdi.run_scenario(from_dict(raw, source=str(tmp_path))).runs
+    up = {v: np.asarray(runs[v].record["error"])[:, 8] for v in ("fde", "no_fde")}
+    rms = {v: float(np.sqrt(np.nanmean(x ** 2))) for v, x in up.items()}
+    assert rms["fde"] <= 3.0 * rms["no_fde"] and np.nanmax(np.abs(up["fde"])) < 2.0, rms
+
+
 def test_positions_only_fde_that_leaves_most_fixes_out_warns() -> None:
     """Where FDE leaves more than half of a positions-only receiver's tested fixes out, the run
     says so, naming the comparison to make (isolate = false) and what to give (velocities)."""
