@@ -1018,9 +1018,10 @@ class LoggedSource:
     ``[source]`` table.
 
     ``imu``: (N, 7) float array — time (s from the run's time 0), angular rate x, y, z (rad/s),
-    specific force x, y, z (m/s²), IMU axes. ``gnss``, ``reference``: (M, 13) — time (s),
+    specific force x, y, z (m/s²), IMU axes. ``gnss``, ``reference``: (M, 13) or (M, 14) — time (s),
     latitude, longitude (rad), height (m), velocity east, north, up (m/s), σ of position
-    east, north, up (m) and of velocity (m/s). Or ``rinex`` = (observation path, navigation
+    east, north, up (m) and of velocity (m/s), and (optional) the solution quality in RTKLIB's
+    codes (1 fixed, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP; 0 unknown). Or ``rinex`` = (observation path, navigation
     path) instead of ``gnss`` (tight scenarios): the record epochs are the observation
     epochs, time 0 the first, and ``imu`` and ``reference`` times are GPS seconds (GPST).
     ``score_inputs``: score the reference at the GNSS input epochs too (after their update),

@@ -67,11 +67,14 @@ class PosLog:
     ns: np.ndarray | None = None
 
     def rows(self, t0: float) -> np.ndarray:
-        """(M, 13) rows for :class:`navfdi._core.LoggedSource`: time from ``t0`` (s), latitude,
-        longitude (rad), height (m), velocity east, north, up, σ position, σ velocity."""
+        """(M, 14) rows for :class:`navfdi._core.LoggedSource`: time from ``t0`` (s), latitude,
+        longitude (rad), height (m), velocity east, north, up, σ position, σ velocity, and the
+        solution quality (RTKLIB's codes; 0 where unknown)."""
+        q = np.asarray(self.q, float)
+        q = np.where(np.isfinite(q) & (q >= 0) & (q <= 255), np.round(q), 0.0)
         return np.column_stack([
             self.t - t0, np.radians(self.lat), np.radians(self.lon), self.height,
-            self.vel, self.sd_pos, self.sd_vel,
+            self.vel, self.sd_pos, self.sd_vel, q,
         ]).astype(np.float64)
 
     def select(self, mask: np.ndarray) -> PosLog:
@@ -382,7 +385,7 @@ def _isfloat(x: str) -> bool:
 
 def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     """Read a scenario's ``[source]`` table (paths relative to ``base``): returns ``imu``
-    (N, 7), ``gnss`` (M, 13) or None, ``reference`` (K, 13) or None arrays and ``rinex``
+    (N, 7), ``gnss`` (M, 14) or None, ``reference`` (K, 14) or None arrays and ``rinex``
     (observation and navigation paths, or None) for :class:`navfdi._core.LoggedSource`,
     ``t0`` (GPS seconds of time 0; None for RINEX logs, whose time 0 is the first observation
     epoch and whose arrays keep GPS seconds), and the logs."""

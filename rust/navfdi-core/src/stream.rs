@@ -89,6 +89,10 @@ pub struct Logged {
     /// log, east, north, up (m, from the origin) and velocity east, north, up (m/s), NaN
     /// where there is none (the tight filter aligns on them); empty otherwise.
     pub fixes: Vec<[f64; 6]>,
+    /// Per epoch, where the source has it: the receiver's solution quality in RTKLIB's codes
+    /// (1 fixed, 2 float, 3 SBAS, 4 DGPS, 5 single, 6 PPP; 0 unknown); empty otherwise.
+    #[serde(default)]
+    pub quality: Vec<u8>,
 }
 
 impl Nominal {

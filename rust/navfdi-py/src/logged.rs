@@ -17,10 +17,28 @@ use pyo3::types::PyList;
 use std::sync::OnceLock;
 
 fn gnss_log(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<GnssLog> {
-    let m = columns(name, obj, 13)?;
+    let cols = read(name, obj)?.shape.get(1).copied().unwrap_or(0);
+    let m = columns(name, obj, if cols == 14 { 14 } else { 13 })?;
     let rows = m.nrows();
     let v3 = |r: usize, c: usize| Vector3::new(m[(r, c)], m[(r, c + 1)], m[(r, c + 2)]);
+    let q = if cols == 14 {
+        (0..rows)
+            .map(|r| {
+                let v = m[(r, 13)];
+                if v == v.trunc() && (0.0..=255.0).contains(&v) {
+                    Ok(v as u8)
+                } else {
+                    Err(PyValueError::new_err(format!(
+                        "{name}: row {r}, column 13 (solution quality): {v} is not an integer code 0-255"
+                    )))
+                }
+            })
+            .collect::<PyResult<Vec<u8>>>()?
+    } else {
+        Vec::new()
+    };
     Ok(GnssLog {
+        q,
         t: (0..rows).map(|r| m[(r, 0)]).collect(),
         pos: (0..rows)
             .map(|r| Nominal {
@@ -51,8 +69,10 @@ fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: usize) -> PyResult<DMatrix<
 ///
 /// ``imu``: (N, 7) float array, columns time (s from the run's time 0), angular rate x, y, z
 /// (rad/s) and specific force x, y, z (m/s²) in the IMU's axes. ``gnss`` and ``reference``:
-/// (M, 13) arrays, columns time (s), latitude, longitude (rad), height (m), velocity east,
-/// north, up (m/s), σ of position east, north, up (m) and of velocity east, north, up (m/s).
+/// (M, 13) or (M, 14) arrays, columns time (s), latitude, longitude (rad), height (m), velocity
+/// east, north, up (m/s), σ of position east, north, up (m) and of velocity east, north, up
+/// (m/s), and (14th, optional) the solution quality in RTKLIB's codes (1 fixed, 2 float, 3
+/// SBAS, 4 DGPS, 5 single, 6 PPP; 0 unknown).
 /// The record epochs are ``gnss``'s; the reference is scored where no GNSS measurement was an
 /// input. Or, for a tight scenario (``tight.strapdown``), ``rinex`` = (observation path,
 /// navigation path) instead of ``gnss``: the record epochs are the observation epochs, time 0

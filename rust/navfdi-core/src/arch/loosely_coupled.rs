@@ -327,10 +327,7 @@ fn run<const NS: usize>(
         if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
             if !moving && still(&imu.t, &imu.acc, &imu.gyro, &kf.bg, i, tk, c) {
                 at_rest = true;
-                let mut h = DMatrix::zeros(3, NS);
-                for j in 0..3 {
-                    h[(j, V + j)] = 1.0;
-                }
+                let h = DMatrix::from_fn(3, NS, |i, j| if j == V + i { 1.0 } else { 0.0 });
                 let meas = Meas {
                     res: DVector::from_column_slice(s.v.as_slice()),
                     h,
@@ -404,10 +401,12 @@ fn run<const NS: usize>(
             let sig = logged.sigma.get(si).and_then(|v| v.get(k));
             // Tested with the σ scaled by the channel's noise scale; updated with it as given.
             let mut meas = gnss_measurement::<NS>(&s, aid, z, sig, &logged.origin, &lever, &w_last);
-            let c = scales[a].scale();
+            let q = logged.quality.get(k).copied().unwrap_or(0);
+            let c = scales[a].scale_for(q);
             meas.r *= c * c;
             let mut o = test(&kf, aid, &meas, isolation).map_err(at)?;
             o.scale = c;
+            scales[a].observe(q, o.inn.as_ref(), &meas.r, c);
             tested.push((a, meas, o));
         }
         // Convergence: every tested GNSS channel's predicted σ within `convergence` times its

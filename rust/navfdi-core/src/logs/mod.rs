@@ -40,6 +40,9 @@ pub struct GnssLog {
     pub sd_pos: Vec<Vector3<f64>>,
     /// σ of the velocity east, north, up (m/s).
     pub sd_vel: Vec<Vector3<f64>>,
+    /// Solution quality per epoch in RTKLIB's codes (1 fixed, 2 float, 3 SBAS, 4 DGPS, 5
+    /// single, 6 PPP; 0 unknown), or empty where the log has none.
+    pub q: Vec<u8>,
 }
 
 impl GnssLog {
@@ -49,6 +52,7 @@ impl GnssLog {
             || self.vel.len() != n
             || self.sd_pos.len() != n
             || self.sd_vel.len() != n
+            || !(self.q.is_empty() || self.q.len() == n)
         {
             return Err(Error::Invalid(format!(
                 "{what}: columns of different lengths"
@@ -230,6 +234,7 @@ impl LoggedSource {
             origin,
             sigma,
             fixes: Vec::new(),
+            quality: gnss.q.clone(),
         };
         let models = logged_models(gnss.t.clone(), gnss.pos.clone(), available, None, logged);
         Ok(LoggedSource::assemble(models, z, enu))

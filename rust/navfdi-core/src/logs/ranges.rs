@@ -340,6 +340,7 @@ impl LoggedSource {
             origin,
             sigma: Vec::new(),
             fixes,
+            quality: Vec::new(),
         };
         let ranges = RangeStream {
             sensor: si,

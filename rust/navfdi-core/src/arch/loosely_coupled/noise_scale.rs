@@ -20,6 +20,26 @@ pub struct NoiseScale {
     fixed: Option<f64>,
     lo: f64,
     hi: f64,
+    /// Per solution quality of the receiver (RTKLIB's codes), a scale of its own over every
+    /// tested fix of that quality ([`NoiseScale::scale_for`]).
+    classes: Vec<(u8, NoiseScale)>,
+    /// The best quality seen (rank of [`quality_rank`]).
+    best: Option<u8>,
+}
+
+/// Rank of a solution quality in RTKLIB's codes, best first: fixed, float, PPP, DGPS, SBAS,
+/// single, then any other code; None for 0 (unknown).
+pub fn quality_rank(q: u8) -> Option<u8> {
+    match q {
+        0 => None,
+        1 => Some(0),
+        2 => Some(1),
+        6 => Some(2),
+        4 => Some(3),
+        3 => Some(4),
+        5 => Some(5),
+        _ => Some(6),
+    }
 }
 
 /// A window of the last `CAP` values that keeps a sorted copy beside them, so that its median
@@ -75,7 +95,57 @@ impl NoiseScale {
             fixed,
             lo,
             hi,
+            classes: Vec::new(),
+            best: None,
         }
+    }
+
+    /// The scale for a fix of solution quality `q` (RTKLIB's codes; 0 unknown): this scale for
+    /// the best quality the receiver has given (and where unknown, or fixed by the user); for a
+    /// worse one, that quality's own once it has [`SCALE_MIN`] components. A receiver's σ are
+    /// not equally honest across its solution types — RTKLIB's float σ are often a tenth of
+    /// the float solution's error while its fixed σ fit — and one scale over a window of
+    /// mostly fixed solutions leaves the float ones' σ as optimistic as stated.
+    pub fn scale_for(&self, q: u8) -> f64 {
+        let rank = quality_rank(q);
+        if self.fixed.is_some() || rank.is_none() || rank <= self.best {
+            return self.scale();
+        }
+        match self.classes.iter().find(|c| c.0 == q) {
+            Some((_, c)) if c.d2.len() >= SCALE_MIN => c.scale(),
+            _ => self.scale(),
+        }
+    }
+
+    /// A tested fix of quality `q` (used or not): its innovation `r` (m) and the innovation
+    /// covariance `s` of its test (m²; `inn` = (r, s), None: not tested) and its measurement
+    /// covariance `r_meas` at `scale` (m²), for that quality's own scale; the best quality
+    /// seen is updated.
+    pub fn observe(
+        &mut self,
+        q: u8,
+        inn: Option<&(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>)>,
+        r_meas: &nalgebra::DMatrix<f64>,
+        scale: f64,
+    ) {
+        let (Some(rank), Some((r, s))) = (quality_rank(q), inn) else {
+            return;
+        };
+        self.best = Some(self.best.map_or(rank, |b| b.min(rank)));
+        let i = match self.classes.iter().position(|c| c.0 == q) {
+            Some(i) => i,
+            None => {
+                self.classes
+                    .push((q, NoiseScale::new(self.fixed, self.lo, self.hi)));
+                self.classes.len() - 1
+            }
+        };
+        let c2 = scale * scale;
+        let n = r.len();
+        let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
+        let hph: Vec<f64> = (0..n).map(|i| s[(i, i)] - r_meas[(i, i)]).collect();
+        let rr: Vec<f64> = (0..n).map(|i| r_meas[(i, i)] / c2).collect();
+        self.classes[i].1.add(&d2, &hph, &rr);
     }
 
     /// Add a fix used as measured: its components' squared innovations `d²`, predicted
@@ -129,6 +199,48 @@ mod scale_tests {
         let c = s.scale();
         assert!((c - (0.36f64 - 0.04).sqrt() / 2.0).abs() < 0.06, "{c}");
         assert_eq!(NoiseScale::new(Some(2.0), 0.1, 10.0).scale(), 2.0);
+    }
+
+    /// A worse solution quality gets its own scale once it has enough components; the best
+    /// quality seen, an unknown one and a fixed scale keep the channel's.
+    #[test]
+    fn a_worse_solution_quality_learns_its_own_scale() {
+        use nalgebra::{DMatrix, DVector};
+        let mut s = NoiseScale::new(None, 1.0, 10.0);
+        // Fixed solutions (1) that fit their σ (1 cm; innovations 1 cm at HPHᵀ ≈ 0).
+        let r_meas = DMatrix::from_diagonal_element(3, 3, 1e-4);
+        let fixed = (DVector::from_element(3, 0.01), &r_meas * 1.0001);
+        for _ in 0..40 {
+            s.observe(1, Some(&fixed), &r_meas, 1.0);
+            s.add(&[1e-4; 3], &[1e-8; 3], &[1e-4; 3]);
+        }
+        let channel = s.scale();
+        // Float solutions (2) 0.3 m off at the same stated σ.
+        let float = (DVector::from_element(3, 0.3), &r_meas * 1.0001);
+        for k in 0..SCALE_MIN / 3 {
+            // Below SCALE_MIN components the channel's scale.
+            assert_eq!(s.scale_for(2), channel, "after {k} float fixes");
+            s.observe(2, Some(&float), &r_meas, 1.0);
+        }
+        assert_eq!(s.scale_for(2), 10.0); // 30 σ, clamped at hi
+        assert_eq!(s.scale_for(1), channel);
+        assert_eq!(s.scale_for(0), channel);
+        // A fixed scale is the user's for every quality.
+        let mut f = NoiseScale::new(Some(2.0), 1.0, 10.0);
+        for _ in 0..20 {
+            f.observe(2, Some(&float), &r_meas, 2.0);
+        }
+        assert_eq!(f.scale_for(2), 2.0);
+        // Float first, fixed later: once fixed solutions are seen, float is the worse one.
+        let mut g = NoiseScale::new(None, 1.0, 10.0);
+        for _ in 0..12 {
+            g.observe(2, Some(&float), &r_meas, 1.0);
+        }
+        assert_eq!(g.scale_for(2), g.scale());
+        g.observe(1, Some(&fixed), &r_meas, 1.0);
+        assert_eq!(g.scale_for(2), 10.0);
+        assert_eq!([1, 2, 6, 4, 3, 5, 9].map(quality_rank), [0, 1, 2, 3, 4, 5, 6].map(Some));
+        assert_eq!(quality_rank(0), None);
     }
 
     /// The rolling window's median is the selection's over the same values, to the bit,
