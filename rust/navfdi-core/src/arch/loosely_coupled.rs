@@ -165,8 +165,7 @@ fn run<const NS: usize>(
 
     // Alignment.
     let measure = |aid: &Aid, k: usize, off: Option<usize>| -> Option<Vector3<f64>> {
-        let si = aid.sensor?;
-        let o = off?;
+        let (si, o) = (aid.sensor?, off?);
         if !models.available[si][k] {
             return None;
         }
@@ -216,8 +215,7 @@ fn run<const NS: usize>(
         },
         true,
     )?;
-    let ka = aligned.epoch;
-    let mut s = aligned.state;
+    let (ka, mut s) = (aligned.epoch, aligned.state);
     let q = s.q;
     // The INS point is the IMU's: move from the antenna by −C l.
     shift(&mut s, &-(q * lever));
@@ -518,12 +516,14 @@ fn run<const NS: usize>(
                 for j in (0..3).filter(|&j| holds[a].step_ended_at(j, tk)) {
                     receivers[a].forget(j);
                 }
-                // Held fixes the INS runs away from, or held out longer than the fixes before
-                // agreed (not a held ramp: it ends by its own rules): the INS is moved onto them.
+                // Held fixes the INS runs away from, held out longer than the fixes before agreed
+                // (not a held ramp: it ends by its own rules) or a return to the receiver's best
+                // quality (NoiseScale::resolved): the INS is moved onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
-                let mut uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, converged) {
+                let state = (converged, scales[a].resolved(tk));
+                let mut uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, state) {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();
@@ -532,7 +532,7 @@ fn run<const NS: usize>(
                     }
                     None => uses,
                 };
-                if watch[a].vertical(tk, holds[a].up_step(), converged) {
+                if watch[a].vertical(tk, holds[a].up_step(), state) {
                     diverge::reanchor_up(&mut s, &mut kf, d.z, sd.z, &mut holds[a]);
                     rec.reanchored.push(tk);
                     uses[2] = hold::Use::Raw;
@@ -597,6 +597,7 @@ fn run<const NS: usize>(
                     let hph: Vec<f64> = (0..n).map(|i| sv[(i, i)] - meas.r[(i, i)]).collect();
                     let rr: Vec<f64> = (0..n).map(|i| meas.r[(i, i)] / c2).collect();
                     scales[a].add(&d2, &hph, &rr);
+                    scales[a].used(tk);
                 }
             }
             if o.fused {

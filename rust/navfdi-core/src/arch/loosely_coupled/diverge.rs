@@ -238,6 +238,7 @@ impl Outlast {
     /// only, decide: a jump taken in then is no fault's start). True when the step has
     /// outlasted the spell before it, or undone a jump taken in (the INS is to be moved onto
     /// the fix).
+    #[allow(clippy::too_many_arguments)]
     pub fn push(
         &mut self,
         t: f64,
@@ -246,6 +247,7 @@ impl Outlast {
         held: bool,
         step: bool,
         converged: bool,
+        resolved: bool,
     ) -> bool {
         if !held {
             self.onset = None;
@@ -276,8 +278,13 @@ impl Outlast {
                 if let Some(i) = undone {
                     self.open.remove(i);
                 }
-                self.onset = Some((t, undone.is_some()));
+                // A hold that starts at the receiver's return to its best solution quality
+                // after the filter followed a worse one is that return, confirmed the same way.
+                self.onset = Some((t, undone.is_some() || resolved));
             }
+            // The receiver returns to its best quality during a hold that started while the
+            // filter followed a worse one: the hold is (from here) that return.
+            Some((_, false)) if resolved => self.onset = Some((t, true)),
             Some((t0, undone)) => {
                 let wait = if undone {
                     MATCH_CONFIRM
@@ -325,23 +332,24 @@ impl InsWatch {
         }
     }
 
-    /// The fix at `t` (s) with its up component held as a step (`held`), `converged` the
-    /// filter converged: true when that step has outlasted the spell of fixes before it by
+    /// The fix at `t` (s) with its up component held as a step (`held`), `state` (the filter
+    /// converged, the fix a return to the receiver's best solution quality): true when that step has outlasted the spell of fixes before it by
     /// [`OUTLAST_MARGIN`] ([`Outlast`], without the horizontal jumps' evidence) — the INS's
     /// height was wrong, not the fixes: it is moved onto them ([`reanchor_up`]).
     ///
     /// On drive_0708 on positions alone, float fixes 3 s after the alignment pulled the INS's
     /// height 0.35 m off; the RTK-fixed heights after them were held as a step for the rest
     /// of the drive, the height 0.36 m RMS off (0.025 m without FDE).
-    pub fn vertical(&mut self, t: f64, held: bool, converged: bool) -> bool {
+    pub fn vertical(&mut self, t: f64, held: bool, state: (bool, bool)) -> bool {
         self.up
             .as_mut()
-            .is_some_and(|o| o.push(t, None, [0.0; 2], held, true, converged))
+            .is_some_and(|o| o.push(t, None, [0.0; 2], held, true, state.0, state.1))
     }
 
     /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
     /// east and north, m): `held` a horizontal component held out or used relative to an
-    /// offset, `step` none of them a held ramp, `converged` the filter converged. The rate
+    /// offset, `step` none of them a held ramp, `state` (the filter converged, the fix a
+    /// return to the receiver's best solution quality: [`Outlast::push`]). The rate
     /// (m/s, INS − fix, east and north; zero for an outlasting step or a followed fault's
     /// end) to move the INS onto the fix with, when it is to be moved.
     pub fn push(
@@ -351,12 +359,12 @@ impl InsWatch {
         d: [f64; 2],
         held: bool,
         step: bool,
-        converged: bool,
+        state: (bool, bool),
     ) -> Option<[f64; 2]> {
         let outlasted = self
             .outlast
             .as_mut()
-            .is_some_and(|o| o.push(t, p, d, held, step, converged));
+            .is_some_and(|o| o.push(t, p, d, held, step, state.0, state.1));
         let rate = self.runaway.push(t, d, held);
         let rate = rate.or(outlasted.then_some([0.0; 2]));
         if rate.is_some() {
@@ -488,6 +496,7 @@ mod tests {
                 held,
                 step,
                 true,
+                false,
             )
         };
         let mut o = Outlast::new(2.0, 1.0);
@@ -517,9 +526,9 @@ mod tests {
                 let burst = if (38..46).contains(&k) { 15.0 } else { 0.0 };
                 // At its jump the fix is `off` m off the INS (INS − fix), then followed.
                 let d = if k == 38 { [0.0, off] } else { [0.0; 2] };
-                assert!(!o.push(k as f64, fix(k, burst), d, false, false, converged));
+                assert!(!o.push(k as f64, fix(k, burst), d, false, false, converged, false));
             }
-            (46..200).find(|&k| o.push(k as f64, fix(k, 15.0 - back), d, true, true, false))
+            (46..200).find(|&k| o.push(k as f64, fix(k, 15.0 - back), d, true, true, false, false))
         };
         let run = |d: [f64; 2], back: f64| run_with(d, back, -15.0, false);
         // Moved after 5 s of hold, not after 46 + 30.
@@ -609,18 +618,29 @@ mod tests {
         use crate::ins::error_filter::tests::noise;
         use crate::ins::error_filter::N;
         let mut w = InsWatch::new(Some(0.0), 1.0, std::iter::empty());
-        assert!((0..44).all(|t| !w.vertical(t as f64, false, true)));
+        assert!((0..44).all(|t| !w.vertical(t as f64, false, (true, false))));
         // Held from 44 s: it must outlast 44 − 0 + 30 s (fires at 119 s, not at 118 s).
         let fired: Vec<u32> = (44..200)
-            .filter(|&t| w.vertical(t as f64, true, true))
+            .filter(|&t| w.vertical(t as f64, true, (true, false)))
             .collect();
         assert_eq!(fired.first(), Some(&119), "{fired:?}");
         // A hold that ends in time is forgotten.
         let mut w = InsWatch::new(Some(0.0), 1.0, std::iter::empty());
-        assert!((44..100).all(|t| !w.vertical(t as f64, true, true)));
-        assert!(!w.vertical(100.0, false, true));
+        assert!((44..100).all(|t| !w.vertical(t as f64, true, (true, false))));
+        assert!(!w.vertical(100.0, false, (true, false)));
         // Holds of under a minute from 101 s on: each would have to outlast 131 s.
-        assert!((101..400).all(|t| !w.vertical(t as f64, t % 60 != 0, true)));
+        assert!((101..400).all(|t| !w.vertical(t as f64, t % 60 != 0, (true, false))));
+        // Held from the receiver's return to its best solution quality (after the filter
+        // used float fixes): the return, moved after 5 s (at 50 s), not 75 s; the same for a
+        // hold that started on a float fix and meets the return at 45 s (moved at 51 s).
+        for (start, back, at) in [(44, 44, 50), (44, 45, 51)] {
+            let mut w = InsWatch::new(Some(0.0), 1.0, std::iter::empty());
+            assert!((0..start).all(|t| !w.vertical(t as f64, false, (true, false))));
+            let fired: Vec<u32> = (start..200)
+                .filter(|&t| w.vertical(t as f64, true, (true, t >= back && t < back + 10)))
+                .collect();
+            assert_eq!(fired.first(), Some(&at), "{fired:?}");
+        }
 
         let mut s = NavState {
             lat: 0.7,

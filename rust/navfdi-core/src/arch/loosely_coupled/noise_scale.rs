@@ -25,7 +25,15 @@ pub struct NoiseScale {
     classes: Vec<(u8, NoiseScale)>,
     /// The best quality seen (rank of [`quality_rank`]).
     best: Option<u8>,
+    /// The quality of the last fix observed, and when a fix of a worse quality than the best
+    /// was last used as measured (s).
+    last_q: u8,
+    worse_used: f64,
 }
+
+/// Seconds after the filter last used a fix of a worse solution quality during which a fix of
+/// the best quality is a return from it ([`NoiseScale::resolved`]).
+pub const RESOLVE_MEMORY: f64 = 10.0;
 
 /// Rank of a solution quality in RTKLIB's codes, best first: fixed, float, PPP, DGPS, SBAS,
 /// single, then any other code; None for 0 (unknown).
@@ -97,7 +105,32 @@ impl NoiseScale {
             hi,
             classes: Vec::new(),
             best: None,
+            last_q: 0,
+            worse_used: f64::NEG_INFINITY,
         }
+    }
+
+    /// Whether the last fix observed is of a worse solution quality than the best seen.
+    fn worse(&self) -> bool {
+        let rank = quality_rank(self.last_q);
+        rank.is_some() && rank > self.best
+    }
+
+    /// The last fix observed was used as measured at `t` (s).
+    pub fn used(&mut self, t: f64) {
+        if self.worse() {
+            self.worse_used = t;
+        }
+    }
+
+    /// Whether the last fix observed, at `t` (s), is of the best quality and the filter used a
+    /// fix of a worse one within [`RESOLVE_MEMORY`] s: the receiver's return to its best
+    /// solution after the filter followed a worse one (a jump of it is that return, not a
+    /// fault's onset: [`super::diverge::Outlast`]).
+    pub fn resolved(&self, t: f64) -> bool {
+        quality_rank(self.last_q).is_some()
+            && !self.worse()
+            && t - self.worse_used <= RESOLVE_MEMORY
     }
 
     /// The scale for a fix of solution quality `q` (RTKLIB's codes; 0 unknown): this scale for
@@ -128,6 +161,7 @@ impl NoiseScale {
         r_meas: &nalgebra::DMatrix<f64>,
         scale: f64,
     ) {
+        self.last_q = q;
         let (Some(rank), Some((r, s))) = (quality_rank(q), inn) else {
             return;
         };
@@ -239,7 +273,23 @@ mod scale_tests {
         assert_eq!(g.scale_for(2), g.scale());
         g.observe(1, Some(&fixed), &r_meas, 1.0);
         assert_eq!(g.scale_for(2), 10.0);
-        assert_eq!([1, 2, 6, 4, 3, 5, 9].map(quality_rank), [0, 1, 2, 3, 4, 5, 6].map(Some));
+        // A return to the best quality within RESOLVE_MEMORY s of a worse fix used.
+        g.observe(2, Some(&float), &r_meas, 1.0);
+        g.used(100.0);
+        g.observe(1, Some(&fixed), &r_meas, 1.0);
+        assert!(g.resolved(105.0) && !g.resolved(100.0 + RESOLVE_MEMORY + 0.5));
+        g.observe(2, Some(&float), &r_meas, 1.0);
+        assert!(!g.resolved(101.0), "a worse fix is no return");
+        // A worse fix seen but not used does not count.
+        let mut h = NoiseScale::new(None, 1.0, 10.0);
+        h.observe(1, Some(&fixed), &r_meas, 1.0);
+        h.observe(2, Some(&float), &r_meas, 1.0);
+        h.observe(1, Some(&fixed), &r_meas, 1.0);
+        assert!(!h.resolved(1.0));
+        assert_eq!(
+            [1, 2, 6, 4, 3, 5, 9].map(quality_rank),
+            [0, 1, 2, 3, 4, 5, 6].map(Some)
+        );
         assert_eq!(quality_rank(0), None);
     }
 
