@@ -408,3 +408,23 @@ def test_the_solution_quality_column_is_checked() -> None:
     with pytest.raises(ValueError, match=r"row 5, column 13 \(solution quality\)"):
         _core.LoggedSource(sc.to_json(), data["imu"], bad, data["reference"])
     _core.LoggedSource(sc.to_json(), data["imu"], data["gnss"][:, :13], data["reference"])
+
+
+def test_a_step_across_a_return_from_float_is_still_held(tmp_path: Path) -> None:
+    """A return from float to fixed fixes is trusted after 5 s only within 1 m of the INS (an
+    RTK float solution is off by decimetres): a 20 m step that starts in the float stretch and
+    runs across the return stays held out (0.9 m of error in it; 28.5 m without FDE)."""
+    raw = _drive_positions_only()
+    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
+    src = dict(raw["source"])
+    src["gnss"] = str(_float_stretch(tmp_path, 200.0, 260.0, 0.3, 0.5))
+    src["reference"] = str(data / "gnss_1934_sf.pos.gz")
+    src["imu"] = {**src["imu"], "file": str(data / "imu_1934_gpst.csv.gz")}
+    raw["source"] = src
+    raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": "20 m",
+                      "start": "255 s", "end": "315 s"}]
+    runs = navfdi.run_scenario(from_dict(raw, source=str(tmp_path))).runs
+    x = runs["fde"]
+    during = (x.t >= 255.0) & (x.t < 315.0)
+    assert np.nanmax(_hor(x)[during]) < 2.0, np.nanmax(_hor(x)[during])
+    assert not [t for t in x.record["reanchored"] if 255.0 <= t < 320.0], x.record["reanchored"]

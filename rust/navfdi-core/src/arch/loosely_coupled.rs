@@ -522,7 +522,7 @@ fn run<const NS: usize>(
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
-                let state = (converged, scales[a].resolved(tk));
+                let state = (converged, scales[a].resolved(tk, d.norm()));
                 let mut uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, state) {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);

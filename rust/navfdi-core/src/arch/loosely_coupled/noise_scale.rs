@@ -31,9 +31,13 @@ pub struct NoiseScale {
     worse_used: f64,
 }
 
-/// Seconds after the filter last used a fix of a worse solution quality during which a fix of
-/// the best quality is a return from it ([`NoiseScale::resolved`]).
+/// Seconds after the filter last used a float fix during which a fixed one is a return from
+/// it ([`NoiseScale::resolved`]).
 pub const RESOLVE_MEMORY: f64 = 10.0;
+
+/// The largest offset (m, INS − fix) a return from float fixes explains: an RTK float
+/// solution is off by decimetres, rarely a metre; a larger jump at the return is a fault's.
+pub const FLOAT_RETURN: f64 = 1.0;
 
 /// Rank of a solution quality in RTKLIB's codes, best first: fixed, float, PPP, DGPS, SBAS,
 /// single, then any other code; None for 0 (unknown).
@@ -110,27 +114,21 @@ impl NoiseScale {
         }
     }
 
-    /// Whether the last fix observed is of a worse solution quality than the best seen.
-    fn worse(&self) -> bool {
-        let rank = quality_rank(self.last_q);
-        rank.is_some() && rank > self.best
-    }
-
     /// The last fix observed was used as measured at `t` (s).
     pub fn used(&mut self, t: f64) {
-        if self.worse() {
+        if self.last_q == 2 && self.best == quality_rank(1) {
             self.worse_used = t;
         }
     }
 
-    /// Whether the last fix observed, at `t` (s), is of the best quality and the filter used a
-    /// fix of a worse one within [`RESOLVE_MEMORY`] s: the receiver's return to its best
-    /// solution after the filter followed a worse one (a jump of it is that return, not a
-    /// fault's onset: [`super::diverge::Outlast`]).
-    pub fn resolved(&self, t: f64) -> bool {
-        quality_rank(self.last_q).is_some()
-            && !self.worse()
-            && t - self.worse_used <= RESOLVE_MEMORY
+    /// Whether the last fix observed, at `t` (s) and `offset` (m, |INS − fix|) from the INS,
+    /// is an RTK fixed solution within [`FLOAT_RETURN`] of it and the filter used a float one
+    /// within [`RESOLVE_MEMORY`] s: the receiver's return to its fixed solution after the
+    /// filter followed float ones (a jump of it is that return, not a fault's onset:
+    /// [`super::diverge::Outlast`]). Only RTK: a meter-level receiver that alternates DGPS
+    /// and single fixes jumps by as much as a fault would.
+    pub fn resolved(&self, t: f64, offset: f64) -> bool {
+        self.last_q == 1 && offset <= FLOAT_RETURN && t - self.worse_used <= RESOLVE_MEMORY
     }
 
     /// The scale for a fix of solution quality `q` (RTKLIB's codes; 0 unknown): this scale for
@@ -273,19 +271,31 @@ mod scale_tests {
         assert_eq!(g.scale_for(2), g.scale());
         g.observe(1, Some(&fixed), &r_meas, 1.0);
         assert_eq!(g.scale_for(2), 10.0);
-        // A return to the best quality within RESOLVE_MEMORY s of a worse fix used.
+        // A fixed fix within RESOLVE_MEMORY s of a float fix used, within FLOAT_RETURN of the
+        // INS, is the return from it.
         g.observe(2, Some(&float), &r_meas, 1.0);
         g.used(100.0);
         g.observe(1, Some(&fixed), &r_meas, 1.0);
-        assert!(g.resolved(105.0) && !g.resolved(100.0 + RESOLVE_MEMORY + 0.5));
+        assert!(g.resolved(105.0, 0.5) && !g.resolved(100.0 + RESOLVE_MEMORY + 0.5, 0.5));
+        assert!(
+            !g.resolved(105.0, FLOAT_RETURN + 0.1),
+            "a jump beyond a float error"
+        );
         g.observe(2, Some(&float), &r_meas, 1.0);
-        assert!(!g.resolved(101.0), "a worse fix is no return");
-        // A worse fix seen but not used does not count.
+        assert!(!g.resolved(101.0, 0.5), "a float fix is no return");
+        // A float fix seen but not used does not count.
         let mut h = NoiseScale::new(None, 1.0, 10.0);
         h.observe(1, Some(&fixed), &r_meas, 1.0);
         h.observe(2, Some(&float), &r_meas, 1.0);
         h.observe(1, Some(&fixed), &r_meas, 1.0);
-        assert!(!h.resolved(1.0));
+        assert!(!h.resolved(1.0, 0.5));
+        // Meter-level qualities (single after DGPS) are no RTK return.
+        let mut m = NoiseScale::new(None, 1.0, 10.0);
+        m.observe(4, Some(&fixed), &r_meas, 1.0);
+        m.observe(5, Some(&float), &r_meas, 1.0);
+        m.used(10.0);
+        m.observe(4, Some(&fixed), &r_meas, 1.0);
+        assert!(!m.resolved(11.0, 0.5));
         assert_eq!(
             [1, 2, 6, 4, 3, 5, 9].map(quality_rank),
             [0, 1, 2, 3, 4, 5, 6].map(Some)
