@@ -286,6 +286,20 @@ def _float_stretch(folder: Path, start: float, end: float, sigma_h: float, sigma
     return path
 
 
+def _float_drive(folder: Path) -> dict:
+    """The drive on positions alone (its scenario table) read from a copy of its ``.pos`` with
+    60 s of float fixes over 200-260 s, 0.3 m / 0.5 m off (:func:`_float_stretch`, written to
+    ``folder``); scored against the original fixes."""
+    raw = _drive_positions_only()
+    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
+    src = dict(raw["source"])
+    src["gnss"] = str(_float_stretch(folder, 200.0, 260.0, 0.3, 0.5))
+    src["reference"] = str(data / "gnss_1934_sf.pos.gz")
+    src["imu"] = {**src["imu"], "file": str(data / "imu_1934_gpst.csv.gz")}
+    raw["source"] = src
+    return raw
+
+
 def test_a_float_stretch_on_positions_alone_does_not_run_the_height_away(tmp_path: Path) -> None:
     """60 s of float fixes 0.3 m / 0.5 m off (σ as recorded, cm) on the drive without its
     velocity channel: the window test, against the INS's displacement, flagged the height as
@@ -295,13 +309,7 @@ def test_a_float_stretch_on_positions_alone_does_not_run_the_height_away(tmp_pat
     steps). Then the float fixes' end was held as a step for 230 s (horizontal 0.30 m RMS
     against 0.10 m): the float fixes now have a noise scale of their own (RTKLIB's quality 2),
     learned from their innovations, and are used with it."""
-    raw = _drive_positions_only()
-    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
-    src = dict(raw["source"])
-    src["gnss"] = str(_float_stretch(tmp_path, 200.0, 260.0, 0.3, 0.5))
-    src["reference"] = str(data / "gnss_1934_sf.pos.gz")
-    src["imu"] = {**src["imu"], "file": str(data / "imu_1934_gpst.csv.gz")}
-    raw["source"] = src
+    raw = _float_drive(tmp_path)
     runs = navfdi.run_scenario(from_dict(raw, source=str(tmp_path))).runs
     up = {v: np.asarray(runs[v].record["error"])[:, 8] for v in ("fde", "no_fde")}
     rms = {v: float(np.sqrt(np.nanmean(x ** 2))) for v, x in up.items()}
@@ -414,13 +422,7 @@ def test_a_step_across_a_return_from_float_is_still_held(tmp_path: Path) -> None
     """A return from float to fixed fixes is trusted after 5 s only within 1 m of the INS (an
     RTK float solution is off by decimetres): a 20 m step that starts in the float stretch and
     runs across the return stays held out (0.9 m of error in it; 28.5 m without FDE)."""
-    raw = _drive_positions_only()
-    data = Path(navfdi.__file__).parent / "data" / "drive_0708"
-    src = dict(raw["source"])
-    src["gnss"] = str(_float_stretch(tmp_path, 200.0, 260.0, 0.3, 0.5))
-    src["reference"] = str(data / "gnss_1934_sf.pos.gz")
-    src["imu"] = {**src["imu"], "file": str(data / "imu_1934_gpst.csv.gz")}
-    raw["source"] = src
+    raw = _float_drive(tmp_path)
     raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": "20 m",
                       "start": "255 s", "end": "315 s"}]
     runs = navfdi.run_scenario(from_dict(raw, source=str(tmp_path))).runs

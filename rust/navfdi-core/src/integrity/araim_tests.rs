@@ -119,6 +119,16 @@ fn the_add_search_returns_a_level_within_tol_pl_above_the_root() {
     }
 }
 
+/// A deterministic uniform draw in [0, 1) (a 64-bit LCG's top 53 bits) from `seed`.
+fn uniform_from(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
 #[test]
 fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
     // add_level replays the half-interval search from the root instead of evaluating f at
@@ -142,13 +152,7 @@ fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
         }
         hi
     };
-    let mut seed = 7_u64;
-    let mut uniform = || {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = uniform_from(7);
     for case in 0..300 {
         let k = 1 + case % 40;
         let terms: Vec<(f64, f64, f64)> = (0..k)
@@ -176,13 +180,7 @@ fn the_replayed_add_search_returns_the_plain_searchs_level_bit_for_bit() {
 #[test]
 fn the_root_search_leaves_out_only_terms_below_its_floor() {
     // Priors of satellites, pairs and constellations; shifts and σ of 40-satellite modes.
-    let mut seed = 11_u64;
-    let mut uniform = || {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut uniform = uniform_from(11);
     let (mut dropped, mut total) = (0, 0);
     for _ in 0..50 {
         let terms: Vec<(f64, f64, f64)> = (0..200)
