@@ -185,14 +185,16 @@ def test_a_burst_on_a_held_step_is_a_new_offset_on_positions_only(tmp_path: Path
     assert rms["fde"] <= rms["no_fde"], rms
 
 
-def _drive_positions_only() -> dict:
-    """drive_lc's scenario with its velocity channel removed, fault-free, with and without FDE."""
+def _drive_positions_only(velocity: bool = False) -> dict:
+    """drive_lc's scenario with its velocity channel removed (kept with ``velocity``),
+    fault-free, with and without FDE."""
     import copy
 
     sc = load_scenario("drive_lc")
     raw = copy.deepcopy(dict(sc.raw))
-    raw["sensors"] = [s for s in raw["sensors"] if s["name"] != "gnss_vel"]
-    raw["loosely_coupled"] = {**raw["loosely_coupled"], "sensors": [s for s in raw["loosely_coupled"]["sensors"] if s["sensor"] != "gnss_vel"]}
+    if not velocity:
+        raw["sensors"] = [s for s in raw["sensors"] if s["name"] != "gnss_vel"]
+        raw["loosely_coupled"] = {**raw["loosely_coupled"], "sensors": [s for s in raw["loosely_coupled"]["sensors"] if s["sensor"] != "gnss_vel"]}
     raw.pop("faults", None)
     raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
     return raw
@@ -286,11 +288,12 @@ def _float_stretch(folder: Path, start: float, end: float, sigma_h: float, sigma
     return path
 
 
-def _float_drive(folder: Path) -> dict:
-    """The drive on positions alone (its scenario table) read from a copy of its ``.pos`` with
-    60 s of float fixes over 200-260 s, 0.3 m / 0.5 m off (:func:`_float_stretch`, written to
-    ``folder``); scored against the original fixes."""
-    raw = _drive_positions_only()
+def _float_drive(folder: Path, velocity: bool = False) -> dict:
+    """The drive on positions alone (with the receiver's velocities: ``velocity``; its
+    scenario table) read from a copy of its ``.pos`` with 60 s of float fixes over 200-260 s,
+    0.3 m / 0.5 m off (:func:`_float_stretch`, written to ``folder``); scored against the
+    original fixes."""
+    raw = _drive_positions_only(velocity)
     data = Path(navfdi.__file__).parent / "data" / "drive_0708"
     src = dict(raw["source"])
     src["gnss"] = str(_float_stretch(folder, 200.0, 260.0, 0.3, 0.5))
@@ -430,3 +433,18 @@ def test_a_step_across_a_return_from_float_is_still_held(tmp_path: Path) -> None
     during = (x.t >= 255.0) & (x.t < 315.0)
     assert np.nanmax(_hor(x)[during]) < 2.0, np.nanmax(_hor(x)[during])
     assert not [t for t in x.record["reanchored"] if 255.0 <= t < 320.0], x.record["reanchored"]
+
+
+def test_a_float_stretch_with_velocities_ends_at_the_return_to_fixed(tmp_path: Path) -> None:
+    """With the receiver's velocities the float positions of the stretch drift from the
+    displacement its velocities give, and the receiver consistency holds them as a ramp (right).
+    When the receiver returns to fixed fixes within 1 m of the INS, right after float ones,
+    the ramp held is released and the fixed fixes are used: 1 fix left out in the 60 s after
+    the stretch (26 before), the horizontal error the run without FDE's."""
+    runs = navfdi.run_scenario(from_dict(_float_drive(tmp_path, velocity=True), source=str(tmp_path))).runs
+    x = runs["fde"]
+    sub = next(s for s in x.record["subfilters"] if s["sensor"] == "gnss_pos")
+    out = (np.asarray(sub["reason"]) > 0) & (np.asarray(sub["dof"]) > 0)
+    assert out[(x.t >= 260.0) & (x.t < 320.0)].sum() <= 3, out[(x.t >= 260.0) & (x.t < 320.0)].sum()
+    hor = {v: float(np.sqrt(np.nanmean(_hor(runs[v]) ** 2))) for v in ("fde", "no_fde")}
+    assert hor["fde"] <= 1.1 * hor["no_fde"], hor

@@ -29,16 +29,16 @@ use super::inertial::{align, record_nav, velocity_from_positions, BodyImu, Mecha
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
-use crate::ins::earth;
 use crate::ins::error_filter::{ErrorFilter, N, N_SCALE, PHI, R, V};
 use crate::ins::strapdown::{mounting, skew, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
 use checks::{
-    antenna, correlation_weight, diag, enu, isolate, rows, shift, sigma_h, still, three, Meas,
+    antenna, correlation_weight, diag, enu, gnss_measurement, isolate, rows, shift, sigma_h, still,
+    three, Meas,
 };
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 /// One aiding channel's configuration resolved against the scenario.
 struct Aid {
@@ -404,7 +404,7 @@ fn run<const NS: usize>(
             meas.r *= c * c;
             let mut o = test(&kf, aid, &meas, isolation).map_err(at)?;
             o.scale = c;
-            scales[a].observe(q, o.inn.as_ref(), &meas.r, c);
+            scales[a].observe((q, tk), o.inn.as_ref(), &meas.r, c);
             tested.push((a, meas, o));
         }
         // Convergence: every tested GNSS channel's predicted σ within `convergence` times its
@@ -498,6 +498,9 @@ fn run<const NS: usize>(
                 } else {
                     vec![0, 1, 2]
                 };
+                if scales[a].float_ended(tk, d.norm()) {
+                    (0..3).for_each(|j| holds[a].release_drift(j));
+                }
                 let uses = holds[a].decide(
                     tk,
                     &d,
@@ -705,69 +708,6 @@ fn receiver_epoch(
         }
     }
     out
-}
-
-#[allow(clippy::too_many_arguments)]
-fn gnss_measurement<const NS: usize>(
-    s: &NavState,
-    aid: &Aid,
-    z: &DVector<f64>,
-    sig: Option<&DVector<f64>>,
-    origin: &Nominal,
-    lever: &Vector3<f64>,
-    w: &Vector3<f64>,
-) -> Meas {
-    let dim = z.len();
-    let c = s.q.to_rotation_matrix().into_inner();
-    let cl = c * lever;
-    let mut res = DVector::zeros(dim);
-    let mut h = DMatrix::zeros(dim, NS);
-    // NED rows into the sensor's east, north, up order.
-    let mut put = |off: usize,
-                   d_ned: &Vector3<f64>,
-                   rows: &nalgebra::Matrix3x6<f64>,
-                   col0: usize,
-                   blk: &Matrix3<f64>| {
-        let order = [(1usize, 1.0), (0, 1.0), (2, -1.0)];
-        for (j, (src_row, sign)) in order.iter().enumerate() {
-            res[off + j] = sign * d_ned[*src_row];
-            for q in 0..3 {
-                h[(off + j, col0 + q)] = sign * rows[(*src_row, q)];
-                h[(off + j, PHI + q)] = sign * blk[(*src_row, q)];
-            }
-        }
-    };
-    let ident = nalgebra::Matrix3x6::<f64>::from_fn(|r, c| if r == c { 1.0 } else { 0.0 });
-    if let Some(o) = aid.pos {
-        let g = origin.from_enu(&Vector3::new(z[o], z[o + 1], z[o + 2]));
-        let rm = earth::r_meridian(s.lat) + s.h;
-        let rn = earth::r_normal(s.lat) + s.h;
-        let d = Vector3::new(
-            (s.lat - g.lat) * rm,
-            (s.lon - g.lon) * rn * s.lat.cos(),
-            -(s.h - g.h),
-        ) + cl;
-        put(o, &d, &ident, R, &skew(&cl));
-    }
-    if let Some(o) = aid.vel {
-        let vl = c * w.cross(lever);
-        let v_g = Vector3::new(z[o + 1], z[o], -z[o + 2]);
-        let d = s.v + vl - v_g;
-        put(o, &d, &ident, V, &skew(&vl));
-    }
-    let sd: Vec<f64> = (0..dim)
-        .map(|j| {
-            let rec = sig
-                .and_then(|v| v.get(j).copied())
-                .filter(|x| x.is_finite() && *x > 0.0);
-            rec.unwrap_or(0.0).max(aid.floor[j])
-        })
-        .collect();
-    Meas {
-        res,
-        h,
-        r: diag(&sd),
-    }
 }
 
 /// Test one measurement with the channel's detectors: the outcome says whether its deciding

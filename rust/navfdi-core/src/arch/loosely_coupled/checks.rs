@@ -3,9 +3,13 @@
 
 pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
+use crate::ins::earth;
+use crate::ins::error_filter::{PHI, R, V};
+use crate::ins::strapdown::{skew, NavState};
 use crate::spec::ConstraintSpec;
 use crate::stream::Logged;
-use nalgebra::{DMatrix, DVector, Vector3};
+use crate::stream::Nominal;
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// A measurement ready for the filter, components in the channel's order.
 pub(super) struct Meas {
@@ -100,6 +104,74 @@ pub(super) fn sigma_h(logged: &Logged, aid: &super::Aid, k: usize) -> f64 {
         .map(|(s, o)| s[o].max(s[o + 1]))
         .filter(|x| x.is_finite() && *x > 0.0);
     rec.unwrap_or(0.0).max(aid.floor[0].max(aid.floor[1]))
+}
+
+/// The GNSS measurement of channel `aid` at the INS state `s`: the innovation `INS − fix`
+/// (position: the fix `z` east, north, up from `origin`, m, lever arm `lever` applied; velocity:
+/// m/s, with the lever arm's rotation at the body rate `w`, rad/s) in the sensor's east, north,
+/// up order, its rows of H in the `NS` error states, and R from the recorded σ `sig` floored
+/// at the sensor's noise.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn gnss_measurement<const NS: usize>(
+    s: &NavState,
+    aid: &super::Aid,
+    z: &DVector<f64>,
+    sig: Option<&DVector<f64>>,
+    origin: &Nominal,
+    lever: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> Meas {
+    let dim = z.len();
+    let c = s.q.to_rotation_matrix().into_inner();
+    let cl = c * lever;
+    let mut res = DVector::zeros(dim);
+    let mut h = DMatrix::zeros(dim, NS);
+    // NED rows into the sensor's east, north, up order.
+    let mut put = |off: usize,
+                   d_ned: &Vector3<f64>,
+                   rows: &nalgebra::Matrix3x6<f64>,
+                   col0: usize,
+                   blk: &Matrix3<f64>| {
+        let order = [(1usize, 1.0), (0, 1.0), (2, -1.0)];
+        for (j, (src_row, sign)) in order.iter().enumerate() {
+            res[off + j] = sign * d_ned[*src_row];
+            for q in 0..3 {
+                h[(off + j, col0 + q)] = sign * rows[(*src_row, q)];
+                h[(off + j, PHI + q)] = sign * blk[(*src_row, q)];
+            }
+        }
+    };
+    let ident = nalgebra::Matrix3x6::<f64>::from_fn(|r, c| if r == c { 1.0 } else { 0.0 });
+    if let Some(o) = aid.pos {
+        let g = origin.from_enu(&Vector3::new(z[o], z[o + 1], z[o + 2]));
+        let rm = earth::r_meridian(s.lat) + s.h;
+        let rn = earth::r_normal(s.lat) + s.h;
+        let d = Vector3::new(
+            (s.lat - g.lat) * rm,
+            (s.lon - g.lon) * rn * s.lat.cos(),
+            -(s.h - g.h),
+        ) + cl;
+        put(o, &d, &ident, R, &skew(&cl));
+    }
+    if let Some(o) = aid.vel {
+        let vl = c * w.cross(lever);
+        let v_g = Vector3::new(z[o + 1], z[o], -z[o + 2]);
+        let d = s.v + vl - v_g;
+        put(o, &d, &ident, V, &skew(&vl));
+    }
+    let sd: Vec<f64> = (0..dim)
+        .map(|j| {
+            let rec = sig
+                .and_then(|v| v.get(j).copied())
+                .filter(|x| x.is_finite() && *x > 0.0);
+            rec.unwrap_or(0.0).max(aid.floor[j])
+        })
+        .collect();
+    Meas {
+        res,
+        h,
+        r: diag(&sd),
+    }
 }
 
 /// Rest over the window before `tk`: σ of the specific-force magnitude and mean

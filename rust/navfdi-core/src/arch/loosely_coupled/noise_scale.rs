@@ -29,6 +29,7 @@ pub struct NoiseScale {
     /// was last used as measured (s).
     last_q: u8,
     worse_used: f64,
+    float_seen: f64,
 }
 
 /// Seconds after the filter last used a float fix during which a fixed one is a return from
@@ -111,7 +112,15 @@ impl NoiseScale {
             best: None,
             last_q: 0,
             worse_used: f64::NEG_INFINITY,
+            float_seen: f64::NEG_INFINITY,
         }
+    }
+
+    /// Whether the last fix observed, at `t` (s) and `offset` (m) from the INS, is a fixed one
+    /// within [`FLOAT_RETURN`] right after float ones were observed (within
+    /// [`RESOLVE_MEMORY`] s, used or not).
+    pub fn float_ended(&self, t: f64, offset: f64) -> bool {
+        self.last_q == 1 && offset <= FLOAT_RETURN && t - self.float_seen <= RESOLVE_MEMORY
     }
 
     /// The last fix observed was used as measured at `t` (s).
@@ -148,18 +157,22 @@ impl NoiseScale {
         }
     }
 
-    /// A tested fix of quality `q` (used or not): its innovation `r` (m) and the innovation
-    /// covariance `s` of its test (m²; `inn` = (r, s), None: not tested) and its measurement
-    /// covariance `r_meas` at `scale` (m²), for that quality's own scale; the best quality
-    /// seen is updated.
+    /// A tested fix of quality `q` at `t` (s; `fix` = (q, t); used or not): its innovation `r`
+    /// (m) and the innovation covariance `s` of its test (m²; `inn` = (r, s), None: not
+    /// tested) and its measurement covariance `r_meas` at `scale` (m²), for that quality's own
+    /// scale; the best quality seen is updated.
     pub fn observe(
         &mut self,
-        q: u8,
+        fix: (u8, f64),
         inn: Option<&(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>)>,
         r_meas: &nalgebra::DMatrix<f64>,
         scale: f64,
     ) {
+        let q = fix.0;
         self.last_q = q;
+        if q == 2 {
+            self.float_seen = fix.1;
+        }
         let (Some(rank), Some((r, s))) = (quality_rank(q), inn) else {
             return;
         };
@@ -243,7 +256,7 @@ mod scale_tests {
         let r_meas = DMatrix::from_diagonal_element(3, 3, 1e-4);
         let fixed = (DVector::from_element(3, 0.01), &r_meas * 1.0001);
         for _ in 0..40 {
-            s.observe(1, Some(&fixed), &r_meas, 1.0);
+            s.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
             s.add(&[1e-4; 3], &[1e-8; 3], &[1e-4; 3]);
         }
         let channel = s.scale();
@@ -252,7 +265,7 @@ mod scale_tests {
         for k in 0..SCALE_MIN / 3 {
             // Below SCALE_MIN components the channel's scale.
             assert_eq!(s.scale_for(2), channel, "after {k} float fixes");
-            s.observe(2, Some(&float), &r_meas, 1.0);
+            s.observe((2, 0.0), Some(&float), &r_meas, 1.0);
         }
         assert_eq!(s.scale_for(2), 10.0); // 30 σ, clamped at hi
         assert_eq!(s.scale_for(1), channel);
@@ -260,47 +273,55 @@ mod scale_tests {
         // A fixed scale is the user's for every quality.
         let mut f = NoiseScale::new(Some(2.0), 1.0, 10.0);
         for _ in 0..20 {
-            f.observe(2, Some(&float), &r_meas, 2.0);
+            f.observe((2, 0.0), Some(&float), &r_meas, 2.0);
         }
         assert_eq!(f.scale_for(2), 2.0);
         // Float first, fixed later: once fixed solutions are seen, float is the worse one.
         let mut g = NoiseScale::new(None, 1.0, 10.0);
         for _ in 0..12 {
-            g.observe(2, Some(&float), &r_meas, 1.0);
+            g.observe((2, 0.0), Some(&float), &r_meas, 1.0);
         }
         assert_eq!(g.scale_for(2), g.scale());
-        g.observe(1, Some(&fixed), &r_meas, 1.0);
+        g.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
         assert_eq!(g.scale_for(2), 10.0);
         // A fixed fix within RESOLVE_MEMORY s of a float fix used, within FLOAT_RETURN of the
         // INS, is the return from it.
-        g.observe(2, Some(&float), &r_meas, 1.0);
+        g.observe((2, 0.0), Some(&float), &r_meas, 1.0);
         g.used(100.0);
-        g.observe(1, Some(&fixed), &r_meas, 1.0);
+        g.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
         assert!(g.resolved(105.0, 0.5) && !g.resolved(100.0 + RESOLVE_MEMORY + 0.5, 0.5));
         assert!(
             !g.resolved(105.0, FLOAT_RETURN + 0.1),
             "a jump beyond a float error"
         );
-        g.observe(2, Some(&float), &r_meas, 1.0);
+        g.observe((2, 0.0), Some(&float), &r_meas, 1.0);
         assert!(!g.resolved(101.0, 0.5), "a float fix is no return");
         // A float fix seen but not used does not count.
         let mut h = NoiseScale::new(None, 1.0, 10.0);
-        h.observe(1, Some(&fixed), &r_meas, 1.0);
-        h.observe(2, Some(&float), &r_meas, 1.0);
-        h.observe(1, Some(&fixed), &r_meas, 1.0);
+        h.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
+        h.observe((2, 0.0), Some(&float), &r_meas, 1.0);
+        h.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
         assert!(!h.resolved(1.0, 0.5));
         // Meter-level qualities (single after DGPS) are no RTK return.
         let mut m = NoiseScale::new(None, 1.0, 10.0);
-        m.observe(4, Some(&fixed), &r_meas, 1.0);
-        m.observe(5, Some(&float), &r_meas, 1.0);
+        m.observe((4, 0.0), Some(&fixed), &r_meas, 1.0);
+        m.observe((5, 0.0), Some(&float), &r_meas, 1.0);
         m.used(10.0);
-        m.observe(4, Some(&fixed), &r_meas, 1.0);
+        m.observe((4, 0.0), Some(&fixed), &r_meas, 1.0);
         assert!(!m.resolved(11.0, 0.5));
         assert_eq!(
             [1, 2, 6, 4, 3, 5, 9].map(quality_rank),
             [0, 1, 2, 3, 4, 5, 6].map(Some)
         );
         assert_eq!(quality_rank(0), None);
+        // A fixed fix within RESOLVE_MEMORY s of a float one seen (used or not) ends a float
+        // stretch, within FLOAT_RETURN.
+        let mut e = NoiseScale::new(None, 1.0, 10.0);
+        e.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
+        e.observe((2, 50.0), Some(&float), &r_meas, 1.0);
+        e.observe((1, 51.0), Some(&fixed), &r_meas, 1.0);
+        assert!(e.float_ended(51.0, 0.8) && !e.float_ended(51.0, 1.2));
+        assert!(!e.float_ended(50.0 + RESOLVE_MEMORY + 1.0, 0.8));
     }
 
     /// The rolling window's median is the selection's over the same values, to the bit,
