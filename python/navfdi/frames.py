@@ -43,7 +43,7 @@ HEADING_TOLERANCE_DEG = 30.0
 VELOCITY_EXCLUSION_SHARE = 0.2
 #: Share of a positions-only receiver's tested fixes left out above which a run warns: the
 #: displacement checks and this INS do not agree (the recorded drive with FDE and positions
-#: alone left 99 % out before its two causes were fixed; 19 % now, none without FDE).
+#: alone left 99 % out before its causes were fixed; 2 % now, none without FDE).
 POSITION_EXCLUSION_SHARE = 0.5
 
 _NAMES = ("x", "y", "z")

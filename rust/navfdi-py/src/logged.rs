@@ -17,11 +17,10 @@ use pyo3::types::PyList;
 use std::sync::OnceLock;
 
 fn gnss_log(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<GnssLog> {
-    let cols = read(name, obj)?.shape.get(1).copied().unwrap_or(0);
-    let m = columns(name, obj, if cols == 14 { 14 } else { 13 })?;
+    let m = columns(name, obj, &[13, 14])?;
     let rows = m.nrows();
     let v3 = |r: usize, c: usize| Vector3::new(m[(r, c)], m[(r, c + 1)], m[(r, c + 2)]);
-    let q = if cols == 14 {
+    let q = if m.ncols() == 14 {
         (0..rows)
             .map(|r| {
                 let v = m[(r, 13)];
@@ -53,11 +52,14 @@ fn gnss_log(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<GnssLog> {
     })
 }
 
-fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: usize) -> PyResult<DMatrix<f64>> {
+/// `obj` as a matrix of one of the column counts `cols` (ValueError naming `name` otherwise).
+fn columns(name: &str, obj: &Bound<'_, PyAny>, cols: &[usize]) -> PyResult<DMatrix<f64>> {
     let a = read(name, obj)?;
-    if a.shape.len() != 2 || a.shape[1] != cols {
+    if a.shape.len() != 2 || !cols.contains(&a.shape[1]) {
+        let want: Vec<String> = cols.iter().map(|c| format!("(n, {c})")).collect();
         return Err(PyValueError::new_err(format!(
-            "{name}: expected shape (n, {cols}), got {:?}",
+            "{name}: expected shape {}, got {:?}",
+            want.join(" or "),
             a.shape
         )));
     }
@@ -116,7 +118,7 @@ impl PyLoggedSource {
         score_inputs: bool,
     ) -> PyResult<Self> {
         let spec = ScenarioSpec::from_json(spec_json).py()?;
-        let m = columns("imu", imu, 7)?;
+        let m = columns("imu", imu, &[7])?;
         let n = m.nrows();
         let mut imu = ImuSamples {
             t: (0..n).map(|r| m[(r, 0)]).collect(),

@@ -319,28 +319,24 @@ pub fn align(
                 found = Some(rest);
             }
         } else {
-            short.get_or_insert((k0, k1));
+            short.get_or_insert((k0, k1, rest.len()));
         }
         from = k0;
     }
     let Some(idx) = found else {
-        if let Some((k0, k1)) = short {
-            // Only stretches too short to level on: in motion if the log allows, else say so.
-            return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
-                Error::Invalid(format!(
-                    "alignment: the static start {:.2}–{:.2} s holds {} IMU samples; levelling needs at least {MIN_LEVEL_SAMPLES}",
-                    t[k0],
-                    t[k1],
-                    samples(k0, k1).len()
-                ))
-            });
-        }
-        // No rest before moving: align in motion (a car's velocity is along its forward axis).
+        // No rest to level on before moving: align in motion (a car's velocity is along its
+        // forward axis), else say why.
         return in_motion(a, imu, t, origin, ka, &vel, &pos, &sig_v).ok_or_else(|| {
-            Error::Invalid(format!(
-                "alignment: no static start (GNSS speed below {section}.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s, and no second GNSS velocity within 2 s of that epoch to align in motion",
-                a.static_speed, a.speed
-            ))
+            Error::Invalid(match short {
+                Some((k0, k1, n)) => format!(
+                    "alignment: the static start {:.2}–{:.2} s holds {n} IMU samples at rest; levelling needs at least {MIN_LEVEL_SAMPLES}",
+                    t[k0], t[k1]
+                ),
+                None => format!(
+                    "alignment: no static start (GNSS speed below {section}.alignment.static_speed = {} m/s) before the vehicle reaches {} m/s, and no second GNSS velocity within 2 s of that epoch to align in motion",
+                    a.static_speed, a.speed
+                ),
+            })
         });
     };
     let mean =

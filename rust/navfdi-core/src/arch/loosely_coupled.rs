@@ -520,8 +520,8 @@ fn run<const NS: usize>(
                     receivers[a].forget(j);
                 }
                 // Held fixes the INS runs away from, held out longer than the fixes before agreed
-                // (not a held ramp: it ends by its own rules) or a return to the receiver's best
-                // quality (NoiseScale::resolved): the INS is moved onto them.
+                // (not a held ramp: it ends by its own rules) or a return from float fixes
+                // (NoiseScale::resolved): the INS is moved onto them.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
@@ -593,14 +593,8 @@ fn run<const NS: usize>(
             o.reason = reason;
             // The noise scale learns from fixes used as measured.
             if reason == 0 && !o.excluded && !o.partial {
-                if let Some((r, sv)) = o.inn.as_ref() {
-                    let c2 = o.scale * o.scale;
-                    let n = r.len();
-                    let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
-                    let hph: Vec<f64> = (0..n).map(|i| sv[(i, i)] - meas.r[(i, i)]).collect();
-                    let rr: Vec<f64> = (0..n).map(|i| meas.r[(i, i)] / c2).collect();
-                    scales[a].add(&d2, &hph, &rr);
-                    scales[a].used(tk);
+                if let Some(inn) = o.inn.as_ref() {
+                    scales[a].used(tk, inn, &meas.r, o.scale);
                 }
             }
             if o.fused {

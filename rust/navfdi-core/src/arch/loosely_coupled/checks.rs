@@ -7,8 +7,7 @@ use crate::ins::earth;
 use crate::ins::error_filter::{PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
 use crate::spec::ConstraintSpec;
-use crate::stream::Logged;
-use crate::stream::Nominal;
+use crate::stream::{Logged, Nominal};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// A measurement ready for the filter, components in the channel's order.

@@ -126,6 +126,47 @@ fn same(e: [f64; 2], d: [f64; 2]) -> bool {
     (d[0] - e[0]).hypot(d[1] - e[1]) <= MATCH_TOLERANCE.max(0.25 * e[0].hypot(e[1]))
 }
 
+/// A channel's last two fixes (time s, east and north m) and the sizes of their horizontal
+/// second differences (the last `CAP`): the fixes' own noise from one fix to the next.
+#[derive(Debug, Clone, Default)]
+pub(super) struct SecondDifferences<const CAP: usize> {
+    last: [Option<(f64, [f64; 2])>; 2],
+    sizes: super::noise_scale::Rolling<CAP>,
+}
+
+impl<const CAP: usize> SecondDifferences<CAP> {
+    /// The fix `p` (east, north, m) at `t` (s), the fixes `interval` s apart: kept as the
+    /// last; its second difference with the two before it when each is at most 1.5 intervals
+    /// from the next (its size is not recorded: [`SecondDifferences::record`]).
+    pub fn push(&mut self, t: f64, p: [f64; 2], interval: f64) -> Option<[f64; 2]> {
+        let gap = 1.5 * interval;
+        let e = match self.last {
+            [Some((t1, p1)), Some((t0, p0))] if t - t1 <= gap && t1 - t0 <= gap => {
+                Some([0, 1].map(|j| p[j] - 2.0 * p1[j] + p0[j]))
+            }
+            _ => None,
+        };
+        self.last = [Some((t, p)), self.last[0]];
+        e
+    }
+
+    /// Record a second difference's size (m).
+    pub fn record(&mut self, size: f64) {
+        self.sizes.push(size);
+    }
+
+    /// The last fix and the one before it.
+    pub fn last(&self) -> [Option<(f64, [f64; 2])>; 2] {
+        self.last
+    }
+
+    /// σ per component (m) of the recorded second differences, from their median size (a 2D
+    /// Gaussian's: 1.1774 σ); None with fewer than `min` recorded.
+    pub fn sigma(&self, min: usize) -> Option<f64> {
+        (self.sizes.len() >= min.max(1)).then(|| self.sizes.median() / 1.1774)
+    }
+}
+
 /// A held step that outlasts the fixes the INS agreed with before it.
 ///
 /// The INS takes its position from the fixes at the alignment. When those fixes were in a
@@ -153,12 +194,10 @@ pub struct Outlast {
     onset: Option<(f64, bool)>,
     /// The fix interval (s).
     interval: f64,
-    /// The last two fixes (time s, east and north m).
-    last: [Option<(f64, [f64; 2])>; 2],
+    /// The last fixes and their second differences' sizes.
+    steps: SecondDifferences<JUMP_WINDOW>,
     /// The last fix's jump (its second difference comes back at the next fix).
     prev_jump: Option<[f64; 2]>,
-    /// The last second differences' sizes (m).
-    sizes: super::noise_scale::Rolling<JUMP_WINDOW>,
     /// Jumps the filter took in and no later jump undid: time (s), size (m).
     open: Vec<(f64, [f64; 2])>,
 }
@@ -171,31 +210,17 @@ impl Outlast {
             spell: first_fix,
             onset: None,
             interval,
-            last: [None; 2],
+            steps: Default::default(),
             prev_jump: None,
-            sizes: Default::default(),
             open: Vec::new(),
         }
     }
 
     /// The fix `p` (east, north, m) at `t` (s): its jump ([`JUMP_M`]), if any.
     fn jump(&mut self, t: f64, p: [f64; 2]) -> Option<[f64; 2]> {
-        let gap = 1.5 * self.interval;
-        let e = match self.last {
-            [Some((t1, p1)), Some((t0, p0))] if t - t1 <= gap && t1 - t0 <= gap => {
-                Some([0, 1].map(|j| p[j] - 2.0 * p1[j] + p0[j]))
-            }
-            _ => None,
-        };
-        self.last = [Some((t, p)), self.last[0]];
-        let e = e?;
-        // σ per component of a 2D Gaussian from the median size (Rayleigh: 1.1774 σ).
-        let spread = if self.sizes.len() > 0 {
-            self.sizes.median() / 1.1774
-        } else {
-            0.0
-        };
-        self.sizes.push(e[0].hypot(e[1]));
+        let e = self.steps.push(t, p, self.interval)?;
+        let spread = self.steps.sigma(1).unwrap_or(0.0);
+        self.steps.record(e[0].hypot(e[1]));
         let bound = JUMP_M
             .max(JUMP_ACCEL * self.interval * self.interval)
             .max(JUMP_SIGMAS * spread);
@@ -235,9 +260,10 @@ impl Outlast {
     /// The fix at `t` (s), `p` (east, north, m; None: no fix): `d` its horizontal `INS − fix`
     /// (m), `held` a horizontal component held (step or ramp), `step` none held as a ramp,
     /// `converged` the filter has converged (from then on its tests, not gross innovations
-    /// only, decide: a jump taken in then is no fault's start). True when the step has
-    /// outlasted the spell before it, or undone a jump taken in (the INS is to be moved onto
-    /// the fix).
+    /// only, decide: a jump taken in then is no fault's start), `resolved` the fix an RTK
+    /// fixed one right after float fixes the filter used (`NoiseScale::resolved`). True when
+    /// the step has outlasted the spell before it, or undone a jump taken in, or is the
+    /// return from float and confirmed (the INS is to be moved onto the fix).
     #[allow(clippy::too_many_arguments)]
     pub fn push(
         &mut self,
@@ -278,12 +304,12 @@ impl Outlast {
                 if let Some(i) = undone {
                     self.open.remove(i);
                 }
-                // A hold that starts at the receiver's return to its best solution quality
-                // after the filter followed a worse one is that return, confirmed the same way.
+                // A hold that starts at the receiver's return to fixed fixes after the filter
+                // followed float ones is that return, confirmed the same way.
                 self.onset = Some((t, undone.is_some() || resolved));
             }
-            // The receiver returns to its best quality during a hold that started while the
-            // filter followed a worse one: the hold is (from here) that return.
+            // The receiver returns to fixed fixes during a hold that started while the filter
+            // followed float ones: the hold is (from here) that return.
             Some((_, false)) if resolved => self.onset = Some((t, true)),
             Some((t0, undone)) => {
                 let wait = if undone {
@@ -333,8 +359,8 @@ impl InsWatch {
     }
 
     /// The fix at `t` (s) with its up component held as a step (`held`), `state` (the filter
-    /// converged, the fix a return to the receiver's best solution quality): true when that step has outlasted the spell of fixes before it by
-    /// [`OUTLAST_MARGIN`] ([`Outlast`], without the horizontal jumps' evidence) — the INS's
+    /// converged, the fix a return from float: [`Outlast::push`]): true when that step has
+    /// outlasted the spell of fixes before it by [`OUTLAST_MARGIN`] ([`Outlast`], without the horizontal jumps' evidence) — the INS's
     /// height was wrong, not the fixes: it is moved onto them ([`reanchor_up`]).
     ///
     /// On drive_0708 on positions alone, float fixes 3 s after the alignment pulled the INS's
@@ -349,7 +375,7 @@ impl InsWatch {
     /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
     /// east and north, m): `held` a horizontal component held out or used relative to an
     /// offset, `step` none of them a held ramp, `state` (the filter converged, the fix a
-    /// return to the receiver's best solution quality: [`Outlast::push`]). The rate
+    /// return from float: [`Outlast::push`]). The rate
     /// (m/s, INS − fix, east and north; zero for an outlasting step or a followed fault's
     /// end) to move the INS onto the fix with, when it is to be moved.
     pub fn push(
@@ -630,7 +656,7 @@ mod tests {
         assert!(!w.vertical(100.0, false, (true, false)));
         // Holds of under a minute from 101 s on: each would have to outlast 131 s.
         assert!((101..400).all(|t| !w.vertical(t as f64, t % 60 != 0, (true, false))));
-        // Held from the receiver's return to its best solution quality (after the filter
+        // Held from the receiver's return to fixed fixes (after the filter
         // used float fixes): the return, moved after 5 s (at 50 s), not 75 s; the same for a
         // hold that started on a float fix and meets the return at 45 s (moved at 51 s).
         for (start, back, at) in [(44, 44, 50), (44, 45, 51)] {

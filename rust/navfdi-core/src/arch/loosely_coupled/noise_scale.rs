@@ -25,10 +25,10 @@ pub struct NoiseScale {
     classes: Vec<(u8, NoiseScale)>,
     /// The best quality seen (rank of [`quality_rank`]).
     best: Option<u8>,
-    /// The quality of the last fix observed, and when a fix of a worse quality than the best
-    /// was last used as measured (s).
+    /// The quality of the last fix observed, and when an RTK float fix was last used as
+    /// measured and last observed (s).
     last_q: u8,
-    worse_used: f64,
+    float_used: f64,
     float_seen: f64,
 }
 
@@ -111,33 +111,63 @@ impl NoiseScale {
             classes: Vec::new(),
             best: None,
             last_q: 0,
-            worse_used: f64::NEG_INFINITY,
+            float_used: f64::NEG_INFINITY,
             float_seen: f64::NEG_INFINITY,
         }
     }
 
-    /// Whether the last fix observed, at `t` (s) and `offset` (m) from the INS, is a fixed one
-    /// within [`FLOAT_RETURN`] right after float ones were observed (within
-    /// [`RESOLVE_MEMORY`] s, used or not).
-    pub fn float_ended(&self, t: f64, offset: f64) -> bool {
-        self.last_q == 1 && offset <= FLOAT_RETURN && t - self.float_seen <= RESOLVE_MEMORY
+    /// Whether the last fix observed, at `t` (s) and `offset` (m, |INS − fix|) from the INS,
+    /// is an RTK fixed solution within [`FLOAT_RETURN`] of it, at most [`RESOLVE_MEMORY`] s
+    /// after a float one at `since` (s). Only RTK: a meter-level receiver that alternates DGPS
+    /// and single fixes jumps by as much as a fault would.
+    fn after_float(&self, t: f64, offset: f64, since: f64) -> bool {
+        self.last_q == 1 && offset <= FLOAT_RETURN && t - since <= RESOLVE_MEMORY
     }
 
-    /// The last fix observed was used as measured at `t` (s).
-    pub fn used(&mut self, t: f64) {
+    /// [`NoiseScale::after_float`] a float fix observed (used or not): a ramp held through a
+    /// float stretch ends there.
+    pub fn float_ended(&self, t: f64, offset: f64) -> bool {
+        self.after_float(t, offset, self.float_seen)
+    }
+
+    /// [`NoiseScale::after_float`] a float fix used as measured: the receiver's return to its
+    /// fixed solution after the filter followed float ones (a jump of it is that return, not
+    /// a fault's onset: [`super::diverge::Outlast`]).
+    pub fn resolved(&self, t: f64, offset: f64) -> bool {
+        self.after_float(t, offset, self.float_used)
+    }
+
+    /// A fix used as measured at `t` (s), the last one observed: its innovation `r` (m), the
+    /// innovation covariance `s` of its test and its measurement covariance `r_meas` at
+    /// `scale` (m²; `inn` = (r, s)), learned by this scale.
+    pub fn used(
+        &mut self,
+        t: f64,
+        inn: &(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>),
+        r_meas: &nalgebra::DMatrix<f64>,
+        scale: f64,
+    ) {
+        self.add_innovation(inn, r_meas, scale);
         if self.last_q == 2 && self.best == quality_rank(1) {
-            self.worse_used = t;
+            self.float_used = t;
         }
     }
 
-    /// Whether the last fix observed, at `t` (s) and `offset` (m, |INS − fix|) from the INS,
-    /// is an RTK fixed solution within [`FLOAT_RETURN`] of it and the filter used a float one
-    /// within [`RESOLVE_MEMORY`] s: the receiver's return to its fixed solution after the
-    /// filter followed float ones (a jump of it is that return, not a fault's onset:
-    /// [`super::diverge::Outlast`]). Only RTK: a meter-level receiver that alternates DGPS
-    /// and single fixes jumps by as much as a fault would.
-    pub fn resolved(&self, t: f64, offset: f64) -> bool {
-        self.last_q == 1 && offset <= FLOAT_RETURN && t - self.worse_used <= RESOLVE_MEMORY
+    /// [`NoiseScale::add`] from an innovation `r` (m) with the covariance `s` of its test and
+    /// the measurement covariance `r_meas` at `scale` (m²; `inn` = (r, s)).
+    fn add_innovation(
+        &mut self,
+        inn: &(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>),
+        r_meas: &nalgebra::DMatrix<f64>,
+        scale: f64,
+    ) {
+        let (r, s) = inn;
+        let c2 = scale * scale;
+        let n = r.len();
+        let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
+        let hph: Vec<f64> = (0..n).map(|i| s[(i, i)] - r_meas[(i, i)]).collect();
+        let rr: Vec<f64> = (0..n).map(|i| r_meas[(i, i)] / c2).collect();
+        self.add(&d2, &hph, &rr);
     }
 
     /// The scale for a fix of solution quality `q` (RTKLIB's codes; 0 unknown): this scale for
@@ -173,7 +203,7 @@ impl NoiseScale {
         if q == 2 {
             self.float_seen = fix.1;
         }
-        let (Some(rank), Some((r, s))) = (quality_rank(q), inn) else {
+        let (Some(rank), Some(inn)) = (quality_rank(q), inn) else {
             return;
         };
         self.best = Some(self.best.map_or(rank, |b| b.min(rank)));
@@ -185,12 +215,7 @@ impl NoiseScale {
                 self.classes.len() - 1
             }
         };
-        let c2 = scale * scale;
-        let n = r.len();
-        let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
-        let hph: Vec<f64> = (0..n).map(|i| s[(i, i)] - r_meas[(i, i)]).collect();
-        let rr: Vec<f64> = (0..n).map(|i| r_meas[(i, i)] / c2).collect();
-        self.classes[i].1.add(&d2, &hph, &rr);
+        self.classes[i].1.add_innovation(inn, r_meas, scale);
     }
 
     /// Add a fix used as measured: its components' squared innovations `d²`, predicted
@@ -287,7 +312,7 @@ mod scale_tests {
         // A fixed fix within RESOLVE_MEMORY s of a float fix used, within FLOAT_RETURN of the
         // INS, is the return from it.
         g.observe((2, 0.0), Some(&float), &r_meas, 1.0);
-        g.used(100.0);
+        g.used(100.0, &float, &r_meas, 1.0);
         g.observe((1, 0.0), Some(&fixed), &r_meas, 1.0);
         assert!(g.resolved(105.0, 0.5) && !g.resolved(100.0 + RESOLVE_MEMORY + 0.5, 0.5));
         assert!(
@@ -306,7 +331,7 @@ mod scale_tests {
         let mut m = NoiseScale::new(None, 1.0, 10.0);
         m.observe((4, 0.0), Some(&fixed), &r_meas, 1.0);
         m.observe((5, 0.0), Some(&float), &r_meas, 1.0);
-        m.used(10.0);
+        m.used(10.0, &float, &r_meas, 1.0);
         m.observe((4, 0.0), Some(&fixed), &r_meas, 1.0);
         assert!(!m.resolved(11.0, 0.5));
         assert_eq!(

@@ -222,14 +222,13 @@ impl ReceiverConsistency {
                 // (drive_0708 on positions alone with a simulated 60 s float stretch: held
                 // from 210 s to the end, the height 22 m off). A jump of the height is still
                 // held as a step, and watched (`InsWatch::vertical`).
-                let cusum = own_velocity;
                 let window = window.filter(|_| own_velocity || j < 2);
-                let fired = if cusum && self.up[j] > CUSUM_H {
+                let fired = if own_velocity && self.up[j] > CUSUM_H {
                     Some((
                         self.acc_up[j].0,
                         f64::from(self.acc_up[j].1) * sigma[j] * sigma[j],
                     ))
-                } else if cusum && self.down[j] > CUSUM_H {
+                } else if own_velocity && self.down[j] > CUSUM_H {
                     Some((
                         self.acc_down[j].0,
                         f64::from(self.acc_down[j].1) * sigma[j] * sigma[j],

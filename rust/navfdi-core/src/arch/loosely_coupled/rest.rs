@@ -11,7 +11,7 @@
 //! agree with standing still ([`FixRest::moving`]); once started it lasts as long as the IMU
 //! shows rest (a fault starting during a stop does not end it).
 
-use super::noise_scale::Rolling;
+use super::diverge::SecondDifferences;
 use nalgebra::Vector3;
 
 /// Displacements between consecutive fixes whose spread sets the test's noise.
@@ -28,10 +28,10 @@ const INS_ROLLING: f64 = 0.2;
 /// The last fixes of a receiver of positions only, and the spread of their motion.
 #[derive(Debug, Clone, Default)]
 pub struct FixRest {
-    /// The last two fixes: time (s), east, north, up (m), horizontal σ as recorded (m).
-    last: [Option<(f64, Vector3<f64>, f64)>; 2],
-    /// Sizes (m) of the horizontal second differences of consecutive fixes.
-    second: Rolling<SPREAD_WINDOW>,
+    /// The last two fixes and the sizes of their second differences.
+    steps: SecondDifferences<SPREAD_WINDOW>,
+    /// The last two fixes' horizontal σ as recorded (m).
+    sigma: [f64; 2],
 }
 
 impl FixRest {
@@ -39,17 +39,13 @@ impl FixRest {
     /// recorded), the fixes `interval` s apart: kept as the last, and its second difference,
     /// with the two before it at most 1.5 intervals apart, added to the spread.
     pub fn push(&mut self, t: f64, p: Vector3<f64>, sigma: f64, interval: f64) {
-        let gap = 1.5 * interval;
-        if let [Some((t1, p1, _)), Some((t0, p0, _))] = self.last {
-            if t - t1 <= gap && t1 - t0 <= gap {
-                let d = p - 2.0 * p1 + p0;
-                let size = d.x.hypot(d.y);
-                if size.is_finite() {
-                    self.second.push(size);
-                }
+        if let Some(d) = self.steps.push(t, [p.x, p.y], interval) {
+            let size = d[0].hypot(d[1]);
+            if size.is_finite() {
+                self.steps.record(size);
             }
         }
-        self.last = [Some((t, p, sigma)), self.last[0]];
+        self.sigma = [sigma, self.sigma[0]];
     }
 
     /// Whether the INS still rolls (`ins_speed`, m/s, above [`INS_ROLLING`]) and the last two
@@ -66,20 +62,15 @@ impl FixRest {
             return false;
         }
         let gap = 1.5 * interval;
-        let [Some((t1, p1, s1)), Some((t0, p0, s0))] = self.last else {
+        let [Some((t1, p1)), Some((t0, p0))] = self.steps.last() else {
             return false;
         };
         if t - t1 > gap || t1 - t0 > gap {
             return false;
         }
-        let recorded = s1.hypot(s0);
-        let own = if self.second.len() >= 10 {
-            self.second.median() / 1.1774 / 3f64.sqrt()
-        } else {
-            0.0
-        };
-        let d = p1 - p0;
-        d.x.hypot(d.y) > REST_SIGMAS * recorded.max(own)
+        let recorded = self.sigma[0].hypot(self.sigma[1]);
+        let own = self.steps.sigma(10).map_or(0.0, |s| s / 3f64.sqrt());
+        (p1[0] - p0[0]).hypot(p1[1] - p0[1]) > REST_SIGMAS * recorded.max(own)
     }
 }
 
