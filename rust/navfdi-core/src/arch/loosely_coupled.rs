@@ -22,6 +22,7 @@ mod noise_scale;
 mod pull;
 mod receiver;
 mod rest;
+mod shadow;
 mod window;
 
 use super::common::make_detector;
@@ -29,14 +30,14 @@ use super::inertial::{align, record_nav, velocity_from_positions, BodyImu, Mecha
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
-use crate::ins::error_filter::{ErrorFilter, N, N_SCALE, PHI, R, V};
-use crate::ins::strapdown::{mounting, skew, NavState};
+use crate::ins::error_filter::{ErrorFilter, N, N_SCALE, PHI, R};
+use crate::ins::strapdown::{mounting, NavState};
 use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
 use checks::{
-    antenna, correlation_weight, diag, enu, gnss_measurement, isolate, rows, shift, sigma_h, still,
-    three, Meas,
+    antenna, correlation_weight, enu, gnss_measurement, isolate, nhc_applies, nhc_meas, rows,
+    shift, sigma_h, still, three, update, zupt_meas, Meas,
 };
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -292,6 +293,9 @@ fn run<const NS: usize>(
     // How far the GNSS updates moved the INS lately (one history: it is the filter's).
     let mut pull = pull::PullHistory::default();
     let (mut fix_rest, mut resting) = (rest::FixRest::default(), false);
+    // Positions alone: copies of the filter carried without GNSS, witnesses of a hold's cause.
+    let mut shadows = shadow::Shadows::<NS>::default();
+    let (use_shadows, mut unheld) = (vel_aid_none && isolation, false);
     // The INS antenna in the log's east, north, up frame (m).
     let antenna_enu = |s: &NavState| {
         let a = antenna(s, &lever);
@@ -325,37 +329,19 @@ fn run<const NS: usize>(
         if let (Some(ch), Some(c)) = (zupt_ch, l.zupt.as_ref()) {
             if !moving && still(&imu.t, &imu.acc, &imu.gyro, &kf.bg, i, tk, c) {
                 at_rest = true;
-                let h = DMatrix::from_fn(3, NS, |i, j| if j == V + i { 1.0 } else { 0.0 });
-                let meas = Meas {
-                    res: DVector::from_column_slice(s.v.as_slice()),
-                    h,
-                    r: diag(&c.noise),
-                };
+                let meas = zupt_meas::<NS>(&s, c);
                 outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
         }
         resting = at_rest;
         if let (Some(ch), Some(c)) = (nhc_ch, l.nhc.as_ref()) {
-            if !at_rest && s.v.norm() >= c.threshold && w_last.z.abs() <= c.rate_threshold {
-                let cbn = s.q.to_rotation_matrix().into_inner();
-                let ct = cbn.transpose();
-                let vb = ct * s.v;
-                let hv = ct;
-                let hphi = -ct * skew(&s.v);
-                let mut h = DMatrix::zeros(2, NS);
-                for (row, b) in [1usize, 2].iter().enumerate() {
-                    for j in 0..3 {
-                        h[(row, V + j)] = hv[(*b, j)];
-                        h[(row, PHI + j)] = hphi[(*b, j)];
-                    }
-                }
-                let meas = Meas {
-                    res: DVector::from_vec(vec![vb.y, vb.z]),
-                    h,
-                    r: diag(&c.noise),
-                };
+            if nhc_applies(&s, &w_last, at_rest, c) {
+                let meas = nhc_meas::<NS>(&s, c);
                 outcomes[ch] = apply(&mut kf, &mut s, &mut aids[ch], &meas, true).map_err(at)?;
             }
+        }
+        if use_shadows {
+            shadows.advance(&imu, tk, at_rest, l.zupt.as_ref(), l.nhc.as_ref());
         }
         // GNSS: every channel tested on the pre-update state (its raw fix: the detectors'
         // records show what the receiver gave); with `witness`, a channel's alarm excludes it
@@ -526,11 +512,30 @@ fn run<const NS: usize>(
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
                 let state = (converged, scales[a].resolved(tk, d.norm()));
-                let mut uses = match watch[a].push(tk, p, [d[0], d[1]], held, step, state) {
+                let moved = watch[a].push(tk, p, [d[0], d[1]], held, step, state);
+                // A hold a copy of the filter carried without GNSS since before its onset calls
+                // the INS's error (`shadow`): the end of a fault it followed, or its runaway.
+                let moved = moved.or_else(|| {
+                    let (onset, p) = (watch[a].onset().filter(|_| held && use_shadows)?, p?);
+                    let ant = |st: &NavState| shadow::en(&antenna_enu(st));
+                    let (at, var) = (shadow::Vector2::from(p), shadow::block(&meas.r, off));
+                    let ins = (&s, shadow::horizontal(&kf));
+                    shadows
+                        .returned((tk, onset, step), ant, (at, var), ins)
+                        .then_some([0.0; 2])
+                });
+                if let (Some(p), false, true) = (p, held, use_shadows) {
+                    let ant = |st: &NavState| shadow::en(&antenna_enu(st));
+                    let (at, var) = (shadow::Vector2::from(p), shadow::block(&meas.r, off));
+                    shadows.observe(tk, ant, at, &var);
+                }
+                unheld |= !held;
+                let mut uses = match moved {
                     Some(rate) => {
                         diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();
                         rec.reanchored.push(tk);
+                        shadows.clear();
                         [hold::Use::Raw; 3]
                     }
                     None => uses,
@@ -616,6 +621,9 @@ fn run<const NS: usize>(
                 update(&mut kf, &mut s, &rows(&fresh, &keep)).map_err(at)?;
             }
             outcomes[a] = o;
+        }
+        if use_shadows && converged && std::mem::take(&mut unheld) {
+            shadows.start(tk, &s, &kf, &mech);
         }
         if had_gnss {
             // How far the GNSS updates moved the INS antenna this epoch, and how much position
@@ -736,14 +744,6 @@ fn test<const NS: usize>(
         reason: 0,
         scale: 1.0,
     })
-}
-
-/// Update the filter with a measurement and feed the correction back into the state.
-fn update<const NS: usize>(kf: &mut ErrorFilter<NS>, s: &mut NavState, meas: &Meas) -> Result<()> {
-    let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
-    let dx = kf.update(&inn, &meas.h, &meas.r)?;
-    kf.feedback(s, &dx);
-    Ok(())
 }
 
 /// Test a constraint and update with it unless excluded.

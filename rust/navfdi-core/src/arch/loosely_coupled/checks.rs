@@ -4,7 +4,7 @@
 pub(super) use super::super::inertial::{antenna, shift};
 use crate::error::Result;
 use crate::ins::earth;
-use crate::ins::error_filter::{PHI, R, V};
+use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
 use crate::ins::strapdown::{skew, NavState};
 use crate::spec::ConstraintSpec;
 use crate::stream::{Logged, Nominal};
@@ -16,6 +16,60 @@ pub(super) struct Meas {
     pub res: DVector<f64>,
     pub h: DMatrix<f64>,
     pub r: DMatrix<f64>,
+}
+
+/// Update the filter with a measurement and feed the correction back into the state.
+pub(super) fn update<const NS: usize>(
+    kf: &mut ErrorFilter<NS>,
+    s: &mut NavState,
+    meas: &Meas,
+) -> Result<()> {
+    let inn = kf.innovation(&meas.res, &meas.h, &meas.r)?;
+    let dx = kf.update(&inn, &meas.h, &meas.r)?;
+    kf.feedback(s, &dx);
+    Ok(())
+}
+
+/// The zero-velocity measurement: the INS velocity (north, east, down; m/s) against zero, σ
+/// `c.noise`.
+pub(super) fn zupt_meas<const NS: usize>(s: &NavState, c: &ConstraintSpec) -> Meas {
+    Meas {
+        res: DVector::from_column_slice(s.v.as_slice()),
+        h: DMatrix::from_fn(3, NS, |i, j| if j == V + i { 1.0 } else { 0.0 }),
+        r: diag(&c.noise),
+    }
+}
+
+/// Whether the non-holonomic constraint applies: not at rest, the INS at least `c.threshold`
+/// m/s and turning at most `c.rate_threshold` rad/s about the body's down axis (`w`, the last
+/// compensated angular rate).
+pub(super) fn nhc_applies(
+    s: &NavState,
+    w: &Vector3<f64>,
+    at_rest: bool,
+    c: &ConstraintSpec,
+) -> bool {
+    !at_rest && s.v.norm() >= c.threshold && w.z.abs() <= c.rate_threshold
+}
+
+/// The non-holonomic measurement: the body's right and down velocity (m/s) against zero, σ
+/// `c.noise`.
+pub(super) fn nhc_meas<const NS: usize>(s: &NavState, c: &ConstraintSpec) -> Meas {
+    let ct = s.q.to_rotation_matrix().into_inner().transpose();
+    let vb = ct * s.v;
+    let hphi = -ct * skew(&s.v);
+    let mut h = DMatrix::zeros(2, NS);
+    for (row, b) in [1usize, 2].iter().enumerate() {
+        for j in 0..3 {
+            h[(row, V + j)] = ct[(*b, j)];
+            h[(row, PHI + j)] = hphi[(*b, j)];
+        }
+    }
+    Meas {
+        res: DVector::from_vec(vec![vb.y, vb.z]),
+        h,
+        r: diag(&c.noise),
+    }
 }
 
 /// Components to keep of an alarming innovation `r` with covariance `s`: the component with

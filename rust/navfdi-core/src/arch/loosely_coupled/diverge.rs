@@ -372,6 +372,11 @@ impl InsWatch {
             .is_some_and(|o| o.push(t, None, [0.0; 2], held, true, state.0, state.1))
     }
 
+    /// The onset (s) of the horizontal hold in progress, if any.
+    pub fn onset(&self) -> Option<f64> {
+        self.outlast.as_ref()?.onset.map(|(t, _)| t)
+    }
+
     /// The fix at `t` (s), `p` (east, north, m), with horizontal innovation `d` (INS − fix,
     /// east and north, m): `held` a horizontal component held out or used relative to an
     /// offset, `step` none of them a held ramp, `state` (the filter converged, the fix a
