@@ -296,14 +296,19 @@ mod tests {
         (sh, s0, en)
     }
 
+    /// `s` moved `m` metres north.
+    fn north_of(mut s: NavState, m: f64) -> NavState {
+        s.lat += m / r_meridian(s.lat);
+        s
+    }
+
     #[test]
     fn the_ins_off_the_copies_and_the_fix_on_them_is_the_ins_error() {
         let (sh, s0, en) = witnesses();
         assert_eq!(sh.list.len(), 2);
         let fix = (Vector2::zeros(), Matrix2::identity());
         // The INS 20 m north of the copies (it followed a ramp), the fix back on them.
-        let mut ins = s0;
-        ins.lat += 20.0 / r_meridian(0.7);
+        let ins = north_of(s0, 20.0);
         let ins = (&ins, Matrix2::identity() * 0.01);
         assert!(sh.returned((62.0, 59.0, true), en, fix, ins));
         // A held step later than the window after its onset: no longer.
@@ -331,8 +336,7 @@ mod tests {
     fn copies_without_enough_comparisons_decide_nothing() {
         let (mut sh, s0, en) = witnesses();
         sh.fit = Default::default();
-        let mut ins = s0;
-        ins.lat += 20.0 / r_meridian(0.7);
+        let ins = north_of(s0, 20.0);
         let fix = (Vector2::zeros(), Matrix2::identity());
         assert!(!sh.returned(
             (62.0, 59.0, true),
