@@ -515,19 +515,17 @@ fn run<const NS: usize>(
                 let moved = watch[a].push(tk, p, [d[0], d[1]], held, step, state);
                 // A hold a copy of the filter carried without GNSS since before its onset calls
                 // the INS's error (`shadow`): the end of a fault it followed, or its runaway.
+                let ant = |st: &NavState| antenna_enu(st).xy();
+                let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
                 let moved = moved.or_else(|| {
-                    let (onset, p) = (watch[a].onset().filter(|_| held && use_shadows)?, p?);
-                    let ant = |st: &NavState| shadow::en(&antenna_enu(st));
-                    let (at, var) = (shadow::Vector2::from(p), shadow::block(&meas.r, off));
+                    let onset = watch[a].onset().filter(|_| held && use_shadows)?;
                     let ins = (&s, shadow::horizontal(&kf));
                     shadows
-                        .returned((tk, onset, step), ant, (at, var), ins)
+                        .returned((tk, onset, step), ant, fix_h?, ins)
                         .then_some([0.0; 2])
                 });
-                if let (Some(p), false, true) = (p, held, use_shadows) {
-                    let ant = |st: &NavState| shadow::en(&antenna_enu(st));
-                    let (at, var) = (shadow::Vector2::from(p), shadow::block(&meas.r, off));
-                    shadows.observe(tk, ant, at, &var);
+                if let (Some(f), false, true) = (fix_h, held, use_shadows) {
+                    shadows.observe(tk, ant, f);
                 }
                 unheld |= !held;
                 let mut uses = match moved {

@@ -25,8 +25,7 @@ use crate::arch::inertial::{BodyImu, Mechaniser};
 use crate::ins::error_filter::{ErrorFilter, R};
 use crate::ins::strapdown::NavState;
 use crate::spec::ConstraintSpec;
-use nalgebra::Vector3;
-pub use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, Vector2};
 use std::collections::VecDeque;
 
 /// Seconds between the starts of two copies.
@@ -150,12 +149,12 @@ impl<const NS: usize> Shadows<NS> {
 
     /// At `t` (s), a fix the filter used as measured, `fix` (east, north, m) with horizontal
     /// covariance `fix_var` (m²): each copy's χ² against it, for its age bin's consistency.
+    /// `antenna` gives a state's antenna east and north (m).
     pub fn observe(
         &mut self,
         t: f64,
         antenna: impl Fn(&NavState) -> Vector2<f64>,
-        fix: Vector2<f64>,
-        fix_var: &Matrix2<f64>,
+        (fix, fix_var): (Vector2<f64>, Matrix2<f64>),
     ) {
         for c in self.list.iter_mut().filter(|c| t - c.seen >= FIT_EVERY) {
             let x = chi2(antenna(&c.s) - fix, horizontal(&c.kf) + fix_var);
@@ -166,9 +165,8 @@ impl<const NS: usize> Shadows<NS> {
         }
     }
 
-    /// How far the copies of age `age` (s) understate their error: the 95th percentile of
-    /// their χ² against used fixes over χ²(2)'s, at least 1; None before [`MIN_FIT`]
-    /// comparisons.
+    /// How far the copies of age `age` (s) understate their error: the median of their χ²
+    /// against used fixes over χ²(2)'s, at least 1; None before [`MIN_FIT`] comparisons.
     fn inflation(&self, age: f64) -> Option<f64> {
         let f = &self.fit[bin(age)];
         (f.len() >= MIN_FIT).then(|| (f.median() / CHI2_2_MEDIAN).max(1.0))
@@ -223,17 +221,12 @@ pub fn block(m: &nalgebra::DMatrix<f64>, off: usize) -> Matrix2<f64> {
     m.fixed_view::<2, 2>(off, off).into_owned()
 }
 
-/// East and north (m) of a vector in east, north, up.
-pub fn en(v: &Vector3<f64>) -> Vector2<f64> {
-    Vector2::new(v.x, v.y)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::ins::earth::{gravity, r_meridian, r_normal, OMEGA_IE};
     use crate::ins::error_filter::{tests::noise, N};
-    use nalgebra::UnitQuaternion;
+    use nalgebra::{UnitQuaternion, Vector3};
 
     /// A vehicle standing level, its body axes north, east, down, at 100 Hz for `secs` s (the
     /// IMU reads the Earth's rotation and gravity).
@@ -281,7 +274,7 @@ mod tests {
                 let mech = Mechaniser::new(&imu, t, &Vector3::zeros());
                 sh.start(t, &s0, &kf, &mech);
             }
-            sh.observe(t, en, Vector2::zeros(), &Matrix2::identity());
+            sh.observe(t, en, (Vector2::zeros(), Matrix2::identity()));
         }
         // The copies' horizontal σ set to 2 m (what carrying them gives depends on the IMU
         // model; the decision is what is tested here), every age bin fitted as consistent.
