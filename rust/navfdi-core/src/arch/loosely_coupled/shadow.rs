@@ -10,8 +10,10 @@
 //! tells the INS's error from the fixes' is where the vehicle really is, and the IMU with the
 //! vehicle's constraints (zero velocity, non-holonomic) knows that for a while without a fix.
 //! Every [`SHADOW_EVERY`] s of fixes used as measured a copy of the filter is started, and
-//! carried on the IMU samples and the constraints alone for [`SHADOW_AGE`] s, with its own
-//! covariance. A hold (step or ramp) that began [`SHADOW_LEAD`] s or more after a copy started
+//! carried on the IMU samples and the constraints alone, with its own covariance; a copy
+//! [`SHADOW_AGE`] s old is dropped when the next one starts, so during a hold (when none
+//! starts) the copies carried when it began stay to its end (dropping them at that age
+//! whatever happens raised the simulated ramps' false exclusions, 0.045 → 0.051 per epoch). A hold (step or ramp) that began [`SHADOW_LEAD`] s or more after a copy started
 //! has that copy as a witness: where the fix is on it (within [`FIX_CHI2`]) and the INS off it
 //! (beyond [`INS_CHI2`], and [`LR_CHI2`] more than the fix: the INS's error a thousand times
 //! likelier than the fix's), the INS is the one that is wrong and is moved onto the fix. A
@@ -30,7 +32,7 @@ use std::collections::VecDeque;
 
 /// Seconds between the starts of two copies.
 pub const SHADOW_EVERY: f64 = 20.0;
-/// Seconds a copy is carried (the oldest kept).
+/// A copy this many seconds old is dropped when the next one starts.
 pub const SHADOW_AGE: f64 = 100.0;
 /// A copy witnesses a hold that began at least this many seconds after its start.
 pub const SHADOW_LEAD: f64 = 5.0;
@@ -337,6 +339,23 @@ mod tests {
             fix,
             (&ins, Matrix2::identity() * 0.01)
         ));
+    }
+
+    #[test]
+    fn copies_past_their_age_stay_until_the_next_start() {
+        let (mut sh, s0, _) = witnesses();
+        let imu = standing(200.0, s0.lat);
+        // No start during a hold: the copies from 0 and 20 s are carried past 100 s old.
+        for k in 63..=150 {
+            sh.advance(&imu, k as f64, false, None, None);
+        }
+        assert_eq!(sh.list.len(), 2);
+        // The next start drops both (150 and 130 s old) and keeps the new one alone.
+        let kf = sh.list[0].kf.clone();
+        let mech = Mechaniser::new(&imu, 150.0, &Vector3::zeros());
+        sh.start(150.0, &s0, &kf, &mech);
+        assert_eq!(sh.list.len(), 1);
+        assert_eq!(sh.list[0].start, 150.0);
     }
 
     #[test]
