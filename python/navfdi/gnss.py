@@ -518,7 +518,8 @@ class GnssSolution:
         sats = self.satellites.copy()
         sats["satellite"] = sats["satellite"].astype(str)
         sats.to_parquet(paths[1], index=False)
-        paths[2].write_text(_json.dumps({"summary": self.summary(), "config": self.config}, default=_json_default) + "\n")
+        summary = self.summary()  # once: the JSON and the report share it
+        paths[2].write_text(_json.dumps({"summary": summary, "config": self.config}, default=_json_default) + "\n")
         from navfdi._gnss_plots import plot
 
         figs: list[Path] = plot(self, d) if figures else []
@@ -527,17 +528,17 @@ class GnssSolution:
 
             figs += plot_stanford(self, d)
         paths += figs
-        paths.append(self._report(d, figs))
+        paths.append(self._report(d, figs, summary))
         return paths
 
-    def _report(self, d: Path, figures: list[Path]) -> Path:
-        """``report.html``: the summary's numbers, per-fault results, the solution (first 200
-        epochs as a table; the whole error series interactive), the figures and the settings."""
+    def _report(self, d: Path, figures: list[Path], s: dict[str, Any]) -> Path:
+        """``report.html``: the summary's numbers (``s``, :meth:`summary`), per-fault results,
+        the solution (first 200 epochs as a table; the whole error series interactive), the
+        figures and the settings."""
         import pandas as pd
 
         from navfdi.report import write_report
 
-        s = self.summary()
         headline = {k: v for k, v in s.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
         headline.update({f"integrity {k}": v for k, v in s.get("integrity", {}).items() if isinstance(v, (int, float)) and not isinstance(v, bool)})
         tables = [("faults", pd.DataFrame(s["faults"]))] if s["faults"] else []
