@@ -13,8 +13,9 @@
 //! carried on the IMU samples and the constraints alone, with its own covariance; a copy
 //! [`SHADOW_AGE`] s old is dropped when the next one starts, so during a hold (when none
 //! starts) the copies carried when it began stay to its end (dropping them at that age
-//! whatever happens raised the simulated ramps' false exclusions, 0.045 → 0.051 per epoch). A hold (step or ramp) that began [`SHADOW_LEAD`] s or more after a copy started
-//! has that copy as a witness: where the fix is on it (within [`FIX_CHI2`]) and the INS off it
+//! whatever happens raised the simulated ramps' false exclusions, 0.045 → 0.051 per epoch).
+//! A hold (step or ramp) that began [`SHADOW_LEAD`] s or more after a copy started has that
+//! copy as a witness: where the fix is on it (within [`FIX_CHI2`]) and the INS off it
 //! (beyond [`INS_CHI2`], and [`LR_CHI2`] more than the fix: the INS's error a thousand times
 //! likelier than the fix's), the INS is the one that is wrong and is moved onto the fix. A
 //! step's onset takes the fix off the copy and leaves the INS on it; a fault ramp held drifts
