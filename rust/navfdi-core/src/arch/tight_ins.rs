@@ -21,12 +21,12 @@
 //! recorded; `separation` (with `[tight.integrity]`) — the bank's separation test: on an alarm
 //! the satellite whose sub-filter separates most, if that sub-filter's navigator explains the
 //! epoch (the other satellites agree with it, the named one does not), is excluded and the
-//! filter takes that navigator over; at most [`MAX_SEPARATION_OUT`] out at once, each back
+//! filter takes that navigator over; at most `MAX_SEPARATION_OUT` out at once, each back
 //! after [`crate::integrity::filter_ss::READMIT_EPOCHS`] epochs in a row of agreeing with the
 //! filter. With `rates`, a satellite without a Doppler at an epoch is left out of it.
 //!
 //! With `[tight.integrity]` a bank of strapdown sub-filters gives the filter's protection levels
-//! ([`super::tight_ins_pl`]; the test reports and, under `separation`, excludes), beside the
+//! (`super::tight_ins_pl`; the test reports and, under `separation`, excludes), beside the
 //! snapshot ARAIM levels of the epoch's pseudoranges.
 //!
 //! Alignment as the loosely coupled filter's ([`super::inertial::align`]) on the source's

@@ -594,7 +594,7 @@ fn major(text: &str) -> Option<char> {
 }
 
 /// Read and parse an observation file from disk (RINEX 3 or 4; RINEX 2.11 through
-/// [`super::rinex2::obs_to_v3`], errors naming the original lines).
+/// `super::rinex2::obs_to_v3`, errors naming the original lines).
 pub fn read_obs(path: &str) -> Result<ObsData> {
     let text = read_text(path)?;
     read_obs_text(path, &text).map_err(|e| {
@@ -643,7 +643,7 @@ fn read_obs_text(path: &str, text: &str) -> Result<ObsData> {
 }
 
 /// Read and parse a navigation file from disk (RINEX 3; RINEX 4 through
-/// [`super::rinex_text::rinex4_nav`], RINEX 2 GPS through [`super::rinex2::nav_to_v3`];
+/// `super::rinex_text::rinex4_nav`, RINEX 2 GPS through `super::rinex2::nav_to_v3`;
 /// errors name the original file's lines).
 pub fn read_nav(path: &str) -> Result<NavData> {
     let text = read_text(path)?;

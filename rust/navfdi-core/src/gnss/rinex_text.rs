@@ -31,7 +31,7 @@ pub(crate) fn label(line: &str) -> &str {
 
 /// Read a file's text, gunzipping `.gz` files; errors name the path (not found, unreadable,
 /// corrupt gzip, not text). Compact RINEX (Hatanaka) 1 and 3 is expanded
-/// ([`expand_compact`]).
+/// (`expand_compact`).
 pub fn read_text(path: &str) -> Result<String> {
     let meta = std::fs::metadata(path).map_err(|e| Error::Io(format!("{path}: {e}")))?;
     if meta.is_dir() {

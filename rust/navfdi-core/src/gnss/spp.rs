@@ -4,7 +4,7 @@
 //! Per epoch and satellite with a pseudorange ρ of the chosen code (first band: GPS/QZSS/
 //! Galileo `C1x`, BeiDou `C2x`):
 //!
-//! * ephemeris: [`broadcast::select`] (nearest healthy t_oe within the system's maximum age;
+//! * ephemeris: `broadcast::select` (nearest healthy t_oe within the system's maximum age;
 //!   Galileo I/NAV first); none → `no_ephemeris`, only unhealthy ones → `unhealthy`;
 //! * transmission time `t_rx − ρ/c − δt_s`, satellite position at that time, satellite clock
 //!   δt_s with the relativistic term, group delay: `ρ_c = ρ + c δt_s − c TGD`;
@@ -19,7 +19,7 @@
 //!   times a per-system factor;
 //! * elevation mask applied at the start position (the previous epoch's solution, or for the
 //!   first epoch an uncorrected least-squares fix from the Earth's centre);
-//! * the exclusion loop [`snapshot::fde`] (global χ² test + w-test, METHODS §10) on every
+//! * the exclusion loop `snapshot::fde` (global χ² test + w-test, METHODS §10) on every
 //!   epoch, or plain weighted least squares when exclusion is off.
 //!
 //! Injected faults ([`InjectedFault`]) are added to the chosen satellites' pseudoranges before

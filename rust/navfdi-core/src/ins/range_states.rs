@@ -49,7 +49,7 @@ pub struct RangeStates {
     t: f64,
 }
 
-/// An update computed and not yet committed ([`RangeStates::commit`]).
+/// An update computed and not yet committed (`RangeStates::commit`).
 #[derive(Debug, Clone)]
 pub enum Pending {
     /// Without range-error states: the error filter's covariance and estimate.

@@ -16,7 +16,7 @@
 //! * protection levels: the ADD's equation with the fault-free term `2Q(L/σ₀)` and one term
 //!   `P_sat Q((L − T_s)/σ_s)` per sub-filter, no nominal bias (the simulated errors have
 //!   none), the budgets scaled by the probability of two or more simultaneous satellite
-//!   faults, which the bank does not monitor ([`super::araim::protection_levels`]).
+//!   faults, which the bank does not monitor (`super::araim::protection_levels`).
 //!
 //! Exclusion (placement `separation`): on an alarm the satellite whose whole-state separation
 //! is least likely under its covariance ([`SeparationBank::identify`]) is excluded, provided

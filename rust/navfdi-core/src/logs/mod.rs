@@ -11,7 +11,7 @@
 //!
 //! The record epochs are the GNSS log's epochs (time 0 = its first epoch). A GNSS sensor of
 //! the scenario takes a measurement at every n-th log epoch (its `rate` the log's divided by
-//! n; [`sample_epochs`]) outside its outages, each at its own recorded time.
+//! n; `sample_epochs`) outside its outages, each at its own recorded time.
 //! The reference is scored only at epochs where no GNSS measurement was an input.
 
 pub mod imu_csv;

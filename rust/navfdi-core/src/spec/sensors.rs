@@ -27,7 +27,8 @@ pub enum SensorKind {
     /// components' noise σ); needs the sensor's `ranges` table and architecture `tight`.
     GnssRanges,
     /// Radio altimeter: height above the terrain under the vehicle, used as altitude over a
-    /// flat reference (m); 1 component. Its error includes the terrain height ([`TerrainSpec`]).
+    /// flat reference (m); 1 component. Its error includes the terrain height
+    /// ([`TerrainSpec`](crate::spec::trajectory::TerrainSpec)).
     RadioAltimeter,
 }
 
