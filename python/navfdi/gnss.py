@@ -515,9 +515,11 @@ class GnssSolution:
         paths = [d / "solution.csv", d / "satellites.parquet", d / "summary.json"]
         # 15 significant digits: GPS seconds (~1.4e9) keep their milliseconds at 4 Hz and more.
         self.solution.to_csv(paths[0], index=False, float_format="%.15g")
-        sats = self.satellites.copy()
-        sats["satellite"] = sats["satellite"].astype(str)
+        # The satellite names as plain strings; `assign` shares the other columns (pandas'
+        # copy-on-write) where a `copy()` doubled the table in memory.
+        sats = self.satellites.assign(satellite=self.satellites["satellite"].astype(str))
         sats.to_parquet(paths[1], index=False)
+        del sats
         summary = self.summary()  # once: the JSON and the report share it
         paths[2].write_text(_json.dumps({"summary": summary, "config": self.config}, default=_json_default) + "\n")
         from navfdi._gnss_plots import plot
