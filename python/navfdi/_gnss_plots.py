@@ -37,11 +37,12 @@ def plot(s: Any, d: Path) -> list[Path]:
     ax.grid(alpha=0.3)
     paths.append(finish(plt, fig, ax, s.faults, d / "statistic.png", {}, what, ylabel="VᵀD⁻¹V", title="Global test statistic vs threshold"))
     fig, ax = plt.subplots(figsize=(9, 4))
-    # Each row's satellite as its rank among the sorted names, through the category codes
-    # (no filtered copies of the table: a day file has ~10^5 rows).
-    cat = sats["satellite"].astype("category").cat
+    # Each row's satellite as its rank among the sorted names of the satellites present,
+    # through the category codes (no filtered copies of the table: a day file has ~10^5 rows);
+    # a missing name (code −1) takes the appended −1 and is left out.
+    cat = sats["satellite"].astype("category").cat.remove_unused_categories().cat
     labels = [str(n) for n in cat.categories]
-    names = sorted(set(labels))
+    names = sorted(labels)
     pos = {n: i for i, n in enumerate(names)}
     row = np.array([pos[n] for n in labels] + [-1])[cat.codes.to_numpy()]
     epoch, status = sats["epoch"].to_numpy(), sats["status"].to_numpy()
