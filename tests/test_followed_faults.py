@@ -95,3 +95,25 @@ def test_a_white_receivers_step_is_held_without_moving_or_outlasting(tmp_path: P
     # Seed 1: the step's end jump, left in the receiver's drift windows, read as a ramp 11-15 s
     # after the end (five good fixes left out) before the windows restarted at a step's end.
     assert r["late"] == 0.0, r
+
+
+def test_a_copy_that_calls_a_followed_steps_end_replaces_the_ins(tmp_path: Path, docs_script: Callable[[str], ModuleType]) -> None:
+    """Positions alone, a tactical-grade IMU, multipath bursts and stale spells
+    (``meter_fde_campaign``'s ``urban_pos_tactical``): a 34.5 m north step from 358.9 s was let
+    in after a stale spell and followed; at its end, as a burst began, two copies of the filter
+    carried without GNSS called the INS wrong. The INS used to be moved onto that fix — the
+    burst's, 19 m off — with its velocity left free, and the burst's end then gave it a
+    2 m/s velocity error that ran it 200 m away for the rest of the log, the fixes held out
+    (61 m of error 20-60 s after the step). The copy replaces the INS now, and the fix
+    updates it."""
+    mc = docs_script("meter_fde_campaign")
+    folder = str(tmp_path)
+    base = mc._base("urban_pos_tactical", folder)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        clean = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs["fde"]
+        r = mc._one(base, _fault("pos_n", "step", "34.54 m", 358.9, 60.0), mc._natural(folder), clean.t[mc._excluded(clean)])
+    e = clean.record["error"]
+    clean_max = float(np.nanmax(np.hypot(e[:, 6], e[:, 7])))
+    assert r["fde.after"] <= clean_max, (r, clean_max)
+    assert r["fde.after"] < r["no_fde.after"], r

@@ -2,7 +2,8 @@
 data set (drive_lc's RTK fixes; a simulated car drive with meter-level fixes, σ 2 m
 Gauss-Markov τ 30 s + 0.3 m white, written by navfdi.simlog.simulate_log; meter_pos: the same
 receiver writing positions only; urban: the same receiver at 1 Hz with multipath bursts and
-stale spells; urban_pos: that receiver writing positions only) and fault shape
+stale spells; urban_pos: that receiver writing positions only; urban_pos_tactical: the same with
+a tactical-grade IMU) and fault shape
 (steps 5-40 m for 60 s, ramps 0.1-2 m/s for 40 s), RUNS runs each drawing the onset (60 s to
 120 s before the end), the component (north or east) and the size. Per size bin: the share
 of runs excluded at the first fix after the onset, the median delay of the first exclusion
@@ -12,7 +13,8 @@ without), runs with an exclusion left standing more than 5 s after the end, the 
 after the end (with FDE and without), and false
 exclusions per clean tested epoch (Wilson 95 % interval).
 drive_pos: drive_lc's fixes alone, its velocity channel removed.
-Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|drive_pos|meter|meter_pos|urban|urban_pos] [step|ramp] [TAU]
+Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|drive_pos|meter|meter_pos|urban|urban_pos|urban_pos_tactical]
+[step|ramp] [TAU]
 (TAU: ``[loosely_coupled] position_correlation`` in s, default 0: white)"""
 
 from __future__ import annotations
@@ -44,14 +46,17 @@ def _base(which: str, folder: str) -> navfdi.Scenario:
         lc["sensors"] = [s for s in lc["sensors"] if s["sensor"] != "gnss_vel"]
         raw["loosely_coupled"] = lc
         return from_dict(raw, source=sc.source)
-    if which not in ("meter", "meter_pos", "urban", "urban_pos"):
-        raise SystemExit(f"data set {which!r}: drive, drive_pos, meter, meter_pos, urban or urban_pos")
+    if which not in ("meter", "meter_pos", "urban", "urban_pos", "urban_pos_tactical"):
+        raise SystemExit(f"data set {which!r}: drive, drive_pos, meter, meter_pos, urban, urban_pos or urban_pos_tactical")
     # urban: the meter-level receiver at 1 Hz with 15 m multipath bursts of 8 s once a minute
     # and 4 s stale spells every two minutes (natural errors up to about 60 m); urban_pos: the
-    # same receiver writing positions only.
+    # same receiver writing positions only; urban_pos_tactical: that, with a tactical-grade IMU
+    # (biases 1 deg/h and 0.3 mg, noise 0.002 deg/s/sqrt(Hz) and 0.05 mg/sqrt(Hz)) instead of
+    # simulate_log's default (10 deg/h, 1 mg, 0.01, 0.1).
     urban = which.startswith("urban")
+    imu = {"gyro_bias": 1.0, "accel_bias": 0.3, "gyro_noise": 0.002, "accel_noise": 0.05} if which.endswith("_tactical") else {}
     log = simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1,
-                       gnss_velocity=not which.endswith("_pos"), gnss_rate=1.0 if urban else 4.0,
+                       gnss_velocity="_pos" not in which, gnss_rate=1.0 if urban else 4.0, **imu,
                        burst_rate=1 / 60 if urban else 0.0, burst_size=15.0 if urban else 0.0, burst_duration=8.0 if urban else 0.0,
                        stale_rate=1 / 120 if urban else 0.0, stale_duration=4.0 if urban else 0.0)
     return load_scenario(str(log.scenario))

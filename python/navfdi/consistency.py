@@ -102,7 +102,9 @@ def consistency(run: RunRecord) -> dict[str, Any]:
     * ``reanchored``: times (s) at which the INS was moved back onto the fixes it held out:
       running away from them (their distance growing faster than 3 m/s over 10 s), or held
       off them longer than the fixes it agreed with before plus 30 s (it had started from a
-      fault's fixes at the alignment; a held height alone moves the height alone).
+      fault's fixes at the alignment; a held height alone moves the height alone); on
+      positions alone also where two copies of the filter carried without GNSS called a hold
+      the INS's error — the INS is then replaced by the younger copy.
     """
     rec = run.record
     if "nav" not in rec:
@@ -176,7 +178,7 @@ def format_consistency(c: dict[str, Any]) -> list[str]:
     nav = "never navigated" if not math.isfinite(c["navigating_from"]) else f"navigating from {c['navigating_from']:g} s"
     re = c.get("reanchored", [])
     if re:
-        conv += "; the INS ran away from (or stayed off) the fixes it held out and was moved back onto them " + (f"{len(re)} times, first" if len(re) > 1 else "once,") + f" at {re[0]:g} s"
+        conv += "; the INS ran away from (or stayed off) the fixes it held out and was moved back onto them (or replaced by a copy carried without GNSS) " + (f"{len(re)} times, first" if len(re) > 1 else "once,") + f" at {re[0]:g} s"
     lines = [f"filter consistency (its own innovations outside fault windows; {nav}, {conv};",
              "  consistent: mean λ/m in the interval, median λ over χ²(m)'s median 1, lag-1 ρ within ±white):"]
     lines.append(f"  {'channel':<10} {'tests':>6} {'mean λ/m':>9} {'consistent':>13} {'median':>7} {'lag-1 ρ':>8} {'white':>7} {'excluded':>9}")

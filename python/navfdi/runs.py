@@ -242,9 +242,9 @@ class ScenarioRun(RunRecord):
         ``state_chi2``, matched to every fault; the loosely coupled filter's exclusion
         intervals as detector ``excluded:{reason}`` (``test``, ``step``, ``stale``, ``ramp``, ``receiver``:
         the tested epochs at which the channel, or some of its components, was left out for
-        that reason); and each time the loosely coupled INS, run away from the fixes it held
-        out or held off them longer than it had agreed with them, was moved back onto them as
-        subfilter ``navigation``, detector ``reanchored``
+        that reason); and each time the loosely coupled INS, run away from the fixes it held out
+        or held off them too long, was moved back onto them (or, on positions alone, replaced by
+        a copy of the filter carried without GNSS) as subfilter ``navigation``, detector ``reanchored``
         (``alarm_start = alarm_end`` its time, no fault). Returns a pandas DataFrame."""
         import pandas as pd
 

@@ -212,7 +212,8 @@ pub struct RunRecord {
     /// (`loosely_coupled.convergence`); None when it never did (or another architecture).
     pub converged_at: Option<f64>,
     /// Loosely coupled: times (s) at which the INS, diverged from the fixes it held out, was
-    /// moved back onto them (`arch::loosely_coupled::diverge`).
+    /// moved back onto them (`arch::loosely_coupled::diverge`), or replaced by a copy of the
+    /// filter carried without GNSS that called the hold its error (`::shadow`).
     pub reanchored: Vec<f64>,
 }
 

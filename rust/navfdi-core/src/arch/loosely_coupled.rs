@@ -515,14 +515,15 @@ fn run<const NS: usize>(
                 let moved = watch[a].push(tk, p, [d[0], d[1]], held, step, state);
                 // A hold a copy of the filter carried without GNSS since before its onset calls
                 // the INS's error (`shadow`): the end of a fault it followed, or its runaway.
+                // The copy replaces the INS.
                 let ant = |st: &NavState| antenna_enu(st).xy();
                 let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
+                let mut witness = None;
                 let moved = moved.or_else(|| {
                     let onset = watch[a].onset().filter(|_| held && use_shadows)?;
                     let ins = (&s, shadow::horizontal(&kf));
-                    shadows
-                        .returned((tk, onset, step), ant, fix_h?, ins)
-                        .then_some([0.0; 2])
+                    witness = shadows.returned((tk, onset, step), ant, fix_h?, ins);
+                    witness.as_ref().map(|_| [0.0; 2])
                 });
                 if let (Some(f), false, true) = (fix_h, held, use_shadows) {
                     shadows.observe(tk, ant, f);
@@ -530,11 +531,20 @@ fn run<const NS: usize>(
                 unheld |= !held;
                 let mut uses = match moved {
                     Some(rate) => {
-                        diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
                         holds[a] = hold::PositionHold::default();
                         rec.reanchored.push(tk);
                         shadows.clear();
-                        [hold::Use::Raw; 3]
+                        match witness.take() {
+                            // The INS is the witness, updated with the fix.
+                            Some(w) => {
+                                (s, kf, mech) = (w.s, w.kf, w.mech);
+                                [hold::Use::Raw; 3]
+                            }
+                            None => {
+                                diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
+                                [hold::Use::Raw; 3]
+                            }
+                        }
                     }
                     None => uses,
                 };

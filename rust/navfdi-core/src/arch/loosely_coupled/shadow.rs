@@ -17,8 +17,13 @@
 //! A hold (step or ramp) that began [`SHADOW_LEAD`] s or more after a copy started has that
 //! copy as a witness: where the fix is on it (within [`FIX_CHI2`]) and the INS off it
 //! (beyond [`INS_CHI2`], and [`LR_CHI2`] more than the fix: the INS's error a thousand times
-//! likelier than the fix's), the INS is the one that is wrong and is moved onto the fix. A
-//! step's onset takes the fix off the copy and leaves the INS on it; a fault ramp held drifts
+//! likelier than the fix's), the INS is the one that is wrong and the younger witness replaces
+//! it ([`Witness`]: its state, covariance and mechaniser), and the fix updates it. Moving the
+//! INS onto the fix instead (the re-anchoring of [`super::diverge`]) kept the velocity it had
+//! followed the fault with, its variance reopened: where a multipath burst began as a
+//! followed step ended, the burst's end gave it a 2 m/s error that ran it away for minutes
+//! with the fixes held out (simulated positions-only logs, a tactical-grade IMU: 61–117 m of
+//! error 20–60 s after the step). A step's onset takes the fix off the copy and leaves the INS on it; a fault ramp held drifts
 //! the fix away from both. A copy whose covariance has grown to the jump's size (a MEMS IMU, a
 //! minute or more of a poorly known velocity) decides nothing, and the hold stays.
 
@@ -74,6 +79,15 @@ struct Shadow<const NS: usize> {
     mech: Mechaniser,
     /// When it was last compared with a fix (s).
     seen: f64,
+}
+
+/// A copy that called a hold the INS's error ([`Shadows::returned`]): its state, its
+/// covariance scaled by its age bin's inflation, and its mechaniser — what replaces the INS.
+#[derive(Debug, Clone)]
+pub struct Witness<const NS: usize> {
+    pub s: NavState,
+    pub kf: ErrorFilter<NS>,
+    pub mech: Mechaniser,
 }
 
 /// The copies of the filter carried without GNSS (positions-only receivers).
@@ -188,26 +202,37 @@ impl<const NS: usize> Shadows<NS> {
         antenna: impl Fn(&NavState) -> Vector2<f64>,
         (fix, fix_var): (Vector2<f64>, Matrix2<f64>),
         (ins, ins_var): (&NavState, Matrix2<f64>),
-    ) -> bool {
+    ) -> Option<Witness<NS>> {
         if step && t - onset > STEP_WINDOW {
-            return false;
+            return None;
         }
         let at_ins = antenna(ins);
-        let agree = self
+        let agree: Vec<(&Shadow<NS>, f64)> = self
             .list
             .iter()
             .filter(|c| c.start <= onset - SHADOW_LEAD)
-            .filter(|c| {
-                let Some(k) = self.inflation(t - c.start) else {
-                    return false;
-                };
+            .filter_map(|c| {
+                let k = self.inflation(t - c.start)?;
                 let (p, a) = (horizontal(&c.kf), antenna(&c.s));
                 let cf = chi2(a - fix, p + fix_var) / k;
                 let ci = chi2(a - at_ins, p + ins_var) / k;
-                cf <= FIX_CHI2 && ci >= INS_CHI2 && ci - cf >= LR_CHI2
+                (cf <= FIX_CHI2 && ci >= INS_CHI2 && ci - cf >= LR_CHI2).then_some((c, k))
             })
-            .count();
-        agree >= WITNESSES
+            .collect();
+        if agree.len() < WITNESSES {
+            return None;
+        }
+        // The youngest witness: the least carried without fixes.
+        let (c, k) = agree
+            .iter()
+            .max_by(|a, b| a.0.start.total_cmp(&b.0.start))?;
+        let mut kf = c.kf.clone();
+        kf.p *= *k;
+        Some(Witness {
+            s: c.s,
+            kf,
+            mech: c.mech.clone(),
+        })
     }
 }
 
@@ -298,6 +323,18 @@ mod tests {
         s
     }
 
+    impl<const NS: usize> Shadows<NS> {
+        fn returned_(
+            &self,
+            when: (f64, f64, bool),
+            antenna: impl Fn(&NavState) -> Vector2<f64>,
+            fix: (Vector2<f64>, Matrix2<f64>),
+            ins: (&NavState, Matrix2<f64>),
+        ) -> bool {
+            self.returned(when, antenna, fix, ins).is_some()
+        }
+    }
+
     #[test]
     fn the_ins_off_the_copies_and_the_fix_on_them_is_the_ins_error() {
         let (sh, s0, en) = witnesses();
@@ -306,13 +343,36 @@ mod tests {
         // The INS 20 m north of the copies (it followed a ramp), the fix back on them.
         let ins = north_of(s0, 20.0);
         let ins = (&ins, Matrix2::identity() * 0.01);
-        assert!(sh.returned((62.0, 59.0, true), en, fix, ins));
+        assert!(sh.returned_((62.0, 59.0, true), en, fix, ins));
         // A held step later than the window after its onset: no longer.
-        assert!(!sh.returned((62.0, 50.0, true), en, fix, ins));
+        assert!(!sh.returned_((62.0, 50.0, true), en, fix, ins));
         // A held ramp: at any time.
-        assert!(sh.returned((62.0, 50.0, false), en, fix, ins));
+        assert!(sh.returned_((62.0, 50.0, false), en, fix, ins));
         // A hold that began before the second copy started has one witness only.
-        assert!(!sh.returned((21.0, 18.0, false), en, fix, ins));
+        assert!(!sh.returned_((21.0, 18.0, false), en, fix, ins));
+    }
+
+    #[test]
+    fn the_witness_is_the_youngest_copy_with_its_covariance_inflated() {
+        let (mut sh, s0, en) = witnesses();
+        // At 62 s the copies are 62 s (bin 2) and 42 s old (bin 1): the younger's bin
+        // understates its error 4× (in variance), the older's not at all.
+        sh.fit[1] = Default::default();
+        (0..MIN_FIT).for_each(|_| sh.fit[1].push(4.0 * CHI2_2_MEDIAN));
+        sh.list[1].s.v = Vector3::new(0.5, 0.0, 0.0);
+        let ins = north_of(s0, 30.0);
+        let w = sh
+            .returned(
+                (62.0, 59.0, true),
+                en,
+                (Vector2::zeros(), Matrix2::identity()),
+                (&ins, Matrix2::identity() * 0.01),
+            )
+            .expect("both copies witness");
+        // The copy started at 20 s: its state and mechaniser, its covariance times 4.
+        assert_eq!(w.s.v, Vector3::new(0.5, 0.0, 0.0));
+        assert_eq!(w.kf.p, sh.list[1].kf.p * 4.0);
+        assert_eq!(w.mech.i, sh.list[1].mech.i);
     }
 
     #[test]
@@ -320,7 +380,7 @@ mod tests {
         let (sh, s0, en) = witnesses();
         // The fix 20 m north, the INS on the copies: the fix's error, not the INS's.
         let fix = (Vector2::new(0.0, 20.0), Matrix2::identity());
-        assert!(!sh.returned(
+        assert!(!sh.returned_(
             (62.0, 59.0, true),
             en,
             fix,
@@ -334,7 +394,7 @@ mod tests {
         sh.fit = Default::default();
         let ins = north_of(s0, 20.0);
         let fix = (Vector2::zeros(), Matrix2::identity());
-        assert!(!sh.returned(
+        assert!(!sh.returned_(
             (62.0, 59.0, true),
             en,
             fix,
