@@ -117,3 +117,18 @@ def test_a_copy_that_calls_a_followed_steps_end_replaces_the_ins(tmp_path: Path,
     clean_max = float(np.nanmax(np.hypot(e[:, 6], e[:, 7])))
     assert r["fde.after"] <= clean_max, (r, clean_max)
     assert r["fde.after"] < r["no_fde.after"], r
+
+
+def test_the_campaigns_second_route(tmp_path: Path, docs_script: Callable[[str], ModuleType]) -> None:
+    """``meter_fde_campaign``'s ``@city`` route (city blocks and stops, another latitude and
+    noise seed): the fault-free positions-only log runs, FDE ahead of the filter without it
+    (3.2 against 8.6 m RMS when written), and an unknown route is refused."""
+    mc = docs_script("meter_fde_campaign")
+    base = mc._base("urban_pos_tactical@city", str(tmp_path))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        runs = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs
+    rms = {v: float(np.sqrt(np.nanmean(np.sum(runs[v].record["error"][:, 6:8] ** 2, axis=1)))) for v in ("fde", "no_fde")}
+    assert rms["fde"] < 0.6 * rms["no_fde"], rms
+    with pytest.raises(SystemExit, match="route"):
+        mc._base("urban_pos@moon", str(tmp_path))

@@ -33,7 +33,48 @@ from navfdi.scenario import from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
 
+#: A second route for the simulated data sets (``<data set>@city``): city blocks at 8-13 m/s
+#: with right-angle turns both ways and three stops, at another latitude and heading, and
+#: another noise seed — to check that what the campaigns measure on the default route holds
+#: on a route nothing was tuned on.
+CITY: dict = {
+    "latitude": "22.3 deg", "longitude": "114.2 deg", "height": "10 m", "heading": "-70 deg", "speed": "0 m/s",
+    "segments": [
+        {"kind": "stationary", "duration": "30 s"},
+        {"kind": "accelerate", "duration": "7 s", "acceleration": "1.5 m/s2"},
+        {"kind": "level", "duration": "25 s"},
+        {"kind": "turn", "duration": "9 s", "rate": "10 deg/s"},
+        {"kind": "level", "duration": "30 s"},
+        {"kind": "accelerate", "duration": "7 s", "acceleration": "-1.5 m/s2"},
+        {"kind": "stationary", "duration": "25 s"},
+        {"kind": "accelerate", "duration": "6 s", "acceleration": "1.5 m/s2"},
+        {"kind": "level", "duration": "35 s"},
+        {"kind": "turn", "duration": "9 s", "rate": "-10 deg/s"},
+        {"kind": "level", "duration": "20 s"},
+        {"kind": "accelerate", "duration": "4 s", "acceleration": "1 m/s2"},
+        {"kind": "level", "duration": "40 s"},
+        {"kind": "turn", "duration": "6 s", "rate": "15 deg/s"},
+        {"kind": "level", "duration": "30 s"},
+        {"kind": "accelerate", "duration": "6 s", "acceleration": "-1.5 m/s2"},
+        {"kind": "turn", "duration": "9 s", "rate": "-10 deg/s"},
+        {"kind": "accelerate", "duration": "6 s", "acceleration": "1.5 m/s2"},
+        {"kind": "level", "duration": "45 s"},
+        {"kind": "accelerate", "duration": "8 s", "acceleration": "-1.5 m/s2"},
+        {"kind": "stationary", "duration": "15 s"},
+        {"kind": "accelerate", "duration": "8 s", "acceleration": "1.5 m/s2"},
+        {"kind": "level", "duration": "30 s"},
+        {"kind": "turn", "duration": "9 s", "rate": "-10 deg/s"},
+        {"kind": "level", "duration": "50 s"},
+        {"kind": "turn", "duration": "18 s", "rate": "5 deg/s"},
+        {"kind": "level", "duration": "150 s"},
+    ],
+}
+
+
 def _base(which: str, folder: str) -> navfdi.Scenario:
+    which, _, route = which.partition("@")
+    if route not in ("", "city"):
+        raise SystemExit(f"route {route!r}: only 'city' (or none: the default drive)")
     if which == "drive":
         return load_scenario("drive_lc")
     if which == "drive_pos":
@@ -55,7 +96,7 @@ def _base(which: str, folder: str) -> navfdi.Scenario:
     # simulate_log's default (10 deg/h, 1 mg, 0.01, 0.1).
     urban = which.startswith("urban")
     imu = {"gyro_bias": 1.0, "accel_bias": 0.3, "gyro_noise": 0.002, "accel_noise": 0.05} if which.endswith("_tactical") else {}
-    log = simulate_log(folder, duration=600, seed=1, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1,
+    log = simulate_log(folder, duration=600, seed=2 if route else 1, **({"trajectory": CITY} if route else {}), gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.3, gnss_velocity_sigma=0.1,
                        gnss_velocity="_pos" not in which, gnss_rate=1.0 if urban else 4.0, **imu,
                        burst_rate=1 / 60 if urban else 0.0, burst_size=15.0 if urban else 0.0, burst_duration=8.0 if urban else 0.0,
                        stale_rate=1 / 120 if urban else 0.0, stale_duration=4.0 if urban else 0.0)
