@@ -503,13 +503,21 @@ impl PositionHold {
                         // against the INS's displacement, any jump of the fix: a multipath
                         // burst on a held step): a new offset; else the old one held.
                         let renew = jump && recv.is_none_or(|c| c.ins_referenced);
+                        // Against the INS, a jump further from zero remembers the offset
+                        // before it, as the receiver's own jump away does above: a burst on
+                        // the held step, whose end jumps back to it and is no fault's end.
+                        let away = recv.is_some() && d[j] * b > 0.0 && d[j].abs() > b.abs();
                         Comp::Step {
                             b: if renew { d[j] } else { b },
                             var: if renew { s[j] } else { var },
                             back: back && !renew,
                             agree: 0,
                             quiet: if renew { 0 } else { quiet },
-                            base: if renew { None } else { base },
+                            base: match (renew, away) {
+                                (true, true) => Some(b),
+                                (true, false) => None,
+                                _ => base,
+                            },
                         }
                     }
                 }

@@ -491,6 +491,43 @@ fn a_jump_on_a_held_step_against_the_ins_displacement_is_a_new_offset() {
     ));
 }
 
+/// On positions only, the end of that burst — the fix jumping back to the step's offset, by
+/// more than half the burst's — is no fault's end: the step stays held, and its own end is
+/// (on a simulated positions-only route with stops, a 37.5 m step was followed for its last
+/// 20 s from a burst's end, the jump back read as the step's end).
+#[test]
+fn a_bursts_end_on_a_held_step_against_the_ins_displacement_keeps_the_step() {
+    let mut h = PositionHold::default();
+    for k in 0..10 {
+        step_with(&mut h, k as f64, 0.0, false, Some((0.0, 0.0)), true);
+    }
+    step_with(&mut h, 10.0, -30.0, true, Some((30.0, 0.0)), true);
+    step_with(&mut h, 11.0, -30.0, true, Some((0.0, 0.0)), true);
+    assert_eq!(
+        step_with(&mut h, 12.0, -70.0, true, Some((40.0, 0.0)), true),
+        Use::Out(STEP)
+    );
+    step_with(&mut h, 13.0, -70.0, true, Some((0.0, 0.0)), true);
+    // The burst ends: the fix jumps back 40 m, onto the step.
+    let u = step_with(&mut h, 14.0, -30.0, true, Some((-40.0, 0.0)), true);
+    assert_eq!(u, Use::Out(STEP));
+    assert!(
+        matches!(h.comps[1], Comp::Step { b, .. } if b == -30.0),
+        "{:?}",
+        h.comps[1]
+    );
+    assert!(matches!(
+        step_with(&mut h, 15.0, -30.0, true, Some((0.0, 0.0)), true),
+        Use::Relative(b, _) if b == -30.0
+    ));
+    // The step ends: the fix back on the INS.
+    assert_eq!(
+        step_with(&mut h, 16.0, 0.0, false, Some((-30.0, 0.0)), true),
+        Use::Raw
+    );
+    assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
+}
+
 /// On positions only a held ramp's size follows the fixes' displacement against the INS's
 /// velocity for its first [`AGREE_LONG`] fixes, then the line they drew: an INS velocity
 /// error that shows in the displacement afterwards is not taken into the size (the relative
