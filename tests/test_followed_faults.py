@@ -42,12 +42,18 @@ def _case(folder: Path, script: Callable[[str], ModuleType], seed: int, fault: d
     """Run ``fault`` on a simulated log (σ, τ, white noise from ``noise``; fixes at ``rate`` Hz,
     as ``receiver_sweep.log_scenario`` writes it) with and without FDE: the campaign's metrics
     and the fault-free run's largest horizontal error (m)."""
-    mc = script("meter_fde_campaign")
     base = script("receiver_sweep").log_scenario(str(folder), seed, {**noise, "gnss_rate": rate})
+    return _scored(script("meter_fde_campaign"), base, str(folder), fault)
+
+
+def _scored(mc: ModuleType, base: navfdi.Scenario, folder: str, fault: dict[str, Any]) -> tuple[dict[str, float], float]:
+    """``fault`` on the log of ``base`` (simulated in ``folder``), scored with ``mc``
+    (``meter_fde_campaign``) against its fault-free run: the metrics and the fault-free run's
+    largest horizontal error (m)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         clean = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs["fde"]
-        out = mc._one(base, fault, mc._natural(str(folder)), clean.t[mc._excluded(clean)])
+        out = mc._one(base, fault, mc._natural(folder), clean.t[mc._excluded(clean)])
     e = clean.record["error"]
     return out, float(np.nanmax(np.hypot(e[:, 6], e[:, 7])))
 
@@ -108,13 +114,7 @@ def test_a_copy_that_calls_a_followed_steps_end_replaces_the_ins(tmp_path: Path,
     updates it."""
     mc = docs_script("meter_fde_campaign")
     folder = str(tmp_path)
-    base = mc._base("urban_pos_tactical", folder)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        clean = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs["fde"]
-        r = mc._one(base, _fault("pos_n", "step", "34.54 m", 358.9, 60.0), mc._natural(folder), clean.t[mc._excluded(clean)])
-    e = clean.record["error"]
-    clean_max = float(np.nanmax(np.hypot(e[:, 6], e[:, 7])))
+    r, clean_max = _scored(mc, mc._base("urban_pos_tactical", folder), folder, _fault("pos_n", "step", "34.54 m", 358.9, 60.0))
     assert r["fde.after"] <= clean_max, (r, clean_max)
     assert r["fde.after"] < r["no_fde.after"], r
 

@@ -534,17 +534,13 @@ fn run<const NS: usize>(
                         holds[a] = hold::PositionHold::default();
                         rec.reanchored.push(tk);
                         shadows.clear();
+                        // The INS becomes the witness, or is moved onto the fix; the fix then
+                        // updates it.
                         match witness.take() {
-                            // The INS is the witness, updated with the fix.
-                            Some(w) => {
-                                (s, kf, mech) = (w.s, w.kf, w.mech);
-                                [hold::Use::Raw; 3]
-                            }
-                            None => {
-                                diverge::reanchor(&mut s, &mut kf, &d, &sd, rate);
-                                [hold::Use::Raw; 3]
-                            }
+                            Some(w) => (s, kf, mech) = (w.s, w.kf, w.mech),
+                            None => diverge::reanchor(&mut s, &mut kf, &d, &sd, rate),
                         }
+                        [hold::Use::Raw; 3]
                     }
                     None => uses,
                 };
