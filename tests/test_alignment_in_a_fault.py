@@ -9,7 +9,9 @@ is now taken as the INS's error (``diverge::Outlast``); a fault after a longer s
 fixes is still held to its end. And where the fixes show the fault's start — a jump the filter
 took in (on positions only, 2 s after the alignment, before it had converged) that the hold's
 jump undoes — the INS is moved after 5 s of hold (before: 10.1-10.6 m RMS from 51 s to the
-end, the hold lasting to 123 s; without FDE 2.6-3.3 m).
+end, the hold lasting to 123 s; without FDE 2.6-3.3 m). Where the filter converges inside such
+a fault, its later fixes are held from there and the jump back comes in the hold; it ends the
+hold the same way (before: 14-44 m RMS for 20-45 m steps, the hold lasting to 109-123 s).
 """
 
 from __future__ import annotations
@@ -26,14 +28,14 @@ from navfdi.scenario import from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
 
-def _runs(folder: Path, seed: int, velocity: bool, start: float, end: float) -> dict[str, navfdi.ScenarioRun]:
-    """A 300 s simulated log (σ 2 m Gauss-Markov τ 30 s + 0.5 m white fixes at 1 Hz) with a 15 m
-    north step from ``start`` to ``end`` s, run with FDE and without."""
+def _runs(folder: Path, seed: int, velocity: bool, start: float, end: float, size: float = 15.0) -> dict[str, navfdi.ScenarioRun]:
+    """A 300 s simulated log (σ 2 m Gauss-Markov τ 30 s + 0.5 m white fixes at 1 Hz) with a
+    ``size`` m north step from ``start`` to ``end`` s, run with FDE and without."""
     log = simulate_log(folder, duration=300, seed=seed, gnss_rate=1.0, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.5,
                        gnss_velocity_sigma=0.1, gnss_velocity=velocity)
     raw = copy.deepcopy(dict(load_scenario(str(log.scenario)).raw))
     raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
-    raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": "15 m",
+    raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": f"{size} m",
                       "start": f"{start} s", "end": f"{end} s"}]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -71,6 +73,20 @@ def test_a_burst_taken_in_before_the_filter_converged_ends_where_the_fixes_jump_
     # Positions only: the car aligns at 35-36 s; a 15 m north step over 38-46 s is taken in
     # (only gross innovations exclude before the filter converges), and its end held.
     runs = _runs(tmp_path, seed, False, 38.0, 46.0)
+    moved = runs["fde"].record.get("reanchored", [])
+    assert len(moved) >= 1 and 50.0 <= moved[0] <= 53.0, moved
+    fde, no_fde = _horizontal(runs["fde"], 51.0, 300.0), _horizontal(runs["no_fde"], 51.0, 300.0)
+    assert np.sqrt(np.mean(fde**2)) < 1.3 * np.sqrt(np.mean(no_fde**2)), (np.sqrt(np.mean(fde**2)), np.sqrt(np.mean(no_fde**2)))
+
+
+@pytest.mark.parametrize("size", [20.0, 30.0, 45.0])
+def test_a_burst_the_filter_converged_in_ends_where_the_fixes_jump_back_in_the_hold(tmp_path: Path, size: float) -> None:
+    # Positions only, seed 4: the filter converges at 39-40 s, inside a 20-45 m north step over
+    # 38-46 s taken in until then; the step's later fixes are held, and its end comes in that
+    # hold. The INS, which followed the step and coasted past it on the velocity its first fixes
+    # gave it, is moved 5 s after the jump back (before: at 121-123 s, 14.2 / 21.7 / 37.6 m RMS
+    # from 51 s to the end against 3.5 / 4.1 / 6.2 m without FDE).
+    runs = _runs(tmp_path, 4, False, 38.0, 46.0, size)
     moved = runs["fde"].record.get("reanchored", [])
     assert len(moved) >= 1 and 50.0 <= moved[0] <= 53.0, moved
     fde, no_fde = _horizontal(runs["fde"], 51.0, 300.0), _horizontal(runs["no_fde"], 51.0, 300.0)
