@@ -56,11 +56,16 @@ def test_logs_in_line_or_without_turns_pass(tmp_path: Path) -> None:
     log = simulate_log(tmp_path / "a", duration=300, seed=2, gnss_sigma=1.0)
     imu = np.loadtxt(log.imu, delimiter=",", skiprows=1)
     gnss = read_pos(log.gnss)
-    check_turns(imu[:, 1] + 0.3, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
+    # GPS seconds, as the GNSS log's (week and seconds of week: the seconds alone never overlap
+    # it, and the check had nothing to say).
+    t_imu = imu[:, 0] * 604_800.0 + imu[:, 1]
+    check_turns(t_imu + 0.3, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
+    with pytest.raises(ScenarioError, match="stamped 18"):
+        check_turns(t_imu - 18.0, np.radians(imu[:, 2:5]), gnss, 0.0, "loosely_coupled")
     straight = {**{k: v for k, v in CAR_DRIVE.items() if k != "segments"}, "speed": "15 m/s", "segments": [{"duration": "300 s", "kind": "level"}]}
     log2 = simulate_log(tmp_path / "b", duration=300, seed=2, gnss_sigma=1.0, trajectory=straight)
     imu2 = np.loadtxt(log2.imu, delimiter=",", skiprows=1)
-    check_turns(imu2[:, 1] - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")
+    check_turns(imu2[:, 0] * 604_800.0 + imu2[:, 1] - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")
 
 
 @pytest.mark.parametrize(("unit", "factor"), [("rad/s", "180/π"), ("deg/s", "π/180")])
@@ -83,3 +88,22 @@ def test_a_gyro_unit_read_wrong_is_refused_by_the_size_of_the_turns(tmp_path: Pa
         raw["source"] = {**raw["source"], "imu": {**raw["source"]["imu"], "gyro_unit": unit}}
     with pytest.raises(ScenarioError, match=rf"rotation rate is .* times the GNSS course's rate.*{factor} is in that range.*gyro_unit = \"{'deg/s' if unit == 'rad/s' else 'rad/s'}\""):
         navfdi.run_scenario(from_dict(raw, source=str(log.scenario)))
+
+
+def test_a_short_log_with_one_turn_lines_up_or_says_nothing(tmp_path: Path) -> None:
+    """Two minutes with one turn: on meter-level positions alone (σ 2 m, course rate noise of
+    several deg/s) that turn lined up with noise 29-30 s away better than with itself
+    (correlation 0.48-0.54 against 0.10-0.21), and a log in line was refused for a 30 s lag.
+    One turn now says a lag only where the correlation is clear (≥ 0.7), as the receiver's
+    velocities make it: an 18 s shift there is still refused."""
+    kw = {"duration": 120, "seed": 11, "gnss_rate": 1.0, "gnss_sigma": 2.0, "gnss_tau": 30.0, "gnss_white": 0.5,
+          "gnss_velocity_sigma": 0.1, "stale_rate": 1 / 120, "stale_duration": 4.0}
+    log = simulate_log(tmp_path / "a", gnss_velocity=False, **kw)
+    imu = np.loadtxt(log.imu, delimiter=",", skiprows=1)
+    t_imu = imu[:, 0] * 604_800.0 + imu[:, 1]
+    check_turns(t_imu, np.radians(imu[:, 2:5]), read_pos(log.gnss), 0.0, "loosely_coupled")
+    log2 = simulate_log(tmp_path / "b", gnss_velocity=True, **kw)
+    imu2 = np.loadtxt(log2.imu, delimiter=",", skiprows=1)
+    t2 = imu2[:, 0] * 604_800.0 + imu2[:, 1]
+    with pytest.raises(ScenarioError, match=r"stamped 18\.\d s later in the GNSS log"):
+        check_turns(t2 - 18.0, np.radians(imu2[:, 2:5]), read_pos(log2.gnss), 0.0, "loosely_coupled")

@@ -104,6 +104,8 @@ TIME_LAG_TOLERANCE_S = 1.5
 TURN_RATE_RATIO = 2.0
 #: Lags searched (s, both ways).
 _MAX_LAG_S = 40.0
+#: The correlation from which :func:`check_turns` says a lag from a log with one turn.
+_ONE_TURN_CORRELATION = 0.7
 
 
 def _windowed_rate(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarray:
@@ -175,7 +177,9 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     both ways (the noisy course's rate bends one down, the other up) are both beyond it. Said only where
     the evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at
     > 3 m/s) and the best lag's correlation is ≥ 0.4 (for a lag, also 0.1 above the
-    correlation with no lag). A straight road or a walk says nothing and passes.
+    correlation with no lag, and ≥ 0.7 where the IMU turns only once over those epochs: one
+    turn against a noisy course can line up with noise). A straight road or a walk says
+    nothing and passes.
 
     Parameters
     ----------
@@ -228,6 +232,11 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     r0 = float(corr_at(np.zeros(1))[0])
     if not r_best >= 0.4:
         return
+    # One turn matched against a noisy course (a short log of meter-level positions) can line
+    # up with noise elsewhere as well as with itself: a lag is said from two turns or more, or
+    # from one where the correlation is clear.
+    if abs(lag) > TIME_LAG_TOLERANCE_S and r_best < _ONE_TURN_CORRELATION and _turn_count(imu_t, w, tg) < 2:
+        return
     if abs(lag) <= TIME_LAG_TOLERANCE_S or not (not math.isfinite(r0) or r_best - r0 >= 0.1):
         _check_turn_size(tg, rate, imu_t, w, lag, field)
         return
@@ -243,6 +252,18 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
         f"{'GNSS' if lag < 0 else 'IMU'} log than in the {'IMU' if lag < 0 else 'GNSS'} log (the GNSS course's rate against the "
         f"IMU's rotation rate: correlation {r_best:.2f} at that lag, {r0:.2f} at none).{hint} Fix the time stamps, or if the "
         f"IMU's clock really is offset, set {field}.imu_time_offset = \"{-lag:+.1f} s\" (added to the IMU's times)")
+
+
+def _turn_count(imu_t: np.ndarray, w: np.ndarray, tg: np.ndarray) -> int:
+    """Turns of the IMU (its 2 s mean rotation-rate magnitude ``w``, rad/s, at ``imu_t``, s)
+    over the GNSS epochs at speed ``tg`` (s): spells of at least 3 s above 2 deg/s."""
+    inside = (imu_t >= tg[0]) & (imu_t <= tg[-1])
+    t, on = imu_t[inside], w[inside] > math.radians(2.0)
+    if not on.any():
+        return 0
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
+    starts, ends = edges[::2], edges[1::2] - 1
+    return int(np.sum(t[ends] - t[starts] >= 3.0))
 
 
 def _lag_correlation(tg: np.ndarray, rate: np.ndarray, grid0: float, wg: np.ndarray, lags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

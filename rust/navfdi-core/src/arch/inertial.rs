@@ -71,7 +71,11 @@ pub struct Aligned {
 /// after it, `(p₊ − p₋)/(t₊ − t₋)` (east, north, up m/s), where neither is more than `half +
 /// interval` s away (None elsewhere: a gap); with its horizontal σ `√(σ₋² + σ₊²)/(t₊ − t₋)`
 /// from the positions' horizontal σ `sig_p` (m). Time-correlated position errors largely
-/// cancel in the difference, so the σ is an upper bound.
+/// cancel in the difference, so the σ is an upper bound. None too where the two fixes differ
+/// and one of them, or a fix between them, repeats the one before it exactly: the receiver
+/// held its position while the vehicle moved (a stale spell, a static hold released), and
+/// the difference is the hold's catching up, not a velocity (a vehicle standing still, its fixes
+/// repeated or not, differences to zero as before).
 pub fn velocity_from_positions(
     t: &[f64],
     pos: impl Fn(usize) -> Option<Vector3<f64>>,
@@ -82,13 +86,26 @@ pub fn velocity_from_positions(
     let fixes: Vec<(usize, Vector3<f64>)> = (0..t.len())
         .filter_map(|k| pos(k).map(|p| (k, p)))
         .collect();
+    // Fixes (by their index in `fixes`) that repeat the one before them exactly.
+    let repeats: Vec<bool> = (0..fixes.len())
+        .map(|i| i > 0 && fixes[i].1 == fixes[i - 1].1)
+        .collect();
     let mut out = vec![None; t.len()];
     for (i, &(k, _)) in fixes.iter().enumerate() {
-        let before = fixes[..i].iter().rev().find(|(a, _)| t[k] - t[*a] >= half);
-        let after = fixes[i + 1..].iter().find(|(b, _)| t[*b] - t[k] >= half);
-        if let (Some(&(a, pa)), Some(&(b, pb))) = (before, after) {
+        let before = fixes[..i].iter().rposition(|(a, _)| t[k] - t[*a] >= half);
+        let after = fixes[i + 1..]
+            .iter()
+            .position(|(b, _)| t[*b] - t[k] >= half)
+            .map(|j| i + 1 + j);
+        if let (Some(ia), Some(ib)) = (before, after) {
+            let ((a, pa), (b, pb)) = (fixes[ia], fixes[ib]);
             let span = t[b] - t[a];
-            if t[k] - t[a] <= half + interval && t[b] - t[k] <= half + interval && span > 0.0 {
+            let held = pa != pb && repeats[ia..=ib].iter().any(|&r| r);
+            if t[k] - t[a] <= half + interval
+                && t[b] - t[k] <= half + interval
+                && span > 0.0
+                && !held
+            {
                 out[k] = Some(((pb - pa) / span, sig_p(a).hypot(sig_p(b)) / span));
             }
         }
@@ -692,6 +709,33 @@ mod tests {
             }
         }
         assert!(out.iter().filter(|o| o.is_some()).count() > 50);
+    }
+
+    #[test]
+    fn a_held_position_gives_no_velocity_where_it_catches_up() {
+        // 1 Hz fixes of a car at rest to 10 s, then at 5 m/s north; the receiver repeats its
+        // fix at 12-14 s (a stale spell) and at rest (a static hold).
+        let t: Vec<f64> = (0..30).map(f64::from).collect();
+        let truth = |x: f64| Vector3::new(0.0, 5.0 * (x - 10.0).max(0.0), 0.0);
+        let pos = |k: usize| Some(truth(if (12..15).contains(&k) { t[11] } else { t[k] }));
+        let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 1.0);
+        for (k, o) in out.iter().enumerate().skip(1).take(28) {
+            match o {
+                // Differences spanning a repeated fix and a move give none: the stale spell's
+                // start and end (11, 14, 15 s), and moving off from the held rest (10 s).
+                None => assert!([10, 11, 14, 15].contains(&k), "none at {k}"),
+                Some((v, _)) => {
+                    assert!(![10, 11, 14, 15].contains(&k), "{v} at {k}");
+                    // Inside the spell two repeated fixes say what a standing vehicle's do.
+                    let want = if k <= 9 || k == 12 || k == 13 {
+                        0.0
+                    } else {
+                        5.0
+                    };
+                    assert!((v.y - want).abs() < 1e-9, "{v} at {k}");
+                }
+            }
+        }
     }
 
     /// Speeds differenced from meter-level fixes (σ 1.4 m/s) dip below 2.5σ in motion: a

@@ -190,6 +190,20 @@ fn run<const NS: usize>(
             ))
         }
     };
+    // Fixes that repeat the one before them exactly: the alignment, in motion, does not take
+    // its position from one (the receiver held it while the vehicle moved).
+    let repeated: Vec<bool> = {
+        let aid = &aids[pos_aid];
+        let mut last = None;
+        (0..epochs)
+            .map(|k| {
+                let p = measure(aid, k, aid.pos);
+                let r = p.is_some() && p == last;
+                last = p.or(last);
+                r
+            })
+            .collect()
+    };
     let aligned = align(
         &l.alignment,
         "loosely_coupled",
@@ -201,7 +215,7 @@ fn run<const NS: usize>(
             (None, Some(va)) => measure(&aids[va], k, aids[va].vel),
             (None, None) => None,
         },
-        |k| measure(&aids[pos_aid], k, aids[pos_aid].pos),
+        |k| measure(&aids[pos_aid], k, aids[pos_aid].pos).filter(|_| !repeated[k]),
         |k| match (&derived, vel_aid) {
             (Some(d), _) => d[k].map_or(0.1, |(_, s)| s),
             (None, va) => va
