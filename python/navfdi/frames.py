@@ -104,7 +104,7 @@ TIME_LAG_TOLERANCE_S = 1.5
 TURN_RATE_RATIO = 2.0
 #: Lags searched (s, both ways).
 _MAX_LAG_S = 40.0
-#: The correlation from which :func:`check_turns` says a lag from a log with one turn.
+#: The correlation from which :func:`check_turns` speaks on a log whose IMU turns at most once.
 _ONE_TURN_CORRELATION = 0.7
 
 
@@ -177,9 +177,9 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     both ways (the noisy course's rate bends one down, the other up) are both beyond it. Said only where
     the evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at
     > 3 m/s) and the best lag's correlation is ≥ 0.4 (for a lag, also 0.1 above the
-    correlation with no lag, and ≥ 0.7 where the IMU turns only once over those epochs: one
-    turn against a noisy course can line up with noise). A straight road or a walk says
-    nothing and passes.
+    correlation with no lag; and ≥ 0.7 where the IMU turns at most once over those epochs:
+    one turn against a noisy course can line up with noise, and a course's noise alone can
+    pass for turns). A straight road or a walk says nothing and passes.
 
     Parameters
     ----------
@@ -233,9 +233,11 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     if not r_best >= 0.4:
         return
     # One turn matched against a noisy course (a short log of meter-level positions) can line
-    # up with noise elsewhere as well as with itself: a lag is said from two turns or more, or
-    # from one where the correlation is clear.
-    if abs(lag) > TIME_LAG_TOLERANCE_S and r_best < _ONE_TURN_CORRELATION and _turn_count(imu_t, w, tg) < 2:
+    # up with noise elsewhere as well as with itself, and a course's noise alone can pass for
+    # turns: a lag, or the turns' size, is said from two turns of the IMU or more, or where the
+    # correlation is clear (a gyro unit read wrong scales the IMU's turns below the count's
+    # 2 deg/s, not the correlation).
+    if r_best < _ONE_TURN_CORRELATION and _turn_count(imu_t, w, tg) < 2:
         return
     if abs(lag) <= TIME_LAG_TOLERANCE_S or not (not math.isfinite(r0) or r_best - r0 >= 0.1):
         _check_turn_size(tg, rate, imu_t, w, lag, field)
