@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from navfdi._errors import ScenarioError, ScenarioWarning
+from navfdi._intervals import alarm_intervals
 from navfdi._lc_schema import _rot
 
 __all__ = ["FrameWarning", "check_gravity", "check_turns", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG",
@@ -258,14 +259,14 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
 
 def _turn_count(imu_t: np.ndarray, w: np.ndarray, tg: np.ndarray) -> int:
     """Turns of the IMU (its 2 s mean rotation-rate magnitude ``w``, rad/s, at ``imu_t``, s)
-    over the GNSS epochs at speed ``tg`` (s): spells of at least 3 s above 2 deg/s."""
+    over the GNSS epochs at speed ``tg`` (s): spells of at least 3 s above 2 deg/s (as alarm
+    intervals, :func:`navfdi._intervals.alarm_intervals`)."""
     inside = (imu_t >= tg[0]) & (imu_t <= tg[-1])
-    t, on = imu_t[inside], w[inside] > math.radians(2.0)
-    if not on.any():
+    t = imu_t[inside]
+    if t.size == 0:
         return 0
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], on.astype(np.int8), [0]])))
-    starts, ends = edges[::2], edges[1::2] - 1
-    return int(np.sum(t[ends] - t[starts] >= 3.0))
+    spells = alarm_intervals(w[inside] > math.radians(2.0), t)
+    return sum(1 for iv in spells if (t[-1] if iv.end is None else iv.end) - iv.start >= 3.0)
 
 
 def _lag_correlation(tg: np.ndarray, rate: np.ndarray, grid0: float, wg: np.ndarray, lags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

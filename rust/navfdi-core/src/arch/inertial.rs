@@ -83,12 +83,9 @@ pub fn velocity_from_positions(
     half: f64,
     interval: f64,
 ) -> Vec<Option<(Vector3<f64>, f64)>> {
+    let repeats = repeated_fixes(t.len(), &pos);
     let fixes: Vec<(usize, Vector3<f64>)> = (0..t.len())
         .filter_map(|k| pos(k).map(|p| (k, p)))
-        .collect();
-    // Fixes (by their index in `fixes`) that repeat the one before them exactly.
-    let repeats: Vec<bool> = (0..fixes.len())
-        .map(|i| i > 0 && fixes[i].1 == fixes[i - 1].1)
         .collect();
     let mut out = vec![None; t.len()];
     for (i, &(k, _)) in fixes.iter().enumerate() {
@@ -100,7 +97,7 @@ pub fn velocity_from_positions(
         if let (Some(ia), Some(ib)) = (before, after) {
             let ((a, pa), (b, pb)) = (fixes[ia], fixes[ib]);
             let span = t[b] - t[a];
-            let held = pa != pb && repeats[ia..=ib].iter().any(|&r| r);
+            let held = pa != pb && fixes[ia..=ib].iter().any(|&(j, _)| repeats[j]);
             if t[k] - t[a] <= half + interval
                 && t[b] - t[k] <= half + interval
                 && span > 0.0
@@ -111,6 +108,21 @@ pub fn velocity_from_positions(
         }
     }
     out
+}
+
+/// Per epoch of `n`: whether its fix (`pos`, east, north, up m; None: no fix) repeats the last
+/// fix before it exactly — the receiver holding its position (at rest, or stale while the
+/// vehicle moves).
+pub fn repeated_fixes(n: usize, pos: impl Fn(usize) -> Option<Vector3<f64>>) -> Vec<bool> {
+    let mut last = None;
+    (0..n)
+        .map(|k| {
+            let p = pos(k);
+            let repeat = p.is_some() && p == last;
+            last = p.or(last);
+            repeat
+        })
+        .collect()
 }
 
 /// IMU samples a static start must hold for the alignment to level on it.

@@ -26,7 +26,9 @@ mod shadow;
 mod window;
 
 use super::common::make_detector;
-use super::inertial::{align, record_nav, velocity_from_positions, BodyImu, Mechaniser};
+use super::inertial::{
+    align, record_nav, repeated_fixes, velocity_from_positions, BodyImu, Mechaniser,
+};
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
@@ -192,18 +194,7 @@ fn run<const NS: usize>(
     };
     // Fixes that repeat the one before them exactly: the alignment, in motion, does not take
     // its position from one (the receiver held it while the vehicle moved).
-    let repeated: Vec<bool> = {
-        let aid = &aids[pos_aid];
-        let mut last = None;
-        (0..epochs)
-            .map(|k| {
-                let p = measure(aid, k, aid.pos);
-                let r = p.is_some() && p == last;
-                last = p.or(last);
-                r
-            })
-            .collect()
-    };
+    let repeated = repeated_fixes(epochs, |k| measure(&aids[pos_aid], k, aids[pos_aid].pos));
     let aligned = align(
         &l.alignment,
         "loosely_coupled",
