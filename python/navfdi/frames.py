@@ -107,6 +107,10 @@ TURN_RATE_RATIO = 2.0
 _MAX_LAG_S = 40.0
 #: The correlation from which :func:`check_turns` speaks on a log whose IMU turns at most once.
 _ONE_TURN_CORRELATION = 0.7
+#: Standard errors of a chance correlation a lag's must reach in :func:`check_turns`: over
+#: ``n`` independent 2 s windows at speed a correlation by chance has σ 1/√n, and the best of
+#: 161 lags of a heavy-tailed noisy course reaches 4σ.
+_CHANCE_SIGMAS = 5.0
 
 
 def _windowed_rate(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarray:
@@ -177,7 +181,9 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     not be off 1 by more than :data:`TURN_RATE_RATIO`: refused when the least-squares slopes
     both ways (the noisy course's rate bends one down, the other up) are both beyond it. Said only where
     the evidence is clear: the course turns (σ of its rate ≥ 1 deg/s over ≥ 30 epochs at
-    > 3 m/s) and the best lag's correlation is ≥ 0.4 (for a lag, also 0.1 above the
+    > 3 m/s) and the best lag's correlation is ≥ 0.4 and 5 standard errors of a chance one
+    (1/√n over the n independent 2 s windows at speed: on 200 s of meter-level positions with
+    multipath bursts a burst lined up with a turn 32 s away at 0.40; for a lag, also 0.1 above the
     correlation with no lag; and ≥ 0.7 where the IMU turns at most once over those epochs:
     one turn against a noisy course can line up with noise, and a course's noise alone can
     pass for turns). A straight road or a walk says nothing and passes.
@@ -231,7 +237,10 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
     best = int(np.nanargmax(rf))
     lag, r_best = float(np.round(fine[best], 1)), float(rf[best])
     r0 = float(corr_at(np.zeros(1))[0])
-    if not r_best >= 0.4:
+    # The course's rate and the IMU's are 2 s averages: the epochs at speed hold span / 2 s
+    # independent windows, over which a chance correlation has σ 1/√n.
+    windows = len(tg) * float(np.median(np.diff(tg))) / 2.0 if len(tg) > 1 else 0.0
+    if not r_best >= max(0.4, _CHANCE_SIGMAS / math.sqrt(max(windows, 1.0))):
         return
     # One turn matched against a noisy course (a short log of meter-level positions) can line
     # up with noise elsewhere as well as with itself, and a course's noise alone can pass for
