@@ -19,6 +19,7 @@ mod checks;
 mod diverge;
 mod hold;
 mod noise_scale;
+mod own_noise;
 mod pull;
 mod receiver;
 mod rest;
@@ -292,6 +293,24 @@ fn run<const NS: usize>(
         .iter()
         .map(|_| noise_scale::NoiseScale::new(l.noise_scale, 1.0, 10.0))
         .collect();
+    // A receiver of positions alone: its own noise against the σ it records, from the fixes
+    // before the alignment on (with velocities, those hold the INS to the receiver).
+    let mut own: Vec<Option<own_noise::OwnNoise>> = (0..aids.len())
+        .map(|a| {
+            let aid = &aids[a];
+            (vel_aid_none && a < n_gnss && aid.pos.is_some()).then(|| {
+                let mut o = own_noise::OwnNoise::default();
+                for k in 0..ka {
+                    if let Some(p) = measure(aid, k, aid.pos) {
+                        let (t, sig) = (models.t[k], sigma_h(logged, aid, k));
+                        o.push(t, [p.x, p.y], sig, fix_interval[a], false);
+                    }
+                }
+                o
+            })
+        })
+        .collect();
+    let any_own = own.iter().any(Option::is_some);
 
     // Velocity components left out for the receiver's own inconsistency.
     let mut blame = blame::VelocityBlame::default();
@@ -323,6 +342,12 @@ fn run<const NS: usize>(
         }
         mech.advance(&imu, &mut s, &mut kf, tk);
         let (i, w_last) = (mech.i, mech.w_last);
+        if any_own {
+            let prior = antenna_enu(&s);
+            own.iter_mut()
+                .flatten()
+                .for_each(|o| o.mechanised([prior.x, prior.y]));
+        }
         outcomes.iter_mut().for_each(|o| *o = NOT_MEASURED.clone());
         // Constraints first, then GNSS; on positions alone a rest starts where the fixes stand.
         let ap = &aids[pos_aid];
@@ -387,6 +412,11 @@ fn run<const NS: usize>(
                 let fix = Vector3::new(z[off], z[off + 1], z[off + 2]);
                 stale_epoch |= holds[a].stale(&fix, &ant_enu);
             }
+            if let (Some(o), Some(off)) = (own[a].as_mut(), aid.pos) {
+                let sig = sigma_h(logged, aid, k);
+                o.push(tk, [z[off], z[off + 1]], sig, fix_interval[a], true);
+                scales[a].set_own(o.ratio().unwrap_or(1.0));
+            }
             let sig = logged.sigma.get(si).and_then(|v| v.get(k));
             // Tested with the σ scaled by the channel's noise scale; updated with it as given.
             let mut meas = gnss_measurement::<NS>(&s, aid, z, sig, &logged.origin, &lever, &w_last);
@@ -402,8 +432,14 @@ fn run<const NS: usize>(
         // measurement σ. Before it, only gross innovations exclude.
         if rec.converged_at.is_none() && !tested.is_empty() {
             let heading_settled = kf.p[(PHI + 2, PHI + 2)].max(0.0).sqrt() <= CONVERGED_HEADING;
+            // A channel of positions alone has its own noise measured first: the σ it records
+            // may be optimistic.
+            let own_known = tested
+                .iter()
+                .all(|(a, _, _)| own[*a].as_ref().is_none_or(|o| o.ratio().is_some()));
             let settled = l.convergence == 0.0
                 || heading_settled
+                    && own_known
                     && tested.iter().all(|(_, meas, o)| {
                         o.inn.as_ref().is_some_and(|(_, sv)| {
                             let m = meas.r.nrows() as f64;
@@ -640,6 +676,12 @@ fn run<const NS: usize>(
             let moved = antenna_enu(&s) - ant_enu;
             let dvar = p_before - pos_var(&kf);
             pull.add(tk, &moved, &dvar);
+        }
+        if any_own {
+            let post = antenna_enu(&s);
+            own.iter_mut()
+                .flatten()
+                .for_each(|o| o.updated([post.x, post.y]));
         }
         // Record.
         let mut fused = 0;

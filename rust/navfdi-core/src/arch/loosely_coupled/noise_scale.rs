@@ -10,12 +10,16 @@ use std::collections::VecDeque;
 /// a consistent filter's — robust to the faults it must find (held fixes are not counted, and
 /// a median ignores the rest). Optimistic σ give `c > 1` (tests that hold their pf); the
 /// loosely coupled filter clamps it to `[1, 10]`. Clamped to `[lo, hi]`; 1 until
-/// [`SCALE_MIN`] samples are in.
+/// [`SCALE_MIN`] samples are in. Fixes whose own noise shows their σ optimistic lift it
+/// further ([`NoiseScale::set_own`]).
 #[derive(Debug, Clone)]
 pub struct NoiseScale {
-    d2: Rolling<SCALE_WINDOW>,
-    hph: Rolling<SCALE_WINDOW>,
-    r: Rolling<SCALE_WINDOW>,
+    /// The fixes used as measured.
+    used: Windows,
+    /// Every tested fix (used or not), for [`NoiseScale::set_own`].
+    tested: Windows,
+    /// The fixes' own noise over their recorded σ ([`super::own_noise::OwnNoise::ratio`]).
+    own: f64,
     /// Fixed scale (no estimation) when set.
     fixed: Option<f64>,
     lo: f64,
@@ -97,14 +101,18 @@ impl<const CAP: usize> Rolling<CAP> {
 pub const SCALE_WINDOW: usize = 180;
 /// Components needed before the scale departs from 1.
 pub const SCALE_MIN: usize = 30;
+/// The fixes' own noise over their recorded σ beyond which the recorded σ are taken as
+/// optimistic ([`NoiseScale::set_own`]): well beyond the ratio's own scatter (a median over
+/// [`super::own_noise::OWN_WINDOW`] second differences is good to about 10 %).
+pub const OWN_SCALE: f64 = 1.5;
 
 impl NoiseScale {
     /// An estimated scale clamped to `[lo, hi]`, or a `fixed` one.
     pub fn new(fixed: Option<f64>, lo: f64, hi: f64) -> Self {
         NoiseScale {
-            d2: Rolling::default(),
-            hph: Rolling::default(),
-            r: Rolling::default(),
+            used: Windows::default(),
+            tested: Windows::default(),
+            own: 1.0,
             fixed,
             lo,
             hi,
@@ -114,6 +122,18 @@ impl NoiseScale {
             float_used: f64::NEG_INFINITY,
             float_seen: f64::NEG_INFINITY,
         }
+    }
+
+    /// The fixes' own noise over their recorded σ, `ratio`
+    /// ([`super::own_noise::OwnNoise::ratio`]). Beyond [`OWN_SCALE`] the recorded σ are
+    /// optimistic by the fixes' own account, and the scale is at least what every tested fix's
+    /// innovations say, up to that ratio (the ratio itself until [`SCALE_MIN`] components are
+    /// tested): fixes tested at a third of their noise fail, and a
+    /// scale learned only from fixes used would stay at 1 while the INS runs on without them.
+    /// A wrong mounting, which also makes the innovations large, leaves the ratio near 1 (its
+    /// misfit is the INS's, not the fixes').
+    pub fn set_own(&mut self, ratio: f64) {
+        self.own = if ratio.is_finite() { ratio } else { 1.0 };
     }
 
     /// Whether the last fix observed, at `t` (s) and `offset` (m, |INS − fix|) from the INS,
@@ -161,13 +181,9 @@ impl NoiseScale {
         r_meas: &nalgebra::DMatrix<f64>,
         scale: f64,
     ) {
-        let (r, s) = inn;
-        let c2 = scale * scale;
-        let n = r.len();
-        let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
-        let hph: Vec<f64> = (0..n).map(|i| s[(i, i)] - r_meas[(i, i)]).collect();
-        let rr: Vec<f64> = (0..n).map(|i| r_meas[(i, i)] / c2).collect();
-        self.add(&d2, &hph, &rr);
+        if self.fixed.is_none() {
+            self.used.add_innovation(inn, r_meas, scale);
+        }
     }
 
     /// The scale for a fix of solution quality `q` (RTKLIB's codes; 0 unknown): this scale for
@@ -182,7 +198,7 @@ impl NoiseScale {
             return self.scale();
         }
         match self.classes.iter().find(|c| c.0 == q) {
-            Some((_, c)) if c.d2.len() >= SCALE_MIN => c.scale(),
+            Some((_, c)) if c.used.d2.len() >= SCALE_MIN => c.scale(),
             _ => self.scale(),
         }
     }
@@ -203,7 +219,13 @@ impl NoiseScale {
         if q == 2 {
             self.float_seen = fix.1;
         }
-        let (Some(rank), Some(inn)) = (quality_rank(q), inn) else {
+        let Some(inn) = inn else {
+            return;
+        };
+        if self.fixed.is_none() {
+            self.tested.add_innovation(inn, r_meas, scale);
+        }
+        let Some(rank) = quality_rank(q) else {
             return;
         };
         self.best = Some(self.best.map_or(rank, |b| b.min(rank)));
@@ -220,10 +242,41 @@ impl NoiseScale {
 
     /// Add a fix used as measured: its components' squared innovations `d²`, predicted
     /// variances `HPHᵀ` and measurement variances `R` (unscaled).
+    #[cfg(test)]
     pub fn add(&mut self, d2: &[f64], hph: &[f64], r: &[f64]) {
-        if self.fixed.is_some() {
-            return;
+        if self.fixed.is_none() {
+            self.used.add(d2, hph, r);
         }
+    }
+
+    /// The current scale `c` (of σ).
+    pub fn scale(&self) -> f64 {
+        if let Some(f) = self.fixed {
+            return f;
+        }
+        let used = self.used.scale(self.lo, self.hi);
+        if self.own <= OWN_SCALE {
+            used
+        } else if self.tested.d2.len() < SCALE_MIN {
+            used.max(self.own.clamp(self.lo, self.hi))
+        } else {
+            used.max(self.tested.scale(self.lo, self.hi).min(self.own))
+        }
+    }
+}
+
+/// Windows of the last [`SCALE_WINDOW`] components' squared innovations, predicted variances
+/// `HPHᵀ` and measurement variances `R` (unscaled).
+#[derive(Debug, Clone, Default)]
+struct Windows {
+    d2: Rolling<SCALE_WINDOW>,
+    hph: Rolling<SCALE_WINDOW>,
+    r: Rolling<SCALE_WINDOW>,
+}
+
+impl Windows {
+    /// Add components (finite, R > 0).
+    fn add(&mut self, d2: &[f64], hph: &[f64], r: &[f64]) {
         for j in 0..d2.len().min(hph.len()).min(r.len()) {
             if !(d2[j].is_finite() && hph[j].is_finite() && r[j] > 0.0) {
                 continue;
@@ -234,16 +287,31 @@ impl NoiseScale {
         }
     }
 
-    /// The current scale `c` (of σ).
-    pub fn scale(&self) -> f64 {
-        if let Some(f) = self.fixed {
-            return f;
-        }
+    /// Add an innovation `r` (m) with the covariance `s` of its test and the measurement
+    /// covariance `r_meas` at `scale` (m²; `inn` = (r, s)).
+    fn add_innovation(
+        &mut self,
+        inn: &(nalgebra::DVector<f64>, nalgebra::DMatrix<f64>),
+        r_meas: &nalgebra::DMatrix<f64>,
+        scale: f64,
+    ) {
+        let (r, s) = inn;
+        let c2 = scale * scale;
+        let n = r.len();
+        let d2: Vec<f64> = (0..n).map(|i| r[i] * r[i]).collect();
+        let hph: Vec<f64> = (0..n).map(|i| s[(i, i)] - r_meas[(i, i)]).collect();
+        let rr: Vec<f64> = (0..n).map(|i| r_meas[(i, i)] / c2).collect();
+        self.add(&d2, &hph, &rr);
+    }
+
+    /// `c = √((med(d²)/0.4549 − med(HPHᵀ)) / med(R))` clamped to `[lo, hi]`; 1 below
+    /// [`SCALE_MIN`] components.
+    fn scale(&self, lo: f64, hi: f64) -> f64 {
         if self.d2.len() < SCALE_MIN {
             return 1.0;
         }
         let c2 = (self.d2.median() / 0.454_936_4 - self.hph.median()) / self.r.median();
-        c2.max(self.lo * self.lo).sqrt().clamp(self.lo, self.hi)
+        c2.max(lo * lo).sqrt().clamp(lo, hi)
     }
 }
 
@@ -347,6 +415,38 @@ mod scale_tests {
         e.observe((1, 51.0), Some(&fixed), &r_meas, 1.0);
         assert!(e.float_ended(51.0, 0.8) && !e.float_ended(51.0, 1.2));
         assert!(!e.float_ended(50.0 + RESOLVE_MEMORY + 1.0, 0.8));
+    }
+
+    /// The fixes' own noise beyond [`OWN_SCALE`] times their σ lifts the scale to what every
+    /// tested fix says, up to that ratio (the ratio alone before enough are tested); within
+    /// it, the scale is the used fixes' alone.
+    #[test]
+    fn optimistic_fixes_by_their_own_account_lift_the_scale() {
+        use nalgebra::{DMatrix, DVector};
+        // Innovations of 3 σ at a stated R of 1 m² and HPHᵀ ≈ 0: the tested fixes say 3.
+        let r_meas = DMatrix::from_diagonal_element(3, 3, 1.0);
+        let inn = (
+            DVector::from_element(3, 3.0 * 0.454_936_4f64.sqrt()),
+            &r_meas * 1.0,
+        );
+        let mut s = NoiseScale::new(None, 1.0, 10.0);
+        s.set_own(2.5);
+        assert_eq!(s.scale(), 2.5, "the ratio alone before any fix is tested");
+        for _ in 0..SCALE_MIN / 3 {
+            s.observe((5, 0.0), Some(&inn), &r_meas, 1.0);
+        }
+        assert_eq!(s.scale(), 2.5, "capped at the ratio");
+        s.set_own(4.0);
+        assert!((s.scale() - 3.0).abs() < 1e-9, "{}", s.scale());
+        s.set_own(OWN_SCALE);
+        assert_eq!(s.scale(), 1.0, "within OWN_SCALE: the used fixes' scale");
+        s.set_own(f64::NAN);
+        assert_eq!(s.scale(), 1.0);
+        // A user's fixed scale stays.
+        let mut f = NoiseScale::new(Some(1.5), 1.0, 10.0);
+        f.set_own(4.0);
+        f.observe((5, 0.0), Some(&inn), &r_meas, 1.0);
+        assert_eq!(f.scale(), 1.5);
     }
 
     /// The rolling window's median is the selection's over the same values, to the bit,
