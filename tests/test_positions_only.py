@@ -472,3 +472,25 @@ def test_a_receiver_whose_sigma_is_a_third_of_its_noise_is_not_held_out(tmp_path
     assert 2.5 < float(np.nanmedian(scale[-500:])) < 5.0
     counts = r["fde"].exclusion_counts()["gnss_pos"]
     assert counts["test"] + counts["step"] <= 0.05 * counts["tested"], counts
+
+
+def test_a_log_never_fast_enough_for_its_sigma_is_not_aligned_at_rest(tmp_path: Path) -> None:
+    """Positions alone, 3 m of error correlated over 30 s written σ 6 m: the speeds differenced
+    from them have a written σ of 4.2 m/s, and the car's 12 m/s never reaches the 5σ a heading
+    is read at. The alignment then took the first speed above 2 m/s, the fixes' drift while the
+    car still stood (12 s), and read its heading from it: 150° off, 196 m RMS without FDE (16.5
+    m with it, after moving the INS back). Now the first epoch at half the most σ the log
+    reaches: the car moving."""
+    log = simulate_log(tmp_path / "s", duration=400, seed=48, gnss_rate=5.0, imu_rate=200.0, gnss_sigma=3.0, gnss_tau=30.0,
+                       gnss_white=0.5, gnss_velocity=False, gyro_bias=10.0, reported_sigma=6.08)
+    raw = dict(load_scenario(str(log.scenario)).raw)
+    raw.pop("faults", None)
+    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
+    r = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+    for x in r.values():
+        e = x.record["error"]
+        k = int(np.flatnonzero(np.isfinite(e[:, 6]))[0])
+        ref_speed = float(np.hypot(*(x.record["nav"][k, 3:5] - e[k, 3:5])))
+        assert ref_speed > 2.0, (x.t[k], ref_speed)
+    rms = {v: float(np.sqrt(np.nanmean(_hor(x) ** 2))) for v, x in r.items()}
+    assert max(rms.values()) < 8.0, rms

@@ -233,7 +233,8 @@ pub const HEADING_SPEED_SIGMAS: f64 = 5.0;
 /// north, up (m/s; m from `origin`) at epoch k where measured; `sig_v` the velocity σ at the
 /// alignment epoch (m/s, given its index); `rest_by_sigma`: `sig_v` is the receiver's velocity
 /// σ, speeds below 2.5 σ count as rest, and the heading is read at a speed of at least
-/// [`HEADING_SPEED_SIGMAS`] σ where the log reaches it. `section` names the configuration in errors.
+/// [`HEADING_SPEED_SIGMAS`] σ where the log reaches it, else at half the most σ it reaches
+/// (and at least `alignment.speed`). `section` names the configuration in errors.
 #[allow(clippy::too_many_arguments)]
 pub fn align(
     a: &AlignmentSpec,
@@ -263,9 +264,18 @@ pub fn align(
     } else {
         0.0
     };
+    // Where the log never gets that fast, the first epoch at half the most σ its speed
+    // reaches: a first epoch at `speed` may be noise at rest (fixes with 3 m of correlated
+    // error written σ 6 m moved 2 m/s between two fixes 2 s apart while the car stood, and the
+    // heading was read from it).
+    let best = (0..t.len())
+        .filter(|&k| usable(k, a.speed))
+        .filter_map(|k| Some(speed_at(k)? / sig_v(k)))
+        .filter(|r| r.is_finite())
+        .fold(0.0, f64::max);
     let ka = (0..t.len())
         .find(|&k| usable(k, a.speed.max(heading_sigmas * sig_v(k))))
-        .or_else(|| (0..t.len()).find(|&k| usable(k, a.speed)))
+        .or_else(|| (0..t.len()).find(|&k| usable(k, a.speed.max(0.5 * best * sig_v(k)))))
         .ok_or_else(|| {
             Error::Invalid(format!(
                 "alignment: no epoch with a GNSS fix and a GNSS speed of at least {section}.alignment.speed = {} m/s inside the IMU log",
