@@ -103,7 +103,7 @@ pub const SCALE_WINDOW: usize = 180;
 pub const SCALE_MIN: usize = 30;
 /// The fixes' own noise over their recorded σ beyond which the recorded σ are taken as
 /// optimistic ([`NoiseScale::set_own`]): well beyond the ratio's own scatter (a median over
-/// [`super::own_noise::OWN_WINDOW`] second differences is good to about 10 %).
+/// [`super::own_noise::OWN_WINDOW`] third differences is good to about 10 %).
 pub const OWN_SCALE: f64 = 1.5;
 
 impl NoiseScale {

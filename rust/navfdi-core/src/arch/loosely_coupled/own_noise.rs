@@ -113,18 +113,12 @@ impl OwnNoise {
 mod tests {
     use super::*;
 
-    /// A normal deviate stream (Box–Muller on a 64-bit LCG).
+    /// A normal deviate stream (the crates' ChaCha and standard normal, seeded).
     fn gauss(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            let mut u = || {
-                s = s
-                    .wrapping_mul(6_364_136_223_846_793_005)
-                    .wrapping_add(1_442_695_040_888_963_407);
-                ((s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-            };
-            (-2.0 * u().ln()).sqrt() * (std::f64::consts::TAU * u()).cos()
-        }
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        move || StandardNormal.sample(&mut rng)
     }
 
     /// A car turning (1.5 m/s² of lateral acceleration at 1 Hz) with fixes of white σ `own`
