@@ -1,0 +1,217 @@
+//! Tests of [`super`] (the strapdown INS's shared parts): the velocities differenced from
+//! positions, the alignment and the IMU's own rest check.
+
+use super::velocity_from_positions;
+use nalgebra::Vector3;
+
+#[test]
+fn velocities_from_positions_difference_about_two_seconds_and_skip_gaps() {
+    // Fixes at 4 Hz on record epochs of 8 Hz, moving (3, −2, 0.5) m/s, with a gap of 3 s.
+    let t: Vec<f64> = (0..160).map(|k| f64::from(k) * 0.125).collect();
+    let v = Vector3::new(3.0, -2.0, 0.5);
+    let gap = |x: f64| (10.0..13.0).contains(&x);
+    let pos = |k: usize| (k.is_multiple_of(2) && !gap(t[k])).then(|| v * t[k]);
+    let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 0.25);
+    for (k, o) in out.iter().enumerate() {
+        let tk = t[k];
+        let inside = k.is_multiple_of(2)
+            && tk >= 1.0
+            && tk <= t[159] - 1.0
+            && !gap(tk)
+            && !(9.0 < tk && tk < 10.0 || (13.0..14.0).contains(&tk));
+        match o {
+            Some((dv, sig)) => {
+                assert!(inside, "a velocity at {tk}");
+                assert!((dv - v).norm() < 1e-9, "{dv} at {tk}");
+                // Two fixes of σ 2 m, 2 s apart.
+                assert!((sig - 8f64.sqrt() / 2.0).abs() < 1e-9, "{sig}");
+            }
+            None => assert!(!inside || (9.0..=10.0).contains(&tk), "none at {tk}"),
+        }
+    }
+    assert!(out.iter().filter(|o| o.is_some()).count() > 50);
+}
+
+#[test]
+fn a_held_position_gives_no_velocity_where_it_catches_up() {
+    // 1 Hz fixes of a car at rest to 10 s, then at 5 m/s north; the receiver repeats its
+    // fix at 12-14 s (a stale spell) and at rest (a static hold).
+    let t: Vec<f64> = (0..30).map(f64::from).collect();
+    let truth = |x: f64| Vector3::new(0.0, 5.0 * (x - 10.0).max(0.0), 0.0);
+    let pos = |k: usize| Some(truth(if (12..15).contains(&k) { t[11] } else { t[k] }));
+    let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 1.0);
+    for (k, o) in out.iter().enumerate().skip(1).take(28) {
+        match o {
+            // Differences spanning a repeated fix and a move give none: the stale spell's
+            // start and end (11, 14, 15 s), and moving off from the held rest (10 s).
+            None => assert!([10, 11, 14, 15].contains(&k), "none at {k}"),
+            Some((v, _)) => {
+                assert!(![10, 11, 14, 15].contains(&k), "{v} at {k}");
+                // Inside the spell two repeated fixes say what a standing vehicle's do.
+                let want = if k <= 9 || k == 12 || k == 13 {
+                    0.0
+                } else {
+                    5.0
+                };
+                assert!((v.y - want).abs() < 1e-9, "{v} at {k}");
+            }
+        }
+    }
+}
+
+/// Speeds differenced from meter-level fixes (σ 1.4 m/s) dip below 2.5σ in motion: a
+/// single slow epoch before the heading's speed is no static start (it held one IMU sample,
+/// and the alignment failed); the search goes on to the rest before it, whose mean rate is
+/// the gyro bias.
+#[test]
+fn a_slow_moment_in_motion_is_no_static_start() {
+    use super::{align, BodyImu};
+    use crate::spec::AlignmentSpec;
+    use crate::stream::Nominal;
+    let n = 6001;
+    let ti: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
+    // At rest to 30 s (gyro bias 0.01 rad/s on x), turning and shaking after.
+    let gyro = ti
+        .iter()
+        .map(|&x| Vector3::new(if x <= 30.0 { 0.01 } else { 0.3 }, 0.0, 0.0))
+        .collect();
+    let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
+    let imu = BodyImu { t: ti, gyro, acc };
+    let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
+    // 5 m/s from 30 s with a dip to 0.5 m/s at 35 s, 8 m/s (above 5σ) from 40 s.
+    let speed = |x: f64| match x {
+        x if x <= 30.0 => 0.0,
+        35.0 => 0.5,
+        x if x < 40.0 => 5.0,
+        _ => 8.0,
+    };
+    let a = AlignmentSpec {
+        speed: 1.0,
+        heading: None,
+        static_speed: 0.05,
+        gyro_bias: true,
+        sigma_level: 0.02,
+        sigma_heading: 0.1,
+        sigma_position: 2.0,
+        sigma_velocity: 1.0,
+    };
+    let origin = Nominal {
+        lat: 0.7,
+        lon: 0.2,
+        h: 100.0,
+    };
+    let al = align(
+        &a,
+        "loosely_coupled",
+        &imu,
+        &t,
+        &origin,
+        |k| Some(Vector3::new(speed(t[k]), 0.0, 0.0)),
+        |k| Some(Vector3::new(5.0 * t[k], 0.0, 0.0)),
+        |_| 1.4,
+        true,
+    )
+    .expect("aligned on the rest before the slow moment");
+    assert_eq!(t[al.epoch], 40.0);
+    assert!((al.bg0.x - 0.01).abs() < 1e-4, "{:?}", al.bg0);
+}
+
+/// A log whose speed never reaches 5σ of its velocity (σ 4 m/s, 8 m/s at most): the heading
+/// is read at half the most σ it reaches (4 m/s), not at a drift of the fixes at rest that
+/// passes `alignment.speed` (2 m/s at 20 s while the car stands).
+#[test]
+fn a_log_never_5_sigma_fast_is_not_aligned_on_a_drift_at_rest() {
+    use super::{align, BodyImu};
+    use crate::spec::AlignmentSpec;
+    use crate::stream::Nominal;
+    let ti: Vec<f64> = (0..6001).map(|i| i as f64 * 0.01).collect();
+    let gyro = ti.iter().map(|_| Vector3::new(0.01, 0.0, 0.0)).collect();
+    let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
+    let imu = BodyImu { t: ti, gyro, acc };
+    let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
+    let speed = |x: f64| match x {
+        20.0 => 2.0,
+        x if x <= 30.0 => 0.0,
+        x if x < 40.0 => 3.0,
+        _ => 8.0,
+    };
+    let a = AlignmentSpec {
+        speed: 1.0,
+        heading: None,
+        static_speed: 0.05,
+        gyro_bias: true,
+        sigma_level: 0.02,
+        sigma_heading: 0.1,
+        sigma_position: 2.0,
+        sigma_velocity: 1.0,
+    };
+    let origin = Nominal {
+        lat: 0.7,
+        lon: 0.2,
+        h: 100.0,
+    };
+    let al = align(
+        &a,
+        "loosely_coupled",
+        &imu,
+        &t,
+        &origin,
+        |k| Some(Vector3::new(speed(t[k]), 0.0, 0.0)),
+        |k| Some(Vector3::new(5.0 * t[k], 0.0, 0.0)),
+        |_| 4.0,
+        true,
+    )
+    .expect("aligned");
+    assert_eq!(t[al.epoch], 40.0);
+}
+
+/// The IMU's own rest check cuts a static start where the vehicle moves off (three
+/// seconds in a row turning), not at a bump at rest (a door shut: one second).
+#[test]
+fn the_imu_says_where_the_rest_ends() {
+    use super::{imu_rest, BodyImu};
+    use rand::SeedableRng;
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+    let mut noise = |s: f64| -> f64 {
+        let n: f64 = StandardNormal.sample(&mut rng);
+        s * n
+    };
+    let t: Vec<f64> = (0..5000).map(|i| i as f64 * 0.01).collect();
+    // At rest to 40 s with a bump at 20.3–20.8 s; turning at 10°/s and accelerating after.
+    let gyro = t
+        .iter()
+        .map(|&x| {
+            let turn = if x >= 40.0 { 10f64.to_radians() } else { 0.0 };
+            let bump = if (20.3..20.8).contains(&x) { 0.2 } else { 0.0 };
+            Vector3::new(0.002 + noise(0.02) + bump, noise(0.04), turn + noise(0.002))
+        })
+        .collect();
+    let acc = t
+        .iter()
+        .map(|&x| {
+            let a = if x >= 40.0 { 1.0 } else { 0.0 };
+            Vector3::new(a + noise(0.05), noise(0.05), -9.8 + noise(0.13))
+        })
+        .collect();
+    let imu = BodyImu { t, gyro, acc };
+    let idx: Vec<usize> = (0..5000).collect();
+    let rest = imu_rest(&imu, &idx);
+    let end = imu.t[*rest.last().unwrap()];
+    assert!(rest[0] == 0 && (39.0..40.0).contains(&end), "{end}");
+    // At rest throughout: every sample.
+    let idx: Vec<usize> = (0..4000).collect();
+    assert_eq!(imu_rest(&imu, &idx), idx);
+    // Rocked for 4 s at 5–9 s (luggage loaded): the longer rest after it.
+    let mut rocked = BodyImu {
+        t: imu.t.clone(),
+        gyro: imu.gyro.clone(),
+        acc: imu.acc.clone(),
+    };
+    for i in 500..900 {
+        rocked.acc[i].x += 0.3;
+    }
+    let rest = imu_rest(&rocked, &idx);
+    let (a, b) = (rocked.t[rest[0]], rocked.t[*rest.last().unwrap()]);
+    assert!((9.0..10.0).contains(&a) && b > 39.9, "{a} {b}");
+}
