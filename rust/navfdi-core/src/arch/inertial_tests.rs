@@ -59,32 +59,26 @@ fn a_held_position_gives_no_velocity_where_it_catches_up() {
     }
 }
 
-/// Speeds differenced from meter-level fixes (σ 1.4 m/s) dip below 2.5σ in motion: a
-/// single slow epoch before the heading's speed is no static start (it held one IMU sample,
-/// and the alignment failed); the search goes on to the rest before it, whose mean rate is
-/// the gyro bias.
-#[test]
-fn a_slow_moment_in_motion_is_no_static_start() {
+/// [`super::align`] on 60 s of an IMU at 100 Hz whose x rate is `gyro_x(t)` (rad/s, level,
+/// gravity on z) and GNSS epochs every 0.25 s moving east at `speed(t)` (m/s; positions at
+/// 5 m/s) with velocity σ `sig_v` (m/s), by the loosely coupled alignment's defaults
+/// (`alignment.speed` 1 m/s, static speed 0.05 m/s); with the time of its epoch (s).
+fn align_east(
+    gyro_x: impl Fn(f64) -> f64,
+    speed: impl Fn(f64) -> f64,
+    sig_v: f64,
+) -> crate::error::Result<(super::Aligned, f64)> {
     use super::{align, BodyImu};
     use crate::spec::AlignmentSpec;
     use crate::stream::Nominal;
-    let n = 6001;
-    let ti: Vec<f64> = (0..n).map(|i| i as f64 * 0.01).collect();
-    // At rest to 30 s (gyro bias 0.01 rad/s on x), turning and shaking after.
+    let ti: Vec<f64> = (0..6001).map(|i| i as f64 * 0.01).collect();
     let gyro = ti
         .iter()
-        .map(|&x| Vector3::new(if x <= 30.0 { 0.01 } else { 0.3 }, 0.0, 0.0))
+        .map(|&x| Vector3::new(gyro_x(x), 0.0, 0.0))
         .collect();
     let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
     let imu = BodyImu { t: ti, gyro, acc };
     let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
-    // 5 m/s from 30 s with a dip to 0.5 m/s at 35 s, 8 m/s (above 5σ) from 40 s.
-    let speed = |x: f64| match x {
-        x if x <= 30.0 => 0.0,
-        35.0 => 0.5,
-        x if x < 40.0 => 5.0,
-        _ => 8.0,
-    };
     let a = AlignmentSpec {
         speed: 1.0,
         heading: None,
@@ -108,11 +102,31 @@ fn a_slow_moment_in_motion_is_no_static_start() {
         &origin,
         |k| Some(Vector3::new(speed(t[k]), 0.0, 0.0)),
         |k| Some(Vector3::new(5.0 * t[k], 0.0, 0.0)),
-        |_| 1.4,
+        |_| sig_v,
         true,
-    )
-    .expect("aligned on the rest before the slow moment");
-    assert_eq!(t[al.epoch], 40.0);
+    )?;
+    let at = t[al.epoch];
+    Ok((al, at))
+}
+
+/// Speeds differenced from meter-level fixes (σ 1.4 m/s) dip below 2.5σ in motion: a
+/// single slow epoch before the heading's speed is no static start (it held one IMU sample,
+/// and the alignment failed); the search goes on to the rest before it, whose mean rate is
+/// the gyro bias.
+#[test]
+fn a_slow_moment_in_motion_is_no_static_start() {
+    // At rest to 30 s (gyro bias 0.01 rad/s on x), turning and shaking after; 5 m/s from 30 s
+    // with a dip to 0.5 m/s at 35 s, 8 m/s (above 5σ) from 40 s.
+    let gyro = |x: f64| if x <= 30.0 { 0.01 } else { 0.3 };
+    let speed = |x: f64| match x {
+        x if x <= 30.0 => 0.0,
+        35.0 => 0.5,
+        x if x < 40.0 => 5.0,
+        _ => 8.0,
+    };
+    let (al, at) =
+        align_east(gyro, speed, 1.4).expect("aligned on the rest before the slow moment");
+    assert_eq!(at, 40.0);
     assert!((al.bg0.x - 0.01).abs() < 1e-4, "{:?}", al.bg0);
 }
 
@@ -121,48 +135,14 @@ fn a_slow_moment_in_motion_is_no_static_start() {
 /// passes `alignment.speed` (2 m/s at 20 s while the car stands).
 #[test]
 fn a_log_never_5_sigma_fast_is_not_aligned_on_a_drift_at_rest() {
-    use super::{align, BodyImu};
-    use crate::spec::AlignmentSpec;
-    use crate::stream::Nominal;
-    let ti: Vec<f64> = (0..6001).map(|i| i as f64 * 0.01).collect();
-    let gyro = ti.iter().map(|_| Vector3::new(0.01, 0.0, 0.0)).collect();
-    let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
-    let imu = BodyImu { t: ti, gyro, acc };
-    let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
     let speed = |x: f64| match x {
         20.0 => 2.0,
         x if x <= 30.0 => 0.0,
         x if x < 40.0 => 3.0,
         _ => 8.0,
     };
-    let a = AlignmentSpec {
-        speed: 1.0,
-        heading: None,
-        static_speed: 0.05,
-        gyro_bias: true,
-        sigma_level: 0.02,
-        sigma_heading: 0.1,
-        sigma_position: 2.0,
-        sigma_velocity: 1.0,
-    };
-    let origin = Nominal {
-        lat: 0.7,
-        lon: 0.2,
-        h: 100.0,
-    };
-    let al = align(
-        &a,
-        "loosely_coupled",
-        &imu,
-        &t,
-        &origin,
-        |k| Some(Vector3::new(speed(t[k]), 0.0, 0.0)),
-        |k| Some(Vector3::new(5.0 * t[k], 0.0, 0.0)),
-        |_| 4.0,
-        true,
-    )
-    .expect("aligned");
-    assert_eq!(t[al.epoch], 40.0);
+    let (_, at) = align_east(|_| 0.01, speed, 4.0).expect("aligned");
+    assert_eq!(at, 40.0);
 }
 
 /// The IMU's own rest check cuts a static start where the vehicle moves off (three

@@ -131,41 +131,62 @@ fn same(e: [f64; 2], d: [f64; 2]) -> bool {
     (d[0] - e[0]).hypot(d[1] - e[1]) <= MATCH_TOLERANCE.max(0.25 * e[0].hypot(e[1]))
 }
 
-/// A channel's last two fixes (time s, east and north m) and the sizes of their horizontal
-/// second differences (the last `CAP`): the fixes' own noise from one fix to the next.
-#[derive(Debug, Clone, Default)]
-pub(super) struct SecondDifferences<const CAP: usize> {
-    last: [Option<(f64, [f64; 2])>; 2],
+/// A channel's last `ORDER` fixes (time s, east and north m) and the sizes of their horizontal
+/// differences of that order (the last `CAP`): the fixes' own noise from one fix to the next.
+#[derive(Debug, Clone)]
+pub(super) struct Differences<const ORDER: usize, const CAP: usize> {
+    last: [Option<(f64, [f64; 2])>; ORDER],
     sizes: super::noise_scale::Rolling<CAP>,
 }
 
-impl<const CAP: usize> SecondDifferences<CAP> {
+/// [`Differences`] of the second order: `p(k) − 2p(k−1) + p(k−2)`.
+pub(super) type SecondDifferences<const CAP: usize> = Differences<2, CAP>;
+
+impl<const ORDER: usize, const CAP: usize> Default for Differences<ORDER, CAP> {
+    fn default() -> Self {
+        Differences {
+            last: [None; ORDER],
+            sizes: Default::default(),
+        }
+    }
+}
+
+impl<const ORDER: usize, const CAP: usize> Differences<ORDER, CAP> {
     /// The fix `p` (east, north, m) at `t` (s), the fixes `interval` s apart: kept as the
-    /// last; its second difference with the two before it when each is at most 1.5 intervals
-    /// from the next (its size is not recorded: [`SecondDifferences::record`]).
+    /// last; its difference of order `ORDER` with the fixes before it (binomial weights with
+    /// alternating signs) when each is at most 1.5 intervals from the next (its size is not
+    /// recorded: [`Differences::record`]).
     pub fn push(&mut self, t: f64, p: [f64; 2], interval: f64) -> Option<[f64; 2]> {
         let gap = 1.5 * interval;
-        let e = match self.last {
-            [Some((t1, p1)), Some((t0, p0))] if t - t1 <= gap && t1 - t0 <= gap => {
-                Some([0, 1].map(|j| p[j] - 2.0 * p1[j] + p0[j]))
-            }
-            _ => None,
-        };
-        self.last = [Some((t, p)), self.last[0]];
-        e
+        let (mut next, mut c, mut d) = (t, 1.0, Some(p));
+        for (i, f) in self.last.iter().enumerate() {
+            d = match (d, f) {
+                (Some(d), Some((ti, pi))) if next - ti <= gap => {
+                    next = *ti;
+                    c = -c * (ORDER - i) as f64 / (i + 1) as f64;
+                    Some([d[0] + c * pi[0], d[1] + c * pi[1]])
+                }
+                _ => None,
+            };
+        }
+        if ORDER > 0 {
+            self.last.rotate_right(1);
+            self.last[0] = Some((t, p));
+        }
+        d
     }
 
-    /// Record a second difference's size (m).
+    /// Record a difference's size (m).
     pub fn record(&mut self, size: f64) {
         self.sizes.push(size);
     }
 
-    /// The last fix and the one before it.
-    pub fn last(&self) -> [Option<(f64, [f64; 2])>; 2] {
+    /// The last fixes, latest first.
+    pub fn last(&self) -> [Option<(f64, [f64; 2])>; ORDER] {
         self.last
     }
 
-    /// σ per component (m) of the recorded second differences, from their median size (a 2D
+    /// σ per component (m) of the recorded differences, from their median size (a 2D
     /// Gaussian's: 1.1774 σ); None with fewer than `min` recorded.
     pub fn sigma(&self, min: usize) -> Option<f64> {
         (self.sizes.len() >= min.max(1)).then(|| self.sizes.median() / 1.1774)

@@ -14,38 +14,20 @@
 //! scatter is that of their σ around their own track or around the INS's (a right receiver, or
 //! a wrong mounting under honest fixes) give a ratio near 1 or below.
 
+use super::diverge::Differences;
 use super::noise_scale::Rolling;
 
-/// A channel's last three fixes (time s, east and north m) and the sizes of their horizontal
-/// third differences (the last [`OWN_WINDOW`]).
-#[derive(Debug, Clone, Default)]
-struct ThirdDifferences {
-    last: [Option<(f64, [f64; 2])>; 3],
-    sizes: Rolling<OWN_WINDOW>,
-}
+/// A channel's third differences (the last [`OWN_WINDOW`] sizes).
+type ThirdDifferences = Differences<3, OWN_WINDOW>;
 
-impl ThirdDifferences {
-    /// The fix `p` (east, north, m) at `t` (s), the fixes `interval` s apart: kept as the
-    /// last, and its third difference with the three before it, each at most 1.5 intervals
-    /// from the next, recorded.
-    fn push(&mut self, t: f64, p: [f64; 2], interval: f64) {
-        let gap = 1.5 * interval;
-        if let [Some((t2, p2)), Some((t1, p1)), Some((t0, p0))] = self.last {
-            if t - t2 <= gap && t2 - t1 <= gap && t1 - t0 <= gap {
-                let d = [0, 1].map(|j| p[j] - 3.0 * p2[j] + 3.0 * p1[j] - p0[j]);
-                let size = d[0].hypot(d[1]);
-                if size.is_finite() {
-                    self.sizes.push(size);
-                }
-            }
+/// Record the third difference the fix `p` (east, north, m) at `t` (s) makes in `w`, the fixes
+/// `interval` s apart.
+fn record(w: &mut ThirdDifferences, t: f64, p: [f64; 2], interval: f64) {
+    if let Some(d) = w.push(t, p, interval) {
+        let size = d[0].hypot(d[1]);
+        if size.is_finite() {
+            w.record(size);
         }
-        self.last = [Some((t, p)), self.last[0], self.last[1]];
-    }
-
-    /// σ per component (m) of the recorded third differences, from their median size (a 2D
-    /// Gaussian's: 1.1774 σ); None with fewer than [`OWN_MIN`].
-    fn sigma(&self) -> Option<f64> {
-        (self.sizes.len() >= OWN_MIN).then(|| self.sizes.median() / 1.1774)
     }
 }
 
@@ -86,10 +68,10 @@ impl OwnNoise {
     /// as recorded), the fixes `interval` s apart; `navigated`: the INS runs (after the
     /// alignment), and the fix is also taken against its track.
     pub fn push(&mut self, t: f64, p: [f64; 2], stated: f64, interval: f64, navigated: bool) {
-        self.raw.push(t, p, interval);
+        record(&mut self.raw, t, p, interval);
         if navigated {
             let rel = [p[0] - self.track[0], p[1] - self.track[1]];
-            self.ins.push(t, rel, interval);
+            record(&mut self.ins, t, rel, interval);
         }
         if stated.is_finite() && stated > 0.0 {
             self.stated.push(stated);
@@ -102,8 +84,8 @@ impl OwnNoise {
     /// raw ones start with the log, before the alignment: a receiver is known for what it is
     /// when the INS starts.
     pub fn ratio(&self) -> Option<f64> {
-        let raw = self.raw.sigma()?;
-        let own = self.ins.sigma().map_or(raw, |s| s.min(raw)) / 20f64.sqrt();
+        let raw = self.raw.sigma(OWN_MIN)?;
+        let own = self.ins.sigma(OWN_MIN).map_or(raw, |s| s.min(raw)) / 20f64.sqrt();
         let stated = self.stated.median();
         (stated > 0.0).then(|| own / stated)
     }
