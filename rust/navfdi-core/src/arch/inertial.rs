@@ -75,11 +75,15 @@ pub struct Aligned {
 /// and one of them, or a fix between them, repeats the one before it exactly: the receiver
 /// held its position while the vehicle moved (a stale spell, a static hold released), and
 /// the difference is the hold's catching up, not a velocity (a vehicle standing still, its fixes
-/// repeated or not, differences to zero as before).
+/// repeated or not, differences to zero as before). None too where a fix after the first
+/// of the two, up to the second, `jumped` (epoch index: the fix jumped from the ones before
+/// it, a multipath burst's or a fault's start or end): the difference would carry the jump
+/// as a velocity (simulated, a 34 m burst 1 s after the alignment gave its INS 17 m/s).
 pub fn velocity_from_positions(
     t: &[f64],
     pos: impl Fn(usize) -> Option<Vector3<f64>>,
     sig_p: impl Fn(usize) -> f64,
+    jumped: impl Fn(usize) -> bool,
     half: f64,
     interval: f64,
 ) -> Vec<Option<(Vector3<f64>, f64)>> {
@@ -98,10 +102,12 @@ pub fn velocity_from_positions(
             let ((a, pa), (b, pb)) = (fixes[ia], fixes[ib]);
             let span = t[b] - t[a];
             let held = pa != pb && fixes[ia..=ib].iter().any(|&(j, _)| repeats[j]);
+            let jump = fixes[ia + 1..=ib].iter().any(|&(j, _)| jumped(j));
             if t[k] - t[a] <= half + interval
                 && t[b] - t[k] <= half + interval
                 && span > 0.0
                 && !held
+                && !jump
             {
                 out[k] = Some(((pb - pa) / span, sig_p(a).hypot(sig_p(b)) / span));
             }

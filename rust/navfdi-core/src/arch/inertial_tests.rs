@@ -11,7 +11,7 @@ fn velocities_from_positions_difference_about_two_seconds_and_skip_gaps() {
     let v = Vector3::new(3.0, -2.0, 0.5);
     let gap = |x: f64| (10.0..13.0).contains(&x);
     let pos = |k: usize| (k.is_multiple_of(2) && !gap(t[k])).then(|| v * t[k]);
-    let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 0.25);
+    let out = velocity_from_positions(&t, pos, |_| 2.0, |_| false, 1.0, 0.25);
     for (k, o) in out.iter().enumerate() {
         let tk = t[k];
         let inside = k.is_multiple_of(2)
@@ -33,13 +33,41 @@ fn velocities_from_positions_difference_about_two_seconds_and_skip_gaps() {
 }
 
 #[test]
+fn no_velocity_is_differenced_across_a_jump_of_the_fixes() {
+    // 1 Hz fixes of a car at 5 m/s north; a 30 m burst east from 20 s to 27 s: the fixes jump
+    // at 20 s and back at 28 s.
+    let t: Vec<f64> = (0..40).map(f64::from).collect();
+    let burst = |k: usize| if (20..28).contains(&k) { 30.0 } else { 0.0 };
+    let pos = |k: usize| Some(Vector3::new(burst(k), 5.0 * t[k], 0.0));
+    let jumped = |k: usize| k == 20 || k == 28;
+    let out = velocity_from_positions(&t, pos, |_| 2.0, jumped, 1.0, 1.0);
+    for (k, o) in out.iter().enumerate().skip(1).take(38) {
+        // Differences from k − 1 to k + 1 spanning the fix at 20 s or 28 s give none.
+        let spans = [19, 20, 27, 28].contains(&k);
+        match o {
+            None => assert!(spans, "none at {k}"),
+            Some((v, _)) => {
+                assert!(!spans, "{v} at {k}");
+                assert!(
+                    (v - Vector3::new(0.0, 5.0, 0.0)).norm() < 1e-9,
+                    "{v} at {k}"
+                );
+            }
+        }
+    }
+    // Without the jumps marked, those epochs take 15 m/s east from the burst.
+    let blind = velocity_from_positions(&t, pos, |_| 2.0, |_| false, 1.0, 1.0);
+    assert!((blind[19].unwrap().0.x - 15.0).abs() < 1e-9);
+}
+
+#[test]
 fn a_held_position_gives_no_velocity_where_it_catches_up() {
     // 1 Hz fixes of a car at rest to 10 s, then at 5 m/s north; the receiver repeats its
     // fix at 12-14 s (a stale spell) and at rest (a static hold).
     let t: Vec<f64> = (0..30).map(f64::from).collect();
     let truth = |x: f64| Vector3::new(0.0, 5.0 * (x - 10.0).max(0.0), 0.0);
     let pos = |k: usize| Some(truth(if (12..15).contains(&k) { t[11] } else { t[k] }));
-    let out = velocity_from_positions(&t, pos, |_| 2.0, 1.0, 1.0);
+    let out = velocity_from_positions(&t, pos, |_| 2.0, |_| false, 1.0, 1.0);
     for (k, o) in out.iter().enumerate().skip(1).take(28) {
         match o {
             // Differences spanning a repeated fix and a move give none: the stale spell's

@@ -27,9 +27,7 @@ mod shadow;
 mod window;
 
 use super::common::make_detector;
-use super::inertial::{
-    align, record_nav, repeated_fixes, velocity_from_positions, BodyImu, Mechaniser,
-};
+use super::inertial::{align, record_nav, repeated_fixes, BodyImu, Mechaniser};
 use crate::cancel::Cancel;
 use crate::detect::Detector;
 use crate::error::{Error, Result};
@@ -178,17 +176,16 @@ fn run<const NS: usize>(
         v.iter().all(|x| x.is_finite()).then_some(v)
     };
     // A log without velocities: the alignment takes them from the positions' differences
-    // over about 2 s, or two fix intervals if longer (velocity_from_positions).
+    // (own_noise::alignment_velocities).
     let derived = match vel_aid {
         Some(_) => None,
         None => {
             let aid = &aids[pos_aid];
             let interval = aid.sensor.map_or(1.0, |si| 1.0 / spec.sensors[si].rate);
-            Some(velocity_from_positions(
+            Some(own_noise::alignment_velocities(
                 &models.t,
                 |k| measure(aid, k, aid.pos),
                 |k| sigma_h(logged, aid, k),
-                interval.max(1.0),
                 interval,
             ))
         }

@@ -193,6 +193,45 @@ impl<const ORDER: usize, const CAP: usize> Differences<ORDER, CAP> {
     }
 }
 
+/// A channel's fixes, one after the other: where they jump ([`JUMP_M`]).
+#[derive(Debug, Clone)]
+pub(super) struct Jumps {
+    /// The fix interval (s).
+    interval: f64,
+    /// The last fixes and their second differences' sizes.
+    steps: SecondDifferences<JUMP_WINDOW>,
+    /// The last fix's jump (its second difference comes back at the next fix).
+    prev: Option<[f64; 2]>,
+}
+
+impl Jumps {
+    /// For fixes `interval` s apart.
+    pub fn new(interval: f64) -> Self {
+        Jumps {
+            interval,
+            steps: Default::default(),
+            prev: None,
+        }
+    }
+
+    /// The fix `p` (east, north, m) at `t` (s): its jump (the second difference, m), if any
+    /// (not the one right after a jump, which comes back the other way).
+    pub fn push(&mut self, t: f64, p: [f64; 2]) -> Option<[f64; 2]> {
+        let e = self.steps.push(t, p, self.interval)?;
+        let spread = self.steps.sigma(1).unwrap_or(0.0);
+        self.steps.record(e[0].hypot(e[1]));
+        let bound = JUMP_M
+            .max(JUMP_ACCEL * self.interval * self.interval)
+            .max(JUMP_SIGMAS * spread);
+        let back = self
+            .prev
+            .is_some_and(|e0| e[0] * e0[0] + e[1] * e0[1] < 0.0);
+        let jump = (e[0].hypot(e[1]) > bound && !back).then_some(e);
+        self.prev = jump;
+        jump
+    }
+}
+
 /// A held step that outlasts the fixes the INS agreed with before it.
 ///
 /// The INS takes its position from the fixes at the alignment. When those fixes were in a
@@ -221,12 +260,8 @@ pub struct Outlast {
     spell: f64,
     /// Onset (s) of the hold in progress, and whether it undoes a jump taken in.
     onset: Option<(f64, bool)>,
-    /// The fix interval (s).
-    interval: f64,
-    /// The last fixes and their second differences' sizes.
-    steps: SecondDifferences<JUMP_WINDOW>,
-    /// The last fix's jump (its second difference comes back at the next fix).
-    prev_jump: Option<[f64; 2]>,
+    /// The fixes' jumps.
+    jumps: Jumps,
     /// Jumps the filter took in and no later jump undid: time (s), size (m).
     open: Vec<(f64, [f64; 2])>,
 }
@@ -238,27 +273,9 @@ impl Outlast {
         Outlast {
             spell: first_fix,
             onset: None,
-            interval,
-            steps: Default::default(),
-            prev_jump: None,
+            jumps: Jumps::new(interval),
             open: Vec::new(),
         }
-    }
-
-    /// The fix `p` (east, north, m) at `t` (s): its jump ([`JUMP_M`]), if any.
-    fn jump(&mut self, t: f64, p: [f64; 2]) -> Option<[f64; 2]> {
-        let e = self.steps.push(t, p, self.interval)?;
-        let spread = self.steps.sigma(1).unwrap_or(0.0);
-        self.steps.record(e[0].hypot(e[1]));
-        let bound = JUMP_M
-            .max(JUMP_ACCEL * self.interval * self.interval)
-            .max(JUMP_SIGMAS * spread);
-        let back = self
-            .prev_jump
-            .is_some_and(|e0| e[0] * e0[0] + e[1] * e0[1] < 0.0);
-        let jump = (e[0].hypot(e[1]) > bound && !back).then_some(e);
-        self.prev_jump = jump;
-        jump
     }
 
     /// A fix the filter took in (used as measured, or before the alignment) at `t` (s), `p`
@@ -268,7 +285,7 @@ impl Outlast {
     /// forgets the one it undoes.
     fn taken(&mut self, t: f64, p: [f64; 2], d: Option<[f64; 2]>) {
         self.open.retain(|&(t0, _)| t - t0 <= JUMP_MEMORY);
-        let Some(e) = self.jump(t, p) else {
+        let Some(e) = self.jumps.push(t, p) else {
             return;
         };
         match self.open.last() {
@@ -309,12 +326,12 @@ impl Outlast {
             match p {
                 Some(p) if !converged => self.taken(t, p, Some(d)),
                 // The jump reference follows the fixes.
-                Some(p) => _ = self.jump(t, p),
+                Some(p) => _ = self.jumps.push(t, p),
                 None => {}
             }
             return false;
         }
-        let jump = p.and_then(|p| self.jump(t, p));
+        let jump = p.and_then(|p| self.jumps.push(t, p));
         // The fix jumps back by what it jumped, and the INS is off it that way (within 45°),
         // by at most [`FOLLOW_OVERSHOOT`] times as much (it followed the fault, or part of
         // it, or past it on the velocity the fault's first fixes gave it). At the hold's

@@ -14,8 +14,10 @@
 //! scatter is that of their σ around their own track or around the INS's (a right receiver, or
 //! a wrong mounting under honest fixes) give a ratio near 1 or below.
 
-use super::diverge::Differences;
+use super::super::inertial::velocity_from_positions;
+use super::diverge::{Differences, Jumps};
 use super::noise_scale::Rolling;
+use nalgebra::Vector3;
 
 /// A channel's third differences (the last [`OWN_WINDOW`] sizes).
 type ThirdDifferences = Differences<3, OWN_WINDOW>;
@@ -89,6 +91,23 @@ impl OwnNoise {
         let stated = self.stated.median();
         (stated > 0.0).then(|| own / stated)
     }
+}
+
+/// The alignment's velocities on a log of positions only: the fixes `pos` (east, north, up,
+/// m; None: no fix) differenced over about 2 s, or two fix intervals if longer
+/// ([`velocity_from_positions`]; σ from the fixes' horizontal σ `sig_p`, m), none across a
+/// jump of the fixes ([`Jumps`]).
+pub fn alignment_velocities(
+    t: &[f64],
+    pos: impl Fn(usize) -> Option<Vector3<f64>>,
+    sig_p: impl Fn(usize) -> f64,
+    interval: f64,
+) -> Vec<Option<(Vector3<f64>, f64)>> {
+    let mut jumps = Jumps::new(interval);
+    let jumped: Vec<bool> = (0..t.len())
+        .map(|k| pos(k).is_some_and(|p| jumps.push(t[k], [p.x, p.y]).is_some()))
+        .collect();
+    velocity_from_positions(t, &pos, sig_p, |k| jumped[k], interval.max(1.0), interval)
 }
 
 #[cfg(test)]
