@@ -1,5 +1,5 @@
 """Helpers of the tests on recorded-log scenarios: a scenario file run with given faults, the
-horizontal error of a run, and a GNSS log written as NMEA sentences."""
+horizontal error of a run, the same fault-free with FDE and without, and a GNSS log written as NMEA sentences."""
 
 from __future__ import annotations
 
@@ -21,6 +21,16 @@ def run_log(path: Path, faults: list[dict] | None = None) -> navfdi.ScenarioRun:
     if faults:
         raw["faults"] = faults
     return navfdi.run_scenario(from_dict(raw, source=str(path)))
+
+
+def run_log_with_and_without_fde(path: Path) -> dict[str, navfdi.ScenarioRun]:
+    """The scenario file ``path`` run fault-free (its own faults left out) on the same
+    measurements twice: variant ``fde`` as written, ``no_fde`` with
+    ``loosely_coupled.isolate = false``."""
+    raw = dict(load_scenario(str(path)).raw)
+    raw.pop("faults", None)
+    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
+    return dict(navfdi.run_scenario(from_dict(raw, source=str(path))).runs)
 
 
 def horizontal_error(run: navfdi.RunRecordView) -> np.ndarray:

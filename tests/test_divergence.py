@@ -20,10 +20,9 @@ import numpy as np
 import pytest
 
 import navfdi
-from navfdi.scenario import from_dict, load_scenario
 from navfdi.simlog import simulate_log
 from navfdi.consistency import consistency, format_consistency
-from loglib import horizontal_error
+from loglib import horizontal_error, run_log_with_and_without_fde
 
 
 @pytest.fixture()
@@ -89,16 +88,13 @@ def test_the_alignment_takes_no_velocity_across_a_burst(tmp_path: Path, reported
                        gnss_white=0.5, burst_rate=1 / 60, burst_size=15.0, burst_duration=8.0, stale_rate=1 / 120,
                        stale_duration=4.0, gnss_velocity=False, reported_sigma=reported, imu_axes=("forward", "right", "down"),
                        gyro_bias=1.0)
-    raw = dict(load_scenario(str(log.scenario)).raw)
-    raw.pop("faults", None)
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        r = navfdi.run_scenario(from_dict(raw, source=str(log.scenario)))
-    e = r.runs["fde"].record["error"]
+        r = run_log_with_and_without_fde(log.scenario)
+    e = r["fde"].record["error"]
     first = int(np.flatnonzero(np.isfinite(e[:, 6]))[0])
     # A velocity from two fixes of σ 6 m (stated) 2 s apart is good to about 4 m/s; the
     # differences across the burst were 2-4 times that.
     assert np.hypot(e[first, 3], e[first, 4]) < 3.0, e[first, 3:6]
-    fde, no_fde = _rms(r.runs["fde"]), _rms(r.runs["no_fde"])
+    fde, no_fde = _rms(r["fde"]), _rms(r["no_fde"])
     assert fde <= no_fde, (fde, no_fde)

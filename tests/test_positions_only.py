@@ -16,7 +16,7 @@ import navfdi
 from navfdi.scenario import ScenarioError, from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
-from loglib import horizontal_error, nmea_lines, run_log
+from loglib import horizontal_error, nmea_lines, run_log, run_log_with_and_without_fde
 
 
 @cache
@@ -462,10 +462,7 @@ def test_a_receiver_whose_sigma_is_a_third_of_its_noise_is_not_held_out(tmp_path
     since the alignment no longer reads a heading at rest from them.)"""
     log = simulate_log(tmp_path / "s", duration=200, seed=seed, gnss_rate=10.0, gnss_sigma=2.0, gnss_white=0.5,
                        gnss_velocity=False, reported_sigma=0.6)
-    raw = dict(load_scenario(str(log.scenario)).raw)
-    raw.pop("faults", None)
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
-    r = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+    r = run_log_with_and_without_fde(log.scenario)
     sub = next(s for s in r["fde"].record["subfilters"] if s["sensor"] == "gnss_pos")
     scale = np.asarray(sub["noise_scale"])
     assert 2.5 < float(np.nanmedian(scale[-500:])) < 5.0
@@ -486,10 +483,7 @@ def test_a_receiver_whose_sigma_is_a_third_of_its_noise_is_aligned_in_motion(tmp
     for seed in range(1, 13):
         log = simulate_log(tmp_path / f"s{seed}", duration=200, seed=seed, gnss_rate=10.0, gnss_sigma=2.0, gnss_white=0.5,
                            gnss_velocity=False, reported_sigma=0.6)
-        raw = dict(load_scenario(str(log.scenario)).raw)
-        raw.pop("faults", None)
-        raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
-        r = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+        r = run_log_with_and_without_fde(log.scenario)
         for v, x in r.items():
             e = x.record["error"]
             k = int(np.flatnonzero(np.isfinite(e[:, 6]))[0])
@@ -509,10 +503,7 @@ def test_a_log_never_fast_enough_for_its_sigma_is_not_aligned_at_rest(tmp_path: 
     reaches: the car moving."""
     log = simulate_log(tmp_path / "s", duration=400, seed=48, gnss_rate=5.0, imu_rate=200.0, gnss_sigma=3.0, gnss_tau=30.0,
                        gnss_white=0.5, gnss_velocity=False, gyro_bias=10.0, reported_sigma=6.08)
-    raw = dict(load_scenario(str(log.scenario)).raw)
-    raw.pop("faults", None)
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
-    r = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+    r = run_log_with_and_without_fde(log.scenario)
     for x in r.values():
         e = x.record["error"]
         k = int(np.flatnonzero(np.isfinite(e[:, 6]))[0])

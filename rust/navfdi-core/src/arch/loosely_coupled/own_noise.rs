@@ -112,11 +112,11 @@ pub fn log_sigma(fixes: impl IntoIterator<Item = (f64, [f64; 2])>, interval: f64
 /// m; None: no fix) differenced over about 2 s, or two fix intervals if longer
 /// ([`velocity_from_positions`]), none across a jump of the fixes ([`Jumps`]); their σ from
 /// the fixes' horizontal σ `sig_p` (m) as recorded or, where larger by [`OWN_SCALE`], as
-/// their own scatter over the log says ([`log_sigma`]): a receiver that writes 0.6 m and
-/// scatters by 1 m (white) moves 2 m/s between two fixes 2 s apart now and then while the
+/// their own scatter over the log says ([`log_sigma`]): a receiver that writes 0.56 m and
+/// scatters by 1.1 m (white) moves 2 m/s between two fixes 2 s apart now and then while the
 /// car stands, 5σ of the velocity its σ gives, and the alignment read the heading from it
-/// (simulated at 10 Hz: aligned at rest 20 s before the car moved off, 60° off, 9.9 m RMS
-/// against 2.3 m without FDE).
+/// (simulated at 10 Hz: aligned at rest 19 s before the car moved off, about 50° off, 9.9 m
+/// RMS against 2.3 m without FDE).
 pub fn alignment_velocities(
     t: &[f64],
     pos: impl Fn(usize) -> Option<Vector3<f64>>,
