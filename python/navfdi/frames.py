@@ -127,13 +127,23 @@ def _east_north_velocity(t: np.ndarray, vel: np.ndarray, lat: np.ndarray, lon: n
                          half: float) -> tuple[np.ndarray, np.ndarray, bool]:
     """East and north velocity (m/s) at the GNSS epochs ``t``: the receiver's where it writes
     them (more than half finite), else the positions (deg) differenced over ``half`` s either
-    side (:func:`_windowed_rate`); and whether they came from the positions."""
+    side (:func:`_windowed_rate`); and whether they came from the positions.
+
+    A fix that repeats the one before it (a receiver writing its last fix while it has none)
+    is no end of a difference: NaN there. A stale fix differenced with a fresh one gives the
+    distance covered while it was stale as a velocity — the catch-up after 4 s of repeats at
+    12 m/s read as 29–35 m/s turning at 60 deg/s, which lined up with a turn 15 s away at a
+    correlation of 0.94 in :func:`check_turns`."""
     ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
     if np.isfinite(ve).mean() > 0.5:
         return ve, vn, False
+    lat, lon = np.asarray(lat, float), np.asarray(lon, float)
     r = 6_371_000.0
-    n = np.radians(np.asarray(lat, float)) * r
-    e = np.radians(np.asarray(lon, float)) * r * np.cos(np.radians(np.nanmedian(lat)))
+    n = np.radians(lat) * r
+    e = np.radians(lon) * r * np.cos(np.radians(np.nanmedian(lat)))
+    repeated = np.zeros(len(lat), bool)
+    repeated[1:] = (lat[1:] == lat[:-1]) & (lon[1:] == lon[:-1])
+    e, n = np.where(repeated, np.nan, e), np.where(repeated, np.nan, n)
     return _windowed_rate(e, t, half), _windowed_rate(n, t, half), True
 
 
@@ -378,7 +388,11 @@ def estimate_imu_axes(imu_t: np.ndarray, accel: np.ndarray, gnss: Any, field: st
     half = 3.0 if from_positions else 1.0
     speed = np.hypot(ve, vn)
     a_long = _windowed_rate(speed, t, half)
-    a_lat = speed * _windowed_rate(np.unwrap(np.nan_to_num(np.arctan2(ve, vn))), t, half)
+    # The course unwrapped over the epochs that have one (NaN stays NaN: no rate across it).
+    course = np.arctan2(ve, vn)
+    has = np.isfinite(course)
+    course[has] = np.unwrap(course[has])
+    a_lat = speed * _windowed_rate(course, t, half)
     ok = np.isfinite(a_long) & np.isfinite(a_lat) & (speed > 3.0) & (t >= imu_t[0] + half) & (t <= imu_t[-1] - half)
     if ok.sum() < 30:
         raise ScenarioError(f"{why}: fewer than 30 GNSS epochs above 3 m/s inside the IMU log; give imu_axes (or mounting) by hand")
