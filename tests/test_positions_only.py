@@ -471,7 +471,8 @@ def test_a_receiver_whose_sigma_is_a_third_of_its_noise_is_not_held_out(tmp_path
 
 
 def test_a_receiver_whose_sigma_is_a_third_of_its_noise_is_aligned_in_motion(tmp_path: Path) -> None:
-    """The same receiver (2 m white written 0.6 m, 10 Hz) on twelve seeds. Its speeds
+    """The same receiver (2 m white written 0.6 m; a 10 Hz log, 1 Hz of its fixes taken as
+    simulate_log's scenario does) on twelve seeds. Its speeds
     differenced over 2 s while the car stands scatter by 1.5 m/s, past the 5σ (2.1 m/s) of
     the σ it writes now and then, and the alignment read its heading from them at rest (1-9 s
     into the log; 11-23 m RMS on eight seeds, 11.6 m at the median, with FDE). The velocities'
