@@ -45,6 +45,29 @@ def test_axis_names_give_the_mounting() -> None:
     assert len(_right_handed()) == 24
 
 
+@pytest.mark.parametrize("axes", _right_handed(), ids=lambda a: "-".join(a))
+def test_every_axis_set_gives_its_own_mounting(axes: list[str]) -> None:
+    """All 24 axis sets: the mounting's rotation has the named axes as its columns. With x up
+    or down the pitch is ±90° and the Euler angles read 0/0: six sets (up-left-back among
+    them) were given the mounting of the set with y and z turned 180° about x (a user's
+    correct names then refused as gravity on the wrong axis, or a simulated log written with
+    the other axes)."""
+    from navfdi._lc_schema import _rot
+
+    c = _rot(*axes_mounting(axes)).T
+    assert np.allclose(c, np.array([_V[a] for a in axes]).T, atol=1e-12), np.round(c, 3)
+
+
+def test_a_simulated_imu_with_x_up_has_gravity_on_x(tmp_path: Path) -> None:
+    """An IMU simulated with x up (y left, z back) reads the specific force at rest, +g, on
+    +x (before: on −x, its axes turned 180° about x, and its own scenario's names agreed with
+    the wrong data)."""
+    log = simulate_log(tmp_path, duration=60, seed=1, imu_axes=("up", "left", "back"))
+    acc = np.loadtxt(log.imu, delimiter=",", skiprows=1)[:, 5:8]
+    f = np.median(acc, axis=0)
+    assert f[0] > 9.5 and abs(f[1]) < 1.0 and abs(f[2]) < 1.0, f
+
+
 @pytest.fixture(scope="module")
 def rfu(tmp_path_factory: pytest.TempPathFactory) -> navfdi.Scenario:
     log = simulate_log(tmp_path_factory.mktemp("rfu"), duration=300, seed=3, imu_axes=("right", "forward", "up"), scenario_mounting="nominal")

@@ -57,9 +57,18 @@ def axes_mounting(axes: Sequence[str]) -> tuple[float, float, float]:
 
 
 def _euler_of_mounting(c_imu_b: np.ndarray) -> tuple[float, float, float]:
-    """Roll, pitch, yaw (rad) with ``mounting(r, p, y) = c_imu_b``, i.e. ``R_z R_y R_x = c_imu_bᵀ``."""
+    """Roll, pitch, yaw (rad) with ``mounting(r, p, y) = c_imu_b``, i.e. ``R_z R_y R_x = c_imu_bᵀ``.
+
+    At a pitch of ±90° (an IMU whose x axis is vertical) only roll ∓ yaw is defined and the
+    general formulas read 0/0 for both: the roll is then 0 and the yaw carries the rest (the
+    first column is (0, 0, ∓1), the second (−sin yaw, cos yaw, 0)). Read with the general
+    formulas, six of the 24 axis sets (x up or down) became the mounting of another set, y and
+    z turned 180° about x: ``imu_axes = ["up", "left", "back"]`` was the mounting of
+    ``["down", "right", "back"]``."""
     m = c_imu_b.T
     pitch = -math.asin(max(-1.0, min(1.0, m[2, 0])))
+    if abs(m[2, 0]) > 1.0 - 1e-12:
+        return 0.0, pitch, math.atan2(-m[0, 1], m[1, 1])
     roll = math.atan2(m[2, 1], m[2, 2])
     yaw = math.atan2(m[1, 0], m[0, 0])
     return roll, pitch, yaw
