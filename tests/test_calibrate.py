@@ -199,3 +199,19 @@ def test_gnss_sigma_scale_is_reported(tmp_path: Path) -> None:
     med, lo, hi = c.gnss_sigma_scale["gnss_pos"]
     assert abs(med / (2.0 / 0.7) - 1) <= 0.2 and lo <= med <= hi
     assert any(ln.startswith("gnss_pos: the receiver's σ × ") for ln in c.lines())
+
+
+@pytest.mark.parametrize(("sigma", "tau", "seed"), [(3.0, 30.0, 43), (1.0, 10.0, 13)])
+def test_the_imu_noise_from_a_log_of_positions_only(tmp_path: Path, sigma: float, tau: float, seed: int) -> None:
+    """A receiver that writes positions only (no velocity columns, as rnx2rtkp writes by
+    default): the rests were looked for in the velocities alone, found none, and every
+    "auto" noise was refused. The speed now comes from the positions differenced over 4 s,
+    bounded by their σ (2.6 m/s at σ 3 m), and the accelerometer trims what a car pulling
+    away adds (without it the forward axis read 0.2-3.7 mg/√Hz for 0.1): the densities
+    within 10 %."""
+    log = simulate_log(tmp_path / "s", duration=200, seed=seed, gnss_rate=10.0, gnss_sigma=sigma, gnss_tau=tau, gnss_white=0.5,
+                       gnss_velocity=False, gyro_noise=0.01, accel_noise=0.1)
+    c = calibrate(load_scenario(str(log.scenario)), ["imu.gyro_noise", "imu.accel_noise"])
+    assert c.rest
+    assert all(abs(g / 0.01 - 1) <= 0.1 for g in c.gyro_noise), c.gyro_noise
+    assert all(abs(a / 0.1 - 1) <= 0.1 for a in c.accel_noise), c.accel_noise

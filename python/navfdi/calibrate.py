@@ -300,19 +300,88 @@ def _calibrate_tight(sc: Any, fields: Sequence[str] | None) -> Calibration:
 def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: float = 2.0) -> list[tuple[float, float]]:
     """The GNSS rest intervals of at least :data:`MIN_REST` s (speed below ``static_speed``
     m/s or 2.5× the receiver's velocity σ) that a still gyro confirms (the spread of its rate
-    below ``still_deg_s``)."""
+    below ``still_deg_s``).
+
+    A log of positions only (fewer than half its velocities written) gives its speed from the
+    positions differenced over 4 s (:func:`_position_speed`), with the σ that difference has
+    from the fixes' σ — the larger of the σ they write and their own scatter."""
     imu, pos, t0 = data["imu_log"], data["gnss_log"], float(data["t0"])
     t = pos.t - t0
     ti = imu.t - t0
     speed = np.hypot(pos.vel[:, 0], pos.vel[:, 1])
-    sd_v = np.nan_to_num(np.nanmax(pos.sd_vel[:, :2], axis=1) if np.isfinite(pos.sd_vel).any() else np.zeros(len(t)), nan=0.0)
+    from_positions = not np.isfinite(speed).mean() > 0.5
+    if from_positions:
+        speed, sd_v = _position_speed(pos)
+    else:
+        sd_v = np.nan_to_num(np.nanmax(pos.sd_vel[:, :2], axis=1) if np.isfinite(pos.sd_vel).any() else np.zeros(len(t)), nan=0.0)
     thr = np.maximum(static_speed, 2.5 * sd_v)
     rest = []
     for a, b in _rest(t, np.nan_to_num(speed, nan=np.inf), thr):
+        if from_positions:
+            # Meter-level positions call a car pulling away (under 2.6 m/s at σ 3 m) still;
+            # its accelerometer does not: the interval's longest run of still seconds.
+            still = _still_accel(ti, imu.accel, a, b)
+            if still is None:
+                continue
+            a, b = still
         m = (ti >= a) & (ti <= b)
         if m.sum() > 20 and np.degrees(np.std(np.linalg.norm(imu.gyro[m], axis=1))) < still_deg_s:
             rest.append((a, b))
     return rest
+
+
+#: Largest change of a 1 s mean of the specific force (m/s², any axis) from the interval's
+#: median one that a rest found from positions alone keeps (:func:`_still_accel`): 5 mg,
+#: a tenth of a gentle pull-away's acceleration.
+STILL_ACCEL = 0.05
+
+
+def _still_accel(ti: np.ndarray, accel: np.ndarray, a: float, b: float) -> tuple[float, float] | None:
+    """The longest run of whole seconds in ``[a, b]`` (s, on the IMU's times ``ti``) whose mean
+    specific force ``accel`` (m/s²) is within :data:`STILL_ACCEL` of the seconds' median on
+    every axis, less a second at each end (an acceleration sets in within one); None when
+    shorter than :data:`MIN_REST`."""
+    edges = np.arange(a, b + 1e-9, 1.0)
+    if len(edges) < 2:
+        return None
+    idx = np.searchsorted(ti, edges)
+    means = np.array([accel[i:j].mean(axis=0) if j > i else np.full(3, np.nan) for i, j in zip(idx[:-1], idx[1:])])
+    ok = np.all(np.abs(means - np.nanmedian(means, axis=0)) <= STILL_ACCEL, axis=1)
+    best, run, start = (0, 0), 0, 0
+    for k, good in enumerate(ok):
+        run, start = (run + 1, start) if good else (0, k + 1)
+        if run > best[1] - best[0]:
+            best = (start, start + run)
+    # A second off each end: the acceleration sets in within one.
+    lo, hi = best[0] + 1, best[1] - 1
+    if hi - lo < MIN_REST:
+        return None
+    return float(edges[lo]), float(edges[hi])
+
+
+def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal speed (m/s) at the fixes of the GNSS log ``pos`` from its positions
+    differenced over ``half`` s either side (fixes that repeat the last are no end of a
+    difference: NaN there, as in :func:`navfdi.frames._east_north_velocity`), and its σ (m/s):
+    √2 × the fixes' horizontal σ over the span, the fixes' σ the larger of the σ they write
+    and their own scatter (the median size of their third differences, a 2D Gaussian's
+    1.1774 σ, over √20)."""
+    from navfdi.frames import _east_north_velocity
+
+    ve, vn, _ = _east_north_velocity(pos.t, np.full((len(pos.t), 3), np.nan), pos.lat, pos.lon, half)
+    r = 6_371_000.0
+    lat = np.radians(np.asarray(pos.lat, float))
+    e = np.radians(np.asarray(pos.lon, float)) * r * math.cos(float(np.nanmedian(lat)))
+    n = lat * r
+    keep = np.ones(len(e), bool)
+    keep[1:] = (np.diff(e) != 0) | (np.diff(n) != 0)
+    d3 = np.hypot(np.diff(e[keep], 3), np.diff(n[keep], 3))
+    own = float(np.median(d3)) / 1.1774 / math.sqrt(20.0) if d3.size >= 10 else 0.0
+    written = np.nanmax(pos.sd_pos[:, :2], axis=1) if np.isfinite(pos.sd_pos).any() else np.zeros(len(e))
+    sd_p = np.maximum(np.nan_to_num(written, nan=0.0), own)
+    dt = float(np.median(np.diff(pos.t))) if len(pos.t) > 1 else 1.0
+    span = 2.0 * max(1, int(round(half / dt))) * dt
+    return np.hypot(ve, vn), math.sqrt(2.0) * sd_p / span
 
 
 def _noise(imu: Any, t0: float, rest: list[tuple[float, float]], differences: bool = False) -> dict[str, tuple[list[float], list[float]]]:
