@@ -303,8 +303,9 @@ def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: floa
     below ``still_deg_s``).
 
     A log of positions only (fewer than half its velocities written) gives its speed from the
-    positions differenced over 4 s (:func:`_position_speed`), with the σ that difference has
-    from the fixes' σ — the larger of the σ they write and their own scatter."""
+    positions differenced over 4 s (:func:`_position_speed`), bounded by 3.5× the σ that
+    difference has from the fixes' σ (the larger of the σ they write and their own scatter),
+    and each interval is trimmed to where the accelerometer is still (:func:`_still_accel`)."""
     imu, pos, t0 = data["imu_log"], data["gnss_log"], float(data["t0"])
     t = pos.t - t0
     ti = imu.t - t0
@@ -314,7 +315,9 @@ def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: floa
         speed, sd_v = _position_speed(pos)
     else:
         sd_v = np.nan_to_num(np.nanmax(pos.sd_vel[:, :2], axis=1) if np.isfinite(pos.sd_vel).any() else np.zeros(len(t)), nan=0.0)
-    thr = np.maximum(static_speed, 2.5 * sd_v)
+    # From positions the accelerometer's trim below tells a still car from a moving one; the
+    # speed only has to rule out a steady cruise, above the noise of its differences.
+    thr = np.maximum(static_speed, (3.5 if from_positions else 2.5) * sd_v)
     rest = []
     for a, b in _rest(t, np.nan_to_num(speed, nan=np.inf), thr):
         if from_positions:
