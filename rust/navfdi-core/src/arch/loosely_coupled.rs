@@ -667,9 +667,14 @@ fn run<const NS: usize>(
         if use_shadows && converged && std::mem::take(&mut unheld) {
             shadows.start(tk, &s, &kf, &mech);
         }
-        if had_gnss {
-            // How far the GNSS updates moved the INS antenna this epoch, and how much position
-            // variance they took off.
+        // How far the GNSS updates moved the INS antenna this epoch, and how much position
+        // variance they took off; not an epoch where the INS was moved onto the fixes (or
+        // replaced by a witness): that move is no update's pull. Counted as one, the move
+        // (12 m east after a burst the filter had followed) made the next burst, jumping
+        // west, "the fix back where the updates had pulled the INS from", and the INS was
+        // moved onto it. Forgetting the history at such a move instead lost the ramps the
+        // filter follows again after it (4 of 200 drive_lc ramps on positions only worse).
+        if had_gnss && rec.reanchored.last() != Some(&tk) {
             let moved = antenna_enu(&s) - ant_enu;
             let dvar = p_before - pos_var(&kf);
             pull.add(tk, &moved, &dvar);
