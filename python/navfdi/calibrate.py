@@ -64,7 +64,8 @@ class Calibration:
     ``boresight`` (roll, pitch, yaw, deg: the scenario's roll, the estimated pitch and yaw,
     the whole boresight on top of ``imu_axes``/``mounting``) with ``boresight_sigma`` (pitch
     and yaw, deg), None when the log has too little driving at speed; ``imu_time_offset`` (s)
-    with its σ (None when the log has too few turns); ``rest`` the rest intervals used
+    with its σ (None when the log does not tell it: ``imu_time_offset_note`` says why);
+    ``rest`` the rest intervals used
     ((start, end), s from the first GNSS epoch); ``straight`` the seconds of driving the
     boresight was read from; ``yaw_parts`` the yaw (deg) and its σ from each of the two
     ways it is read (the velocity direction under the filter's heading, the body-frame specific
@@ -95,6 +96,7 @@ class Calibration:
     imu_axes: list[str] | None = None
     imu_axes_fit: tuple[float, float] | None = None
     asked: tuple[str, ...] | None = None
+    imu_time_offset_note: str = "too few turns while moving"
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
@@ -130,7 +132,7 @@ class Calibration:
         if asked is not None and "imu_time_offset" not in asked:
             pass
         elif self.imu_time_offset is None:
-            out.append("IMU time offset: not estimated (too few turns while moving)")
+            out.append(f"IMU time offset: not estimated ({self.imu_time_offset_note})")
         else:
             out.append(f"IMU time offset: {self.imu_time_offset:+.3f} ± {self.imu_time_offset_sigma:.3f} s")
         for name, (med, lo, hi) in self.gnss_sigma_scale.items():
@@ -224,6 +226,7 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
                                 "the IMU noise needs the vehicle at rest: give loosely_coupled.imu.gyro_noise and accel_noise (the datasheet's)")
     src = logs.logged_source(base)
     bore = lag = lag_s = None
+    offset_note = ""
     # The boresight read from a run with a wrong time offset is off (and the reverse): with
     # both asked, a second round starts from the first's values.
     for _ in range(2 if {"boresight", "imu_time_offset"} <= asked else 1):
@@ -235,13 +238,26 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
             if bore is not None:
                 base = base.with_values({"loosely_coupled.boresight": [f"{x:.6f} deg" for x in bore[0]]}, create=True)
         if "imu_time_offset" in asked:
-            lag, lag_s = _offset_by_innovations(base, src)
+            pos = data["gnss_log"]
+            if not np.isfinite(pos.vel[:, 0]).mean() > 0.5 and float(np.median(_fix_sigma(pos))) > OFFSET_POSITIONS_SIGMA:
+                if "imu_time_offset" in required:
+                    raise ScenarioError(
+                        f"calibrate: loosely_coupled.imu_time_offset: on positions alone of {float(np.median(_fix_sigma(pos))):.2g} m "
+                        f"(above {OFFSET_POSITIONS_SIGMA:g} m) the log does not tell the offset (simulated: 0.16-0.56 s off in 9 of 23 "
+                        "such logs, at a stated sigma of 0.01-0.04 s); give it (0 s where the IMU is stamped on the receiver's "
+                        "clock), or a log with the receiver's velocities")
+                lag, lag_s = None, None
+                offset_note = f"positions alone of {float(np.median(_fix_sigma(pos))):.2g} m: the log does not tell it"
+            else:
+                lag, lag_s = _offset_by_innovations(base, src)
             if lag is None and "imu_time_offset" in required:
                 raise ScenarioError(f"calibrate: loosely_coupled.imu_time_offset: no minimum of the innovations within ±{MAX_LAG:g} s "
                                     "of the scenario's value (too few turns while moving); give the offset")
             if lag is not None:
                 base = base.with_values({"loosely_coupled.imu_time_offset": f"{lag:.6f} s"}, create=True)
     cal = Calibration(None, None, None, None, None, None, lag, lag_s, rest)
+    if offset_note:
+        cal.imu_time_offset_note = offset_note
     if noise is not None:
         (cal.gyro_noise, cal.gyro_noise_sigma), (cal.accel_noise, cal.accel_noise_sigma), (cal.gyro_bias, cal.gyro_bias_sigma) = (
             noise["gyro_noise"], noise["accel_noise"], noise["gyro_bias"])
@@ -362,16 +378,11 @@ def _still_accel(ti: np.ndarray, accel: np.ndarray, a: float, b: float) -> tuple
     return float(edges[lo]), float(edges[hi])
 
 
-def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
-    """Horizontal speed (m/s) at the fixes of the GNSS log ``pos`` from its positions
-    differenced over ``half`` s either side (fixes that repeat the last are no end of a
-    difference: NaN there, as in :func:`navfdi.frames._east_north_velocity`), and its σ (m/s):
-    √2 × the fixes' horizontal σ over the span, the fixes' σ the larger of the σ they write
-    and their own scatter (the median size of their third differences, a 2D Gaussian's
-    1.1774 σ, over √20)."""
-    from navfdi.frames import _east_north_velocity
-
-    ve, vn, _ = _east_north_velocity(pos.t, np.full((len(pos.t), 3), np.nan), pos.lat, pos.lon, half)
+def _fix_sigma(pos: Any) -> np.ndarray:
+    """The horizontal σ (m) of each fix of the GNSS log ``pos``: the larger of the σ it writes
+    (its larger horizontal component; 0 where not written) and the fixes' own scatter over the
+    log (the median size of their third differences, a 2D Gaussian's 1.1774 σ, over √20;
+    fixes that repeat the last left out)."""
     r = 6_371_000.0
     lat = np.radians(np.asarray(pos.lat, float))
     e = np.radians(np.asarray(pos.lon, float)) * r * math.cos(float(np.nanmedian(lat)))
@@ -381,7 +392,18 @@ def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray
     d3 = np.hypot(np.diff(e[keep], 3), np.diff(n[keep], 3))
     own = float(np.median(d3)) / 1.1774 / math.sqrt(20.0) if d3.size >= 10 else 0.0
     written = np.nanmax(pos.sd_pos[:, :2], axis=1) if np.isfinite(pos.sd_pos).any() else np.zeros(len(e))
-    sd_p = np.maximum(np.nan_to_num(written, nan=0.0), own)
+    return np.maximum(np.nan_to_num(written, nan=0.0), own)
+
+
+def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Horizontal speed (m/s) at the fixes of the GNSS log ``pos`` from its positions
+    differenced over ``half`` s either side (fixes that repeat the last are no end of a
+    difference: NaN there, as in :func:`navfdi.frames._east_north_velocity`), and its σ (m/s):
+    √2 × the fixes' horizontal σ (:func:`_fix_sigma`) over the span."""
+    from navfdi.frames import _east_north_velocity
+
+    ve, vn, _ = _east_north_velocity(pos.t, np.full((len(pos.t), 3), np.nan), pos.lat, pos.lon, half)
+    sd_p = _fix_sigma(pos)
     dt = float(np.median(np.diff(pos.t))) if len(pos.t) > 1 else 1.0
     span = 2.0 * max(1, int(round(half / dt))) * dt
     return np.hypot(ve, vn), math.sqrt(2.0) * sd_p / span
@@ -557,6 +579,11 @@ def _given_boresight(v: Any) -> list[float]:
 #: bursts once a minute set the misfit: on three of four simulated urban logs no minimum was
 #: found, and on the fourth one was, confidently wrong (−0.44 s, σ 0.01 s, for +0.19 s).
 MISFIT_CAP = 9.0
+#: Horizontal σ (m) of a log of positions only above which the time offset is not estimated
+#: (:func:`calibrate`): on 23 simulated meter-level logs of positions only the innovations'
+#: minimum was 0.16–0.56 s off in nine (eight with multipath bursts), its σ 0.01–0.04 s; on
+#: ten RTK ones within 0.01 s.
+OFFSET_POSITIONS_SIGMA = 0.5
 
 
 def _offset_by_innovations(sc: Any, src: Any) -> tuple[float | None, float | None]:
