@@ -239,15 +239,17 @@ def calibrate(scenario: Any, fields: Sequence[str] | None = None) -> Calibration
                 base = base.with_values({"loosely_coupled.boresight": [f"{x:.6f} deg" for x in bore[0]]}, create=True)
         if "imu_time_offset" in asked:
             pos = data["gnss_log"]
-            if not np.isfinite(pos.vel[:, 0]).mean() > 0.5 and float(np.median(_fix_sigma(pos))) > OFFSET_POSITIONS_SIGMA:
+            positions_only = not np.isfinite(pos.vel[:, 0]).mean() > 0.5
+            fix_sigma = float(np.median(_fix_sigma(pos))) if positions_only else 0.0
+            if fix_sigma > OFFSET_POSITIONS_SIGMA:
                 if "imu_time_offset" in required:
                     raise ScenarioError(
-                        f"calibrate: loosely_coupled.imu_time_offset: on positions alone of {float(np.median(_fix_sigma(pos))):.2g} m "
+                        f"calibrate: loosely_coupled.imu_time_offset: on positions alone of {fix_sigma:.2g} m "
                         f"(above {OFFSET_POSITIONS_SIGMA:g} m) the log does not tell the offset (simulated: 0.16-0.56 s off in 9 of 23 "
                         "such logs, at a stated sigma of 0.01-0.04 s); give it (0 s where the IMU is stamped on the receiver's "
                         "clock), or a log with the receiver's velocities")
                 lag, lag_s = None, None
-                offset_note = f"positions alone of {float(np.median(_fix_sigma(pos))):.2g} m: the log does not tell it"
+                offset_note = f"positions alone of {fix_sigma:.2g} m: the log does not tell it"
             else:
                 lag, lag_s = _offset_by_innovations(base, src)
             if lag is None and "imu_time_offset" in required:
@@ -337,7 +339,7 @@ def _rest_intervals(static_speed: float, data: dict[str, Any], still_deg_s: floa
     rest = []
     for a, b in _rest(t, np.nan_to_num(speed, nan=np.inf), thr):
         if from_positions:
-            # Meter-level positions call a car pulling away (under 2.6 m/s at σ 3 m) still;
+            # Meter-level positions call a car pulling away (under 3.7 m/s at σ 3 m) still;
             # its accelerometer does not: the interval's longest run of still seconds.
             still = _still_accel(ti, imu.accel, a, b)
             if still is None:
