@@ -24,12 +24,11 @@ from pathlib import Path
 import numpy as np
 
 import navfdi
+from navfdi._lc_schema import _AXES
 from navfdi.scenario import from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
-#: The body axes an IMU axis may point along.
-_AXES = {"forward": (1, 0, 0), "back": (-1, 0, 0), "right": (0, 1, 0), "left": (0, -1, 0), "down": (0, 0, 1), "up": (0, 0, -1)}
-#: The 24 right-handed axis sets.
+#: The 24 right-handed axis sets (the body axes each IMU axis may point along: ``imu_axes``).
 AXIS_SETS = [a for a in itertools.permutations(_AXES, 3) if np.linalg.det(np.array([_AXES[x] for x in a], float)) > 0.5]
 
 

@@ -385,13 +385,10 @@ def _fix_sigma(pos: Any) -> np.ndarray:
     (its larger horizontal component; 0 where not written) and the fixes' own scatter over the
     log (the median size of their third differences, a 2D Gaussian's 1.1774 σ, over √20;
     fixes that repeat the last left out)."""
-    r = 6_371_000.0
-    lat = np.radians(np.asarray(pos.lat, float))
-    e = np.radians(np.asarray(pos.lon, float)) * r * math.cos(float(np.nanmedian(lat)))
-    n = lat * r
-    keep = np.ones(len(e), bool)
-    keep[1:] = (np.diff(e) != 0) | (np.diff(n) != 0)
-    d3 = np.hypot(np.diff(e[keep], 3), np.diff(n[keep], 3))
+    from navfdi.frames import _east_north_m
+
+    e, n, repeated = _east_north_m(pos.lat, pos.lon)
+    d3 = np.hypot(np.diff(e[~repeated], 3), np.diff(n[~repeated], 3))
     own = float(np.median(d3)) / 1.1774 / math.sqrt(20.0) if d3.size >= 10 else 0.0
     written = np.nanmax(pos.sd_pos[:, :2], axis=1) if np.isfinite(pos.sd_pos).any() else np.zeros(len(e))
     return np.maximum(np.nan_to_num(written, nan=0.0), own)
@@ -399,16 +396,15 @@ def _fix_sigma(pos: Any) -> np.ndarray:
 
 def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
     """Horizontal speed (m/s) at the fixes of the GNSS log ``pos`` from its positions
-    differenced over ``half`` s either side (fixes that repeat the last are no end of a
-    difference: NaN there, as in :func:`navfdi.frames._east_north_velocity`), and its σ (m/s):
-    √2 × the fixes' horizontal σ (:func:`_fix_sigma`) over the span."""
-    from navfdi.frames import _east_north_velocity
+    differenced over ``half`` s either side (:func:`navfdi.frames._position_velocity`: no
+    difference ends at a repeated fix), and its σ (m/s): √2 × the fixes' horizontal σ
+    (:func:`_fix_sigma`) over the span."""
+    from navfdi.frames import _position_velocity
 
-    ve, vn, _ = _east_north_velocity(pos.t, np.full((len(pos.t), 3), np.nan), pos.lat, pos.lon, half)
-    sd_p = _fix_sigma(pos)
+    ve, vn = _position_velocity(pos.t, pos.lat, pos.lon, half)
     dt = float(np.median(np.diff(pos.t))) if len(pos.t) > 1 else 1.0
     span = 2.0 * max(1, int(round(half / dt))) * dt
-    return np.hypot(ve, vn), math.sqrt(2.0) * sd_p / span
+    return np.hypot(ve, vn), math.sqrt(2.0) * _fix_sigma(pos) / span
 
 
 def _noise(imu: Any, t0: float, rest: list[tuple[float, float]], differences: bool = False) -> dict[str, tuple[list[float], list[float]]]:

@@ -123,28 +123,40 @@ def _windowed_rate(x: np.ndarray, t: np.ndarray, half: float = 1.0) -> np.ndarra
     return out
 
 
-def _east_north_velocity(t: np.ndarray, vel: np.ndarray, lat: np.ndarray, lon: np.ndarray,
-                         half: float) -> tuple[np.ndarray, np.ndarray, bool]:
-    """East and north velocity (m/s) at the GNSS epochs ``t``: the receiver's where it writes
-    them (more than half finite), else the positions (deg) differenced over ``half`` s either
-    side (:func:`_windowed_rate`); and whether they came from the positions.
-
-    A fix that repeats the one before it (a receiver writing its last fix while it has none)
-    is no end of a difference: NaN there. A stale fix differenced with a fresh one gives the
-    distance covered while it was stale as a velocity — the catch-up after 4 s of repeats at
-    12 m/s read as 29–35 m/s turning at 60 deg/s, which lined up with a turn 15 s away at a
-    correlation of 0.94 in :func:`check_turns`."""
-    ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
-    if np.isfinite(ve).mean() > 0.5:
-        return ve, vn, False
+def _east_north_m(lat: np.ndarray, lon: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """East and north (m; a sphere's, scaled at the median latitude) of the fixes ``lat``,
+    ``lon`` (deg), and which fixes repeat the one before them exactly (a receiver writing its
+    last fix while it has none)."""
     lat, lon = np.asarray(lat, float), np.asarray(lon, float)
     r = 6_371_000.0
     n = np.radians(lat) * r
     e = np.radians(lon) * r * np.cos(np.radians(np.nanmedian(lat)))
     repeated = np.zeros(len(lat), bool)
     repeated[1:] = (lat[1:] == lat[:-1]) & (lon[1:] == lon[:-1])
+    return e, n, repeated
+
+
+def _position_velocity(t: np.ndarray, lat: np.ndarray, lon: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
+    """East and north velocity (m/s) at the epochs ``t`` from the positions (deg) differenced
+    over ``half`` s either side (:func:`_windowed_rate`). A fix that repeats the one before it
+    is no end of a difference: NaN there. A stale fix differenced with a fresh one gives the
+    distance covered while it was stale as a velocity — the catch-up after 4 s of repeats at
+    12 m/s read as 29–35 m/s turning at 60 deg/s, which lined up with a turn 15 s away at a
+    correlation of 0.94 in :func:`check_turns`."""
+    e, n, repeated = _east_north_m(lat, lon)
     e, n = np.where(repeated, np.nan, e), np.where(repeated, np.nan, n)
-    return _windowed_rate(e, t, half), _windowed_rate(n, t, half), True
+    return _windowed_rate(e, t, half), _windowed_rate(n, t, half)
+
+
+def _east_north_velocity(t: np.ndarray, vel: np.ndarray, lat: np.ndarray, lon: np.ndarray,
+                         half: float) -> tuple[np.ndarray, np.ndarray, bool]:
+    """East and north velocity (m/s) at the GNSS epochs ``t``: the receiver's where it writes
+    them (more than half finite), else the positions (deg) differenced over ``half`` s either
+    side (:func:`_position_velocity`); and whether they came from the positions."""
+    ve, vn = np.asarray(vel, float)[:, 0], np.asarray(vel, float)[:, 1]
+    if np.isfinite(ve).mean() > 0.5:
+        return ve, vn, False
+    return (*_position_velocity(t, lat, lon, half), True)
 
 
 def _turn_signals(imu_t: np.ndarray, gyro: np.ndarray, t: np.ndarray, vel: np.ndarray, lat: np.ndarray,
