@@ -301,6 +301,9 @@ impl PositionHold {
         // The fix jumped back across an INS the GNSS updates had pulled the other way
         // ([`super::pull::PullHistory::back`]): the end of a fault the filter followed.
         let pulled = |j: usize| pull.is_some_and(|p| p.back(j, d[j], s[j]));
+        // Held components whose fix is back on the INS (within the deciding test).
+        let landed: [bool; 3] =
+            std::array::from_fn(|k| matches!(self.comps[k], Comp::Step { .. }) && w2(k) <= thr1);
         for j in 0..3 {
             let jump = jumped(j);
             self.comps[j] = match self.comps[j] {
@@ -401,8 +404,17 @@ impl PositionHold {
                     // last jump away (nearer that than zero): a burst on the held step ended.
                     let to_base =
                         |dd: f64| base.is_some_and(|b0| (b + dd - b0).abs() < (b + dd).abs());
-                    let jump_back =
-                        |dd: f64| dd * b < 0.0 && dd.abs() > 0.5 * b.abs() && !to_base(dd);
+                    // Nor one that leaves the fix still off the INS the fault's way beyond the
+                    // deciding test: the fault changed (one multipath burst giving way to
+                    // another), it did not end — at an end the fix lands on the INS, or across
+                    // it where the INS followed part of the fault. Unless another held
+                    // component of the fix landed on the INS at once: one receiver, one fault,
+                    // which has ended, and what is left off is the INS's own drift.
+                    let still_off =
+                        d[j] * b > 0.0 && w2(j) > thr1 && !(0..3).any(|k| k != j && landed[k]);
+                    let jump_back = |dd: f64| {
+                        dd * b < 0.0 && dd.abs() > 0.5 * b.abs() && !to_base(dd) && !still_off
+                    };
                     let receiver_jump = recv
                         .filter(|c| c.e[j].abs() > RECEIVER_JUMP * c.sigma[j])
                         .map(|c| c.e[j]);

@@ -528,6 +528,60 @@ fn a_bursts_end_on_a_held_step_against_the_ins_displacement_keeps_the_step() {
     assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
 }
 
+/// One multipath burst giving way to a smaller one the same way: the fix jumps back by more
+/// than half the held offset but stays off the INS beyond the deciding test. That is the fault
+/// changing, not ending: its fixes are held at the new offset, not used as measured (a
+/// simulated positions-only log, a 33 m burst followed by a 13 m one: the jump back was taken
+/// for the end, the second burst's fixes pulled the INS 30 m off and it ran away, 24.5 m RMS
+/// against 0.35 m with them held).
+#[test]
+fn a_burst_giving_way_to_a_smaller_one_is_no_end() {
+    for ins_referenced in [true, false] {
+        let mut h = PositionHold::default();
+        for k in 0..10 {
+            step_with(
+                &mut h,
+                k as f64,
+                0.0,
+                false,
+                Some((0.0, 0.0)),
+                ins_referenced,
+            );
+        }
+        // The fix 40 m north (innovation −40), held.
+        step_with(&mut h, 10.0, -40.0, true, Some((40.0, 0.0)), ins_referenced);
+        step_with(&mut h, 11.0, -40.0, true, Some((0.0, 0.0)), ins_referenced);
+        // Back by 25 m of 40: the fix still 15 m off (w² 50 against THR 28.4).
+        let u = step_with(
+            &mut h,
+            12.0,
+            -15.0,
+            true,
+            Some((-25.0, 0.0)),
+            ins_referenced,
+        );
+        assert_ne!(u, Use::Raw, "{ins_referenced}");
+        assert!(
+            matches!(h.comps[1], Comp::Step { .. }),
+            "{ins_referenced}: {:?}",
+            h.comps[1]
+        );
+        assert!(
+            matches!(
+                step_with(&mut h, 13.0, -15.0, true, Some((0.0, 0.0)), ins_referenced),
+                Use::Relative(b, _) if b == -15.0
+            ),
+            "{ins_referenced}"
+        );
+        // Its end, the fix back on the INS, is the end.
+        assert_eq!(
+            step_with(&mut h, 14.0, 0.0, false, Some((-15.0, 0.0)), ins_referenced),
+            Use::Raw,
+            "{ins_referenced}"
+        );
+    }
+}
+
 /// On positions only a held ramp's size follows the fixes' displacement against the INS's
 /// velocity for its first [`AGREE_LONG`] fixes, then the line they drew: an INS velocity
 /// error that shows in the displacement afterwards is not taken into the size (the relative
