@@ -582,6 +582,60 @@ fn a_burst_giving_way_to_a_smaller_one_is_no_end() {
     }
 }
 
+/// The same jump back where another held component of the fix lands on the INS at once: the
+/// burst has ended, and what the first component is left off by is the INS's own drift — the
+/// end, used as measured (a ramp the INS had followed, with a burst on top, kept the INS's
+/// 14 m drift held as a new step otherwise, 79 m off after the ramp).
+#[test]
+fn a_jump_back_beside_a_component_back_on_the_ins_is_the_end() {
+    let mut h = PositionHold::default();
+    let s = Vector3::repeat(4.5);
+    let fix = |h: &mut PositionHold, t: f64, d: Vector3<f64>, e: Vector3<f64>, alarm: bool| {
+        let c = Consistency {
+            e,
+            sigma: Vector3::repeat(1.0),
+            ramp: [false; 3],
+            onset: [None; 3],
+            window: Vector3::zeros(),
+            excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+            structure: [[f64::NAN; crate::arch::loosely_coupled::window::LAGS.len()]; 3],
+            ins_referenced: true,
+        };
+        h.decide(
+            t,
+            &d,
+            &s,
+            alarm,
+            &[1, 2],
+            THR,
+            Some(&c),
+            false,
+            true,
+            false,
+            true,
+            None,
+        )
+    };
+    for k in 0..10 {
+        fix(&mut h, k as f64, Vector3::zeros(), Vector3::zeros(), false);
+    }
+    // A burst: the fix 40 m north and 20 m up, both held.
+    let burst = Vector3::new(0.0, -40.0, -20.0);
+    fix(&mut h, 10.0, burst, -burst, true);
+    fix(&mut h, 11.0, burst, Vector3::zeros(), true);
+    assert!(matches!(h.comps[1], Comp::Step { .. }) && matches!(h.comps[2], Comp::Step { .. }));
+    // Its end: up back on the INS, north left 15 m off by the INS's drift during the hold.
+    let u = fix(
+        &mut h,
+        12.0,
+        Vector3::new(0.0, -15.0, 0.0),
+        Vector3::new(0.0, -25.0, 20.0),
+        true,
+    );
+    assert_eq!(u[1], Use::Raw);
+    assert_eq!(h.comps[1], Comp::Return { fixes: 1 });
+}
+
 /// On positions only a held ramp's size follows the fixes' displacement against the INS's
 /// velocity for its first [`AGREE_LONG`] fixes, then the line they drew: an INS velocity
 /// error that shows in the displacement afterwards is not taken into the size (the relative
