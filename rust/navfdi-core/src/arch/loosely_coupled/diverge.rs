@@ -761,6 +761,7 @@ mod tests {
             agree: 0,
             quiet: 0,
             base: None,
+            moved: false,
         };
         reanchor_up(&mut s, &mut kf, 0.4, 0.003, &mut hold);
         assert!(!hold.up_step());

@@ -89,6 +89,9 @@ pub enum Comp {
         /// jump stands: a jump back to it (a multipath burst on a held step ending) returns to
         /// the step, not to the fault's end.
         base: Option<f64>,
+        /// The offset has followed the receiver's own inconsistency since the hold began (a
+        /// ramp taken for a step): the INS may have followed more of the fault than it.
+        moved: bool,
     },
     /// A held ramp since `since` (s): its size `b` (innovation units, m) followed by the
     /// receiver's own displacement against its velocity, with variance `var` (m²).
@@ -346,6 +349,7 @@ impl PositionHold {
                             agree: 0,
                             quiet: 0,
                             base: None,
+                            moved: false,
                         }
                     } else if let (true, Some((sum, var))) =
                         (converged, recv.and_then(|c| c.onset[j]))
@@ -397,6 +401,7 @@ impl PositionHold {
                     agree,
                     quiet,
                     base,
+                    moved,
                 } => {
                     // The jump back: from the receiver's consistency, or where it has none at
                     // this fix (moving off from rest, after a gap) from the innovation's change.
@@ -412,8 +417,29 @@ impl PositionHold {
                     // which has ended, and what is left off is the INS's own drift.
                     let still_off =
                         d[j] * b > 0.0 && w2(j) > thr1 && !(0..3).any(|k| k != j && landed[k]);
+                    // Nor one that lands across the INS, beyond the deciding test, further
+                    // than the held offset (3σ of the innovation on top): what the INS
+                    // followed of a fault is at most the fault, so the fix jumped past the
+                    // end to a new fault the other way (a burst giving way to a step). Only
+                    // where the offset is the fault: with the receiver's velocities, an offset
+                    // that has not followed the receiver's inconsistency and that the fix
+                    // before the jump still fitted (a ramp taken for a step grows past its
+                    // offset, and the INS follows it past); against the INS's displacement
+                    // the offset follows nothing.
+                    let overshoots = recv.is_some_and(|c| !c.ins_referenced)
+                        && !moved
+                        && self
+                            .prev
+                            .is_some_and(|(pd, ps)| (pd[j] - b).powi(2) <= thr1 * (ps[j] + var))
+                        && d[j] * b < 0.0
+                        && w2(j) > thr1
+                        && d[j].abs() > b.abs() + 3.0 * s[j].sqrt();
                     let jump_back = |dd: f64| {
-                        dd * b < 0.0 && dd.abs() > 0.5 * b.abs() && !to_base(dd) && !still_off
+                        dd * b < 0.0
+                            && dd.abs() > 0.5 * b.abs()
+                            && !to_base(dd)
+                            && !still_off
+                            && !overshoots
                     };
                     let receiver_jump = recv
                         .filter(|c| c.e[j].abs() > RECEIVER_JUMP * c.sigma[j])
@@ -425,8 +451,10 @@ impl PositionHold {
                             .is_some_and(|(dd, _)| jump_back(dd));
                     // A jump away from zero (with the receiver's velocity) remembers the offset
                     // before it; one back to it forgets it.
+                    // Past the end to a new fault: the old one is over, nothing to go back to.
                     let base =
                         match receiver_jump.filter(|_| recv.is_some_and(|c| !c.ins_referenced)) {
+                            _ if overshoots => None,
                             Some(e) if (b - e).abs() > b.abs() => Some(b),
                             Some(e) if to_base(-e) => None,
                             _ => base,
@@ -448,18 +476,20 @@ impl PositionHold {
                     // relative fixes agreeing with an INS drifting away (tens of km, fault-free,
                     // with an IMU noise set above the sensor's).
                     let held = b;
-                    let (b, var) = match recv {
+                    let (b, var, moved) = match recv {
                         Some(c) if !c.ins_referenced => {
                             let (e, v) = (c.e[j], c.sigma[j] * c.sigma[j]);
                             let confirmed = (d[j] - b + e).abs() < (d[j] - b).abs();
                             let z2 = e * e / v;
                             if z2 > MOVE_ALONE * MOVE_ALONE || (z2 > 9.0 && confirmed) {
-                                (b - e, var + v)
+                                // Not where the jump past the offset was just refused as the
+                                // end: that is a new fault, the offset renewed by it.
+                                (b - e, var + v, moved || !overshoots)
                             } else {
-                                (b, var)
+                                (b, var, moved)
                             }
                         }
-                        _ => (b, var),
+                        _ => (b, var, moved),
                     };
                     // The offset is gone: the fix jumped back and agrees with the INS (the
                     // deciding test), or it agrees strictly — for [`AGREE`] fixes when no
@@ -493,6 +523,7 @@ impl PositionHold {
                                 agree,
                                 quiet,
                                 base,
+                                moved,
                             }
                         }
                     } else if (d[j] - b).powi(2) / (s[j] + var) <= thr1 {
@@ -508,6 +539,7 @@ impl PositionHold {
                             agree: 0,
                             quiet: 0,
                             base,
+                            moved,
                         }
                     } else {
                         out[j] = Use::Out(STEP);
@@ -530,6 +562,7 @@ impl PositionHold {
                                 (true, false) => None,
                                 _ => base,
                             },
+                            moved: moved && !renew,
                         }
                     }
                 }

@@ -850,3 +850,6 @@ fn a_ramps_end_at_rest_across_a_pull_is_a_return() {
     assert_eq!(at_rest(&mut h, 33.0, 12.0, Some(&pull)), Use::Raw);
     assert_eq!(at_rest(&mut h, 34.0, 8.0, Some(&pull)), Use::Raw);
 }
+
+#[path = "hold_landing_tests.rs"]
+mod landing;
