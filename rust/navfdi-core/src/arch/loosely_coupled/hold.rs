@@ -482,9 +482,10 @@ impl PositionHold {
                             let confirmed = (d[j] - b + e).abs() < (d[j] - b).abs();
                             let z2 = e * e / v;
                             if z2 > MOVE_ALONE * MOVE_ALONE || (z2 > 9.0 && confirmed) {
-                                // Not where the jump past the offset was just refused as the
-                                // end: that is a new fault, the offset renewed by it.
-                                (b - e, var + v, moved || !overshoots)
+                                // A move is the offset following the fault — except the
+                                // jump past it just refused as the end: a new fault, the
+                                // offset renewed by it (and `overshoots` implies `!moved`).
+                                (b - e, var + v, !overshoots)
                             } else {
                                 (b, var, moved)
                             }

@@ -593,13 +593,8 @@ fn a_jump_back_beside_a_component_back_on_the_ins_is_the_end() {
     let fix = |h: &mut PositionHold, t: f64, d: Vector3<f64>, e: Vector3<f64>, alarm: bool| {
         let c = Consistency {
             e,
-            sigma: Vector3::repeat(1.0),
-            ramp: [false; 3],
-            onset: [None; 3],
-            window: Vector3::zeros(),
-            excursion: [[(0.0, 0.0); crate::arch::loosely_coupled::window::LAGS.len()]; 3],
-            structure: [[f64::NAN; crate::arch::loosely_coupled::window::LAGS.len()]; 3],
             ins_referenced: true,
+            ..north(0.0, 1.0, 0.0)
         };
         h.decide(
             t,
