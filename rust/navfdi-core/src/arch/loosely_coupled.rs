@@ -268,12 +268,25 @@ fn run<const NS: usize>(
     // Per GNSS channel: the position hold (faults held to their end) and the time of its
     // last fix, against its nominal interval (a longer gap forgets the jump reference).
     let mut holds: Vec<hold::PositionHold> = vec![hold::PositionHold::default(); aids.len()];
+    // The receiver's own horizontal velocity at epoch k (east, north; m/s), where it gives
+    // one: its fixes' jumps are read against it (`diverge::Jumps::push_with`).
+    let vel_of: Vec<(usize, usize)> = (aids.iter().take(n_gnss))
+        .filter_map(|a| Some((a.sensor?, a.vel?)))
+        .collect();
+    let own_vel = |k: usize| {
+        vel_of.iter().find_map(|&(si, o)| {
+            let z = &src.meas.z[si][k];
+            let v = [z[o], z[o + 1]];
+            (models.available[si][k] && (o..o + 3).all(|i| z[i].is_finite())).then_some(v)
+        })
+    };
     // The INS watched per channel, from its first fix (before the alignment too).
     let mut watch: Vec<diverge::InsWatch> = aids
         .iter()
         .zip(&fix_interval)
         .map(|(aid, &dt)| {
-            let fix = |k: usize| measure(aid, k, aid.pos).map(|p| (models.t[k], [p.x, p.y]));
+            let fix =
+                |k: usize| measure(aid, k, aid.pos).map(|p| (models.t[k], [p.x, p.y], own_vel(k)));
             let first = (0..epochs).find_map(fix).map(|f| f.0);
             diverge::InsWatch::new(first, dt, (0..ka).filter_map(fix))
         })
@@ -550,7 +563,7 @@ fn run<const NS: usize>(
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
                 let state = (converged, scales[a].resolved(tk, d.norm()));
-                let moved = watch[a].push(tk, p, [d[0], d[1]], held, step, state);
+                let moved = watch[a].push(tk, p, own_vel(k), [d[0], d[1]], held, step, state);
                 // A hold a copy of the filter carried without GNSS since before its onset calls
                 // the INS's error (`shadow`): the end of a fault it followed, or its runaway.
                 // The copy replaces the INS.
