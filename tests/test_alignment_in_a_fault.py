@@ -116,26 +116,40 @@ def test_the_alignment_in_motion_does_not_take_a_stale_fix(tmp_path: Path) -> No
     assert np.sqrt(np.nanmean(h**2)) < 6.0 and np.nanmax(h) < 12.0
 
 
-def test_a_burst_at_the_alignment_is_read_against_the_receivers_velocities(tmp_path: Path) -> None:
-    # A random urban set-up (white fixes of 2.1 m at 1 Hz with the receiver's velocities, 10 m
-    # multipath bursts, stale spells), fault-free: a burst over 23-35 s is under way at the
-    # alignment (32 s), which takes its position from it (19.6 m off). Its start and end (18.5
-    # and 17.2 m) are within the fixes' second differences' 5σ (26 m), so no jump was seen, and
-    # the good fixes after it were held out as the hold's onset for 270 s: 11.3 m RMS over the
-    # log against 3.8 m without FDE. Read against the receiver's velocities (σ 3.5 m there) both
-    # are jumps, the second undoing the first: the INS is moved onto the fixes at 42 s.
-    log = simulate_log(tmp_path, duration=600, seed=432, gnss_rate=1.0, gnss_velocity=True, gnss_sigma=0.0, gnss_tau=0.0,
-                       gnss_white=2.0572, burst_rate=0.016626, burst_size=10.0, burst_duration=12.708, stale_rate=1 / 120,
-                       stale_duration=4.0, gyro_bias=100.0, accel_bias=1.0)
+@pytest.mark.parametrize(("kw", "burst", "moved_by"), [
+    # White 2.1 m fixes at 1 Hz, 10 m bursts: a burst over 23-35 s, the alignment at 32 s.
+    ({"seed": 432, "gnss_rate": 1.0, "gnss_white": 2.0572, "burst_rate": 0.016626, "burst_size": 10.0,
+      "burst_duration": 12.708, "gyro_bias": 100.0, "accel_bias": 1.0}, (23.0, 35.0), 44.0),
+    # White 0.45 m fixes at 10 Hz taken at 1 Hz, 30 m bursts: a 56 m burst over 31.7-35.7 s,
+    # the first fix in it the alignment's own (32 s), the INS put on it.
+    ({"seed": 779, "gnss_rate": 10.0, "gnss_white": 0.44647, "burst_rate": 0.020286, "burst_size": 30.0,
+      "burst_duration": 4.0421, "gyro_bias": 1.0, "accel_bias": 1.0}, (31.7, 35.7), 43.0),
+])
+def test_a_burst_at_the_alignment_is_read_against_the_receivers_velocities(tmp_path: Path, kw: dict[str, float],
+                                                                           burst: tuple[float, float],
+                                                                           moved_by: float) -> None:
+    # Random urban set-ups (white fixes with the receiver's velocities, multipath bursts, stale
+    # spells), fault-free, with a burst under way at the alignment, which takes its position
+    # from it. 1 Hz: the burst's start and end (18.5 and 17.2 m) were within the fixes' second
+    # differences' 5σ (26 m), so no jump was seen, and the good fixes after it were held out for
+    # 270 s: 11.3 m RMS over the log against 3.8 m without FDE; read against the receiver's
+    # velocities (σ 3.5 m there) both are jumps, the second undoing the first. 10 Hz: the jump
+    # at the alignment's own fix was taken for a jump onto the INS (no innovation there), and
+    # 56 m held for 34 s: 14.8 m RMS against 7.7 m. The INS is now moved onto the fixes 5-6 s
+    # after the burst's end.
+    log = simulate_log(tmp_path, duration=600, gnss_velocity=True, gnss_sigma=0.0, gnss_tau=0.0, stale_rate=1 / 120,
+                       stale_duration=4.0, **kw)
     truth = np.genfromtxt(log.truth, delimiter=",", names=True)
-    burst = truth["time"][truth["burst"] > 0]
-    assert burst[0] == 23.0 and burst[burst < 60].max() == 35.0, burst[:15]
+    t, in_burst, dt = truth["time"], truth["burst"] > 0, 1.0 / kw["gnss_rate"]
+    inside = (t >= burst[0] - 1e-6) & (t <= burst[1] + 1e-6)
+    edges = np.isclose(t, burst[0] - dt) | np.isclose(t, burst[1] + dt)
+    assert in_burst[inside].all() and not in_burst[edges].any(), t[in_burst][:60]
     raw = copy.deepcopy(dict(load_scenario(str(log.scenario)).raw))
     raw.pop("faults", None)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         runs = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
     moved = runs["fde"].record.get("reanchored", [])
-    assert len(moved) >= 1 and 40.0 <= moved[0] <= 44.0, moved
+    assert len(moved) >= 1 and burst[1] < moved[0] <= moved_by, moved
     rms = {v: float(np.sqrt(np.nanmean(_horizontal(run, 0.0, 600.0) ** 2))) for v, run in runs.items()}
     assert rms["fde"] < rms["no_fde"], rms

@@ -334,6 +334,8 @@ pub struct Outlast {
     open: Vec<(f64, [f64; 2], f64)>,
     /// Since when (s) the converged filter has used every fix (none held).
     agreed: Option<f64>,
+    /// No fix pushed since the alignment yet: the first is the one the INS was put on.
+    first: bool,
 }
 
 impl Outlast {
@@ -346,6 +348,7 @@ impl Outlast {
             jumps: Jumps::new(interval),
             open: Vec::new(),
             agreed: None,
+            first: true,
         }
     }
 
@@ -396,6 +399,7 @@ impl Outlast {
         converged: bool,
         resolved: bool,
     ) -> bool {
+        let first = p.is_some() && std::mem::take(&mut self.first);
         if !held {
             self.onset = None;
             // The converged filter using the fixes for [`OUTLAST_MARGIN`] s: the jumps taken
@@ -408,7 +412,9 @@ impl Outlast {
                 self.open.clear();
             }
             match p {
-                Some(p) if !converged => self.taken(t, p, v, Some(d)),
+                // The alignment's own fix: the INS was put on it, so a jump there is read as
+                // before the alignment (the INS then is where the fixes before it were).
+                Some(p) if !converged => self.taken(t, p, v, (!first).then_some(d)),
                 // The jump reference follows the fixes.
                 Some(p) => _ = self.jumps.push_with(t, p, v),
                 None => {}

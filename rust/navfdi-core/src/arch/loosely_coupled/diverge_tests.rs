@@ -377,3 +377,39 @@ fn an_up_step_that_outlasts_the_fixes_before_it_moves_the_height_alone() {
         }
     }
 }
+
+#[test]
+fn a_jump_at_the_alignments_own_fix_is_a_faults_start() {
+    // A car at 10 m/s east, clean fixes to 31 s, the alignment at 32 s on a fix a 56 m burst
+    // moved (the INS put on it: no innovation), the burst's end at 36 s held. The jump at 32 s
+    // is read as before the alignment (not "onto the INS"): the INS is moved 5 s after the hold's
+    // onset instead of after the spell (36 + 30 s).
+    let v = Some([10.0, 0.0]);
+    let fix = |k: u32| {
+        let burst = if (32..36).contains(&k) {
+            [21.6, -51.8]
+        } else {
+            [0.0; 2]
+        };
+        [10.0 * k as f64 + burst[0], burst[1]]
+    };
+    let mut o = Outlast::new(0.0, 1.0);
+    for k in 0..32 {
+        o.taken(k as f64, fix(k), v, None);
+    }
+    for k in 32..36 {
+        assert!(!o.push(
+            k as f64,
+            Some(fix(k)),
+            v,
+            [0.0; 2],
+            false,
+            false,
+            false,
+            false
+        ));
+    }
+    let d = [21.6, -51.8];
+    let moved = (36..200).find(|&k| o.push(k as f64, Some(fix(k)), v, d, true, true, true, false));
+    assert_eq!(moved, Some(42));
+}
