@@ -160,17 +160,11 @@ fn with_velocities_a_burst_is_a_jump_the_second_differences_miss() {
     // 18 m burst north over 23–35 s under way at the alignment: its start and end are
     // within the second differences' 5σ (about 26 m) but beyond the displacement against
     // the velocities' (about 15 m).
-    let mut rng = 12345_u64;
-    let mut gauss = || {
-        // Box–Muller on a linear congruential generator: reproducible without a crate.
-        let mut u = || {
-            rng = rng
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((rng >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-        };
-        let (a, b) = (u(), u());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    let mut gauss = {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12345);
+        move || -> f64 { StandardNormal.sample(&mut rng) }
     };
     let fixes: Vec<[f64; 2]> = (0..60)
         .map(|k| {
