@@ -116,6 +116,10 @@ pub const JUMP_WINDOW: usize = 120;
 /// this many σ of the last [`JUMP_WINDOW`] displacements (a Gaussian's size passes 4σ once in
 /// 3 000: at 1 Hz once an hour of fixes, and a jump acts only where a later hold undoes it).
 pub const JUMP_SIGMAS_VELOCITY: f64 = 4.0;
+/// Seconds of a stale spell (fixes repeating the last fresh one) across which a fix is read
+/// against the velocities at its two ends ([`Jumps::push_with`]): the spells the simulated
+/// logs have (4 s) and a second more.
+pub const STALE_SPAN: f64 = 5.0;
 /// Two jumps read against the velocities, each with σ per component, are one within this
 /// many σ of their difference (a 2D Gaussian's size passes 2.5σ once in 23).
 pub const MATCH_SIGMAS: f64 = 2.5;
@@ -222,8 +226,11 @@ pub(super) struct Jumps {
     steps: SecondDifferences<JUMP_WINDOW>,
     /// The last fix's jump (its second difference comes back at the next fix).
     prev: Option<[f64; 2]>,
-    /// The last fix with the receiver's velocity: time (s), east and north (m, m/s).
+    /// The last fresh fix with the receiver's velocity: time (s), east and north (m, m/s).
     last_v: Option<(f64, [f64; 2], [f64; 2])>,
+    /// Fixes since it repeated it (a stale spell: read across, against the velocities at its
+    /// two ends, up to [`STALE_SPAN`] s).
+    repeats: bool,
     /// The sizes (m) of the displacements against the velocities.
     moved: super::noise_scale::Rolling<JUMP_WINDOW>,
     /// σ per component (m) the last jump was read with against the velocities (0 for a
@@ -239,6 +246,7 @@ impl Jumps {
             steps: Default::default(),
             prev: None,
             last_v: None,
+            repeats: false,
             moved: Default::default(),
             sigma: 0.0,
         }
@@ -256,10 +264,23 @@ impl Jumps {
     pub fn push_with(&mut self, t: f64, p: [f64; 2], v: Option<[f64; 2]>) -> Option<[f64; 2]> {
         let second = self.second(t, p);
         let v = v.filter(|v| v.iter().all(|x| x.is_finite()));
-        let last = std::mem::replace(&mut self.last_v, v.map(|v| (t, p, v)));
         self.sigma = 0.0;
+        // A fix repeating the last fresh one (a stale spell): no jump, and the next fresh fix
+        // is read from that one, across the spell (its catch-up is motion, not a jump).
+        if let (Some(_), Some((t0, p0, _))) = (v, self.last_v) {
+            if t > t0 && (p[0] - p0[0]).abs().max((p[1] - p0[1]).abs()) < 1e-3 {
+                self.repeats = true;
+                return None;
+            }
+        }
+        let span = if std::mem::take(&mut self.repeats) {
+            STALE_SPAN
+        } else {
+            1.5 * self.interval
+        };
+        let last = std::mem::replace(&mut self.last_v, v.map(|v| (t, p, v)));
         match (v, last) {
-            (Some(v), Some((t0, p0, v0))) if t - t0 <= 1.5 * self.interval && t > t0 => {
+            (Some(v), Some((t0, p0, v0))) if t - t0 <= span && t > t0 => {
                 let dt = t - t0;
                 let e = [
                     p[0] - p0[0] - 0.5 * (v[0] + v0[0]) * dt,

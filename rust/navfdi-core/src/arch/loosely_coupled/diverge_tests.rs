@@ -407,3 +407,34 @@ fn a_jump_at_the_alignments_own_fix_is_a_faults_start() {
     let moved = (36..200).find(|&k| o.push(k as f64, Some(fix(k)), v, d, true, true, true, false));
     assert_eq!(moved, Some(42));
 }
+
+#[test]
+fn a_stale_spells_catch_up_is_motion_not_a_jump() {
+    // A car at 10 m/s east with the receiver's velocities; the receiver repeats its fix (and
+    // velocity) over 31-34 s. Its first fresh fix is read from the last fresh one against the
+    // velocities at both ends: the catch-up (40 m) is no jump, and a 20 m burst north that
+    // began in the spell is that burst alone.
+    let run = |burst_from: u32| {
+        let mut j = Jumps::new(1.0);
+        (0..60u32)
+            .filter_map(|k| {
+                let fresh = !(31..35).contains(&k);
+                let at = if fresh { k } else { 30 };
+                let burst = if (burst_from..45).contains(&at) {
+                    20.0
+                } else {
+                    0.0
+                };
+                let p = [10.0 * at as f64, burst];
+                j.push_with(k as f64, p, Some([10.0, 0.0])).map(|e| (k, e))
+            })
+            .collect::<Vec<_>>()
+    };
+    assert!(run(100).is_empty(), "{:?}", run(100));
+    let jumps = run(33);
+    assert_eq!(jumps.len(), 2, "{jumps:?}");
+    let ((k0, e0), (k1, e1)) = (jumps[0], jumps[1]);
+    assert_eq!((k0, k1), (35, 45));
+    assert!(e0[0].abs() < 1e-9 && (e0[1] - 20.0).abs() < 1e-9, "{e0:?}");
+    assert!(e1[0].abs() < 1e-9 && (e1[1] + 20.0).abs() < 1e-9, "{e1:?}");
+}
