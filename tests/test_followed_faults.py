@@ -35,6 +35,7 @@ import pytest
 
 import navfdi
 from navfdi.scenario import from_dict
+from navfdi.simlog import simulate_log
 
 
 def _case(folder: Path, script: Callable[[str], ModuleType], seed: int, fault: dict[str, Any], rate: float = 1.0,
@@ -148,8 +149,6 @@ def test_a_jump_landing_past_what_the_ins_followed_is_a_new_fault(tmp_path: Path
     followed of the fault — never further across than the held offset. The step was followed
     before (``before``: RMS error through the step, m; about as without FDE); now it is held
     (1.3 m)."""
-    from navfdi.simlog import simulate_log
-
     log = simulate_log(tmp_path / "s", duration=600, gnss_velocity=True, gnss_sigma=0.0, gnss_tau=0.0, stale_rate=1 / 120,
                        stale_duration=4.0, **kw)
     raw = dict(navfdi.load_scenario(str(log.scenario)).raw)

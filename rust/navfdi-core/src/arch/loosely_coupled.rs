@@ -166,8 +166,8 @@ fn run<const NS: usize>(
         .map(|_| n_gnss + usize::from(l.zupt.is_some()));
 
     // Alignment.
-    let measure = |aid: &Aid, k: usize, off: Option<usize>| -> Option<Vector3<f64>> {
-        let (si, o) = (aid.sensor?, off?);
+    // Sensor `si`'s three components from offset `o` at epoch k, where given and finite.
+    let measured_at = |si: usize, o: usize, k: usize| -> Option<Vector3<f64>> {
         if !models.available[si][k] {
             return None;
         }
@@ -175,6 +175,7 @@ fn run<const NS: usize>(
         let v = Vector3::new(z[o], z[o + 1], z[o + 2]);
         v.iter().all(|x| x.is_finite()).then_some(v)
     };
+    let measure = |aid: &Aid, k: usize, off: Option<usize>| measured_at(aid.sensor?, off?, k);
     // A log without velocities: the alignment takes them from the positions' differences
     // (own_noise::alignment_velocities).
     let derived = match vel_aid {
@@ -274,11 +275,9 @@ fn run<const NS: usize>(
         .filter_map(|a| Some((a.sensor?, a.vel?)))
         .collect();
     let own_vel = |k: usize| {
-        vel_of.iter().find_map(|&(si, o)| {
-            let z = &src.meas.z[si][k];
-            let v = [z[o], z[o + 1]];
-            (models.available[si][k] && (o..o + 3).all(|i| z[i].is_finite())).then_some(v)
-        })
+        (vel_of.iter())
+            .find_map(|&(si, o)| measured_at(si, o, k))
+            .map(|v| [v.x, v.y])
     };
     // The INS watched per channel, from its first fix (before the alignment too).
     let mut watch: Vec<diverge::InsWatch> = aids

@@ -138,7 +138,7 @@ pub const FOLLOW_OVERSHOOT: f64 = 2.0;
 
 /// Whether the horizontal offset `d` (m) is the jump `e` (m): within [`MATCH_TOLERANCE`] or a
 /// quarter of the jump, or within [`MATCH_SIGMAS`] σ of the difference of two jumps each read
-/// with `sigma` (m per component; [`Jumps::sigma`]).
+/// with `sigma` (m per component; [`Jumps::push_with`]).
 fn same(e: [f64; 2], d: [f64; 2], sigma: f64) -> bool {
     let tolerance = MATCH_TOLERANCE
         .max(0.25 * e[0].hypot(e[1]))
@@ -232,10 +232,7 @@ pub(super) struct Jumps {
     /// two ends, up to [`STALE_SPAN`] s).
     repeats: bool,
     /// The sizes (m) of the displacements against the velocities.
-    moved: super::noise_scale::Rolling<JUMP_WINDOW>,
-    /// σ per component (m) the last jump was read with against the velocities (0 for a
-    /// second difference's: those match within [`MATCH_TOLERANCE`] or a quarter).
-    pub sigma: f64,
+    moved: Differences<0, JUMP_WINDOW>,
 }
 
 impl Jumps {
@@ -248,23 +245,28 @@ impl Jumps {
             last_v: None,
             repeats: false,
             moved: Default::default(),
-            sigma: 0.0,
         }
     }
 
     /// The fix `p` (east, north, m) at `t` (s): its jump (the second difference, m), if any
     /// (not the one right after a jump, which comes back the other way).
     pub fn push(&mut self, t: f64, p: [f64; 2]) -> Option<[f64; 2]> {
-        self.push_with(t, p, None)
+        self.push_with(t, p, None).map(|(e, _)| e)
     }
 
     /// The fix `p` (east, north, m) at `t` (s) with the receiver's horizontal velocity `v`
     /// (east, north, m/s; None: not given): its jump (m), if any — against the velocities
-    /// where this fix and the one before have them, else the second difference.
-    pub fn push_with(&mut self, t: f64, p: [f64; 2], v: Option<[f64; 2]>) -> Option<[f64; 2]> {
-        let second = self.second(t, p);
+    /// where this fix and the one before have them, else the second difference — and the σ
+    /// per component (m) it was read with against the velocities (0 for a second
+    /// difference's: those match within [`MATCH_TOLERANCE`] or a quarter).
+    pub fn push_with(
+        &mut self,
+        t: f64,
+        p: [f64; 2],
+        v: Option<[f64; 2]>,
+    ) -> Option<([f64; 2], f64)> {
+        let second = self.second(t, p).map(|e| (e, 0.0));
         let v = v.filter(|v| v.iter().all(|x| x.is_finite()));
-        self.sigma = 0.0;
         // A fix repeating the last fresh one (a stale spell): no jump, and the next fresh fix
         // is read from that one, across the spell (its catch-up is motion, not a jump).
         if let (Some(_), Some((t0, p0, _))) = (v, self.last_v) {
@@ -287,14 +289,9 @@ impl Jumps {
                     p[1] - p0[1] - 0.5 * (v[1] + v0[1]) * dt,
                 ];
                 let size = e[0].hypot(e[1]);
-                let spread = if self.moved.len() > 0 {
-                    self.moved.median() / 1.1774
-                } else {
-                    0.0
-                };
-                self.moved.push(size);
-                self.sigma = spread;
-                (size > JUMP_M.max(JUMP_SIGMAS_VELOCITY * spread)).then_some(e)
+                let spread = self.moved.sigma(1).unwrap_or(0.0);
+                self.moved.record(size);
+                (size > JUMP_M.max(JUMP_SIGMAS_VELOCITY * spread)).then_some((e, spread))
             }
             _ => second,
         }
@@ -351,7 +348,7 @@ pub struct Outlast {
     /// The fixes' jumps.
     jumps: Jumps,
     /// Jumps the filter took in and no later jump undid: time (s), size (m), the σ it was
-    /// read with (m per component; [`Jumps::sigma`]).
+    /// read with (m per component; [`Jumps::push_with`]).
     open: Vec<(f64, [f64; 2], f64)>,
     /// Since when (s) the converged filter has used every fix (none held).
     agreed: Option<f64>,
@@ -381,10 +378,9 @@ impl Outlast {
     /// forgets the one it undoes.
     fn taken(&mut self, t: f64, p: [f64; 2], v: Option<[f64; 2]>, d: Option<[f64; 2]>) {
         self.open.retain(|&(t0, _, _)| t - t0 <= JUMP_MEMORY);
-        let Some(e) = self.jumps.push_with(t, p, v) else {
+        let Some((e, sigma)) = self.jumps.push_with(t, p, v) else {
             return;
         };
-        let sigma = self.jumps.sigma;
         match self.open.last() {
             Some(&(_, e0, s0)) if same(e0, [-e[0], -e[1]], s0.max(sigma)) => {
                 self.open.pop();
@@ -426,10 +422,9 @@ impl Outlast {
             // The converged filter using the fixes for [`OUTLAST_MARGIN`] s: the jumps taken
             // in before are behind it (the INS came back onto the fixes, or is a fault's own
             // and outlasts them), and a later hold's jump is not their end.
-            let since = *self.agreed.get_or_insert(t);
             if !converged {
                 self.agreed = None;
-            } else if t - since >= OUTLAST_MARGIN {
+            } else if t - *self.agreed.get_or_insert(t) >= OUTLAST_MARGIN {
                 self.open.clear();
             }
             match p {
@@ -456,9 +451,9 @@ impl Outlast {
                 d[0] * e0[0] + d[1] * e0[1] > std::f64::consts::FRAC_1_SQRT_2 * nd * ne
                     && nd <= FOLLOW_OVERSHOOT * ne + MATCH_TOLERANCE
             };
-            let i = jump.and_then(|e| {
+            let i = jump.and_then(|(e, sigma)| {
                 self.open.iter().rposition(|&(_, e0, s0)| {
-                    same(e0, [-e[0], -e[1]], s0.max(self.jumps.sigma)) && followed(e0)
+                    same(e0, [-e[0], -e[1]], s0.max(sigma)) && followed(e0)
                 })
             });
             i.map(|i| self.open.remove(i)).is_some()

@@ -426,7 +426,8 @@ fn a_stale_spells_catch_up_is_motion_not_a_jump() {
                     0.0
                 };
                 let p = [10.0 * at as f64, burst];
-                j.push_with(k as f64, p, Some([10.0, 0.0])).map(|e| (k, e))
+                j.push_with(k as f64, p, Some([10.0, 0.0]))
+                    .map(|(e, _)| (k, e))
             })
             .collect::<Vec<_>>()
     };
