@@ -10,9 +10,10 @@
 //! steadily faster than [`DIVERGE_RATE`] over [`DIVERGE_WINDOW`] — in each third of the
 //! window, the same way, so a burst's jump, or a step's end and a burst's start, is not a
 //! rate — is the one that is wrong: it is moved back onto the fixes ([`Divergence::push`]
-//! says when and at what rate, [`reanchor`] moves it). A held step that outlasts every fix
-//! the INS agreed with before it is the INS's error too ([`Outlast`]): the alignment's fixes
-//! were in a fault.
+//! says when and at what rate, [`reanchor`] moves it). So is a ramp held on positions alone
+//! for longer than [`HOLD_LONGEST`] while the INS drifts from the fixes more slowly. A held
+//! step that outlasts every fix the INS agreed with before it is the INS's error too
+//! ([`Outlast`]): the alignment's fixes were in a fault.
 
 use super::shift;
 use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
@@ -31,10 +32,30 @@ pub const DIVERGE_WINDOW: f64 = 10.0;
 /// The fewest held fixes in the window.
 const DIVERGE_FIXES: usize = 6;
 
+/// Seconds a spell of held fixes may last, a ramp held at its end, while the INS drifts from
+/// them slower than [`DIVERGE_RATE`] ([`Divergence::push`]): the longest any evidence that a
+/// hold is the fixes' fault is kept ([`super::pull::PULL_WINDOW`], [`JUMP_MEMORY`]). Held
+/// longer on fixes without the receiver's velocity, the drift is the INS's: a ramp held
+/// relative to an offset that follows the innovation makes the INS's velocity error the ramp's
+/// rate, and nothing ends it (simulated positions-only logs: about 1 m/s for seven minutes,
+/// 485 m off at the end).
+pub const HOLD_LONGEST: f64 = 120.0;
+/// The window (s) over which a long spell's drift is read.
+pub const DRIFT_WINDOW: f64 = 60.0;
+/// The drift rate (m/s) of a long spell's offset that is the INS's: the slowest ramp the hold
+/// is built for (a held step keeps its offset).
+pub const DRIFT_RATE: f64 = 0.1;
+/// How near (σ of the spell's scatter about its line) the fix the INS is moved onto must be
+/// to the line of the spell's last [`DRIFT_WINDOW`] s.
+pub const ON_LINE_SIGMAS: f64 = 3.0;
+
 /// Held fixes of one GNSS channel: time (s) and the horizontal INS − fix (east, north; m).
 #[derive(Debug, Clone, Default)]
 pub struct Divergence {
     held: VecDeque<(f64, [f64; 2])>,
+    /// The start (s) of the spell of held fixes, and its last [`DRIFT_WINDOW`] s.
+    spell: Option<f64>,
+    recent: VecDeque<(f64, [f64; 2])>,
 }
 
 /// Least-squares slope (per s) of `y` against `t` (NaN with fewer than two distinct times).
@@ -51,22 +72,90 @@ fn slope(pts: &[(f64, [f64; 2])]) -> [f64; 2] {
     out
 }
 
+/// The most points a long spell's line is read from ([`robust_line`]): the window's fixes
+/// are thinned to these.
+const LINE_POINTS: usize = 61;
+
+/// The Theil–Sen line of `pts` (time s, east and north m) per component — the median of the
+/// pairwise slopes (per s) and the median intercept at time 0 — so that a burst of a few
+/// fixes in the window neither tilts nor moves it; None with fewer than two distinct times.
+fn robust_line(pts: &[(f64, [f64; 2])]) -> Option<([f64; 2], [f64; 2])> {
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (!v.is_empty()).then(|| v[v.len() / 2])
+    };
+    let mut rate = [0.0; 2];
+    let mut at0 = [0.0; 2];
+    for j in 0..2 {
+        let mut slopes: Vec<f64> = Vec::new();
+        for (a, pa) in pts.iter().enumerate() {
+            for pb in &pts[a + 1..] {
+                if pb.0 > pa.0 {
+                    slopes.push((pb.1[j] - pa.1[j]) / (pb.0 - pa.0));
+                }
+            }
+        }
+        rate[j] = median(&mut slopes)?;
+        let mut c: Vec<f64> = pts.iter().map(|p| p.1[j] - rate[j] * p.0).collect();
+        at0[j] = median(&mut c)?;
+    }
+    Some((rate, at0))
+}
+
+/// A long spell's drift over `pts` (its last [`DRIFT_WINDOW`] s: time s, INS − fix east and
+/// north m), where the last of them lies on the line of the others ([`robust_line`]): within
+/// [`ON_LINE_SIGMAS`] σ of it, σ from the others' median distance from it (a 2D Gaussian's:
+/// 1.1774 σ). The INS is moved onto that fix: not onto a burst's.
+fn drift_on_line(pts: &[(f64, [f64; 2])]) -> Option<[f64; 2]> {
+    let ((t, d), rest) = pts.split_last()?;
+    let stride = rest.len().div_ceil(LINE_POINTS).max(1);
+    let thin: Vec<(f64, [f64; 2])> = rest.iter().step_by(stride).copied().collect();
+    let (rate, at0) = robust_line(&thin)?;
+    let off = |ti: f64, di: &[f64; 2]| {
+        let r: [f64; 2] = std::array::from_fn(|j| di[j] - at0[j] - rate[j] * ti);
+        r[0].hypot(r[1])
+    };
+    let mut sizes: Vec<f64> = thin.iter().map(|(ti, di)| off(*ti, di)).collect();
+    sizes.sort_by(f64::total_cmp);
+    let sigma = sizes[sizes.len() / 2] / 1.1774;
+    (off(*t, d) <= ON_LINE_SIGMAS * sigma).then_some(rate)
+}
+
 impl Divergence {
     /// Record the fix at `t` (s) with horizontal innovation `d` (INS − fix, east and north,
     /// m) — `held`: the hold machine kept it out or used it relative to an offset (a fix used
     /// as measured, or none at this epoch, empties the window). Returns the rate (m/s, INS −
     /// fix, east and north) when the INS has diverged from the held fixes: over the last
     /// [`DIVERGE_WINDOW`] s the distance grew at more than [`DIVERGE_RATE`] in each third of
-    /// the window, along the whole window's rate and within 45° of it; the window then
-    /// empties.
-    pub fn push(&mut self, t: f64, d: [f64; 2], held: bool) -> Option<[f64; 2]> {
+    /// the window, along the whole window's rate and within 45° of it; or, a ramp held at this
+    /// fix (`ramp`), the spell of held fixes has lasted [`HOLD_LONGEST`] s and over its last
+    /// [`DRIFT_WINDOW`] s the distance drifted at more than [`DRIFT_RATE`], the fix on the
+    /// drift's line ([`drift_on_line`]; that rate returned). The windows then empty.
+    pub fn push(&mut self, t: f64, d: [f64; 2], held: bool, ramp: bool) -> Option<[f64; 2]> {
         if !held || !d.iter().all(|x| x.is_finite()) {
             self.held.clear();
+            self.recent.clear();
+            self.spell = None;
             return None;
         }
         self.held.push_back((t, d));
         while self.held.front().is_some_and(|p| p.0 < t - DIVERGE_WINDOW) {
             self.held.pop_front();
+        }
+        let since = *self.spell.get_or_insert(t);
+        self.recent.push_back((t, d));
+        while self.recent.front().is_some_and(|p| p.0 < t - DRIFT_WINDOW) {
+            self.recent.pop_front();
+        }
+        if ramp && t - since >= HOLD_LONGEST && self.recent.len() >= DIVERGE_FIXES {
+            let pts: Vec<(f64, [f64; 2])> = self.recent.iter().copied().collect();
+            let drift = drift_on_line(&pts).filter(|r| r[0].hypot(r[1]) > DRIFT_RATE);
+            if let Some(rate) = drift {
+                self.held.clear();
+                self.recent.clear();
+                self.spell = None;
+                return Some(rate);
+            }
         }
         let t0 = self.held.front()?.0;
         if self.held.len() < DIVERGE_FIXES || t - t0 < 0.8 * DIVERGE_WINDOW {
@@ -90,6 +179,8 @@ impl Divergence {
             })
         {
             self.held.clear();
+            self.recent.clear();
+            self.spell = None;
             Some(whole)
         } else {
             None
@@ -557,7 +648,9 @@ impl InsWatch {
             .outlast
             .as_mut()
             .is_some_and(|o| o.push(t, p, v, d, held, step, state.0, state.1));
-        let rate = self.runaway.push(t, d, held);
+        // A long-held ramp is the INS's drift only where nothing else measures its velocity:
+        // with the receiver's, the INS's velocity follows it, and what drifts is the fix.
+        let rate = self.runaway.push(t, d, held, held && !step && v.is_none());
         let rate = rate.or(outlasted.then_some([0.0; 2]));
         if rate.is_some() {
             self.runaway = Divergence::default();

@@ -9,7 +9,7 @@ use super::*;
 fn a_runaway_is_a_rate_a_step_ramp_or_burst_is_not() {
     let mut m = Divergence::default();
     let hit = (0..20).find_map(|k| {
-        m.push(k as f64, [5.0 * k as f64, 1.0], true)
+        m.push(k as f64, [5.0 * k as f64, 1.0], true, false)
             .map(|r| (k, r))
     });
     let (k, r) = hit.expect("caught");
@@ -27,15 +27,49 @@ fn a_runaway_is_a_rate_a_step_ramp_or_burst_is_not() {
         },
     ] {
         let mut m = Divergence::default();
-        assert!((0..40).all(|k| m.push(k as f64, d(k as f64), true).is_none()));
+        assert!((0..40).all(|k| m.push(k as f64, d(k as f64), true, true).is_none()));
     }
     // A fix used as measured starts the window again.
     let mut m = Divergence::default();
     let caught = (0..20).any(|k| {
-        m.push(k as f64, [5.0 * k as f64, 0.0], k % 7 != 6)
+        m.push(k as f64, [5.0 * k as f64, 0.0], k % 7 != 6, false)
             .is_some()
     });
     assert!(!caught);
+}
+
+/// A ramp held for more than [`HOLD_LONGEST`] s while the INS drifts from the fixes at 0.8 m/s
+/// (below the runaway rate) is the INS's drift: caught once the spell is that long, at the
+/// drift's rate, and not onto a burst's fix (a 30 m burst at 118–127 s delays it until the
+/// fixes are back on the line). Not a held step (its offset is constant, or it is the
+/// outlasting rule's), nor a drift slower than [`DRIFT_RATE`], nor a spell a fix used as
+/// measured broke.
+#[test]
+fn a_ramp_held_longer_than_any_evidence_while_the_ins_drifts_is_the_ins() {
+    let noise = |k: usize| 0.7 * ((k as f64) * 2.3).sin();
+    let burst = |t: f64| {
+        if (118.0..128.0).contains(&t) {
+            30.0
+        } else {
+            0.0
+        }
+    };
+    let run = |rate: f64, ramp: bool, used_at: Option<usize>| {
+        let mut m = Divergence::default();
+        (0..300).find_map(|k| {
+            let t = k as f64;
+            let d = [rate * t + noise(k) + burst(t), 2.0 + noise(k + 7)];
+            m.push(t, d, used_at != Some(k), ramp).map(|r| (t, r))
+        })
+    };
+    let (t, r) = run(0.8, true, None).expect("caught");
+    assert!((128.0..=130.0).contains(&t), "{t}");
+    assert!((r[0] - 0.8).abs() < 0.05 && r[1].abs() < 0.05, "{r:?}");
+    assert!(run(0.8, false, None).is_none());
+    assert!(run(0.05, true, None).is_none());
+    // A fix used as measured at 100 s: the spell starts again, and is long enough at 221 s.
+    let (t, _) = run(0.8, true, Some(100)).expect("caught later");
+    assert!((221.0..=222.0).contains(&t), "{t}");
 }
 
 #[test]
