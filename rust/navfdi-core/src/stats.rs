@@ -27,6 +27,10 @@ fn check_dof(dof: usize) -> Result<()> {
     Ok(())
 }
 
+/// The median size of a two-dimensional standard Gaussian (√(2 ln 2), to four decimals): a
+/// per-component σ is the median size of 2D errors over it.
+pub const RAYLEIGH_MEDIAN: f64 = 1.1774;
+
 /// The median of `v` (reordered; the upper one of an even count); NaN when empty.
 pub fn median_of(v: &mut [f64]) -> f64 {
     if v.is_empty() {

@@ -18,6 +18,7 @@
 use super::shift;
 use crate::ins::error_filter::{ErrorFilter, PHI, R, V};
 use crate::ins::strapdown::NavState;
+use crate::stats::{median_of, RAYLEIGH_MEDIAN};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::VecDeque;
 
@@ -80,10 +81,7 @@ const LINE_POINTS: usize = 61;
 /// pairwise slopes (per s) and the median intercept at time 0 — so that a burst of a few
 /// fixes in the window neither tilts nor moves it; None with fewer than two distinct times.
 fn robust_line(pts: &[(f64, [f64; 2])]) -> Option<([f64; 2], [f64; 2])> {
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        (!v.is_empty()).then(|| v[v.len() / 2])
-    };
+    let median = |v: &mut Vec<f64>| (!v.is_empty()).then(|| median_of(v));
     let mut rate = [0.0; 2];
     let mut at0 = [0.0; 2];
     for j in 0..2 {
@@ -116,8 +114,7 @@ fn drift_on_line(pts: &[(f64, [f64; 2])]) -> Option<[f64; 2]> {
         r[0].hypot(r[1])
     };
     let mut sizes: Vec<f64> = thin.iter().map(|(ti, di)| off(*ti, di)).collect();
-    sizes.sort_by(f64::total_cmp);
-    let sigma = sizes[sizes.len() / 2] / 1.1774;
+    let sigma = median_of(&mut sizes) / RAYLEIGH_MEDIAN;
     (off(*t, d) <= ON_LINE_SIGMAS * sigma).then_some(rate)
 }
 
@@ -295,7 +292,7 @@ impl<const ORDER: usize, const CAP: usize> Differences<ORDER, CAP> {
     /// σ per component (m) of the recorded differences, from their median size (a 2D
     /// Gaussian's: 1.1774 σ); None with fewer than `min` recorded.
     pub fn sigma(&self, min: usize) -> Option<f64> {
-        (self.sizes.len() >= min.max(1)).then(|| self.sizes.median() / 1.1774)
+        (self.sizes.len() >= min.max(1)).then(|| self.sizes.median() / RAYLEIGH_MEDIAN)
     }
 }
 

@@ -105,7 +105,8 @@ pub fn log_sigma(fixes: impl IntoIterator<Item = (f64, [f64; 2])>, interval: f64
         .map(|d| d[0].hypot(d[1]))
         .filter(|s| s.is_finite())
         .collect();
-    (sizes.len() >= OWN_MIN).then(|| crate::stats::median_of(&mut sizes) / 1.1774 / 20f64.sqrt())
+    (sizes.len() >= OWN_MIN)
+        .then(|| crate::stats::median_of(&mut sizes) / crate::stats::RAYLEIGH_MEDIAN / 20f64.sqrt())
 }
 
 /// The alignment's velocities on a log of positions only: the fixes `pos` (east, north, up,
