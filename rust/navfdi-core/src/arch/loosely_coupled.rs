@@ -555,23 +555,24 @@ fn run<const NS: usize>(
                 for j in (0..3).filter(|&j| holds[a].step_ended_at(j, tk)) {
                     receivers[a].forget(j);
                 }
-                // Held fixes the INS runs away from, held out longer than the fixes before agreed
-                // (not a held ramp: it ends by its own rules) or a return from float fixes
-                // (NoiseScale::resolved): the INS is moved onto them.
+                // The INS is moved onto held fixes it runs from (or drifts from for minutes, the
+                // copies siding with them), a step held past the fixes before, or a float's end.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
                 let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
                 let state = (converged, scales[a].resolved(tk, d.norm()));
-                let moved = watch[a].push(tk, p, own_vel(k), [d[0], d[1]], held, step, state);
-                // A hold a copy of the filter carried without GNSS since before its onset calls
-                // the INS's error (`shadow`): the end of a fault it followed, or its runaway.
-                // The copy replaces the INS.
+                let ins = (&s, shadow::horizontal(&kf));
                 let ant = |st: &NavState| antenna_enu(st).xy();
                 let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
+                let on_fix =
+                    held && use_shadows && shadows.nearer_fix(watch[a].onset(), ant, fix_h, ins);
+                let moved =
+                    watch[a].push(tk, p, own_vel(k), [d[0], d[1]], held, (step, on_fix), state);
+                // A hold a copy of the filter carried without GNSS since before its onset calls
+                // the INS's error: the end of a fault it followed, or its runaway; it replaces the INS.
                 let mut witness = None;
                 let moved = moved.or_else(|| {
                     let onset = watch[a].onset().filter(|_| held && use_shadows)?;
-                    let ins = (&s, shadow::horizontal(&kf));
                     witness = shadows.returned((tk, onset, step), ant, fix_h?, ins);
                     witness.as_ref().map(|_| [0.0; 2])
                 });

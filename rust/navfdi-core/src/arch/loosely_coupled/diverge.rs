@@ -11,7 +11,8 @@
 //! window, the same way, so a burst's jump, or a step's end and a burst's start, is not a
 //! rate — is the one that is wrong: it is moved back onto the fixes ([`Divergence::push`]
 //! says when and at what rate, [`reanchor`] moves it). So is a ramp held on positions alone
-//! for longer than [`HOLD_LONGEST`] while the INS drifts from the fixes more slowly. A held
+//! for longer than [`HOLD_LONGEST`] while the INS drifts from the fixes more slowly, the
+//! copies of the filter carried without GNSS siding with the fixes. A held
 //! step that outlasts every fix the INS agreed with before it is the INS's error too
 //! ([`Outlast`]): the alignment's fixes were in a fault.
 
@@ -36,10 +37,11 @@ const DIVERGE_FIXES: usize = 6;
 /// Seconds a spell of held fixes may last, a ramp held at its end, while the INS drifts from
 /// them slower than [`DIVERGE_RATE`] ([`Divergence::push`]): the longest any evidence that a
 /// hold is the fixes' fault is kept ([`super::pull::PULL_WINDOW`], [`JUMP_MEMORY`]). Held
-/// longer on fixes without the receiver's velocity, the drift is the INS's: a ramp held
-/// relative to an offset that follows the innovation makes the INS's velocity error the ramp's
-/// rate, and nothing ends it (simulated positions-only logs: about 1 m/s for seven minutes,
-/// 485 m off at the end).
+/// longer on positions alone, with the copies of the filter carried without GNSS nearer the
+/// fix than the INS ([`super::shadow::Shadows::nearer_fix`]), the drift is the INS's: a ramp
+/// held relative to an offset that follows the innovation makes the INS's velocity error the
+/// ramp's rate, and nothing ends it (simulated positions-only logs: about 1 m/s for seven
+/// minutes, 485 m off at the end).
 pub const HOLD_LONGEST: f64 = 120.0;
 /// The window (s) over which a long spell's drift is read.
 pub const DRIFT_WINDOW: f64 = 60.0;
@@ -626,8 +628,10 @@ impl InsWatch {
     /// The fix at `t` (s), `p` (east, north, m), `v` the receiver's velocity there (east,
     /// north, m/s; None: not given), with horizontal innovation `d` (INS − fix, east and
     /// north, m): `held` a horizontal component held out or used relative to an
-    /// offset, `step` none of them a held ramp, `state` (the filter converged, the fix a
-    /// return from float: [`Outlast::push`]). The rate
+    /// offset, `step` none of them a held ramp, `on_fix` the copies of the filter carried
+    /// without GNSS nearer the fix than the INS ([`super::shadow::Shadows::nearer_fix`]; a
+    /// held ramp is then the INS's drift once it outlasts [`HOLD_LONGEST`]), `state` (the
+    /// filter converged, the fix a return from float: [`Outlast::push`]). The rate
     /// (m/s, INS − fix, east and north; zero for an outlasting step or a followed fault's
     /// end) to move the INS onto the fix with, when it is to be moved.
     #[allow(clippy::too_many_arguments)]
@@ -638,16 +642,14 @@ impl InsWatch {
         v: Option<[f64; 2]>,
         d: [f64; 2],
         held: bool,
-        step: bool,
+        (step, on_fix): (bool, bool),
         state: (bool, bool),
     ) -> Option<[f64; 2]> {
         let outlasted = self
             .outlast
             .as_mut()
             .is_some_and(|o| o.push(t, p, v, d, held, step, state.0, state.1));
-        // A long-held ramp is the INS's drift only where nothing else measures its velocity:
-        // with the receiver's, the INS's velocity follows it, and what drifts is the fix.
-        let rate = self.runaway.push(t, d, held, held && !step && v.is_none());
+        let rate = self.runaway.push(t, d, held, held && !step && on_fix);
         let rate = rate.or(outlasted.then_some([0.0; 2]));
         if rate.is_some() {
             self.runaway = Divergence::default();
