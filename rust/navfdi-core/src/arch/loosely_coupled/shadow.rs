@@ -191,11 +191,11 @@ impl<const NS: usize> Shadows<NS> {
 
     /// Whether the copies side with the fix against the INS on a hold that began at `onset`
     /// (s; None: no hold, and false): every copy started [`SHADOW_LEAD`] s or more before it,
-    /// [`WITNESSES`] at least, is
-    /// nearer the fix than the INS (χ² with its covariance and the fix's, or the INS's; the
-    /// age bin's inflation scales both alike). What a ramp held for minutes needs to be the
-    /// INS's drift ([`super::diverge::HOLD_LONGEST`]): on a real ramp the INS, aided by the
-    /// held offset, stays with the copies. Arguments as for [`Shadows::returned`].
+    /// [`WITNESSES`] at least, is nearer the fix than the INS (χ² with its covariance and the
+    /// fix's, or the INS's; the age bin's inflation scales both alike). What a ramp held for
+    /// minutes needs to be the INS's drift ([`super::diverge::HOLD_LONGEST`]): on a real ramp
+    /// the INS, aided by the held offset, stays with the copies. Arguments as for
+    /// [`Shadows::returned`] (`fix` None: no fix, and false).
     pub fn nearer_fix(
         &self,
         onset: Option<f64>,
@@ -207,13 +207,9 @@ impl<const NS: usize> Shadows<NS> {
             return false;
         };
         let at_ins = antenna(ins);
-        let before: Vec<&Shadow<NS>> = self
-            .list
-            .iter()
-            .filter(|c| c.start <= onset - SHADOW_LEAD)
-            .collect();
-        before.len() >= WITNESSES
-            && before.iter().all(|c| {
+        let before = || self.list.iter().filter(|c| c.start <= onset - SHADOW_LEAD);
+        before().count() >= WITNESSES
+            && before().all(|c| {
                 let (p, a) = (horizontal(&c.kf), antenna(&c.s));
                 chi2(a - fix, p + fix_var) < chi2(a - at_ins, p + ins_var)
             })
