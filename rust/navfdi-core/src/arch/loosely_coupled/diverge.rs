@@ -55,10 +55,10 @@ pub const ON_LINE_SIGMAS: f64 = 3.0;
 /// Held fixes of one GNSS channel: time (s) and the horizontal INS − fix (east, north; m).
 #[derive(Debug, Clone, Default)]
 pub struct Divergence {
+    /// The spell's last [`DRIFT_WINDOW`] s (the runaway reads the last [`DIVERGE_WINDOW`]).
     held: VecDeque<(f64, [f64; 2])>,
-    /// The start (s) of the spell of held fixes, and its last [`DRIFT_WINDOW`] s.
+    /// The start (s) of the spell of held fixes.
     spell: Option<f64>,
-    recent: VecDeque<(f64, [f64; 2])>,
 }
 
 /// Least-squares slope (per s) of `y` against `t` (NaN with fewer than two distinct times).
@@ -132,35 +132,28 @@ impl Divergence {
     /// drift's line ([`drift_on_line`]; that rate returned). The windows then empty.
     pub fn push(&mut self, t: f64, d: [f64; 2], held: bool, ramp: bool) -> Option<[f64; 2]> {
         if !held || !d.iter().all(|x| x.is_finite()) {
-            self.held.clear();
-            self.recent.clear();
-            self.spell = None;
+            *self = Self::default();
             return None;
         }
+        let since = *self.spell.get_or_insert(t);
         self.held.push_back((t, d));
-        while self.held.front().is_some_and(|p| p.0 < t - DIVERGE_WINDOW) {
+        while self.held.front().is_some_and(|p| p.0 < t - DRIFT_WINDOW) {
             self.held.pop_front();
         }
-        let since = *self.spell.get_or_insert(t);
-        self.recent.push_back((t, d));
-        while self.recent.front().is_some_and(|p| p.0 < t - DRIFT_WINDOW) {
-            self.recent.pop_front();
-        }
-        if ramp && t - since >= HOLD_LONGEST && self.recent.len() >= DIVERGE_FIXES {
-            let pts: Vec<(f64, [f64; 2])> = self.recent.iter().copied().collect();
+        if ramp && t - since >= HOLD_LONGEST && self.held.len() >= DIVERGE_FIXES {
+            let pts: Vec<(f64, [f64; 2])> = self.held.iter().copied().collect();
             let drift = drift_on_line(&pts).filter(|r| r[0].hypot(r[1]) > DRIFT_RATE);
             if let Some(rate) = drift {
-                self.held.clear();
-                self.recent.clear();
-                self.spell = None;
+                *self = Self::default();
                 return Some(rate);
             }
         }
-        let t0 = self.held.front()?.0;
-        if self.held.len() < DIVERGE_FIXES || t - t0 < 0.8 * DIVERGE_WINDOW {
+        let from = self.held.partition_point(|p| p.0 < t - DIVERGE_WINDOW);
+        let pts: Vec<(f64, [f64; 2])> = self.held.range(from..).copied().collect();
+        let t0 = pts.first()?.0;
+        if pts.len() < DIVERGE_FIXES || t - t0 < 0.8 * DIVERGE_WINDOW {
             return None;
         }
-        let pts: Vec<(f64, [f64; 2])> = self.held.iter().copied().collect();
         // Thirds of the window, each with its own rate: two jumps of one sign (a step's end
         // and a burst's start) fill two thirds at most, a runaway all three.
         let cut = |f: f64| pts.partition_point(|p| p.0 < t0 + f * (t - t0));
@@ -177,9 +170,7 @@ impl Divergence {
                 along(v) > DIVERGE_RATE && along(v) > std::f64::consts::FRAC_1_SQRT_2 * norm(v)
             })
         {
-            self.held.clear();
-            self.recent.clear();
-            self.spell = None;
+            *self = Self::default();
             Some(whole)
         } else {
             None
