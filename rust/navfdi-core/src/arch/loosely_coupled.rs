@@ -291,9 +291,8 @@ fn run<const NS: usize>(
         })
         .collect();
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
-    // Time-correlated position errors: in the update each fix's position variance is
-    // multiplied by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent
-    // one (1 for white errors).
+    // Time-correlated position errors: in the update each fix's position variance is multiplied
+    // by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent one (1: white).
     let weight: Vec<f64> = fix_interval
         .iter()
         .map(|&dt| correlation_weight(dt, l.position_correlation))
@@ -537,6 +536,12 @@ fn run<const NS: usize>(
                 if scales[a].float_ended(tk, d.norm()) {
                     (0..3).for_each(|j| holds[a].release_drift(j));
                 }
+                let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
+                let ins = (&s, shadow::horizontal(&kf));
+                let ant = |st: &NavState| antenna_enu(st).xy();
+                let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
+                let side = use_shadows.then(|| shadows.side(watch[a].onset(), ant, fix_h, ins));
+                holds[a].copies_with_ins = side == Some(Some(false));
                 let uses = holds[a].decide(
                     tk,
                     &d,
@@ -559,13 +564,8 @@ fn run<const NS: usize>(
                 // copies siding with them), a step held past the fixes before, or a float's end.
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
-                let p = measure(&aids[a], k, aids[a].pos).map(|p| [p.x, p.y]);
                 let state = (converged, scales[a].resolved(tk, d.norm()));
-                let ins = (&s, shadow::horizontal(&kf));
-                let ant = |st: &NavState| antenna_enu(st).xy();
-                let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
-                let on_fix =
-                    held && use_shadows && shadows.nearer_fix(watch[a].onset(), ant, fix_h, ins);
+                let on_fix = held && side == Some(Some(true));
                 let moved =
                     watch[a].push(tk, p, own_vel(k), [d[0], d[1]], held, (step, on_fix), state);
                 // A hold a copy of the filter carried without GNSS since before its onset calls

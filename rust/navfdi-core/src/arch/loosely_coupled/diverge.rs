@@ -38,7 +38,7 @@ const DIVERGE_FIXES: usize = 6;
 /// them slower than [`DIVERGE_RATE`] ([`Divergence::push`]): the longest any evidence that a
 /// hold is the fixes' fault is kept ([`super::pull::PULL_WINDOW`], [`JUMP_MEMORY`]). Held
 /// longer on positions alone, with the copies of the filter carried without GNSS nearer the
-/// fix than the INS ([`super::shadow::Shadows::nearer_fix`]), the drift is the INS's: a ramp
+/// fix than the INS ([`super::shadow::Shadows::side`]), the drift is the INS's: a ramp
 /// held relative to an offset that follows the innovation makes the INS's velocity error the
 /// ramp's rate, and nothing ends it (simulated positions-only logs: about 1 m/s for seven
 /// minutes, 485 m off at the end).
@@ -620,7 +620,7 @@ impl InsWatch {
     /// north, m/s; None: not given), with horizontal innovation `d` (INS − fix, east and
     /// north, m): `held` a horizontal component held out or used relative to an
     /// offset, `step` none of them a held ramp, `on_fix` the copies of the filter carried
-    /// without GNSS nearer the fix than the INS ([`super::shadow::Shadows::nearer_fix`]; a
+    /// without GNSS nearer the fix than the INS ([`super::shadow::Shadows::side`]; a
     /// held ramp is then the INS's drift once it outlasts [`HOLD_LONGEST`]), `state` (the
     /// filter converged, the fix a return from float: [`Outlast::push`]). The rate
     /// (m/s, INS − fix, east and north; zero for an outlasting step or a followed fault's

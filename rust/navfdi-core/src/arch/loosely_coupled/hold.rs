@@ -155,6 +155,10 @@ pub struct PositionHold {
     /// carried on beyond |w| 1) while nothing was held, up to the previous fix; None
     /// otherwise.
     lag: [Option<(f64, f64, u32)>; 3],
+    /// Set by the caller before each fix on positions alone: the copies of the filter carried
+    /// without GNSS since before the hold's onset are all nearer the INS than the fix
+    /// ([`super::shadow::Shadows::side`]) — the INS followed none of the held fault.
+    pub copies_with_ins: bool,
 }
 
 /// Seconds of fixes off the INS prediction (|w| > 2, then > 1) on one side that make a jump back
@@ -180,6 +184,7 @@ impl Default for PositionHold {
             prev: None,
             last_fix: None,
             ended: [None; 3],
+            copies_with_ins: false,
             lag: [None; 3],
         }
     }
@@ -420,13 +425,21 @@ impl PositionHold {
                     // Nor one that lands across the INS, beyond the deciding test, further
                     // than the held offset (3σ of the innovation on top): what the INS
                     // followed of a fault is at most the fault, so the fix jumped past the
-                    // end to a new fault the other way (a burst giving way to a step). Only
-                    // where the offset is the fault: with the receiver's velocities, an offset
-                    // that has not followed the receiver's inconsistency and that the fix
-                    // before the jump still fitted (a ramp taken for a step grows past its
-                    // offset, and the INS follows it past); against the INS's displacement
-                    // the offset follows nothing.
-                    let overshoots = recv.is_some_and(|c| !c.ins_referenced)
+                    // end to a new fault the other way (a burst giving way to a step, or a
+                    // step starting inside a burst). Only where the offset is the fault: one
+                    // that has not followed the receiver's inconsistency (with its velocities)
+                    // and that the fix before the jump still fitted (a ramp taken for a step
+                    // grows past its offset, and the INS follows it past). Without the
+                    // receiver's velocities the offset follows nothing, and the relative fixes,
+                    // a return or a move onto the fixes can take the INS along a ramp taken for
+                    // a step: there the copies of the filter carried without GNSS must side
+                    // with the INS (it followed none of the fault; without them RTK ramps' ends
+                    // were held as steps, 0.04 -> 76 m after them). A 40 m step starting inside
+                    // a 30 m burst, across the INS from it, was read as the burst's end and used
+                    // as measured (42 m of error through the step, simulated at 1 Hz on a
+                    // tactical-grade IMU).
+                    let overshoots = (recv.is_some_and(|c| !c.ins_referenced)
+                        || self.copies_with_ins)
                         && !moved
                         && self
                             .prev

@@ -189,30 +189,40 @@ impl<const NS: usize> Shadows<NS> {
         (f.len() >= MIN_FIT).then(|| (f.median() / CHI2_2_MEDIAN).max(1.0))
     }
 
-    /// Whether the copies side with the fix against the INS on a hold that began at `onset`
-    /// (s; None: no hold, and false): every copy started [`SHADOW_LEAD`] s or more before it,
+    /// Which side the copies take between the fix and the INS on a hold that began at `onset`
+    /// (s): `Some(true)` where every copy started [`SHADOW_LEAD`] s or more before it,
     /// [`WITNESSES`] at least, is nearer the fix than the INS (χ² with its covariance and the
-    /// fix's, or the INS's; the age bin's inflation scales both alike). What a ramp held for
-    /// minutes needs to be the INS's drift ([`super::diverge::HOLD_LONGEST`]): on a real ramp
-    /// the INS, aided by the held offset, stays with the copies. Arguments as for
-    /// [`Shadows::returned`] (`fix` None: no fix, and false).
-    pub fn nearer_fix(
+    /// fix's, or the INS's; the age bin's inflation scales both alike), `Some(false)` where
+    /// every one is nearer the INS, None otherwise (no hold, no fix, too few copies, or copies
+    /// on both sides). With the fix: what a ramp held for minutes needs to be the INS's drift
+    /// ([`super::diverge::HOLD_LONGEST`]; on a real ramp the INS, aided by the held offset,
+    /// stays with the copies). With the INS: the INS followed none of the held fault, so a
+    /// jump of the fix past the held offset is a new fault
+    /// ([`super::hold::PositionHold::copies_with_ins`]). Arguments as for
+    /// [`Shadows::returned`] (`fix` None: no fix).
+    pub fn side(
         &self,
         onset: Option<f64>,
         antenna: impl Fn(&NavState) -> Vector2<f64>,
         fix: Option<(Vector2<f64>, Matrix2<f64>)>,
         (ins, ins_var): (&NavState, Matrix2<f64>),
-    ) -> bool {
-        let (Some(onset), Some((fix, fix_var))) = (onset, fix) else {
-            return false;
-        };
+    ) -> Option<bool> {
+        let (onset, (fix, fix_var)) = (onset?, fix?);
         let at_ins = antenna(ins);
         let before = || self.list.iter().filter(|c| c.start <= onset - SHADOW_LEAD);
-        before().count() >= WITNESSES
-            && before().all(|c| {
-                let (p, a) = (horizontal(&c.kf), antenna(&c.s));
-                chi2(a - fix, p + fix_var) < chi2(a - at_ins, p + ins_var)
-            })
+        let nearer_fix = |c: &Shadow<NS>| {
+            let (p, a) = (horizontal(&c.kf), antenna(&c.s));
+            chi2(a - fix, p + fix_var) < chi2(a - at_ins, p + ins_var)
+        };
+        if before().count() < WITNESSES {
+            None
+        } else if before().all(nearer_fix) {
+            Some(true)
+        } else if before().all(|c| !nearer_fix(c)) {
+            Some(false)
+        } else {
+            None
+        }
     }
 
     /// Whether, at `t` (s), a hold that began at `onset` (s) is the INS's error (a held step
@@ -351,20 +361,23 @@ mod tests {
 
     /// A ramp held for minutes is the INS's drift only where every copy started before the
     /// hold is nearer the fix than the INS: not where the INS stays with them (a real ramp,
-    /// held), nor with one copy only, nor without a hold or a fix.
+    /// held; they side with the INS), nor with one copy only, nor without a hold or a fix.
     #[test]
     fn the_copies_side_with_the_fix_or_the_ins() {
         let (sh, s0, en) = witnesses();
         let m = Matrix2::identity();
         // The fix 30 m north of the copies, the INS 150 m south: the copies side with the fix.
         let (fix, ins) = (Some((Vector2::new(0.0, 30.0), m)), north_of(s0, -150.0));
-        assert!(sh.nearer_fix(Some(62.0), en, fix, (&ins, m)));
+        assert_eq!(sh.side(Some(62.0), en, fix, (&ins, m)), Some(true));
         // The INS 5 m from the copies, the fix 30 m off them: a real ramp.
-        assert!(!sh.nearer_fix(Some(62.0), en, fix, (&north_of(s0, -5.0), m)));
+        assert_eq!(
+            sh.side(Some(62.0), en, fix, (&north_of(s0, -5.0), m)),
+            Some(false)
+        );
         // One copy started before the hold (at 0 s; the other at 20 s): not enough.
-        assert!(!sh.nearer_fix(Some(24.0), en, fix, (&ins, m)));
-        assert!(!sh.nearer_fix(None, en, fix, (&ins, m)));
-        assert!(!sh.nearer_fix(Some(62.0), en, None, (&ins, m)));
+        assert_eq!(sh.side(Some(24.0), en, fix, (&ins, m)), None);
+        assert_eq!(sh.side(None, en, fix, (&ins, m)), None);
+        assert_eq!(sh.side(Some(62.0), en, None, (&ins, m)), None);
     }
 
     #[test]
