@@ -135,27 +135,38 @@ def test_the_campaigns_second_route(tmp_path: Path, docs_script: Callable[[str],
         mc._base("urban_pos@moon", str(tmp_path))
 
 
-@pytest.mark.parametrize(("name", "kw", "fault", "before"), [
+@pytest.mark.parametrize(("name", "kw", "fault", "before", "bound"), [
     # A 15 m burst held as a step gave way, at one fix, to a 40 m step the other way: the jump
     # "back" was read as the burst's end and the step used as measured for ten fixes.
     ("a burst giving way to a step", {"seed": 669, "gnss_rate": 1.0, "gnss_white": 0.7297, "burst_rate": 0.009035,
                                       "burst_size": 15.0, "burst_duration": 8.285, "gyro_bias": 1.0, "accel_bias": 0.3},
-     _fault("pos_n", "step", "40 m", 342.62, 30.0), 20.6),
+     _fault("pos_n", "step", "40 m", 342.62, 30.0), 20.6, 2.0),
     # On positions alone (a tactical-grade IMU, fixes of σ 0.31 m at 1 Hz): a 40 m step east
     # starting inside a 30 m burst held as a step, across the INS from it, was read as the
     # burst's end and used as measured (42.2 m through the step; 39.0 m without FDE).
     ("a step starting inside a burst, positions alone", {"seed": 353, "gnss_rate": 1.0, "gnss_velocity": False,
                                                          "gnss_white": 0.31164, "burst_rate": 0.015113, "burst_size": 30.0,
                                                          "burst_duration": 13.9988, "gyro_bias": 1.0, "accel_bias": 0.3},
-     _fault("pos_e", "step", "40 m", 154.1757, 30.0), 42.2),
+     _fault("pos_e", "step", "40 m", 154.1757, 30.0), 42.2, 2.0),
+    # On positions alone (white σ 0.74 m at 1 Hz, a 5 mg accelerometer): a 30 m burst on a held
+    # 20 m step, held as a new fault; its end jumped back to the step's offset, 20 m across the
+    # INS but inside the burst's offset, and was read as the end (29.6 m through the step;
+    # 5.9 m while the landing was bounded by the held offset; no FDE 18.4 m). The copies
+    # carried without GNSS sided with the INS: it followed none of the fault, so an end lands
+    # on it.
+    ("a burst on a held step, positions alone", {"seed": 161, "gnss_rate": 1.0, "gnss_velocity": False,
+                                                "gnss_white": 0.744889, "burst_rate": 0.0164872, "burst_size": 30.0,
+                                                "burst_duration": 10.43844, "gyro_bias": 10.0, "accel_bias": 5.0},
+     _fault("pos_e", "step", "20 m", 406.7023, 30.0), 29.6, 3.0),
 ])
 def test_a_jump_landing_past_what_the_ins_followed_is_a_new_fault(tmp_path: Path, name: str, kw: dict[str, Any],
-                                                                  fault: dict[str, Any], before: float) -> None:
+                                                                  fault: dict[str, Any], before: float, bound: float) -> None:
     """Random urban set-ups (white fixes with the receiver's velocities or without, multipath
-    bursts and stale spells): the end of a held step lands the fix on the INS, or across it by what the INS
-    followed of the fault — never further across than the held offset. The step was followed
-    before (``before``: RMS error through the step, m; about as without FDE); now it is held
-    (1.3 m)."""
+    bursts and stale spells): the end of a held step lands the fix on the INS, or across it by
+    what the INS followed of the fault — never further across than the held offset, and on
+    positions alone, where the copies carried without GNSS side with the INS, not across it at
+    all. The step was followed before (``before``: RMS error through the step, m; about as
+    without FDE); now it is held (1.3, 0.76 and 2.25 m; ``bound``)."""
     log = simulate_log(tmp_path / "s", duration=600, gnss_sigma=0.0, gnss_tau=0.0, stale_rate=1 / 120, stale_duration=4.0,
                        **{"gnss_velocity": True, **kw})
     raw = dict(navfdi.load_scenario(str(log.scenario)).raw)
@@ -169,4 +180,4 @@ def test_a_jump_landing_past_what_the_ins_followed_is_a_new_fault(tmp_path: Path
     for v, run in runs.items():
         inside = (run.t >= start) & (run.t < start + 30.0)
         rms[v] = float(np.sqrt(np.nanmean(np.sum(run.record["error"][inside, 6:8] ** 2, axis=1))))
-    assert rms["fde"] < 2.0 and rms["fde"] < 0.2 * rms["no_fde"], (name, rms, before)
+    assert rms["fde"] < bound and rms["fde"] < 0.2 * rms["no_fde"], (name, rms, before)

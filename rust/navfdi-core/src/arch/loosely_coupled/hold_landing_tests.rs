@@ -63,16 +63,26 @@ fn a_jump_back_past_the_held_offset_is_a_new_fault() {
         step_with(&mut h, 8.0, 0.2, false, Some((40.0, 0.0)), true),
         Use::Raw
     );
-    // A jump back that lands across the INS by less than the held offset is the end, as
-    // with the receiver's velocities.
-    let mut h = settled();
-    h.copies_with_ins = true;
-    step_with(&mut h, 5.0, -20.0, true, Some((20.0, 0.0)), true);
-    step_with(&mut h, 6.0, -20.0, true, Some((0.1, 0.0)), true);
-    assert_eq!(
-        step_with(&mut h, 7.0, 15.0, true, Some((-35.0, 0.0)), true),
-        Use::Raw
-    );
+    // A jump back that lands across the INS by less than the held offset: with the copies on
+    // the INS (it followed none of the fault, so an end lands on it) a new fault too; without
+    // them the end, as with the receiver's velocities.
+    for with_ins in [true, false] {
+        let mut h = settled();
+        h.copies_with_ins = with_ins;
+        step_with(&mut h, 5.0, -20.0, true, Some((20.0, 0.0)), true);
+        step_with(&mut h, 6.0, -20.0, true, Some((0.1, 0.0)), true);
+        let u = step_with(&mut h, 7.0, 15.0, true, Some((-35.0, 0.0)), true);
+        assert_eq!(
+            u == Use::Raw,
+            !with_ins,
+            "{with_ins}: {u:?} {:?}",
+            h.comps[1]
+        );
+        assert_eq!(
+            matches!(h.comps[1], Comp::Step { b, .. } if (b - 15.0).abs() < 1e-9),
+            with_ins
+        );
+    }
 }
 
 /// Positions alone: the relative fixes of a held step (or a return, or a move onto the fixes)
