@@ -432,16 +432,14 @@ impl PositionHold {
                     // grows past its offset, and the INS follows it past). Without the
                     // receiver's velocities the offset follows nothing, and the relative fixes,
                     // a return or a move onto the fixes can take the INS along a ramp taken for
-                    // a step: there the copies of the filter carried without GNSS must side
-                    // with the INS (it followed none of the fault; without them RTK ramps' ends
-                    // were held as steps, 0.04 -> 76 m after them). A 40 m step starting inside
-                    // a 30 m burst, across the INS from it, was read as the burst's end and used
-                    // as measured (42 m of error through the step, simulated at 1 Hz on a
-                    // tactical-grade IMU). Where the copies side with the INS it followed none
-                    // of the fault, so an end lands on it: any landing across it beyond the
-                    // deciding test is a new fault (a 20 m step with a burst on it, the burst's
-                    // end landing 20 m across the INS inside the offset the burst renewed: its
-                    // fixes were used as measured, 5.9 m RMS through the step).
+                    // a step, so there the copies of the filter carried without GNSS must side
+                    // with the INS (without them RTK ramps' ends were held as steps, 0.04 -> 76
+                    // m after them) — and then the INS followed none of the fault, so an end
+                    // lands on it: any landing across it beyond the deciding test is a new
+                    // fault. Traced on positions alone: a 40 m step starting inside a 30 m
+                    // burst, across the INS from it (42 m of error through the step), and a
+                    // burst's end on a held 20 m step landing 20 m across the INS, inside the
+                    // offset the burst renewed (5.9 m), both read as ends and used as measured.
                     let followed = if self.copies_with_ins { 0.0 } else { b.abs() };
                     let overshoots = (recv.is_some_and(|c| !c.ins_referenced)
                         || self.copies_with_ins)
