@@ -23,12 +23,14 @@ def run_log(path: Path, faults: list[dict] | None = None) -> navfdi.ScenarioRun:
     return navfdi.run_scenario(from_dict(raw, source=str(path)))
 
 
-def run_log_with_and_without_fde(path: Path) -> dict[str, navfdi.ScenarioRun]:
-    """The scenario file ``path`` run fault-free (its own faults left out) on the same
-    measurements twice: variant ``fde`` as written, ``no_fde`` with
-    ``loosely_coupled.isolate = false``."""
+def run_log_with_and_without_fde(path: Path, faults: list[dict] | None = None) -> dict[str, navfdi.ScenarioRun]:
+    """The scenario file ``path`` run on the same measurements twice — fault-free (its own
+    faults left out) or with ``faults`` (scenario fault tables) injected: variant ``fde`` as
+    written, ``no_fde`` with ``loosely_coupled.isolate = false``."""
     raw = dict(load_scenario(str(path)).raw)
     raw.pop("faults", None)
+    if faults:
+        raw["faults"] = faults
     raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
     return dict(navfdi.run_scenario(from_dict(raw, source=str(path))).runs)
 

@@ -27,19 +27,19 @@ import navfdi
 from navfdi.scenario import from_dict, load_scenario
 from navfdi.simlog import simulate_log
 
+from loglib import run_log_with_and_without_fde
+
 
 def _runs(folder: Path, seed: int, velocity: bool, start: float, end: float, size: float = 15.0) -> dict[str, navfdi.ScenarioRun]:
     """A 300 s simulated log (σ 2 m Gauss-Markov τ 30 s + 0.5 m white fixes at 1 Hz) with a
     ``size`` m north step from ``start`` to ``end`` s, run with FDE and without."""
     log = simulate_log(folder, duration=300, seed=seed, gnss_rate=1.0, gnss_sigma=2.0, gnss_tau=30.0, gnss_white=0.5,
                        gnss_velocity_sigma=0.1, gnss_velocity=velocity)
-    raw = copy.deepcopy(dict(load_scenario(str(log.scenario)).raw))
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
-    raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": f"{size} m",
-                      "start": f"{start} s", "end": f"{end} s"}]
+    step = {"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "step", "magnitude": f"{size} m",
+            "start": f"{start} s", "end": f"{end} s"}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+        return run_log_with_and_without_fde(log.scenario, [step])
 
 
 def _horizontal(run: navfdi.ScenarioRun, a: float, b: float) -> np.ndarray:

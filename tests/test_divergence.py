@@ -155,15 +155,13 @@ def test_a_real_ramp_held_for_minutes_stays_held(tmp_path: Path) -> None:
     log = simulate_log(tmp_path / "log", duration=600.0, seed=1, gnss_rate=1.0, gnss_velocity=False, gnss_sigma=0.0,
                        gnss_tau=30.0, gnss_white=1.0, burst_rate=1 / 90, burst_size=15.0, burst_duration=6.0,
                        stale_rate=1 / 120, stale_duration=4.0, gyro_bias=1.0, accel_bias=0.3)
-    raw = dict(navfdi.load_scenario(str(log.scenario)).raw)
-    raw["faults"] = [{"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp", "magnitude": "1 m/s",
-                      "start": "150 s", "end": "350 s"}]
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
+    ramp = {"id": "f", "sensor": "gnss_pos", "components": ["pos_n"], "kind": "ramp", "magnitude": "1 m/s",
+            "start": "150 s", "end": "350 s"}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        runs = navfdi.run_scenario(navfdi.scenario.from_dict(raw, source=str(log.scenario))).runs
+        runs = run_log_with_and_without_fde(log.scenario, [ramp])
     t = runs["fde"].t
-    ramp = (t >= 150.0) & (t < 350.0)
-    fde, no_fde = (float(np.sqrt(np.nanmean(horizontal_error(runs[v])[ramp] ** 2))) for v in ("fde", "no_fde"))
+    inside = (t >= 150.0) & (t < 350.0)
+    fde, no_fde = (float(np.sqrt(np.nanmean(horizontal_error(runs[v])[inside] ** 2))) for v in ("fde", "no_fde"))
     assert fde < 20.0, (fde, no_fde)
     assert no_fde > 50.0, no_fde

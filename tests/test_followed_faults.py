@@ -37,6 +37,8 @@ import navfdi
 from navfdi.scenario import from_dict
 from navfdi.simlog import simulate_log
 
+from loglib import run_log_with_and_without_fde
+
 
 def _case(folder: Path, script: Callable[[str], ModuleType], seed: int, fault: dict[str, Any], rate: float = 1.0,
           **noise: float) -> tuple[dict[str, float], float]:
@@ -169,12 +171,9 @@ def test_a_jump_landing_past_what_the_ins_followed_is_a_new_fault(tmp_path: Path
     without FDE); now it is held (1.3, 0.76 and 2.25 m; ``bound``)."""
     log = simulate_log(tmp_path / "s", duration=600, gnss_sigma=0.0, gnss_tau=0.0, stale_rate=1 / 120, stale_duration=4.0,
                        **{"gnss_velocity": True, **kw})
-    raw = dict(navfdi.load_scenario(str(log.scenario)).raw)
-    raw["faults"] = [fault]
-    raw["variants"] = [{"name": "fde"}, {"name": "no_fde", "set": {"loosely_coupled.isolate": False}}]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        runs = navfdi.run_scenario(from_dict(raw, source=str(log.scenario))).runs
+        runs = run_log_with_and_without_fde(log.scenario, [fault])
     start = float(fault["start"].split()[0])
     rms = {}
     for v, run in runs.items():

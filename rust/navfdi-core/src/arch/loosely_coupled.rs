@@ -540,8 +540,8 @@ fn run<const NS: usize>(
                 let ins = (&s, shadow::horizontal(&kf));
                 let ant = |st: &NavState| antenna_enu(st).xy();
                 let fix_h = p.map(|p| (p.into(), shadow::block(&meas.r, off)));
-                let side = use_shadows.then(|| shadows.side(watch[a].onset(), ant, fix_h, ins));
-                holds[a].copies_with_ins = side == Some(Some(false));
+                let side = shadows.side(watch[a].onset().filter(|_| use_shadows), ant, fix_h, ins);
+                holds[a].copies_with_ins = side == Some(false);
                 let uses = holds[a].decide(
                     tk,
                     &d,
@@ -565,7 +565,7 @@ fn run<const NS: usize>(
                 let held = uses[..2].iter().any(|u| !matches!(u, hold::Use::Raw));
                 let step = !holds[a].ramp_held();
                 let state = (converged, scales[a].resolved(tk, d.norm()));
-                let on_fix = held && side == Some(Some(true));
+                let on_fix = side == Some(true);
                 let moved =
                     watch[a].push(tk, p, own_vel(k), [d[0], d[1]], held, (step, on_fix), state);
                 // A hold a copy of the filter carried without GNSS since before its onset calls

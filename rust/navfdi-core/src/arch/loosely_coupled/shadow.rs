@@ -209,19 +209,21 @@ impl<const NS: usize> Shadows<NS> {
     ) -> Option<bool> {
         let (onset, (fix, fix_var)) = (onset?, fix?);
         let at_ins = antenna(ins);
-        let before = || self.list.iter().filter(|c| c.start <= onset - SHADOW_LEAD);
-        let nearer_fix = |c: &Shadow<NS>| {
-            let (p, a) = (horizontal(&c.kf), antenna(&c.s));
-            chi2(a - fix, p + fix_var) < chi2(a - at_ins, p + ins_var)
-        };
-        if before().count() < WITNESSES {
-            None
-        } else if before().all(nearer_fix) {
-            Some(true)
-        } else if before().all(|c| !nearer_fix(c)) {
-            Some(false)
-        } else {
-            None
+        // The copies started before the hold, and how many of them are nearer the fix.
+        let (n, near) = self
+            .list
+            .iter()
+            .filter(|c| c.start <= onset - SHADOW_LEAD)
+            .fold((0, 0), |(n, near), c| {
+                let (p, a) = (horizontal(&c.kf), antenna(&c.s));
+                let nearer = chi2(a - fix, p + fix_var) < chi2(a - at_ins, p + ins_var);
+                (n + 1, near + usize::from(nearer))
+            });
+        match near {
+            _ if n < WITNESSES => None,
+            k if k == n => Some(true),
+            0 => Some(false),
+            _ => None,
         }
     }
 
