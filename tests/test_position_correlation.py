@@ -81,3 +81,42 @@ def test_positions_only_logs_refuse_it(tmp_path: Path) -> None:
     raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "30 s"}
     with pytest.raises(ValueError, match="needs the receiver's velocities"):
         navfdi.run_scenario(from_dict(raw, source=base.source))
+
+
+def test_auto_reads_the_correlation_from_the_log_and_holds_the_ramp(folder: Path) -> None:
+    """``"auto"``: the errors' white and correlated parts and τ read from the fixes against the
+    receiver's velocities (simulated: white 0.3 m, Gauss-Markov σ 2 m, τ 30 s) — within a
+    factor 2 of τ and 1.5 of σ — and the slow ramp is held as with τ given."""
+    clean = _run(folder, "auto")
+    white, gm, tau, weight = clean.runs["fde"].record["position_errors"]
+    assert 15.0 <= tau <= 60.0, tau
+    assert 2.0 / 1.5 <= gm <= 2.0 * 1.5, gm
+    assert white < gm, (white, gm)
+    assert weight > 10.0, weight
+    t = clean.runs["fde"].t
+    win = (t >= 300.0) & (t < 400.0)
+    peak = lambda r: float(np.nanmax(horizontal_error(r.runs["fde"])[win]))  # noqa: E731
+    assert peak(_run(folder, "auto", RAMP)) < 0.5 * peak(_run(folder, None, RAMP))
+    # What it read is said in the consistency report.
+    from navfdi.consistency import consistency, format_consistency
+
+    lines = format_consistency(consistency(clean.runs["fde"]))
+    assert any(f"τ {tau:.1f} s" in ln for ln in lines), lines
+
+
+def test_auto_leaves_white_fixes_and_positions_alone_white(tmp_path: Path) -> None:
+    """White fixes (σ 1.5 m, no wander) read as white: the run is the white filter's to the bit.
+    On positions alone nothing can be read (no velocities): white, said so, not refused."""
+    path = simulate_log(str(tmp_path / "w"), duration=400, seed=3, gnss_sigma=0.0, gnss_tau=0.0, gnss_white=1.5).scenario
+    base = load_scenario(str(path))
+    auto = dict(base.raw)
+    auto["loosely_coupled"] = {**auto["loosely_coupled"], "position_correlation": "auto"}
+    a, w = navfdi.run_scenario(from_dict(auto, source=base.source)), navfdi.run_scenario(base)
+    assert a.runs["fde"].record["position_errors"][1:] == [0.0, 0.0, 1.0]
+    np.testing.assert_array_equal(a.runs["fde"].record["error"], w.runs["fde"].record["error"])
+    path = simulate_log(str(tmp_path / "p"), duration=120, seed=2, gnss_sigma=2.0, gnss_tau=30.0, gnss_velocity=False).scenario
+    base = load_scenario(str(path))
+    raw = dict(base.raw)
+    raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "auto"}
+    rec = navfdi.run_scenario(from_dict(raw, source=base.source)).runs["fde"].record
+    assert np.isnan(rec["position_errors"][:3]).all() and rec["position_errors"][3] == 1.0

@@ -15,7 +15,7 @@ exclusions per clean tested epoch (Wilson 95 % interval).
 drive_pos: drive_lc's fixes alone, its velocity channel removed.
 Run: python docs/scripts/meter_fde_campaign.py [RUNS] [drive|drive_pos|meter|meter_pos|urban|urban_pos|urban_pos_tactical]
 [step|ramp] [TAU]
-(TAU: ``[loosely_coupled] position_correlation`` in s, default 0: white)"""
+(TAU: ``[loosely_coupled] position_correlation`` in s, default 0: white; ``auto``: read from the log)"""
 
 from __future__ import annotations
 
@@ -164,16 +164,19 @@ def _one(base: navfdi.Scenario, fault: dict, natural: np.ndarray | None = None, 
     return out
 
 
-def main(runs: int = 500, which: str = "meter", kind: str = "step", tau: float = 0.0) -> None:
+def main(runs: int = 500, which: str = "meter", kind: str = "step", tau: float | str = 0.0) -> None:
     folder = tempfile.mkdtemp(prefix="navfdi_meter_")
     base = _base(which, folder)
     natural = _natural(folder)
     if tau:
         raw = dict(base.raw)
-        raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": f"{tau} s"}
+        raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "auto" if tau == "auto" else f"{tau} s"}
         base = from_dict(raw, source=base.source)
     clean_run = navfdi.run_scenario(from_dict({**dict(base.raw), "faults": []}, source=base.source)).runs["fde"]
     clean_out = clean_run.t[_excluded(clean_run)]
+    if "position_errors" in clean_run.record:
+        w, g, tc, f = clean_run.record["position_errors"]
+        print(f"position errors read from the log: white σ {w:.2f} m, correlated σ {g:.2f} m, τ {tc:.1f} s, variance × {f:.1f}")
     span = float(base.core["duration"])
     rng = np.random.default_rng(0)
     lo, hi, dur, unit = (5.0, 40.0, 60.0, "m") if kind == "step" else (0.1, 2.0, 40.0, "m/s")
@@ -187,7 +190,8 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step", tau: float =
                  "start": f"{onset} s", "end": f"{onset + dur} s"}
         rows.append((size, _one(base, fault, natural, clean_out)))
     wall = time.perf_counter() - t0
-    print(f"{which} / {kind} (position_correlation {tau:g} s): {runs} runs (2 variants each) in {wall:.0f} s")
+    pc = tau if tau == "auto" else f"{tau:g} s"
+    print(f"{which} / {kind} (position_correlation {pc}): {runs} runs (2 variants each) in {wall:.0f} s")
     edges = [5, 10, 20, 40] if kind == "step" else [0.1, 0.3, 0.6, 1.0, 2.0]
     print(f"| {kind} [{unit}] | runs | excluded at first fix | median delay [s] | max error before it (median / 95 %) [m] | fixes excluded | max error FDE (median / 95 %) [m] | no FDE (median) [m] | excluded > 5 s after end | max error 20-60 s after end, FDE (median / 95 %) / no FDE (median) [m] |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -216,4 +220,5 @@ def main(runs: int = 500, which: str = "meter", kind: str = "step", tau: float =
 
 if __name__ == "__main__":
     main(int(sys.argv[1]) if len(sys.argv) > 1 else 500, sys.argv[2] if len(sys.argv) > 2 else "meter",
-         sys.argv[3] if len(sys.argv) > 3 else "step", float(sys.argv[4]) if len(sys.argv) > 4 else 0.0)
+         sys.argv[3] if len(sys.argv) > 3 else "step",
+         ("auto" if sys.argv[4] == "auto" else float(sys.argv[4])) if len(sys.argv) > 4 else 0.0)

@@ -215,7 +215,7 @@ def _loosely_coupled(lc: Any) -> dict[str, Any]:
         "isolate": _bool(lc.get("isolate", True), f"{p}.isolate"),
         "convergence": _number(lc.get("convergence", 3.0), f"{p}.convergence"),
         "noise_scale": None if lc.get("noise_scale", "auto") == "auto" else _number(lc["noise_scale"], f"{p}.noise_scale"),
-        "position_correlation": _unit(lc.get("position_correlation", "0 s"), "time", f"{p}.position_correlation"),
+        "position_correlation": None if lc.get("position_correlation", "0 s") == "auto" else _unit(lc.get("position_correlation", "0 s"), "time", f"{p}.position_correlation"),
     }
     for i, a in enumerate(_list(_need(lc, "sensors", p), f"{p}.sensors")):
         q = f"{p}.sensors[{i}]"

@@ -269,7 +269,7 @@ SECTIONS: dict[str, Section] = {
         ("isolate", "bool", "true", "false: detectors report but every measurement is used"),
         ("convergence", "number", "3", "converged once every channel's predicted σ is within this multiple of its own"),
         ("noise_scale", "\"auto\" or number", "auto", "scale of the GNSS σ in the tests (auto: from the innovations, clamped to [1, 10]; a solution quality worse than the best the receiver gave, e.g. RTK float beside fixed, gets its own from its own fixes; positions alone: at least the fixes' own scatter over the σ they write, up to what the tested fixes say, where that ratio exceeds 1.5)"),
-        ("position_correlation", "time", "0 s", "correlation time of the GNSS position errors (Gauss-Markov): in the update each fix counts as the fraction (1 − ρ)/(1 + ρ) of an independent fix (its position variance × (1 + ρ)/(1 − ρ)), ρ = exp(−Δt/τ), Δt the fix interval; 0: white"),
+        ("position_correlation", "\"auto\" or time", "0 s", "correlation time of the GNSS position errors (Gauss-Markov): in the update each fix counts as the fraction (1 − ρ)/(1 + ρ) of an independent fix (its position variance × (1 + ρ)/(1 − ρ)), ρ = exp(−Δt/τ), Δt the fix interval; 0: white; auto: the errors' white and correlated parts and τ read from the log's fixes against the receiver's velocities, the variance × (σ_w² + σ_g² (1 + ρ)/(1 − ρ))/(σ_w² + σ_g²) (white where the log shows no correlation or has no velocities)"),
     ]),
     "strapdown.imu": _s("[loosely_coupled.imu] / [tight.strapdown.imu]", "IMU noise figures, per IMU axis.", [
         ("gyro_noise", "angular rate density ×3 (deg/s/sqrt(Hz), deg/sqrt(h)), or \"auto\"", REQ, "angle random walk; \"auto\": from the log's rest intervals (loosely coupled)"),

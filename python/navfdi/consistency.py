@@ -104,7 +104,13 @@ def consistency(run: RunRecord) -> dict[str, Any]:
       off them longer than the fixes it agreed with before plus 30 s (it had started from a
       fault's fixes at the alignment; a held height alone moves the height alone); on
       positions alone also where two copies of the filter carried without GNSS called a hold
-      the INS's error — the INS is then replaced by the younger copy.
+      the INS's error — the INS is then replaced by the younger copy;
+    * ``position_errors`` (with ``position_correlation = "auto"`` only): the first position
+      channel's error model read from the log's fixes against the receiver's velocities —
+      ``white`` and ``correlated`` σ (m), ``tau`` (s) and ``weight``, the factor on the fixes'
+      position variance in the update (``correlated`` and ``tau`` 0 and ``weight`` 1 where
+      the log shows no correlation, ``white`` then holding the velocities' noise too; NaN σ
+      and τ and weight 1 where the log could not say: no velocities, or too short).
     """
     rec = run.record
     if "nav" not in rec:
@@ -166,6 +172,8 @@ def consistency(run: RunRecord) -> dict[str, Any]:
         "navigating_from": float(t[int(np.argmax(ok))]) if ok.any() else math.nan,
         "converged_at": float(rec.get("converged_at", math.nan)),
         "reanchored": [float(x) for x in rec.get("reanchored", [])],
+        **({"position_errors": dict(zip(("white", "correlated", "tau", "weight"), map(float, rec["position_errors"])))}
+           if "position_errors" in rec else {}),
     }
 
 
@@ -207,6 +215,14 @@ def format_consistency(c: dict[str, Any]) -> list[str]:
         lines.append("  IMU biases at the end (x, y, z) and their σ as a share of the first:")
         lines.append("    gyro  " + ", ".join(f"{v['final'] * dph:+.1f}" for v in g) + " deg/h; σ " + ", ".join(f"{v['reduction']:.2f}" for v in g))
         lines.append("    accel " + ", ".join(f"{v['final'] * mg:+.2f}" for v in a) + " mg;    σ " + ", ".join(f"{v['reduction']:.2f}" for v in a))
+    pe = c.get("position_errors")
+    if pe is not None:
+        if not math.isfinite(pe["white"]):
+            lines.append("  GNSS position errors (position_correlation auto): not read from the log (no receiver velocities, or too short): taken as white")
+        elif pe["correlated"] > 0:
+            lines.append(f"  GNSS position errors (position_correlation auto): white σ {pe['white']:.2f} m, correlated σ {pe['correlated']:.2f} m with τ {pe['tau']:.1f} s; each fix's variance × {pe['weight']:.1f} in the update")
+        else:
+            lines.append("  GNSS position errors (position_correlation auto): white (no correlation the log shows)")
     h = c["heading"]
     if h["epochs"]:
         lines.append(f"  heading against the velocity's course above 5 m/s ({h['epochs']} epochs): median {h['median_deg']:.2f}°, 95 % {h['p95_deg']:.2f}°")

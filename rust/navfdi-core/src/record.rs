@@ -215,6 +215,11 @@ pub struct RunRecord {
     /// moved back onto them (`arch::loosely_coupled::diverge`), or replaced by a copy of the
     /// filter carried without GNSS that called the hold its error (`::shadow`).
     pub reanchored: Vec<f64>,
+    /// Loosely coupled with `position_correlation = "auto"`: the first position channel's
+    /// error model read from the log — σ of the white part (m), σ of the correlated part (m),
+    /// its correlation time (s) and the factor on the fixes' position variance in the update;
+    /// NaN, NaN, NaN, 1 where the log could not say (no velocities, too short). None otherwise.
+    pub position_errors: Option<[f64; 4]>,
 }
 
 /// Per-epoch filter integrity of a tight run ([`crate::integrity::filter_ss`]), each T long.
@@ -397,6 +402,7 @@ impl RunRecord {
             integrity: None,
             converged_at: None,
             reanchored: Vec::new(),
+            position_errors: None,
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

@@ -16,6 +16,7 @@
 
 mod blame;
 mod checks;
+mod correlation;
 mod diverge;
 mod hold;
 mod noise_scale;
@@ -37,8 +38,8 @@ use crate::record::{RunRecord, NAV_COLUMNS};
 use crate::spec::{ScenarioSpec, SensorKind};
 use crate::stream::{Nominal, Streams};
 use checks::{
-    antenna, correlation_weight, enu, gnss_measurement, isolate, nhc_applies, nhc_meas, rows,
-    shift, sigma_h, still, three, update, zupt_meas, Meas,
+    antenna, enu, gnss_measurement, isolate, nhc_applies, nhc_meas, rows, shift, sigma_h, still,
+    three, update, zupt_meas, Meas,
 };
 use nalgebra::{DMatrix, DVector, Vector3};
 
@@ -149,16 +150,7 @@ fn run<const NS: usize>(
     // Without a velocity channel the receiver's consistency compares its displacement with
     // the INS's, and a jump of a position innovation against the INS also marks a step.
     let vel_aid_none = !aids.iter().take(n_gnss).any(|a| a.vel.is_some());
-    if vel_aid_none && l.position_correlation > 0.0 {
-        // Measured on simulated σ 2 m fixes at 4 Hz with τ 30 s: without velocities the INS
-        // cannot carry the position between fixes weighted that little (10–20 m steps left
-        // out at their first fix 1.00 → 0.80, false exclusions 0.0056 → 0.0150 per clean
-        // epoch; docs/meter_fde.md).
-        return Err(Error::Invalid(format!(
-            "loosely_coupled.position_correlation = {} s needs the receiver's velocities (a gnss or gnss_velocity sensor): on positions alone, weighting the fixes for their correlation lets the INS drift; leave it at 0 s",
-            l.position_correlation
-        )));
-    }
+    correlation::positions_alone(l.position_correlation, vel_aid_none)?;
     let zupt_ch = l.zupt.as_ref().map(|_| n_gnss);
     let nhc_ch = l
         .nhc
@@ -291,12 +283,18 @@ fn run<const NS: usize>(
         })
         .collect();
     let mut last_fix_t: Vec<Option<f64>> = vec![None; aids.len()];
-    // Time-correlated position errors: in the update each fix's position variance is multiplied
-    // by (1 + ρ)/(1 − ρ), a fix being worth (1 − ρ)/(1 + ρ) of an independent one (1: white).
-    let weight: Vec<f64> = fix_interval
-        .iter()
-        .map(|&dt| correlation_weight(dt, l.position_correlation))
-        .collect();
+    // Time-correlated position errors: each fix's position variance in the update multiplied by
+    // what it is worth (given τ, or "auto": its white and correlated parts read from the log).
+    let models_of = |a: usize| {
+        let (aid, sh) = (&aids[a], |k| sigma_h(logged, &aids[a], k));
+        let (t, pos) = (&models.t, |k| measure(aid, k, aid.pos));
+        let dt = fix_interval[a];
+        aid.pos
+            .map(|_| correlation::from_log(t, pos, own_vel, sh, &logged.origin, dt))
+    };
+    let pc = l.position_correlation;
+    let (weight, errors) = correlation::weights(pc, &fix_interval, pos_aid, models_of);
+    rec.position_errors = errors;
     let mut scales: Vec<noise_scale::NoiseScale> = aids
         .iter()
         .map(|_| noise_scale::NoiseScale::new(l.noise_scale, 1.0, 10.0))

@@ -141,9 +141,16 @@ pub struct LooselyCoupledSpec {
     /// process: in the update each fix counts as the fraction `(1 − ρ)/(1 + ρ)` of an
     /// independent fix that it is worth (`ρ = e^(−Δt/τ)`, Δt the fix interval), i.e. its
     /// position variance is multiplied by `(1 + ρ)/(1 − ρ)` (not in the tests, whose σ is the
-    /// errors' size). 0 (default): white errors, the update as before.
-    #[serde(default)]
-    pub position_correlation: f64,
+    /// errors' size). 0 (default): white errors, the update as before. None (`"auto"`): the
+    /// errors' white and correlated parts and τ estimated from the log's fixes and the
+    /// receiver's velocities, the fix weighted by `(σ_w² + σ_g² (1 + ρ)/(1 − ρ)) / (σ_w² + σ_g²)`
+    /// (white where the log does not show a correlation, or has no velocities).
+    #[serde(default = "default_correlation")]
+    pub position_correlation: Option<f64>,
+}
+
+fn default_correlation() -> Option<f64> {
+    Some(0.0)
 }
 
 fn default_convergence() -> f64 {
@@ -255,14 +262,15 @@ impl ScenarioSpec {
                 ),
             ));
         }
-        if !(l.position_correlation >= 0.0 && l.position_correlation <= 1e5) {
-            return Err(bad(
-                format!("{p}.position_correlation"),
-                format!(
-                    "{} s: a correlation time in [0, 1e5] s (0: white errors)",
-                    l.position_correlation
-                ),
-            ));
+        if let Some(tau) = l.position_correlation {
+            if !(0.0..=1e5).contains(&tau) {
+                return Err(bad(
+                    format!("{p}.position_correlation"),
+                    format!(
+                        "{tau} s: a correlation time in [0, 1e5] s (0: white errors) or \"auto\""
+                    ),
+                ));
+            }
         }
         if let Some(c) = l.noise_scale {
             if !(c > 0.0 && c <= 1e3) {
