@@ -235,6 +235,10 @@ def test_the_time_offset_through_multipath_bursts(tmp_path: Path) -> None:
     c = calibrate(from_dict(raw, source=sc.source), ["imu_time_offset"])
     assert c.imu_time_offset == pytest.approx(0.23, abs=0.05)
     assert abs(c.imu_time_offset - 0.23) < 3.0 * c.imu_time_offset_sigma + 0.01
+    # A scenario that weights its fixes for their correlation (read from the log) is calibrated
+    # on the white weighting all the same: the same offset (weighted, 0.175 s was read).
+    raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "auto"}
+    assert calibrate(from_dict(raw, source=sc.source), ["imu_time_offset"]).imu_time_offset == c.imu_time_offset
 
 
 def test_the_time_offset_is_not_read_from_meter_level_positions_alone(tmp_path: Path) -> None:
