@@ -253,3 +253,18 @@ def test_comma_steps_are_held_out(comma, size: float, onset: float) -> None:
     late = t[tested & out & (t >= onset + 15)]
     assert late.size == 0 or late.max() - (onset + 15) <= 5.0
     assert x.errors()["gnss_fault.hor_max"] <= 3.0 * clean
+
+
+def test_the_cli_summary_counts_exclusions_per_variant(drive, tmp_path: Path) -> None:
+    """``summary.json`` as ``navfdi run`` writes it (every variant): each variant's exclusion
+    counts and filter consistency, the same as one run's summary (strict JSON: NaN as null)."""
+    import json
+
+    res = navfdi.run_scenario(drive)
+    res.write(tmp_path, figures=False)
+    data = json.loads((tmp_path / "summary.json").read_text(encoding="utf-8"))
+    for name, run in res.runs.items():
+        v = data["variants"][name]
+        assert v["exclusions"] == run.exclusion_counts()
+        assert v["consistency"]["channels"].keys() == run.summary()["consistency"]["channels"].keys()
+    assert data["variants"]["fde"]["exclusions"]["gnss_pos"]["step"] > 0

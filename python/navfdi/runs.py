@@ -712,7 +712,10 @@ class VariantRuns:
         return fit("\n".join(parts))
 
     def summary(self) -> dict[str, Any]:
-        """Scenario, seed, versions and per-variant fault tables and errors."""
+        """Scenario, seed, versions and per-variant fault tables and errors; for a strapdown
+        INS (loosely coupled) also each variant's filter consistency
+        (:func:`navfdi.consistency.consistency`) and GNSS exclusion counts per reason
+        (:meth:`ScenarioRun.exclusion_counts`), as in one run's summary."""
         return {
             "scenario": self.scenario.raw,
             "source": self.scenario.source,
@@ -725,6 +728,7 @@ class VariantRuns:
                     "errors": r.errors(),
                     "satellites": r.satellite_table().to_dict(orient="records"),
                     "integrity": r.integrity(),
+                    **({"consistency": consistency(r), "exclusions": r.exclusion_counts()} if "nav" in r.record else {}),
                 }
                 for name, r in self.runs.items()
             },
