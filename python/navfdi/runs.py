@@ -510,14 +510,12 @@ class ScenarioRun(RunRecord):
 
     def summary(self) -> dict[str, Any]:
         """The scenario as run (user form and SI form), seed, versions, and key results."""
-        import numpy
-
         return {
             "scenario": self.scenario.raw,
             "scenario_si": self.scenario.core,
             "source": self.scenario.source,
             "seed": self.seed,
-            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": numpy.__version__},
+            "versions": {"navfdi": _core.__version__, "python": platform.python_version(), "numpy": np.__version__},
             "faults": [m.__dict__ for m in self.fault_table()],
             "integrity": self.integrity(),
             **({"consistency": consistency(self)} if "nav" in self.record else {}),
@@ -712,10 +710,8 @@ class VariantRuns:
         return fit("\n".join(parts))
 
     def summary(self) -> dict[str, Any]:
-        """Scenario, seed, versions and per-variant fault tables and errors; for a strapdown
-        INS (loosely coupled) also each variant's filter consistency
-        (:func:`navfdi.consistency.consistency`) and GNSS exclusion counts per reason
-        (:meth:`ScenarioRun.exclusion_counts`), as in one run's summary."""
+        """Scenario, seed, versions and per-variant fault tables and errors (loosely coupled: also
+        each variant's ``consistency`` and ``exclusions``, as in :meth:`ScenarioRun.summary`)."""
         return {
             "scenario": self.scenario.raw,
             "source": self.scenario.source,

@@ -20,7 +20,11 @@
 //! at their rate) and within the grid ([`TAU_MAX`]), and where its σ is at most
 //! [`STATED_MAX`] times the σ the receiver states: on RTK fixes (σ 1 cm) the velocities'
 //! integral drifts by decimetres over a minute, and a τ read from that would weight centimetre
-//! fixes as decimetre ones.
+//! fixes as decimetre ones. The two components are fitted together and each alone, and all
+//! three fits must show it (a velocity bias drifts one component, and the pooled median of two
+//! differently drifting ones passes for a wander). A receiver whose velocities come out of the
+//! same navigation filter as its positions carries its wander in both: `p − ∫v` cancels it, and
+//! the log reads white (`comma_lc`'s u-blox).
 
 /// The longest lag (s) the structure function is read at.
 pub const LAG_MAX: f64 = 300.0;
