@@ -120,3 +120,18 @@ def test_auto_leaves_white_fixes_and_positions_alone_white(tmp_path: Path) -> No
     raw["loosely_coupled"] = {**raw["loosely_coupled"], "position_correlation": "auto"}
     rec = navfdi.run_scenario(from_dict(raw, source=base.source)).runs["fde"].record
     assert np.isnan(rec["position_errors"][:3]).all() and rec["position_errors"][3] == 1.0
+
+
+def test_white_fixes_that_wander_get_auto_suggested(folder: Path) -> None:
+    """Taken as white (the default), fixes that the log shows wandering against the receiver's
+    velocities are reported with what ``"auto"`` would do, and the console suggests it; the
+    run itself is the white filter's."""
+    from navfdi.consistency import consistency, format_consistency
+
+    white, auto = _run(folder, None), _run(folder, "auto")
+    rec = white.runs["fde"].record
+    assert "position_errors" not in rec
+    np.testing.assert_array_equal(rec["position_wander"], auto.runs["fde"].record["position_errors"])
+    lines = format_consistency(consistency(white.runs["fde"]))
+    assert any('position_correlation = "auto" would weight' in ln for ln in lines), lines
+    assert "position_wander" not in auto.runs["fde"].record

@@ -110,7 +110,9 @@ def consistency(run: RunRecord) -> dict[str, Any]:
       ``white`` and ``correlated`` σ (m), ``tau`` (s) and ``weight``, the factor on the fixes'
       position variance in the update (``correlated`` and ``tau`` 0 and ``weight`` 1 where
       the log shows no correlation, ``white`` then holding the velocities' noise too; NaN σ
-      and τ and weight 1 where the log could not say: no velocities, or too short).
+      and τ and weight 1 where the log could not say: no velocities, or too short);
+    * ``position_wander`` (fixes taken as white, where the log shows a correlation): the same
+      figures, ``weight`` being what ``"auto"`` would use — the console suggests it.
     """
     rec = run.record
     if "nav" not in rec:
@@ -172,8 +174,8 @@ def consistency(run: RunRecord) -> dict[str, Any]:
         "navigating_from": float(t[int(np.argmax(ok))]) if ok.any() else math.nan,
         "converged_at": float(rec.get("converged_at", math.nan)),
         "reanchored": [float(x) for x in rec.get("reanchored", [])],
-        **({"position_errors": dict(zip(("white", "correlated", "tau", "weight"), map(float, rec["position_errors"])))}
-           if "position_errors" in rec else {}),
+        **{k: dict(zip(("white", "correlated", "tau", "weight"), map(float, rec[k])))
+           for k in ("position_errors", "position_wander") if k in rec},
     }
 
 
@@ -223,6 +225,10 @@ def format_consistency(c: dict[str, Any]) -> list[str]:
             lines.append(f"  GNSS position errors (position_correlation auto): white σ {pe['white']:.2f} m, correlated σ {pe['correlated']:.2f} m with τ {pe['tau']:.1f} s; each fix's variance × {pe['weight']:.1f} in the update")
         else:
             lines.append("  GNSS position errors (position_correlation auto): white (no correlation the log shows)")
+    pw = c.get("position_wander")
+    if pw is not None:
+        lines.append(f"  GNSS position errors: the fixes wander against the receiver's velocities (correlated σ {pw['correlated']:.2f} m, τ {pw['tau']:.1f} s) but are taken as white;"
+                     f" position_correlation = \"auto\" would weight each fix's variance × {pw['weight']:.1f} (docs/meter_fde.md)")
     h = c["heading"]
     if h["epochs"]:
         lines.append(f"  heading against the velocity's course above 5 m/s ({h['epochs']} epochs): median {h['median_deg']:.2f}°, 95 % {h['p95_deg']:.2f}°")

@@ -220,6 +220,9 @@ pub struct RunRecord {
     /// its correlation time (s) and the factor on the fixes' position variance in the update;
     /// NaN, NaN, NaN, 1 where the log could not say (no velocities, too short). None otherwise.
     pub position_errors: Option<[f64; 4]>,
+    /// Loosely coupled with the fixes taken as white (`position_correlation = 0`): the same
+    /// model where the log shows a correlation (the factor `"auto"` would use); None otherwise.
+    pub position_wander: Option<[f64; 4]>,
 }
 
 /// Per-epoch filter integrity of a tight run ([`crate::integrity::filter_ss`]), each T long.
@@ -403,6 +406,7 @@ impl RunRecord {
             converged_at: None,
             reanchored: Vec::new(),
             position_errors: None,
+            position_wander: None,
             // Parameters validated by the scenario, so the detector can always be built.
             state: spec.state_chi2.as_ref().and_then(|sc| {
                 let (r, a) = sc.epochs(spec.dt);

@@ -72,6 +72,9 @@ pub fn record_to_py<'py>(py: Python<'py>, rec: RunRecord) -> PyResult<Bound<'py,
     if let Some(m) = rec.position_errors {
         d.set_item("position_errors", m.to_vec())?;
     }
+    if let Some(m) = rec.position_wander {
+        d.set_item("position_wander", m.to_vec())?;
+    }
     d.set_item("error", to_numpy(py, rec.error, &[t, 9])?)?;
     d.set_item("sigma", to_numpy(py, rec.sigma, &[t, 9])?)?;
     d.set_item("error_columns", ERROR_COLUMNS.to_vec())?;

@@ -294,7 +294,7 @@ fn run<const NS: usize>(
     };
     let pc = l.position_correlation;
     let (weight, errors) = correlation::weights(pc, &fix_interval, pos_aid, models_of);
-    rec.position_errors = errors;
+    (rec.position_errors, rec.position_wander) = (errors.used, errors.unused);
     let mut scales: Vec<noise_scale::NoiseScale> = aids
         .iter()
         .map(|_| noise_scale::NoiseScale::new(l.noise_scale, 1.0, 10.0))

@@ -232,35 +232,57 @@ pub fn from_log(
     estimate(&fixes, interval, crate::stats::median_of(&mut sig))
 }
 
+/// What the position channel's weighting records ([`weights`]): the model used
+/// (`"auto"`), or one the log shows while the fixes are taken as white (a suggestion).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Recorded {
+    /// `"auto"`: σ_w, σ_g (m), τ (s) and the factor used (NaN, NaN, NaN, 1: not read).
+    pub used: Option<[f64; 4]>,
+    /// Fixes taken as white (τ 0) where the log shows a correlation: σ_w, σ_g, τ and the
+    /// factor `"auto"` would use.
+    pub unused: Option<[f64; 4]>,
+}
+
 /// Per channel (fixes `interval` s apart) the factor on its fixes' position variance in the
 /// update, and what the record says of it: with a correlation time `tau` given (s; 0: white)
-/// `(1 + ρ)/(1 − ρ)` and nothing recorded; with None (`"auto"`) the channel's error model
+/// `(1 + ρ)/(1 − ρ)` — and, at 0, the position channel `pos_aid`'s model where the log shows a
+/// correlation ([`Recorded::unused`]); with None (`"auto"`) the channel's error model
 /// `model_of(a)` (None: not a position channel; Some(None): the log could not say, white)
-/// and, recorded, the position channel `pos_aid`'s σ_w, σ_g, τ and factor.
+/// and, recorded, the position channel's σ_w, σ_g, τ and factor ([`Recorded::used`]).
 pub fn weights(
     tau: Option<f64>,
     interval: &[f64],
     pos_aid: usize,
     model_of: impl Fn(usize) -> Option<Option<ErrorModel>>,
-) -> (Vec<f64>, Option<[f64; 4]>) {
+) -> (Vec<f64>, Recorded) {
+    let row = |m: ErrorModel, w: f64| [m.white, m.correlated, m.tau, w];
     let Some(auto) = tau
         .is_none()
-        .then(|| (0..interval.len()).map(model_of).collect::<Vec<_>>())
+        .then(|| (0..interval.len()).map(&model_of).collect::<Vec<_>>())
     else {
         let tau = tau.unwrap_or(0.0);
         let w = interval
             .iter()
             .map(|&dt| super::checks::correlation_weight(dt, tau));
-        return (w.collect(), None);
+        let unused = (tau == 0.0)
+            .then(|| model_of(pos_aid).flatten())
+            .flatten()
+            .filter(|m| m.correlated > 0.0)
+            .map(|m| row(m, m.weight(interval[pos_aid])));
+        return (w.collect(), Recorded { used: None, unused });
     };
     let w: Vec<f64> = (interval.iter().zip(&auto))
         .map(|(&dt, m)| m.flatten().map_or(1.0, |m| m.weight(dt)))
         .collect();
     let nan = [f64::NAN, f64::NAN, f64::NAN, 1.0];
-    let rec = auto[pos_aid]
-        .flatten()
-        .map_or(nan, |m| [m.white, m.correlated, m.tau, w[pos_aid]]);
-    (w, Some(rec))
+    let used = auto[pos_aid].flatten().map_or(nan, |m| row(m, w[pos_aid]));
+    (
+        w,
+        Recorded {
+            used: Some(used),
+            unused: None,
+        },
+    )
 }
 
 /// Fit `D(L) = a + b (1 − e^(−L/τ)) + q L + c L²` (a, b, q, c ≥ 0) to `points` (L s, D m²) by
