@@ -44,7 +44,7 @@ pub const STATED_MAX: f64 = 5.0;
 /// Median of χ²₁.
 const CHI2_1_MEDIAN: f64 = 0.454_936_423_119_572_8;
 
-/// A channel's position error model per horizontal component, read from its fixes and
+/// A channel's horizontal position error model (σ per component), read from its fixes and
 /// velocities ([`estimate`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ErrorModel {
@@ -209,7 +209,7 @@ pub fn from_log(
     let repeated = super::super::inertial::repeated_fixes(t.len(), &pos);
     let mut sig: Vec<f64> = Vec::new();
     let fixes: Vec<(f64, [f64; 2], [f64; 2])> = (0..t.len())
-        .filter(|&k| !repeated.get(k).copied().unwrap_or(false))
+        .filter(|&k| !repeated[k])
         .filter_map(|k| {
             let p = pos(k)?;
             let v = vel(k)?;
