@@ -254,7 +254,7 @@ SECTIONS: dict[str, Section] = {
         ("imu", "table", REQ, "IMU noise figures"),
         ("imu_axes", "three of forward, back, right, left, down, up, or \"auto\"", "— (or mounting)", "body frame: where the IMU's x, y, z axes point; \"auto\": from the log (gravity, and the accelerations along and across the GNSS track; a ground vehicle)"),
         ("mounting", "angle×3", "— (or imu_axes)", "roll, pitch, yaw of the IMU axes in the body (forward-right-down)"),
-        ("boresight", "angle×3, or \"auto\"", "0", "small misalignment (roll, pitch, yaw) on top of imu_axes or mounting; \"auto\": pitch and yaw from the log (loosely coupled)"),
+        ("boresight", "angle×3, or \"auto\"", "0; loosely coupled: the log's where it shows one", "small misalignment (roll, pitch, yaw) on top of imu_axes or mounting; \"auto\": pitch and yaw from the log (loosely coupled); not given with imu_axes, a pitch or yaw the log shows beyond 1° and 4σ, fitting the log better than none, is estimated (\"0 deg\" keeps none)"),
         ("lever_arm", "length×3", REQ, "antenna from the IMU, body frame"),
         ("imu_time_offset", "time, or \"auto\"", "0 s", "added to the IMU time stamps; \"auto\": from the log (loosely coupled)"),
         ("alignment", "table", REQ, "initial alignment"),
