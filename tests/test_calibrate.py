@@ -131,7 +131,7 @@ def test_auto_fields_are_estimated_before_the_run(tmp_path: Path) -> None:
     assert c is not None and c.boresight is not None and c.imu_time_offset is not None
     assert abs(c.boresight[1] - 1.5) <= 0.1 and abs(c.boresight[2] + 1.0) <= 0.15
     assert c.imu_time_offset == pytest.approx(0.2, abs=0.01)
-    assert 'estimated from the log ("auto" fields' in run.format_tables()
+    assert 'estimated from the log (navfdi calibrate --out writes them)' in run.format_tables()
     truth = sc.with_values({"loosely_coupled.boresight": ["0 deg", "1.5 deg", "-1 deg"], "loosely_coupled.imu_time_offset": "0.2 s"}, create=True)
     want = navfdi.run_scenario(truth).runs["fde"].errors()["hor_rms"]
     assert run.runs["fde"].errors()["hor_rms"] <= 1.1 * want

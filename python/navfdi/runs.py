@@ -821,11 +821,11 @@ def run_scenario(scenario: Scenario | str | Path, seed: int = 0, compare_isolati
 
 
 def calibration_lines(cal: Any) -> list[str]:
-    """The console lines of the values a run estimated from its log (``"auto"`` fields),
-    followed by a blank line; none without."""
+    """The console lines of the values a run estimated from its log (``"auto"`` fields, or a
+    boresight the log showed), followed by a blank line; none without."""
     if cal is None:
         return []
-    return ["estimated from the log (\"auto\" fields; navfdi calibrate --out writes them):", *("  " + ln for ln in cal.lines()), ""]
+    return ["estimated from the log (navfdi calibrate --out writes them):", *("  " + ln for ln in cal.lines()), ""]
 
 
 def _run_logged(sc: Scenario, seed: int, compare_isolation: bool) -> ScenarioRun | VariantRuns:
