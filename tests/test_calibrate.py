@@ -11,6 +11,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -293,3 +294,36 @@ def test_a_boresight_the_scenario_does_not_give_is_estimated_where_the_log_shows
     assert resolve_auto(right) == (right, None)
     measured = load_scenario(str(simulate_log(tmp_path / "m", duration=600, seed=3, boresight_deg=bore, **kw).scenario))
     assert "mounting" in measured.raw["loosely_coupled"] and boresight_shown(measured) is None
+
+
+def test_an_imu_time_offset_the_scenario_does_not_give_is_estimated_where_the_log_shows_it(tmp_path: Path) -> None:
+    """RTK fixes with the IMU stamped 0.2 s late and a scenario that gives no offset: taken as
+    0, FDE ran at 1.15 m RMS (0.076 m without FDE). The log's innovations show the offset,
+    so it is estimated before the run and said so, and FDE runs as with the true offset; an
+    offset the scenario gives ("0 s") is kept; a log without one is left as it is (three runs,
+    no search); meter-level positions alone do not tell it and are not searched."""
+    from navfdi.calibrate import offset_shown, resolve_auto
+
+    def without_offset(log: Any) -> navfdi.Scenario:
+        text = Path(log.scenario).read_text()
+        Path(log.scenario).write_text(re.sub(r'\nimu_time_offset = "[^"]*"', "", text))
+        sc = load_scenario(str(log.scenario))
+        assert "imu_time_offset" not in sc.raw["loosely_coupled"]
+        return sc
+
+    sc = without_offset(simulate_log(tmp_path / "s", duration=600, seed=3, time_lag=0.2, gnss_sigma=0.02))
+    lag = offset_shown(sc)
+    assert lag is not None and abs(lag[0] - 0.2) <= 0.02
+    run = navfdi.run_scenario(sc)
+    c = run.runs["fde"].calibration
+    assert c is not None and c.imu_time_offset == pytest.approx(lag[0]) and "gives no IMU time offset" in run.format_tables()
+    want = navfdi.run_scenario(sc.with_values({"loosely_coupled.imu_time_offset": "0.2 s"}, create=True)).runs["fde"].errors()["hor_rms"]
+    assert run.runs["fde"].errors()["hor_rms"] <= 1.1 * want
+    zero = navfdi.run_scenario(sc.with_values({"loosely_coupled.imu_time_offset": "0 s"}, create=True))
+    assert zero.runs["fde"].calibration is None
+    assert zero.runs["fde"].errors()["hor_rms"] > 5.0 * want  # what the estimate mends
+    right = without_offset(simulate_log(tmp_path / "r", duration=600, seed=3, gnss_sigma=0.02))
+    assert offset_shown(right) is None and resolve_auto(right) == (right, None)
+    alone = without_offset(simulate_log(tmp_path / "p", duration=600, seed=3, time_lag=0.2, gnss_sigma=2.0, gnss_tau=30.0,
+                                        gnss_white=0.3, gnss_velocity=False, gnss_rate=1.0))
+    assert offset_shown(alone) is None

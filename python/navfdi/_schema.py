@@ -256,7 +256,7 @@ SECTIONS: dict[str, Section] = {
         ("mounting", "angle×3", "— (or imu_axes)", "roll, pitch, yaw of the IMU axes in the body (forward-right-down)"),
         ("boresight", "angle×3, or \"auto\"", "0; loosely coupled: the log's where it shows one", "small misalignment (roll, pitch, yaw) on top of imu_axes or mounting; \"auto\": pitch and yaw from the log (loosely coupled); not given with imu_axes, a pitch or yaw the log shows beyond 1° and 4σ, fitting the log better than none, is estimated (\"0 deg\" keeps none)"),
         ("lever_arm", "length×3", REQ, "antenna from the IMU, body frame"),
-        ("imu_time_offset", "time, or \"auto\"", "0 s", "added to the IMU time stamps; \"auto\": from the log (loosely coupled)"),
+        ("imu_time_offset", "time, or \"auto\"", "0 s; loosely coupled: the log's where it shows one", "added to the IMU time stamps; \"auto\": from the log (loosely coupled); not given, an offset the log's innovations show beyond 0.02 s and 4σ is estimated (\"0 s\" keeps none; not on meter-level positions alone)"),
         ("alignment", "table", REQ, "initial alignment"),
     ]),
     "loosely_coupled": _s("[loosely_coupled]", "Loosely coupled INS/GNSS on recorded logs: the strapdown keys above and these.", [
