@@ -693,7 +693,7 @@ def boresight_shown(sc: Any) -> Calibration | None:
     if _misfit(est)[0] >= _misfit(zero)[0]:
         return None
     what = " and ".join(f"{name} {v:+.2f} ± {e:.2f} deg" for name, v, e in shown)
-    cal.boresight_note = (f"the scenario gives no boresight and the log shows the IMU's {what} from the car: estimated "
+    cal.boresight_note = (f"the scenario gives no boresight and a first read of the log shows the IMU's {what} from the car: estimated "
                           "before the run (boresight = \"0 deg\" keeps none)")
     return cal
 
@@ -757,9 +757,10 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     shown = boresight_shown(sc) if "imu_axes" not in auto else None
     with_bore = sc if shown is None else sc.with_values({"loosely_coupled.boresight": shown.values()["loosely_coupled.boresight"]}, create=True)
     lag = offset_shown(with_bore) if "loosely_coupled" in sc.core else None
-    lag_note = "" if lag is None else (f"the scenario gives no IMU time offset and the log's innovations show {lag[0]:+.3f} ± {lag[1]:.3f} s: "
+    lag_note = "" if lag is None else (f"the scenario gives no IMU time offset and a first read of the log's innovations shows {lag[0]:+.3f} ± {lag[1]:.3f} s: "
                                        "estimated before the run (imu_time_offset = \"0 s\" keeps none)")
-    if not auto and (shown is not None or lag is not None):
+    # Both shown: read again together (each biases the other: a 0.2 s offset read a 1.5° pitch 1.2°).
+    if not auto and (shown is None) != (lag is None):
         cal = shown if shown is not None else Calibration(None, None, None, None, None, None, None, None, [])
         cal.asked = tuple(sorted([*(["boresight"] if shown is not None else []), *(["imu_time_offset"] if lag is not None else [])]))
         if lag is None:
@@ -769,7 +770,7 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     auto = [*auto, *(["boresight"] if shown is not None else []), *(["imu_time_offset"] if lag is not None else [])]
     if not auto:
         return sc, None
-    cal = calibrate(sc, auto)
+    cal = _calibrate(sc, auto, optional=True)  # the scenario's own "auto" fields stay required
     if shown is not None:
         cal.boresight_note = shown.boresight_note
     if lag is not None and cal.imu_time_offset is not None:
