@@ -44,7 +44,7 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["Calibration", "calibrate", "boresight_shown", "resolve_auto", "resolve_from_log", "write_calibrated", "MIN_REST", "MAX_LAG", "MIN_SPEED"]
+__all__ = ["Calibration", "calibrate", "boresight_shown", "offset_shown", "resolve_auto", "resolve_from_log", "write_calibrated", "MIN_REST", "MAX_LAG", "MIN_SPEED"]
 
 #: Shortest rest interval used (s).
 MIN_REST = 3.0
@@ -753,10 +753,11 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     from navfdi._lc_schema import auto_fields
 
     auto = auto_fields(sc.raw)
-    # IMU axes read from the log: the mounting a boresight is read against is not known yet.
+    # IMU axes read from the log: the mounting a boresight or an offset is read with is not
+    # known yet (calibrate reads the axes first, then those asked).
     shown = boresight_shown(sc) if "imu_axes" not in auto else None
     with_bore = sc if shown is None else sc.with_values({"loosely_coupled.boresight": shown.values()["loosely_coupled.boresight"]}, create=True)
-    lag = offset_shown(with_bore) if "loosely_coupled" in sc.core else None
+    lag = offset_shown(with_bore) if "loosely_coupled" in sc.core and "imu_axes" not in auto else None
     lag_note = "" if lag is None else (f"the scenario gives no IMU time offset and a first read of the log's innovations shows {lag[0]:+.3f} ± {lag[1]:.3f} s: "
                                        "estimated before the run (imu_time_offset = \"0 s\" keeps none)")
     # Both shown: read again together (each biases the other: a 0.2 s offset read a 1.5° pitch 1.2°).
