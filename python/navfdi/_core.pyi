@@ -580,7 +580,7 @@ def simulate_logs(
 ) -> dict[str, Any]:
     """Simulate a car's recorded-style logs, GIL released: ``trajectory_json`` the SI
     trajectory, ``duration`` (s), ``noise`` the ``LogNoise`` fields (SI; ``mounting`` three
-    angles in rad, ``ground`` a bool; absent fields keep their defaults), ``seed``, ``run``
+    angles in rad, ``lever_arm`` the antenna from the IMU in m (forward-right-down), ``ground`` a bool; absent fields keep their defaults), ``seed``, ``run``
     the random stream. Returns ``imu`` (N, 7: time s, gyro rad/s, accel m/s², in the IMU's
     axes), ``gnss`` and ``reference`` (M, 13: time, latitude, longitude rad, height m,
     velocity east/north/up m/s, σ position, σ velocity m, m/s), ``attitude`` (M, 4:

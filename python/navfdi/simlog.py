@@ -96,6 +96,7 @@ def simulate_log(
     imu_axes: Sequence[str] = ("forward", "right", "down"),
     boresight_deg: Sequence[float] = (0.0, 0.0, 0.0),
     time_lag: float = 0.0,
+    lever_arm: Sequence[float] = (0.0, 0.0, 0.0),
     imu_rate: float = 100.0,
     gyro_noise: float = 0.01,
     accel_noise: float = 0.1,
@@ -138,6 +139,11 @@ def simulate_log(
     time_lag : float
         Seconds the IMU's time stamps lag the truth (the scenario's ``imu_time_offset`` that
         undoes it is ``+time_lag``).
+    lever_arm : three float
+        The GNSS antenna from the IMU in the vehicle's forward-right-down frame (m): the fixes
+        and their velocities are the antenna's, and so is the reference's position (the
+        filters record the antenna's), its velocity the IMU's. The scenario gets it as
+        ``lever_arm`` (as a tape measure gives it).
     imu_rate : float
         IMU samples per second.
     gyro_noise, accel_noise : float
@@ -183,7 +189,7 @@ def simulate_log(
         "gnss_tau": float(gnss_tau), "gnss_white": float(gnss_white), "burst_rate": float(burst_rate),
         "burst_size": float(burst_size), "burst_duration": float(burst_duration), "stale_rate": float(stale_rate),
         "stale_duration": float(stale_duration), "reported_pos": float(reported_sigma or 0.0),
-        "mounting": list(mount), "time_lag": float(time_lag), "ground": True,
+        "mounting": list(mount), "time_lag": float(time_lag), "ground": True, "lever_arm": [float(v) for v in lever_arm],
     }
     sim = _core.simulate_logs(json.dumps(tr), float(duration), noise, int(seed), int(run))
     folder = Path(out)
@@ -253,7 +259,7 @@ rate = "1 Hz"
 {vel_sensor}
 [loosely_coupled]
 {mline}
-lever_arm = ["0 m", "0 m", "0 m"]
+lever_arm = [{", ".join(f'"{float(v):g} m"' for v in lever_arm)}]
 imu_time_offset = "{time_lag if scenario_mounting == 'true' else 0.0:g} s"
 
 [loosely_coupled.imu]

@@ -488,7 +488,8 @@ fn gnss_table(log: &GnssLog) -> Vec<f64> {
 
 /// Simulate recorded-style logs (`navfdi_core::sim::logs::simulate_logs`, GIL released):
 /// `trajectory_json` the SI trajectory, `duration` (s), `noise` a dict of the `LogNoise`
-/// fields (SI; `mounting` three angles in rad, `ground` a bool; absent fields keep their
+/// fields (SI; `mounting` three angles in rad, `lever_arm` the antenna from the IMU in m
+/// (forward-right-down), `ground` a bool; absent fields keep their
 /// defaults), `seed`, `run`. Returns `imu` (N, 7: time, gyro rad/s, accel m/s², in the IMU's
 /// axes), `gnss` and `reference` (M, 13 in the layout of `LoggedSource`), `attitude` (M, 4:
 /// body-to-NED quaternion w, x, y, z), `gnss_error` (M, 3: east, north, up, m), `stale` and
@@ -533,6 +534,7 @@ pub fn simulate_logs<'py>(
             "ground" => n.ground = v.extract::<bool>()?,
             "bias_tau" => n.bias_tau = f(&v)?,
             "mounting" => n.mounting = v.extract::<[f64; 3]>()?,
+            "lever_arm" => n.lever_arm = v.extract::<[f64; 3]>()?,
             other => {
                 return Err(PyValueError::new_err(format!(
                     "noise: unknown field {other:?}"

@@ -85,6 +85,10 @@ pub struct LogNoise {
     pub time_lag: f64,
     /// A ground vehicle (no bank in turns) rather than an aircraft.
     pub ground: bool,
+    /// The GNSS antenna from the IMU in the vehicle's forward-right-down body frame (m; the
+    /// scenario's `lever_arm`): the fixes and their velocities are the antenna's, and so is
+    /// the reference's position (the filters record the antenna's); its velocity the IMU's.
+    pub lever_arm: [f64; 3],
     /// Correlation time (s) of the gyro and accelerometer biases: first-order Gauss-Markov
     /// processes of stationary σ `gyro_bias`, `accel_bias` (the filters' bias model), driven
     /// from their own random stream; 0: constant per run.
@@ -119,6 +123,7 @@ impl Default for LogNoise {
             time_lag: 0.0,
             ground: false,
             bias_tau: 0.0,
+            lever_arm: [0.0; 3],
         }
     }
 }
@@ -195,6 +200,16 @@ pub fn simulate_logs(
             "simulated logs: time_lag within ±10 s and finite mounting angles".into(),
         ));
     }
+    if !noise
+        .lever_arm
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= 100.0)
+    {
+        return Err(Error::Invalid(format!(
+            "simulated logs: lever_arm = {:?} m must be finite and within ±100 m",
+            noise.lever_arm
+        )));
+    }
     let dt = 1.0 / noise.imu_rate;
     let n = (duration / dt).floor() as usize + 1;
     crate::memory::check(
@@ -257,12 +272,12 @@ pub fn simulate_logs(
     let mut attitude = Vec::new();
     let mut gnss_errors = Vec::new();
     let uniform = |rng: &mut ChaCha8Rng| -> f64 { rand::RngExt::random::<f64>(rng) };
+    let lever_rfu = enu_ned * Vector3::from(noise.lever_arm);
     for (k, e) in truth.iter().step_by(step).enumerate() {
-        let p = Nominal {
-            lat: e.lat,
-            lon: e.lon,
-            h: e.h,
-        };
+        // The antenna: the lever arm turned into ENU, and its velocity ω × l (ω_ib: the earth's
+        // rate in it moves a 1 m arm by 7e-5 m/s).
+        let lever = e.c_bn * lever_rfu;
+        let v_ant = e.v + e.c_bn * e.w_b.cross(&lever_rfu);
         if k > 0 {
             gm = gm * phi + normal3(&mut rng) * (noise.gnss_pos * (1.0 - phi * phi).sqrt());
         }
@@ -277,10 +292,15 @@ pub fn simulate_logs(
         let d = gm + normal3(&mut rng) * noise.gnss_white + b;
         let rm = crate::ins::earth::r_meridian(e.lat) + e.h;
         let rn = crate::ins::earth::r_normal(e.lat) + e.h;
+        let antenna = Nominal {
+            lat: e.lat + lever.y / rm,
+            lon: e.lon + lever.x / (rn * e.lat.cos()),
+            h: e.h + lever.z,
+        };
         let noisy = Nominal {
-            lat: e.lat + d.y / rm,
-            lon: e.lon + d.x / (rn * e.lat.cos()),
-            h: e.h + d.z,
+            lat: antenna.lat + d.y / rm,
+            lon: antenna.lon + d.x / (rn * e.lat.cos()),
+            h: antenna.h + d.z,
         };
         let dv = normal3(&mut rng) * noise.gnss_vel;
         let moving = e.v.xy().norm() > 1.0;
@@ -304,7 +324,7 @@ pub fn simulate_logs(
         let (pos, vel) = if stale {
             (gnss.pos[k - 1], gnss.vel[k - 1])
         } else {
-            (noisy, e.v + dv)
+            (noisy, v_ant + dv)
         };
         gnss.t.push(e.t);
         gnss.pos.push(pos);
@@ -312,11 +332,11 @@ pub fn simulate_logs(
         gnss.sd_pos.push(Vector3::repeat(sp));
         gnss.sd_vel.push(Vector3::repeat(sv));
         reference.t.push(e.t);
-        reference.pos.push(p);
+        reference.pos.push(antenna);
         reference.vel.push(e.v);
         reference.sd_pos.push(Vector3::zeros());
         reference.sd_vel.push(Vector3::zeros());
-        let err = crate::stream::Nominal::to_enu(&p, &pos);
+        let err = crate::stream::Nominal::to_enu(&antenna, &pos);
         gnss_errors.push(GnssTruthError {
             error: err,
             stale,
