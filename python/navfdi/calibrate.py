@@ -99,6 +99,8 @@ class Calibration:
     imu_time_offset_note: str = "too few turns while moving"
     #: Why the boresight was estimated though the scenario did not ask (:func:`boresight_shown`).
     boresight_note: str = ""
+    #: Why the IMU time offset was estimated though the scenario did not ask (:func:`offset_shown`).
+    offset_note: str = ""
 
     def lines(self) -> list[str]:
         """The console report: each value with its σ."""
@@ -139,8 +141,8 @@ class Calibration:
             out.append(f"IMU time offset: not estimated ({self.imu_time_offset_note})")
         else:
             out.append(f"IMU time offset: {self.imu_time_offset:+.3f} ± {self.imu_time_offset_sigma:.3f} s")
-            if self.imu_time_offset_note.startswith("the scenario gives no"):
-                out.append(f"  ({self.imu_time_offset_note})")
+            if self.offset_note:
+                out.append(f"  ({self.offset_note})")
         for name, (med, lo, hi) in self.gnss_sigma_scale.items():
             if hi <= 1.0:
                 out.append(f"{name}: the receiver's σ covers the innovations (noise_scale stays at its floor, 1)")
@@ -262,9 +264,7 @@ def _calibrate(scenario: Any, fields: Sequence[str] | None, optional: bool) -> C
             if bore is not None:
                 base = base.with_values({"loosely_coupled.boresight": [f"{x:.6f} deg" for x in bore[0]]}, create=True)
         if "imu_time_offset" in asked:
-            pos = data["gnss_log"]
-            positions_only = not np.isfinite(pos.vel[:, 0]).mean() > 0.5
-            fix_sigma = float(np.median(_fix_sigma(pos))) if positions_only else 0.0
+            fix_sigma = _positions_alone_sigma(data["gnss_log"])
             if fix_sigma > OFFSET_POSITIONS_SIGMA:
                 if "imu_time_offset" in required:
                     raise ScenarioError(
@@ -416,6 +416,13 @@ def _fix_sigma(pos: Any) -> np.ndarray:
     own = float(np.median(d3)) / 1.1774 / math.sqrt(20.0) if d3.size >= 10 else 0.0
     written = np.nanmax(pos.sd_pos[:, :2], axis=1) if np.isfinite(pos.sd_pos).any() else np.zeros(len(e))
     return np.maximum(np.nan_to_num(written, nan=0.0), own)
+
+
+def _positions_alone_sigma(pos: Any) -> float:
+    """The median horizontal σ (m) of the GNSS log ``pos``'s fixes (:func:`_fix_sigma`) when it
+    has positions alone (fewer than half its velocities written); 0 with velocities. Above
+    :data:`OFFSET_POSITIONS_SIGMA` the log does not tell the IMU time offset."""
+    return float(np.median(_fix_sigma(pos))) if not np.isfinite(pos.vel[:, 0]).mean() > 0.5 else 0.0
 
 
 def _position_speed(pos: Any, half: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
@@ -628,13 +635,10 @@ def _offset_by_innovations(sc: Any, src: Any) -> tuple[float | None, float | Non
     a 0.05 s grid over ± :data:`MAX_LAG` s, refined by a
     parabola; its σ from the curvature of the misfit. Reference-free."""
     lags = np.arange(-MAX_LAG, MAX_LAG + 1e-9, 0.05)
-    misfit = []
-    den = 0.0
     recs = src.run([sc.with_values({"loosely_coupled.imu_time_offset": f"{lag:.4f} s"}, create=True).to_json() for lag in lags])
-    for rec in recs:
-        m_k, den = _misfit(rec)
-        misfit.append(m_k)
-    m = np.array(misfit)
+    fits = [_misfit(rec) for rec in recs]
+    m = np.array([f[0] for f in fits])
+    den = fits[-1][1]
     k = int(np.argmin(m))
     if k in (0, len(lags) - 1):
         return None, None
@@ -728,7 +732,7 @@ def offset_shown(sc: Any) -> tuple[float, float] | None:
     pos = data.get("gnss_log")
     if pos is None or len(pos.t) < 3:
         return None
-    if not np.isfinite(pos.vel[:, 0]).mean() > 0.5 and float(np.median(_fix_sigma(pos))) > OFFSET_POSITIONS_SIGMA:
+    if _positions_alone_sigma(pos) > OFFSET_POSITIONS_SIGMA:
         return None
     base = _internal(sc)
     src = logs.logged_source(base)
@@ -749,7 +753,7 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     None)`` when it has none. A scenario that names its IMU's axes without a ``boresight``, or
     gives no ``imu_time_offset``, has them estimated too where its log shows them
     (:func:`boresight_shown`, :func:`offset_shown`); the calibration says so
-    (``boresight_note``, ``imu_time_offset_note``)."""
+    (``boresight_note``, ``offset_note``)."""
     from navfdi._lc_schema import auto_fields
 
     auto = auto_fields(sc.raw)
@@ -757,7 +761,7 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     # known yet (calibrate reads the axes first, then those asked).
     shown = boresight_shown(sc) if "imu_axes" not in auto else None
     with_bore = sc if shown is None else sc.with_values({"loosely_coupled.boresight": shown.values()["loosely_coupled.boresight"]}, create=True)
-    lag = offset_shown(with_bore) if "loosely_coupled" in sc.core and "imu_axes" not in auto else None
+    lag = offset_shown(with_bore) if "imu_axes" not in auto else None
     lag_note = "" if lag is None else (f"the scenario gives no IMU time offset and a first read of the log's innovations shows {lag[0]:+.3f} ± {lag[1]:.3f} s: "
                                        "estimated before the run (imu_time_offset = \"0 s\" keeps none)")
     # Both shown: read again together (each biases the other: a 0.2 s offset read a 1.5° pitch 1.2°).
@@ -766,7 +770,7 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
         cal.asked = tuple(sorted([*(["boresight"] if shown is not None else []), *(["imu_time_offset"] if lag is not None else [])]))
         if lag is None:
             return with_bore, cal
-        cal.imu_time_offset, cal.imu_time_offset_sigma, cal.imu_time_offset_note = lag[0], lag[1], lag_note
+        cal.imu_time_offset, cal.imu_time_offset_sigma, cal.offset_note = lag[0], lag[1], lag_note
         return with_bore.with_values({"loosely_coupled.imu_time_offset": f"{lag[0]:.6f} s"}, create=True), cal
     auto = [*auto, *(["boresight"] if shown is not None else []), *(["imu_time_offset"] if lag is not None else [])]
     if not auto:
@@ -775,7 +779,7 @@ def resolve_auto(sc: Any) -> tuple[Any, Calibration | None]:
     if shown is not None:
         cal.boresight_note = shown.boresight_note
     if lag is not None and cal.imu_time_offset is not None:
-        cal.imu_time_offset_note = lag_note
+        cal.offset_note = lag_note
     vals = {k: v for k, v in cal.values().items() if k.split(".", 1)[1] in auto}
     return sc.with_values(vals, create=True), cal
 
