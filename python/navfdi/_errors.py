@@ -32,6 +32,15 @@ class PartialLogWarning(ScenarioWarning):
     and a fault outside the processed span is never applied (not missed)."""
 
 
+class ImuGapWarning(ScenarioWarning):
+    """An IMU log with gaps: intervals between samples longer than twice its median interval
+    (samples missing, as loggers drop them). Each gap is bridged by the samples either side
+    and the error filter's noise is raised over it by those samples' own scatter acting for
+    the whole gap (the mean of two samples is not the mean of the missing ones); the message
+    gives how many, their total and the longest one's length and GPS time. Gaps longer than
+    ``source.imu.max_gap`` are refused."""
+
+
 class LeftOutFixesWarning(ScenarioWarning):
     """GNSS log epochs that are not GNSS measurements and are left out as the log is read: a
     position the receiver estimated without satellites (NMEA ``GGA`` quality 6, dead

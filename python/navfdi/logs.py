@@ -534,6 +534,7 @@ def scored_source(sc: Any) -> tuple[Any, str, float]:
     span = float(t[-1] - t[0])
     dt = float(np.median(np.diff(t)))
     _warn_partial(data["imu_log"], t, float(src.time0) if src is not None else float(data["t0"]), what)
+    _warn_gaps(data["imu_log"])
     if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
         raise ScenarioError(
             f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: {what} spans {span:g} s "
@@ -587,6 +588,34 @@ def _warn_partial(imu: ImuLog, t: np.ndarray, t0: float, what: str) -> None:
             f"({_gpst(g0)}–{_gpst(g1)} GPST): only their overlap is navigated, {float(t[0]) + max(late, 0.0):g}–"
             f"{float(t[-1]) - max(early, 0.0):g} s of the run; faults outside it are never applied",
             PartialLogWarning, stacklevel=3)
+
+
+#: An interval between IMU samples is a gap where it exceeds this many times the median one
+#: (``GAP_FACTOR`` of the Rust core's mechanisation).
+GAP_FACTOR = 2.0
+
+
+def _warn_gaps(imu: ImuLog) -> None:
+    """An :class:`ImuGapWarning` where the IMU log has intervals longer than
+    :data:`GAP_FACTOR` times its median one (samples missing): how many, their total, the
+    longest and its GPS time. The mechanisation bridges them and raises the filter's noise."""
+    import warnings
+
+    from ._errors import ImuGapWarning
+
+    dt = np.diff(imu.t)
+    if len(dt) < 2:
+        return
+    med = float(np.median(dt))
+    gap = np.flatnonzero(dt > GAP_FACTOR * med)
+    if len(gap):
+        k = int(gap[np.argmax(dt[gap])])
+        warnings.warn(
+            f"the IMU log {imu.path} has {len(gap)} gap(s) longer than {GAP_FACTOR:g}× its median sample interval "
+            f"({med:.4g} s; samples missing), {float(dt[gap].sum()):.3g} s in all, the longest {float(dt[k]):.3g} s after "
+            f"{_gpst(imu.t[k])} GPST: each is bridged by the samples either side, and the filter's noise over it "
+            "raised by their own scatter acting for the whole gap",
+            ImuGapWarning, stacklevel=3)
 
 
 def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], max_lag: int = 2000) -> tuple[float, np.ndarray]:

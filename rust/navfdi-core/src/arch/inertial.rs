@@ -28,6 +28,69 @@ pub struct BodyImu {
     pub gyro: Vec<Vector3<f64>>,
     /// Specific force per sample (m/s², body axes).
     pub acc: Vec<Vector3<f64>>,
+    /// The intervals between samples that are gaps (samples missing), in time order.
+    pub gaps: Vec<ImuGap>,
+}
+
+/// An interval between two IMU samples longer than [`GAP_FACTOR`] times the log's median
+/// interval: samples are missing, and the mechanisation bridges it with the mean of the two
+/// samples either side. That mean's error — each sample's own scatter (vibration, noise),
+/// not averaged over the missing samples — acts over the whole gap, so the velocity and
+/// attitude errors it leaves grow as `Δ · σ/√2` (Δ the gap, σ the samples' scatter) instead
+/// of the white-noise density's `N √Δ`. The error filter adds the difference, per body
+/// axis, as extra white-noise variance per second over the gap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ImuGap {
+    /// Index of the sample that ends the gap.
+    pub i: usize,
+    /// The gap's length (s).
+    pub span: f64,
+    /// Specific-force variance per second of the gap, `Δ σ_f² / 2` ((m/s²)² s, body axes).
+    pub acc_rate: Vector3<f64>,
+    /// Angular-rate variance per second of the gap, `Δ σ_ω² / 2` ((rad/s)² s, body axes).
+    pub gyro_rate: Vector3<f64>,
+}
+
+/// An interval is a gap where it exceeds this many times the log's median interval.
+pub const GAP_FACTOR: f64 = 2.0;
+
+/// Samples each side of a gap whose scatter is taken for the samples' error.
+pub const GAP_SAMPLES: usize = 10;
+
+/// The gaps of an IMU log (times `t` in s, increasing; rates and forces per sample): every
+/// interval longer than [`GAP_FACTOR`] times the median one, with the scatter (variance
+/// about their mean, per axis) of up to [`GAP_SAMPLES`] samples either side of it.
+pub fn imu_gaps(t: &[f64], gyro: &[Vector3<f64>], acc: &[Vector3<f64>]) -> Vec<ImuGap> {
+    let n = t.len();
+    if n < 3 {
+        return Vec::new();
+    }
+    let mut dt: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let limit = GAP_FACTOR * crate::stats::median_of(&mut dt);
+    if !(limit > 0.0) {
+        return Vec::new();
+    }
+    let scatter = |x: &[Vector3<f64>]| -> Vector3<f64> {
+        let mean = x.iter().sum::<Vector3<f64>>() / x.len() as f64;
+        x.iter()
+            .map(|v| (v - mean).component_mul(&(v - mean)))
+            .sum::<Vector3<f64>>()
+            / (x.len() as f64 - 1.0)
+    };
+    (1..n)
+        .filter(|&i| t[i] - t[i - 1] > limit)
+        .map(|i| {
+            let lo = i.saturating_sub(GAP_SAMPLES);
+            let hi = (i + GAP_SAMPLES).min(n);
+            let span = t[i] - t[i - 1];
+            ImuGap {
+                i,
+                span,
+                acc_rate: scatter(&acc[lo..hi]) * (span / 2.0),
+                gyro_rate: scatter(&gyro[lo..hi]) * (span / 2.0),
+            }
+        })
+        .collect()
 }
 
 impl BodyImu {
@@ -40,11 +103,22 @@ impl BodyImu {
                 "the IMU log has fewer than two samples".into(),
             ));
         }
-        Ok(BodyImu {
-            t: imu.t.iter().map(|t| t + time_offset).collect(),
-            gyro: imu.gyro.iter().map(|w| m * w).collect(),
-            acc: imu.accel.iter().map(|f| m * f).collect(),
-        })
+        let t: Vec<f64> = imu.t.iter().map(|t| t + time_offset).collect();
+        let gyro: Vec<Vector3<f64>> = imu.gyro.iter().map(|w| m * w).collect();
+        let acc: Vec<Vector3<f64>> = imu.accel.iter().map(|f| m * f).collect();
+        let gaps = imu_gaps(&t, &gyro, &acc);
+        Ok(BodyImu { t, gyro, acc, gaps })
+    }
+
+    /// The gap that ends at sample `i`, if the interval from sample `i − 1` to `i` is one.
+    pub fn gap_before(&self, i: usize) -> Option<&ImuGap> {
+        if self.gaps.is_empty() {
+            return None;
+        }
+        self.gaps
+            .binary_search_by_key(&i, |g| g.i)
+            .ok()
+            .map(|k| &self.gaps[k])
     }
 
     /// Time of the last sample (s).
@@ -555,7 +629,10 @@ impl Mechaniser {
                     dt,
                 };
                 mechanise(s, &self.prev, &inc);
-                kf.propagate(s, &f, &w, dt);
+                match imu.gap_before(ip).filter(|_| ip > im) {
+                    Some(g) => kf.propagate_gap(s, &f, &w, dt, &g.acc_rate, &g.gyro_rate),
+                    None => kf.propagate(s, &f, &w, dt),
+                }
                 self.prev = inc;
                 self.w_last = w;
             }

@@ -1,7 +1,7 @@
 //! Tests of [`super`] (the strapdown INS's shared parts): the velocities differenced from
 //! positions, the alignment and the IMU's own rest check.
 
-use super::velocity_from_positions;
+use super::{imu_gaps, velocity_from_positions};
 use nalgebra::Vector3;
 
 #[test]
@@ -105,7 +105,12 @@ fn align_east(
         .map(|&x| Vector3::new(gyro_x(x), 0.0, 0.0))
         .collect();
     let acc = ti.iter().map(|_| Vector3::new(0.0, 0.0, -9.8)).collect();
-    let imu = BodyImu { t: ti, gyro, acc };
+    let imu = BodyImu {
+        t: ti,
+        gyro,
+        acc,
+        gaps: Vec::new(),
+    };
     let t: Vec<f64> = (0..240).map(|k| f64::from(k) * 0.25).collect();
     let a = AlignmentSpec {
         speed: 1.0,
@@ -202,7 +207,12 @@ fn the_imu_says_where_the_rest_ends() {
             Vector3::new(a + noise(0.05), noise(0.05), -9.8 + noise(0.13))
         })
         .collect();
-    let imu = BodyImu { t, gyro, acc };
+    let imu = BodyImu {
+        t,
+        gyro,
+        acc,
+        gaps: Vec::new(),
+    };
     let idx: Vec<usize> = (0..5000).collect();
     let rest = imu_rest(&imu, &idx);
     let end = imu.t[*rest.last().unwrap()];
@@ -215,6 +225,7 @@ fn the_imu_says_where_the_rest_ends() {
         t: imu.t.clone(),
         gyro: imu.gyro.clone(),
         acc: imu.acc.clone(),
+        gaps: Vec::new(),
     };
     for i in 500..900 {
         rocked.acc[i].x += 0.3;
@@ -222,4 +233,46 @@ fn the_imu_says_where_the_rest_ends() {
     let rest = imu_rest(&rocked, &idx);
     let (a, b) = (rocked.t[rest[0]], rocked.t[*rest.last().unwrap()]);
     assert!((9.0..10.0).contains(&a) && b > 39.9, "{a} {b}");
+}
+
+/// Samples missing from a 100 Hz log are found as gaps, with the samples' scatter either side;
+/// the jitter of a logger's clock (intervals up to 1.8× the median) is not a gap.
+#[test]
+fn imu_gaps_are_missing_samples_with_their_scatter() {
+    let mut t: Vec<f64> = Vec::new();
+    let mut k = 0.0;
+    for i in 0..1000 {
+        // Every third interval 1.8× (jitter); 30 samples missing after sample 500.
+        k += if i % 3 == 0 { 0.018 } else { 0.01 };
+        if i == 500 {
+            k += 0.30;
+        }
+        t.push(k);
+    }
+    // Samples alternating ±a about a level: a scatter known exactly.
+    let sgn = |i: usize| if i.is_multiple_of(2) { 1.0 } else { -1.0 };
+    let acc: Vec<Vector3<f64>> = (0..1000)
+        .map(|i| Vector3::new(0.5 * sgn(i), 0.0, -9.8 + 0.1 * sgn(i)))
+        .collect();
+    let gyro: Vec<Vector3<f64>> = (0..1000)
+        .map(|i| Vector3::new(0.0, 0.02 * sgn(i), 0.0))
+        .collect();
+    let gaps = imu_gaps(&t, &gyro, &acc);
+    assert_eq!(gaps.len(), 1, "{gaps:?}");
+    let g = gaps[0];
+    assert_eq!(g.i, 500);
+    let span = t[500] - t[499];
+    assert!((g.span - span).abs() < 1e-12 && span > 0.3);
+    // 20 samples, ten of each sign: variance a² · 20/19.
+    let v = |a: f64| a * a * 20.0 / 19.0 * span / 2.0;
+    assert!(
+        (g.acc_rate - Vector3::new(v(0.5), 0.0, v(0.1))).norm() < 1e-12,
+        "{g:?}"
+    );
+    assert!(
+        (g.gyro_rate - Vector3::new(0.0, v(0.02), 0.0)).norm() < 1e-15,
+        "{g:?}"
+    );
+    // Too short a log has none.
+    assert!(imu_gaps(&t[..2], &gyro[..2], &acc[..2]).is_empty());
 }

@@ -302,6 +302,7 @@ mod tests {
             t: (0..n).map(|i| i as f64 * 0.01).collect(),
             gyro: vec![Vector3::new(OMEGA_IE * lat.cos(), 0.0, -OMEGA_IE * lat.sin()); n],
             acc: vec![Vector3::new(0.0, 0.0, -gravity(lat, 0.0)); n],
+            gaps: Vec::new(),
         }
     }
 
