@@ -141,7 +141,7 @@ def test_imu_reader_converts_units_and_gz(tmp_path: Path) -> None:
         (_rows(), {**COLS, "accel_unit": "m/s^2"}, r"median specific force 1 m/s² .*accel_unit"),
         (_rows()[:5] + ["2374,1000.020,0.0,x,1.0,0.1,0.0,0.0"] + _rows()[6:], COLS, r"line 7, column 'ay': 'x' is not a finite number"),
         (_rows()[:5] + [_rows()[3]] + _rows()[6:], COLS, r"line 7, column 'gps_sow_s': time does not increase"),
-        (_rows(5) + [f"2374,{1001 + i * 0.01:.3f},0.0,0.0,1.0,0.1,0.0,0.0" for i in range(5)], COLS, r"line 7, column 'gps_sow_s': a gap of 0.960 s"),
+        (_rows(5) + [f"2374,{1002 + i * 0.01:.3f},0.0,0.0,1.0,0.1,0.0,0.0" for i in range(5)], COLS, r"line 7, column 'gps_sow_s': a gap of 1.960 s in the IMU log exceeds source.imu.max_gap = 1 s"),
         (_rows()[:5] + ["2374,1000.050,0.0"] + _rows()[6:], COLS, r"line 7: 3 fields, the header has 8"),
     ],
 )

@@ -371,7 +371,7 @@ SECTIONS: dict[str, Section] = {
         ("gyro_unit", "rad/s, deg/s", "rad/s", "gyro column unit"),
         ("accel_unit", "m/s^2, m/s2, g", "m/s^2", "accelerometer column unit"),
         ("kind", "rates, increments", "rates", "increments are divided by the sample interval"),
-        ("max_gap", "time", "0.1 s", "largest sample interval accepted (longer gaps are refused; gaps over twice the median interval are bridged with the filter's noise raised, and said)"),
+        ("max_gap", "time", "1 s", "largest sample interval accepted (longer gaps are refused; gaps over twice the median interval are bridged with the filter's noise raised, and said)"),
     ]),
 }
 

@@ -206,7 +206,7 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     kind = columns.get("kind", "rates")
     if kind not in ("rates", "increments"):
         raise ScenarioError(f"{where}.kind: {kind!r} is not 'rates' or 'increments'")
-    gap = columns.get("max_gap", 0.1)
+    gap = columns.get("max_gap", 1.0)
     if isinstance(gap, str):
         from .units import parse
 
@@ -235,8 +235,8 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     columns are numbered from 1) and ``delimiter`` (default ``","``; one character,
     ``"tab"``, or ``"whitespace"``: runs of spaces and tabs, as column-aligned text); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
     increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
-    the largest interval between samples (s) accepted (default 0.1; the argument overrides
-    the table's). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
+    the largest interval between samples (s) accepted (default 1; the argument overrides
+    the table's; shorter gaps are bridged, :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
     file's). Raises :class:`~navfdi.ScenarioError` naming the file, line and column of bad
     input: a missing column, a row with another number of fields, a value that is not a
     finite number, time not increasing, a gap, a sample beyond any IMU's range (100 rad/s,
