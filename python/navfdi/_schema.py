@@ -337,7 +337,7 @@ SECTIONS: dict[str, Section] = {
     "source.gnss": _s("[source.gnss]", "A GNSS solution log (`gnss = \"file\"` is `{ file = \"file\" }`).", [
         ("file", "path", REQ, "the log (format told from the file when not given)"),
         ("format", "pos, solution, nmea, csv, rinex, ubx", "from the file", "RTKLIB .pos, navfdi solution.csv, NMEA 0183, any CSV, RINEX files solved as read, or a u-blox binary log's NAV-PVT solutions"),
-        ("columns", "table", "— (csv: required)", "csv: time, lat, lon, height or height_msl, sd, vel, sd_vel, satellites column names"),
+        ("columns", "table", "— (csv: required)", "csv: time, lat, lon, height or height_msl (or ecef: x, y, z), sd, vel, sd_vel (or sd_ecef, vel_ecef, sd_vel_ecef), satellites column names"),
         ("time_scale", "gpst, utc, unix", "gpst", "csv: the ISO time column's scale, or unix: a numeric time column is Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds) instead of GPS seconds"),
         ("time_unit", "s, ms, us, ns", "s", "csv: a numeric time column's unit"),
         ("gps_week", "integer", "—", "csv: the GPS week of a time column in seconds of week (as KF-GINS writes)"),

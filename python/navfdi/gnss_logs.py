@@ -26,8 +26,11 @@
 * ``csv`` — any CSV with a ``columns`` mapping: ``time`` (one column of GPS seconds, or
   ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
   ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
-  ``undulation`` m), optional ``sd`` (three columns σ east, north, up, m), ``vel`` (three
-  columns east, north, up, m/s), ``sd_vel``, ``satellites`` (the count the receiver used).
+  ``undulation`` m) — or ``ecef`` (three columns x, y, z, m, WGS 84 Earth-centred
+  Earth-fixed; a row of zeros is no fix) —, optional ``sd`` (three columns σ east, north, up,
+  m), ``vel`` (three columns east, north, up, m/s), ``sd_vel``, each also as ECEF x, y, z
+  columns (``sd_ecef``, ``vel_ecef``, ``sd_vel_ecef``: turned to east, north, up at the fix; σ
+  as a diagonal covariance), ``satellites`` (the count the receiver used).
 
 Every format: fixes from fewer than four satellites (where the log gives the count: ``.pos``
 ``ns``, ``GGA``, ``solution.csv``'s ``used``, a CSV's ``satellites``) are left out, and so are
@@ -483,8 +486,8 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
     """A CSV with a ``columns`` mapping (see the module's description)."""
     cols = cfg.get("columns")
     if not isinstance(cols, Mapping):
-        raise ScenarioError("source.gnss.columns: a table mapping time, lat, lon, height (and optionally sd, vel, sd_vel) to the file's column names")
-    allowed = {"time", "lat", "lon", "height", "height_msl", "sd", "vel", "sd_vel", "satellites"}
+        raise ScenarioError("source.gnss.columns: a table mapping time, lat, lon, height or ecef (and optionally sd, vel, sd_vel) to the file's column names")
+    allowed = {"time", "lat", "lon", "height", "height_msl", "ecef", "sd", "vel", "sd_vel", "sd_ecef", "vel_ecef", "sd_vel_ecef", "satellites"}
     unknown = sorted(set(cols) - allowed)
     if unknown:
         raise ScenarioError(f"source.gnss.columns: unknown key(s) {', '.join(unknown)} (allowed: {', '.join(sorted(allowed))})")
@@ -528,7 +531,7 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
         if v is None:
             return np.full((len(data), 3), np.nan)
         if not (isinstance(v, list) and len(v) == 3):
-            raise ScenarioError(f"source.gnss.columns.{key}: three column names (east, north, up)")
+            raise ScenarioError(f"source.gnss.columns.{key}: three column names ({'x, y, z' if key.endswith('ecef') else 'east, north, up'})")
         return np.column_stack([num(c, key) for c in v])
 
     tc = cmap.get("time")
@@ -567,9 +570,59 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
         if not isinstance(tc, str) or scale != "gpst" or "time_unit" in cfg:
             raise ScenarioError("source.gnss.gps_week: for a single time column of GPS seconds of week (time = …, time_scale \"gpst\")")
         t = t + week * 604800.0
+    sats = cmap.get("satellites")
+    if sats is not None and not isinstance(sats, str):
+        raise ScenarioError("source.gnss.columns.satellites: a column name (the satellites the receiver used)")
+    ns = None if sats is None else num(sats, "satellites")
+    if "ecef" in cmap:
+        geo = [k for k in ("lat", "lon", "height", "height_msl") if k in cmap]
+        if geo:
+            raise ScenarioError(f"source.gnss.columns: ecef (x, y, z) or lat, lon and height, not both (also given: {', '.join(geo)})")
+        lat, lon, h = _ecef_positions(three("ecef"))
+    else:
+        lat, lon, h = _geodetic_positions(cfg, cmap, num)
+
+    def enu(key: str, sd: bool) -> np.ndarray:
+        # East, north, up columns, or their ECEF x, y, z form turned to them at each fix.
+        if f"{key}_ecef" not in cmap:
+            return three(key)
+        if key in cmap:
+            raise ScenarioError(f"source.gnss.columns: {key} (east, north, up) or {key}_ecef (x, y, z), not both")
+        return _ecef_to_enu(three(f"{key}_ecef"), lat, lon, sd)
+
+    none = np.isfinite(t) & ~(np.isfinite(lat) & np.isfinite(lon) & np.isfinite(h))
+    if none.any() and not none[np.isfinite(t)].all():
+        _left_out(path, t[none], "without a position (empty, or ECEF zeros: no fix)")
+    return _log(path, t, lat, lon, h, enu("vel", False), enu("sd", True), enu("sd_vel", True), ns=ns)
+
+
+def _ecef_positions(xyz: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Latitude, longitude (deg) and height (m) of ECEF positions ``xyz`` (M, 3) m; a row of
+    zeros (what receivers write without a fix) is NaN."""
+    from .gnss import ecef_to_lla
+
+    xyz = np.where((xyz == 0.0).all(axis=1, keepdims=True), np.nan, xyz)
+    lla = ecef_to_lla(xyz)
+    return lla[:, 0], lla[:, 1], lla[:, 2]
+
+
+def _ecef_to_enu(v: np.ndarray, lat: np.ndarray, lon: np.ndarray, sd: bool) -> np.ndarray:
+    """ECEF vectors ``v`` (M, 3) turned to east, north, up at ``lat``, ``lon`` (deg); with
+    ``sd``, σ of x, y, z (a diagonal covariance) turned to the σ of east, north, up."""
+    from .gnss import enu_rotation
+
+    r = enu_rotation(lat, lon)
+    if sd:
+        return np.sqrt(np.einsum("kij,kj->ki", r * r, v * v))
+    return np.einsum("kij,kj->ki", r, v)
+
+
+def _geodetic_positions(cfg: Mapping[str, Any], cmap: Mapping[str, Any], num: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Latitude, longitude (deg) and height above the ellipsoid (m) of a CSV's ``lat``,
+    ``lon`` and ``height`` (or ``height_msl`` + ``undulation``) columns."""
     for k in ("lat", "lon"):
         if not isinstance(cmap.get(k), str):
-            raise ScenarioError(f"source.gnss.columns.{k}: the column name is required")
+            raise ScenarioError(f"source.gnss.columns.{k}: the column name is required (or ecef: three columns x, y, z)")
     if isinstance(cmap.get("height"), str):
         h = num(cmap["height"], "height")
     elif isinstance(cmap.get("height_msl"), str):
@@ -579,11 +632,7 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
         h = num(cmap["height_msl"], "height_msl") + float(und)
     else:
         raise ScenarioError("source.gnss.columns: height (above the ellipsoid) or height_msl with source.gnss.undulation")
-    sats = cmap.get("satellites")
-    if sats is not None and not isinstance(sats, str):
-        raise ScenarioError("source.gnss.columns.satellites: a column name (the satellites the receiver used)")
-    ns = None if sats is None else num(sats, "satellites")
-    return _log(path, t, num(cmap["lat"], "lat"), num(cmap["lon"], "lon"), h, three("vel"), three("sd"), three("sd_vel"), ns=ns)
+    return num(cmap["lat"], "lat"), num(cmap["lon"], "lon"), h
 
 
 EPOCH_READERS.append(lambda spec, base: read_gnss(spec, base).t)
