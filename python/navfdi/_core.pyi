@@ -609,7 +609,7 @@ def read_imu_csv(
     time_unit: float = 1.0,
     header: bool = True,
     delimiter: str = ",",
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], tuple[int, int, int, int]]:
     """Read an IMU CSV log (plain or gzip) in one streaming pass, GIL released: ``time`` one
     column name (GPS seconds, or another count: ``time_unit`` seconds per unit, default 1) or
     ``[week, seconds_of_week]``; ``header`` false: no header line, the columns named ``"1"``,
@@ -618,7 +618,10 @@ def read_imu_csv(
     names each; ``gyro_scale`` to rad/s and ``accel_scale`` to m/s² (rad and m/s for
     ``increments``, which are divided by the sample interval); ``max_gap`` the largest sample
     interval accepted (s); ``unit_fields`` the two unit fields' names for messages. Returns
-    ``t`` (N,) GPS seconds, ``gyro`` (N, 3) rad/s, ``accel`` (N, 3) m/s². ``FileFormatError``
+    ``t`` (N,) GPS seconds, ``gyro`` (N, 3) rad/s, ``accel`` (N, 3) m/s² and ``(repeated,
+    line, zeroed, line)``: rows left out as exact repeats of the row before them (the same time
+    and values), and as placeholders (a specific force of exactly zero on every axis), each
+    with the first one's line (0: none). ``FileFormatError``
     names the file, line and column of bad input (missing column, field count, non-finite
     value, time not increasing, a gap, a sample beyond any IMU's range, implausible units,
     no samples, a gzip that inflates over 200 times its size); ``OSError`` a path that is not a

@@ -41,6 +41,14 @@ class ImuGapWarning(ScenarioWarning):
     ``source.imu.max_gap`` are refused."""
 
 
+class LeftOutSamplesWarning(ScenarioWarning):
+    """IMU log rows left out as the log is read: a row that repeats the one before it exactly
+    (the same time and values — a logger writing a sample twice; nothing is lost), or whose
+    specific force is exactly zero on every axis (a logger's placeholder for a sample it did
+    not get; the interval is bridged as a gap). The message gives how many and the first
+    one's line."""
+
+
 class LeftOutFixesWarning(ScenarioWarning):
     """GNSS log epochs that are not GNSS measurements and are left out as the log is read: a
     position the receiver estimated without satellites (NMEA ``GGA`` quality 6, dead

@@ -262,10 +262,15 @@ def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndar
         raise ScenarioError(f"source.gnss: {path}: no epoch with a position")
     order = np.argsort(t[ok], kind="stable")
     sel = np.flatnonzero(ok)[order]
+    rows = np.column_stack([t, lat, lon, h, vel, sd, sd_vel] + [v for v in (q, ns) if v is not None])[sel]
+    again = np.concatenate([[False], ((rows[1:] == rows[:-1]) | (np.isnan(rows[1:]) & np.isnan(rows[:-1]))).all(axis=1)])
+    if again.any():
+        _left_out(path, t[sel][again], "repeating the epoch before them exactly")
+        sel = sel[~again]
     tt = t[sel]
     if (np.diff(tt) <= 0).any():
         i = int(np.argmax(np.diff(tt) <= 0))
-        raise ScenarioError(f"source.gnss: {path}: two epochs at {tt[i]:.3f} GPS s")
+        raise ScenarioError(f"source.gnss: {path}: two different epochs at {tt[i]:.3f} GPS s")
     if (np.abs(lat[sel]) > 90).any() or (np.abs(lon[sel]) > 360).any() or (np.abs(h[sel]) > 1e5).any():
         raise ScenarioError(f"source.gnss: {path}: latitude, longitude or height out of range (degrees and metres expected)")
     qq = np.full(len(sel), 5.0) if q is None else q[sel]

@@ -239,7 +239,9 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     the table's; shorter gaps are bridged, :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
     file's). Raises :class:`~navfdi.ScenarioError` naming the file, line and column of bad
     input: a missing column, a row with another number of fields, a value that is not a
-    finite number, time not increasing, a gap, a sample beyond any IMU's range (100 rad/s,
+    finite number, time not increasing (a row repeating the one before it exactly is left out
+    instead, as is a row whose specific force is exactly zero on every axis — a placeholder —,
+    :class:`~navfdi.LeftOutSamplesWarning`), a gap, a sample beyond any IMU's range (100 rad/s,
     1000 m/s²), a median specific force far from gravity or a median rate over 1 rad/s
     (units), a header with no rows, a compressed file that inflates implausibly, a path that
     is not a regular file.
@@ -256,7 +258,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         time = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     try:
-        t, gyro, accel = _core.read_imu_csv(
+        t, gyro, accel, (repeated, first, zeroed, first_zero) = _core.read_imu_csv(
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
             ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")],
@@ -265,6 +267,18 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         raise ScenarioError(str(e)) from None
     except ValueError as e:
         raise ScenarioError(str(e)) from None
+    if repeated or zeroed:
+        import warnings
+
+        from ._errors import LeftOutSamplesWarning
+
+        if repeated:
+            warnings.warn(f"the IMU log {path}: {repeated} row(s) repeating the row before them exactly (the same time and values; "
+                          f"the first at line {first}) left out", LeftOutSamplesWarning, stacklevel=2)
+        if zeroed:
+            warnings.warn(f"the IMU log {path}: {zeroed} row(s) with a specific force of exactly zero on every axis (no IMU on Earth "
+                          f"measures that: a logger's placeholder for a missing sample; the first at line {first_zero}) left out, "
+                          "their intervals bridged as gaps", LeftOutSamplesWarning, stacklevel=2)
     if columns.get("time_scale", "gpst") == "unix":
         t = unix_to_gps(t)
     if "gps_week" in columns:
@@ -309,10 +323,18 @@ def read_pos(path: str | Path) -> PosLog:
         return np.full(len(a), default)
 
     times = form.gpst(a[:, 0])
+    again = np.concatenate([[False], (a[1:] == a[:-1]).all(axis=1)])
+    if again.any():
+        from .gnss_logs import _left_out
+
+        _left_out(path, times[again], f"repeating the epoch before them exactly (the first at line {line_of[int(np.argmax(again))]})")
+        keep = ~again
+        a, times, line_of = a[keep], times[keep], [n for n, k in zip(line_of, keep) if k]
+        col = {k: v[keep] for k, v in col.items()}
     steps = np.diff(times)
     if (steps <= 0).any():
         i = int(np.argmax(steps <= 0))
-        raise ScenarioError(f"{path}: epoch {i + 2} ({times[i + 1]:.3f} s) does not come after the one before it")
+        raise ScenarioError(f"{path}, line {line_of[i + 1]}: epoch {i + 2} ({times[i + 1]:.3f} s) does not come after the one before it")
     vel = np.column_stack([get("ve"), get("vn"), get("vu")])
     sd_vel = np.column_stack([get("sdve"), get("sdvn"), get("sdvu")])
     # RTKLIB names the height "height(m)"; an ellipsoidal height may be labelled "ellh(m)".

@@ -347,6 +347,7 @@ type ImuArrays<'py> = (
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
+    (usize, u64, usize, u64),
 );
 
 /// Read an IMU CSV log (`navfdi_core::logs::imu_csv::read_imu_csv`, GIL released): `time` is
@@ -356,8 +357,10 @@ type ImuArrays<'py> = (
 /// unit of a single time column (default 1); `header`: the first line names the columns (else
 /// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character, or `"whitespace"`
 /// (runs of spaces and tabs). Returns `t` (N,) in seconds of that column's count,
-/// `gyro` (N, 3) rad/s and `accel` (N, 3) m/s². FileFormatError names the file, line and
-/// column of bad input; OSError an unreadable path.
+/// `gyro` (N, 3) rad/s, `accel` (N, 3) m/s² and `(repeated, line, zeroed, line)`: rows left
+/// out as exact repeats of the row before them, and as placeholders (specific force exactly
+/// zero), each with the first one's line (0: none). FileFormatError names
+/// the file, line and column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
 #[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ","))]
@@ -416,6 +419,12 @@ pub fn read_imu_csv<'py>(
         crate::convert::to_numpy(py, table.t, &[n])?,
         crate::convert::to_numpy(py, flat(table.gyro), &[n, 3])?,
         crate::convert::to_numpy(py, flat(table.accel), &[n, 3])?,
+        (
+            table.repeated,
+            table.first_repeated_line,
+            table.zeroed,
+            table.first_zeroed_line,
+        ),
     ))
 }
 

@@ -134,6 +134,17 @@ pub struct ImuTable {
     pub gyro: Vec<[f64; 3]>,
     /// Specific force per sample (m/s²).
     pub accel: Vec<[f64; 3]>,
+    /// Rows left out as repeats: a row identical to the one before it in time and every
+    /// value (a logger writing a sample twice).
+    pub repeated: usize,
+    /// Line of the first repeat (0: none).
+    pub first_repeated_line: u64,
+    /// Rows left out as placeholders: a specific force (or velocity increment) of exactly
+    /// zero on all three axes, which no IMU near the Earth measures (free fall) and loggers
+    /// write for a sample they did not get. The interval it leaves is a gap like any other.
+    pub zeroed: usize,
+    /// Line of the first placeholder (0: none).
+    pub first_zeroed_line: u64,
 }
 
 /// An error at a cell: "`path`, line `l`, column '`col`': `msg`" (without a line when it is 0).
@@ -155,9 +166,11 @@ fn format_err(path: &str, line: Option<u64>, msg: impl std::fmt::Display) -> Err
 /// Read an IMU CSV log (header line, then one sample per row) as `spec` says. Errors name the
 /// file, the line and the column: a missing column (with the header's), a row with another
 /// number of fields (a trailing comma says so), a value that is not a finite number, time not
-/// increasing, a gap over `max_gap`, a sample beyond [`MAX_RATE`] or [`MAX_SPECIFIC_FORCE`], a
-/// median specific force far from gravity or a median rate over [`MAX_MEDIAN_RATE`] (units),
-/// a file with no sample.
+/// increasing (a row repeating the one before it exactly is left out and counted instead, as
+/// is a row whose specific force is exactly zero on every axis: a placeholder), a
+/// gap over `max_gap`, a sample beyond [`MAX_RATE`] or [`MAX_SPECIFIC_FORCE`], a median
+/// specific force far from gravity or a median rate over [`MAX_MEDIAN_RATE`] (units), a file
+/// with no sample.
 pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
     if !(spec.max_gap > 0.0 && spec.max_gap.is_finite()) {
         return Err(Error::InvalidParameter {
@@ -258,6 +271,7 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
     ];
     let width = header.len();
     let mut out = ImuTable::default();
+    let mut last_raw = ([f64::NAN; 3], [f64::NAN; 3]);
     // Byte records: only the seven cells read are trimmed and decoded (the rest of a row is
     // neither validated as UTF-8 nor trimmed), which halves the time per row.
     let mut rec = csv::ByteRecord::new();
@@ -318,8 +332,23 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
         };
         let gv = [num(g[0])?, num(g[1])?, num(g[2])?];
         let av = [num(a[0])?, num(a[1])?, num(a[2])?];
+        if av == [0.0; 3] {
+            out.zeroed += 1;
+            if out.first_zeroed_line == 0 {
+                out.first_zeroed_line = line;
+            }
+            continue;
+        }
         if let Some(&prev) = out.t.last() {
             let tname = tcols.last().map_or("time", |&c| header[c].as_str());
+            if t == prev && last_raw == (gv, av) {
+                // The same sample written twice: nothing is lost by leaving it out.
+                out.repeated += 1;
+                if out.first_repeated_line == 0 {
+                    out.first_repeated_line = line;
+                }
+                continue;
+            }
             if !(t > prev) {
                 return Err(cell_err(
                     path,
@@ -341,6 +370,7 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
                 ));
             }
         }
+        last_raw = (gv, av);
         out.t.push(t);
         out.gyro.push(gv.map(|v| v * spec.gyro_scale));
         out.accel.push(av.map(|v| v * spec.accel_scale));
@@ -567,6 +597,38 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("line 3") && e.contains("beyond any IMU"), "{e}");
+        let _ = std::fs::remove_dir_all(&d);
+    }
+
+    /// A row written twice is left out and counted; the same time with other values is
+    /// still refused.
+    #[test]
+    fn an_exact_repeat_is_left_out_and_counted() {
+        let d = std::env::temp_dir().join(format!("navfdi_rep_{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let text = rows(6);
+        let line = "1000.02,0.01,0,0,0,0,-9.8\n";
+        let twice = text.replacen(line, &format!("{line}{line}{line}"), 1);
+        let t = read_imu_csv(&write(&d, "r.csv", &twice), &spec()).unwrap();
+        assert_eq!(t.t.len(), 6);
+        assert_eq!((t.repeated, t.first_repeated_line), (2, 5));
+        let clean = read_imu_csv(&write(&d, "c.csv", &text), &spec()).unwrap();
+        assert_eq!((clean.repeated, clean.first_repeated_line), (0, 0));
+        assert_eq!((clean.zeroed, t.zeroed), (0, 0));
+        // A placeholder row (specific force 0, 0, 0) is left out and counted.
+        let hole = text.replacen(line, "1000.02,0,0,0,0,0,0\n", 1);
+        let z = read_imu_csv(&write(&d, "z.csv", &hole), &spec()).unwrap();
+        assert_eq!((z.t.len(), z.zeroed, z.first_zeroed_line), (5, 1, 4));
+        assert!(!z.t.contains(&1000.02));
+        assert_eq!(clean.t, t.t);
+        let other = text.replacen(line, &format!("{line}1000.02,0.02,0,0,0,0,-9.8\n"), 1);
+        let e = read_imu_csv(&write(&d, "o.csv", &other), &spec())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("line 5") && e.contains("does not increase"),
+            "{e}"
+        );
         let _ = std::fs::remove_dir_all(&d);
     }
 
