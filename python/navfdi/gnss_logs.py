@@ -572,8 +572,9 @@ def read_gnss_csv(path: Path, text: str, cfg: Mapping[str, Any]) -> PosLog:
     else:
         raise ScenarioError("source.gnss.columns.time: a column name (GPS seconds or ISO date-time) or [week, seconds]")
     if week is not None:
-        if not isinstance(tc, str) or scale != "gpst" or "time_unit" in cfg:
-            raise ScenarioError("source.gnss.gps_week: for a single time column of GPS seconds of week (time = …, time_scale \"gpst\")")
+        if not isinstance(tc, str) or scale != "gpst":
+            raise ScenarioError("source.gnss.gps_week: for a single time column of GPS time of week (time = …, time_scale \"gpst\"; "
+                                "in time_unit: u-blox's iTOW is \"ms\")")
         t = t + week * 604800.0
     sats = cmap.get("satellites")
     if sats is not None and not isinstance(sats, str):

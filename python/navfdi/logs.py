@@ -187,16 +187,18 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     if week is not None:
         if not (isinstance(week, int) and not isinstance(week, bool) and 0 <= week <= 9999):
             raise ScenarioError(f"{where}.gps_week = {week!r}: the GPS week number (0–9999) of a seconds-of-week column")
-        if "seconds" not in columns or "week" in columns or "time" in columns or "time_scale" in columns or "time_unit" in columns:
-            raise ScenarioError(f"{where}.gps_week: with a seconds-of-week column (seconds = …) alone, no week, time, time_scale or time_unit")
+        if "seconds" not in columns or "week" in columns or "time" in columns or "time_scale" in columns:
+            raise ScenarioError(f"{where}.gps_week: with a seconds-of-week column (seconds = …) alone, no week, time or time_scale "
+                                "(the column may be in time_unit: u-blox's iTOW is \"ms\")")
     if not header and not ("time" in columns or ("seconds" in columns and ("week" in columns or week is not None))):
         raise ScenarioError(f"{where}: without a header line the time column's number is required (time = …, or week and seconds)")
     scale = columns.get("time_scale", "gpst")
     if scale not in ("gpst", "unix", "boot"):
         raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds), 'unix' (Unix time, UTC) or 'boot' (the IMU's own clock, "
                             f"placed on GPS time by the turns)")
-    if "time" not in columns and (scale != "gpst" or "time_unit" in columns):
-        raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …); week and seconds are GPS time in seconds")
+    if "time" not in columns and (scale != "gpst" or ("time_unit" in columns and week is None)):
+        raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …, or seconds of week with gps_week); "
+                            "week and seconds are GPS time in seconds")
     time_unit(columns.get("time_unit", "s"), f"{where}.time_unit")
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     if gu not in _GYRO_UNITS:
