@@ -90,3 +90,30 @@ def test_placeholder_rows_are_left_out_as_missing_samples(tmp_path: Path):
     # Mechanised as read, the vertical RMS went 0.043 → 0.075 m.
     assert got["ver_rms"] <= 1.1 * intact["ver_rms"], (intact, got)
     assert got["hor_rms"] <= 1.1 * intact["hor_rms"], (intact, got)
+
+
+def test_batch_stamps_are_refused_or_spread(tmp_path: Path):
+    # Samples stamped in batches of ten with the first one's time, as some loggers write them.
+    import navfdi
+    from navfdi.scenario import from_dict
+
+    rows = lines("imu_1934_gpst.csv.gz")
+    out = [rows[0]]
+    for i, r in enumerate(rows[1:]):
+        f = r.split(",")
+        f[1] = rows[1 + i - i % 10].split(",")[1]
+        out.append(",".join(f))
+    (tmp_path / "imu.csv").write_text("\n".join(out) + "\n")
+    raw = dict(load_scenario("drive_lc").raw)
+    src = Path(str(resources.files("navfdi"))) / "scenarios" / "drive_lc.toml"
+    cols = {**raw["source"]["imu"], "file": str(tmp_path / "imu.csv"), "max_gap": 1.0}
+    with pytest.raises(ScenarioError, match=r"line 3, column 'gps_sow_s': time does not increase .*time_repeats = \"spread\""):
+        read_imu(tmp_path / "imu.csv", cols)
+    with pytest.raises(ScenarioError, match=r"time_repeats = 'keep': \"refuse\" \(default\) or \"spread\""):
+        read_imu(tmp_path / "imu.csv", {**cols, "time_repeats": "keep"})
+    spread = read_imu(tmp_path / "imu.csv", {**cols, "time_repeats": "spread"})
+    assert np.abs(spread.t - read_imu(DRIVE / "imu_1934_gpst.csv.gz", cols).t).max() < 0.003
+    intact = navfdi.run_scenario(from_dict(raw, source=str(src))).runs["fde"].errors()
+    raw["source"] = {**raw["source"], "imu": {**cols, "time_repeats": "spread"}}
+    got = navfdi.run_scenario(from_dict(raw, source=str(src))).runs["fde"].errors()
+    assert got["hor_rms"] <= 1.05 * intact["hor_rms"], (intact, got)

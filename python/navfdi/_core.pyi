@@ -609,12 +609,14 @@ def read_imu_csv(
     time_unit: float = 1.0,
     header: bool = True,
     delimiter: str = ",",
+    spread_times: bool = False,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], tuple[int, int, int, int]]:
     """Read an IMU CSV log (plain or gzip) in one streaming pass, GIL released: ``time`` one
     column name (GPS seconds, or another count: ``time_unit`` seconds per unit, default 1) or
     ``[week, seconds_of_week]``; ``header`` false: no header line, the columns named ``"1"``,
     ``"2"``, … by position; ``delimiter`` one ASCII character or ``"whitespace"`` (runs of
-    spaces and tabs); ``gyro``, ``accel`` three column
+    spaces and tabs); ``spread_times``: samples sharing a time stamp spread evenly from it to the
+    next stamp (the last batch at the median interval) instead of refused; ``gyro``, ``accel`` three column
     names each; ``gyro_scale`` to rad/s and ``accel_scale`` to m/s² (rad and m/s for
     ``increments``, which are divided by the sample interval); ``max_gap`` the largest sample
     interval accepted (s); ``unit_fields`` the two unit fields' names for messages. Returns

@@ -372,6 +372,7 @@ SECTIONS: dict[str, Section] = {
         ("accel_unit", "m/s^2, m/s2, g", "m/s^2", "accelerometer column unit"),
         ("kind", "rates, increments", "rates", "increments are divided by the sample interval"),
         ("max_gap", "time", "1 s", "largest sample interval accepted (longer gaps are refused; gaps over twice the median interval are bridged with the filter's noise raised, and said)"),
+        ("time_repeats", "refuse, spread", "refuse", "samples sharing a time stamp (a logger stamping them in batches): refused with their line, or spread evenly from the stamp to the next"),
     ]),
 }
 

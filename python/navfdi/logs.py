@@ -200,6 +200,8 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
         raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …, or seconds of week with gps_week); "
                             "week and seconds are GPS time in seconds")
     time_unit(columns.get("time_unit", "s"), f"{where}.time_unit")
+    if columns.get("time_repeats", "refuse") not in ("refuse", "spread"):
+        raise ScenarioError(f"{where}.time_repeats = {columns['time_repeats']!r}: \"refuse\" (default) or \"spread\" (samples sharing a stamp spread evenly to the next)")
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     if gu not in _GYRO_UNITS:
         raise ScenarioError(f"{where}.gyro_unit: {gu!r} is not one of {', '.join(_GYRO_UNITS)}")
@@ -236,7 +238,9 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     for a ``time`` column; ``header`` (default true; false: every line is a sample and the
     columns are numbered from 1) and ``delimiter`` (default ``","``; one character,
     ``"tab"``, or ``"whitespace"``: runs of spaces and tabs, as column-aligned text); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
-    increments, in rad and m/s or deg and g·s, divided by the sample interval); ``max_gap``:
+    increments, in rad and m/s or deg and g·s, divided by the sample interval);
+    ``time_repeats`` ``"refuse"`` (default) or ``"spread"`` (samples sharing a time stamp, as
+    loggers stamping in batches write them, spread evenly from the stamp to the next); ``max_gap``:
     the largest interval between samples (s) accepted (default 1; the argument overrides
     the table's; shorter gaps are bridged, :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
     file's). Raises :class:`~navfdi.ScenarioError` naming the file, line and column of bad
@@ -264,7 +268,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
             ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")],
-            *text_layout(columns, "source.imu"))
+            *text_layout(columns, "source.imu"), columns.get("time_repeats", "refuse") == "spread")
     except OSError as e:
         raise ScenarioError(str(e)) from None
     except ValueError as e:

@@ -356,14 +356,15 @@ type ImuArrays<'py> = (
 /// `max_gap` (s); `unit_fields`: the unit fields' names for messages; `time_unit`: seconds per
 /// unit of a single time column (default 1); `header`: the first line names the columns (else
 /// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character, or `"whitespace"`
-/// (runs of spaces and tabs). Returns `t` (N,) in seconds of that column's count,
+/// (runs of spaces and tabs); `spread_times`: samples sharing a stamp spread evenly to the next
+/// one. Returns `t` (N,) in seconds of that column's count,
 /// `gyro` (N, 3) rad/s, `accel` (N, 3) m/s² and `(repeated, line, zeroed, line)`: rows left
 /// out as exact repeats of the row before them, and as placeholders (specific force exactly
 /// zero), each with the first one's line (0: none). FileFormatError names
 /// the file, line and column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
-#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ","))]
+#[pyo3(signature = (path, time, gyro, accel, gyro_scale, accel_scale, increments, max_gap, unit_fields, time_unit = 1.0, header = true, delimiter = ",", spread_times = false))]
 pub fn read_imu_csv<'py>(
     py: Python<'py>,
     path: String,
@@ -378,6 +379,7 @@ pub fn read_imu_csv<'py>(
     time_unit: f64,
     header: bool,
     delimiter: &str,
+    spread_times: bool,
 ) -> PyResult<ImuArrays<'py>> {
     use navfdi_core::logs::imu_csv::Delimiter;
     let delimiter = match delimiter.as_bytes() {
@@ -411,6 +413,7 @@ pub fn read_imu_csv<'py>(
         header,
         delimiter,
         unit_fields,
+        spread_times,
     };
     let table = crate::interrupt::run(py, move |_| read(&path, &spec))?;
     let n = table.t.len();

@@ -122,6 +122,10 @@ pub struct ImuCsvSpec {
     pub delimiter: Delimiter,
     /// Names of the unit fields, for messages (e.g. `source.imu.gyro_unit`).
     pub unit_fields: [String; 2],
+    /// Samples that share a time stamp (a logger stamping them in batches) are spread evenly
+    /// from it to the next stamp (the last batch at the log's median interval); false: a
+    /// time that does not increase is refused.
+    pub spread_times: bool,
 }
 
 /// An IMU log as read: times (GPS s), rates (rad/s) and specific forces (m/s²) in the IMU's
@@ -145,6 +149,8 @@ pub struct ImuTable {
     pub zeroed: usize,
     /// Line of the first placeholder (0: none).
     pub first_zeroed_line: u64,
+    /// Samples whose shared time stamp was spread ([`ImuCsvSpec::spread_times`]).
+    pub spread: usize,
 }
 
 /// An error at a cell: "`path`, line `l`, column '`col`': `msg`" (without a line when it is 0).
@@ -341,20 +347,28 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
         }
         if let Some(&prev) = out.t.last() {
             let tname = tcols.last().map_or("time", |&c| header[c].as_str());
-            if t == prev && last_raw == (gv, av) {
-                // The same sample written twice: nothing is lost by leaving it out.
+            if t == prev && !spec.spread_times && last_raw == (gv, av) {
+                // The same sample written twice: nothing is lost by leaving it out (in a
+                // batch sharing one stamp, two equal samples are two samples).
                 out.repeated += 1;
                 if out.first_repeated_line == 0 {
                     out.first_repeated_line = line;
                 }
                 continue;
             }
-            if !(t > prev) {
+            if t == prev && spec.spread_times {
+                out.spread += 1;
+            } else if !(t > prev) {
+                let hint = if t == prev {
+                    "; if the logger stamps its samples in batches, source.imu.time_repeats = \"spread\" spreads each batch to the next stamp"
+                } else {
+                    ""
+                };
                 return Err(cell_err(
                     path,
                     line,
                     tname,
-                    format!("time does not increase ({t:.6} s after {prev:.6} s)"),
+                    format!("time does not increase ({t:.6} s after {prev:.6} s){hint}"),
                 ));
             }
             if t - prev > spec.max_gap {
@@ -398,6 +412,9 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
     }
     if out.t.is_empty() {
         return Err(format_err(path, None, "no samples (only a header line)"));
+    }
+    if out.spread > 0 {
+        spread_batches(&mut out.t);
     }
     if spec.increments {
         let n = out.t.len();
@@ -516,6 +533,38 @@ fn plausible(
     Ok(())
 }
 
+/// Times `t` (increasing, runs of equal stamps allowed) with each run spread evenly from its
+/// stamp to the next one; the last run at the median interval between distinct stamps per
+/// sample.
+fn spread_batches(t: &mut [f64]) {
+    let n = t.len();
+    let mut per: Vec<f64> = Vec::new();
+    let mut a = 0;
+    while a < n {
+        let mut b = a + 1;
+        while b < n && t[b] == t[a] {
+            b += 1;
+        }
+        if b < n {
+            let step = (t[b] - t[a]) / (b - a) as f64;
+            per.push(step);
+            for j in 1..b - a {
+                t[a + j] = t[a] + j as f64 * step;
+            }
+        } else if b - a > 1 {
+            let step = if per.is_empty() {
+                f64::NAN
+            } else {
+                crate::stats::median_of(&mut per.clone())
+            };
+            for j in 1..b - a {
+                t[a + j] = t[a] + j as f64 * step;
+            }
+        }
+        a = b;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -550,6 +599,7 @@ mod tests {
             header: true,
             delimiter: Delimiter::Byte(b','),
             unit_fields: ["gyro_unit".into(), "accel_unit".into()],
+            spread_times: false,
         }
     }
 
@@ -629,6 +679,27 @@ mod tests {
             e.contains("line 5") && e.contains("does not increase"),
             "{e}"
         );
+        assert!(e.contains("time_repeats"), "{e}");
+        // Stamped in batches of four at 0.04 s: spread to 0.01 s when asked.
+        let mut batched = String::from("t,gx,gy,gz,ax,ay,az\n");
+        for k in 0..12 {
+            let stamp = 1000.0 + (k / 4) as f64 * 0.04;
+            batched.push_str(&format!("{stamp},0.01,{},0,0,0,-9.8\n", k as f64 * 1e-3));
+        }
+        let p = write(&d, "b.csv", &batched);
+        assert!(read_imu_csv(&p, &spec()).is_err());
+        let t = read_imu_csv(
+            &p,
+            &ImuCsvSpec {
+                spread_times: true,
+                ..spec()
+            },
+        )
+        .unwrap();
+        assert_eq!(t.spread, 9);
+        for (k, tk) in t.t.iter().enumerate() {
+            assert!((tk - (1000.0 + k as f64 * 0.01)).abs() < 1e-9, "{k} {tk}");
+        }
         let _ = std::fs::remove_dir_all(&d);
     }
 
