@@ -83,7 +83,7 @@ def test_the_filter_runs_on_unix_time_logs(unix_log):
 @pytest.mark.parametrize(
     "cols, match",
     [
-        ({"time_scale": "tai"}, r"source.imu.time_scale = 'tai': 'gpst' \(GPS seconds\), 'unix' \(Unix time, UTC\) or 'boot'"),
+        ({"time_scale": "tai"}, r"source.imu.time_scale = 'tai': 'gpst' \(GPS seconds or ISO date-times in GPS time\), 'unix' \(Unix time, UTC\), 'utc' \(ISO date-times in UTC\) or 'boot'"),
         ({"time_unit": "min"}, r"source.imu.time_unit = 'min': one of s, ms, us, ns"),
         ({"time": None, "week": "w", "seconds": "s"}, r"time_scale and time_unit are for a single time column"),
     ],

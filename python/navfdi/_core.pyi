@@ -610,7 +610,7 @@ def read_imu_csv(
     header: bool = True,
     delimiter: str = ",",
     spread_times: bool = False,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], tuple[int, int, int, int]]:
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], tuple[int, int, int, int, bool]]:
     """Read an IMU CSV log (plain or gzip) in one streaming pass, GIL released: ``time`` one
     column name (GPS seconds, or another count: ``time_unit`` seconds per unit, default 1) or
     ``[week, seconds_of_week]``; ``header`` false: no header line, the columns named ``"1"``,
@@ -621,9 +621,11 @@ def read_imu_csv(
     ``increments``, which are divided by the sample interval); ``max_gap`` the largest sample
     interval accepted (s); ``unit_fields`` the two unit fields' names for messages. Returns
     ``t`` (N,) GPS seconds, ``gyro`` (N, 3) rad/s, ``accel`` (N, 3) m/s² and ``(repeated,
-    line, zeroed, line)``: rows left out as exact repeats of the row before them (the same time
-    and values), and as placeholders (a specific force of exactly zero on every axis), each
-    with the first one's line (0: none). ``FileFormatError``
+    line, zeroed, line, iso)``: rows left out as exact repeats of the row before them (the same
+    time and values), and as placeholders (a specific force of exactly zero on every axis),
+    each with the first one's line (0: none); ``iso``: the time column held ISO 8601
+    date-times (told from the first row; ``t`` is then calendar seconds since 1980-01-06 as
+    written, no leap seconds applied). ``FileFormatError``
     names the file, line and column of bad input (missing column, field count, non-finite
     value, time not increasing, a gap, a sample beyond any IMU's range, implausible units,
     no samples, a gzip that inflates over 200 times its size); ``OSError`` a path that is not a

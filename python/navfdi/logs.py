@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 from ._errors import ScenarioError
 from ._schema import SECTIONS as _SECTIONS
-from ._logtime import GPS_EPOCH, TIME_UNITS, pos_time, time_unit, unix_to_gps
+from ._logtime import GPS_EPOCH, TIME_UNITS, pos_time, time_unit, unix_to_gps, utc_count_to_gps
 from .frames import check_gravity, check_turns
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "range_error_process", "resolve_range_errors", "solve_rinex_source"]
@@ -193,9 +193,9 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     if not header and not ("time" in columns or ("seconds" in columns and ("week" in columns or week is not None))):
         raise ScenarioError(f"{where}: without a header line the time column's number is required (time = …, or week and seconds)")
     scale = columns.get("time_scale", "gpst")
-    if scale not in ("gpst", "unix", "boot"):
-        raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds), 'unix' (Unix time, UTC) or 'boot' (the IMU's own clock, "
-                            f"placed on GPS time by the turns)")
+    if scale not in ("gpst", "unix", "utc", "boot"):
+        raise ScenarioError(f"{where}.time_scale = {scale!r}: 'gpst' (GPS seconds or ISO date-times in GPS time), 'unix' (Unix time, UTC), "
+                            f"'utc' (ISO date-times in UTC) or 'boot' (the IMU's own clock, placed on GPS time by the turns)")
     if "time" not in columns and (scale != "gpst" or ("time_unit" in columns and week is None)):
         raise ScenarioError(f"{where}: time_scale and time_unit are for a single time column (time = …, or seconds of week with gps_week); "
                             "week and seconds are GPS time in seconds")
@@ -264,7 +264,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         time = [columns["time"]] if "time" in columns else [columns.get("week", "gps_week"), columns.get("seconds", "gps_sow_s")]
     gu, au = columns.get("gyro_unit", "rad/s"), columns.get("accel_unit", "m/s^2")
     try:
-        t, gyro, accel, (repeated, first, zeroed, first_zero) = _core.read_imu_csv(
+        t, gyro, accel, (repeated, first, zeroed, first_zero, iso) = _core.read_imu_csv(
             str(path), [str(c) for c in time], [str(c) for c in columns["gyro"]], [str(c) for c in columns["accel"]],
             _GYRO_UNITS[gu], _ACCEL_UNITS[au], columns.get("kind", "rates") == "increments", gap,
             ["source.imu.gyro_unit", "source.imu.accel_unit"], TIME_UNITS[columns.get("time_unit", "s")],
@@ -285,7 +285,15 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
             warnings.warn(f"the IMU log {path}: {zeroed} row(s) with a specific force of exactly zero on every axis (no IMU on Earth "
                           f"measures that: a logger's placeholder for a missing sample; the first at line {first_zero}) left out, "
                           "their intervals bridged as gaps", LeftOutSamplesWarning, stacklevel=2)
-    if columns.get("time_scale", "gpst") == "unix":
+    scale = columns.get("time_scale", "gpst")
+    if iso and "time_unit" in columns:
+        raise ScenarioError(f"source.imu.time_unit: {path}'s time column holds ISO date-times (no unit); leave time_unit out")
+    if scale == "utc" and not iso:
+        raise ScenarioError(f"source.imu.time_scale = 'utc': for ISO date-times; {path}'s time column holds numbers "
+                            "(Unix time takes time_scale = 'unix')")
+    if iso and scale in ("utc", "unix"):
+        t = utc_count_to_gps(t)
+    elif scale == "unix":
         t = unix_to_gps(t)
     if "gps_week" in columns:
         t = t + columns["gps_week"] * 604800.0

@@ -347,7 +347,7 @@ type ImuArrays<'py> = (
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
     Bound<'py, numpy::PyArray<f64, numpy::IxDyn>>,
-    (usize, u64, usize, u64),
+    (usize, u64, usize, u64, bool),
 );
 
 /// Read an IMU CSV log (`navfdi_core::logs::imu_csv::read_imu_csv`, GIL released): `time` is
@@ -358,9 +358,10 @@ type ImuArrays<'py> = (
 /// they are `"1"`, `"2"`, … by position); `delimiter`: one ASCII character, or `"whitespace"`
 /// (runs of spaces and tabs); `spread_times`: samples sharing a stamp spread evenly to the next
 /// one. Returns `t` (N,) in seconds of that column's count,
-/// `gyro` (N, 3) rad/s, `accel` (N, 3) m/s² and `(repeated, line, zeroed, line)`: rows left
-/// out as exact repeats of the row before them, and as placeholders (specific force exactly
-/// zero), each with the first one's line (0: none). FileFormatError names
+/// `gyro` (N, 3) rad/s, `accel` (N, 3) m/s² and `(repeated, line, zeroed, line, iso)`: rows
+/// left out as exact repeats of the row before them, and as placeholders (specific force
+/// exactly zero), each with the first one's line (0: none); `iso`: the time column held ISO
+/// date-times (`t` calendar seconds since 1980-01-06 as written). FileFormatError names
 /// the file, line and column of bad input; OSError an unreadable path.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)]
@@ -427,6 +428,7 @@ pub fn read_imu_csv<'py>(
             table.first_repeated_line,
             table.zeroed,
             table.first_zeroed_line,
+            table.iso,
         ),
     ))
 }

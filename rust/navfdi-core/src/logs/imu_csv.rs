@@ -151,6 +151,11 @@ pub struct ImuTable {
     pub first_zeroed_line: u64,
     /// Samples whose shared time stamp was spread ([`ImuCsvSpec::spread_times`]).
     pub spread: usize,
+    /// The time column holds ISO 8601 date-times (`2025-07-08T19:34:43.123`, a space for the
+    /// `T` and a trailing `Z` accepted), told from its first row: `t` is then calendar
+    /// seconds since 1980-01-06 00:00:00 as written, no leap seconds applied (the caller
+    /// knows the time scale).
+    pub iso: bool,
 }
 
 /// An error at a cell: "`path`, line `l`, column '`col`': `msg`" (without a line when it is 0).
@@ -331,8 +336,28 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
                 )),
             }
         };
+        if out.t.is_empty() && out.zeroed == 0 {
+            if let (Some(&s), None) = (tcols.first(), tcols.get(1)) {
+                let raw = rec.get(s).unwrap_or(b"").trim_ascii();
+                out.iso = iso_seconds(raw).is_some();
+            }
+        }
         let t = match (tcols.first(), tcols.get(1)) {
             (Some(&w), Some(&s)) => num(w)? * 604_800.0 + num(s)?,
+            (Some(&s), None) if out.iso => match iso_seconds(rec.get(s).unwrap_or(b"").trim_ascii()) {
+                Some(v) => v,
+                None => {
+                    return Err(cell_err(
+                        path,
+                        line,
+                        &header[s],
+                        format!(
+                            "'{}' is not an ISO date-time (YYYY-MM-DDThh:mm:ss[.fff]) as the first row's is",
+                            String::from_utf8_lossy(rec.get(s).unwrap_or(b""))
+                        ),
+                    ))
+                }
+            },
             (Some(&s), None) => num(s)? * spec.time_unit,
             _ => return Err(format_err(path, Some(line), "no time column")),
         };
@@ -533,6 +558,47 @@ fn plausible(
     Ok(())
 }
 
+/// Calendar seconds since 1980-01-06 00:00:00 of an ISO 8601 date-time
+/// `YYYY-MM-DD[T ]hh:mm:ss[.fff][Z]` as written (no leap seconds), or None.
+pub fn iso_seconds(raw: &[u8]) -> Option<f64> {
+    let s = std::str::from_utf8(raw).ok()?.trim();
+    let s = s.strip_suffix('Z').unwrap_or(s);
+    if s.len() < 19 || !s.is_char_boundary(10) || !s.is_char_boundary(11) {
+        return None;
+    }
+    let (date, time) = (&s[..10], &s[11..]);
+    if !matches!(s.as_bytes()[10], b'T' | b' ') {
+        return None;
+    }
+    let d: Vec<&str> = date.split('-').collect();
+    let hms: Vec<&str> = time.split(':').collect();
+    if d.len() != 3 || hms.len() != 3 || d[0].len() != 4 || d[1].len() != 2 || d[2].len() != 2 {
+        return None;
+    }
+    let digits = |x: &str| !x.is_empty() && x.bytes().all(|b| b.is_ascii_digit());
+    if !(d.iter().all(|x| digits(x)) && digits(hms[0]) && digits(hms[1])) {
+        return None;
+    }
+    let (y, m, day): (i64, i64, i64) = (d[0].parse().ok()?, d[1].parse().ok()?, d[2].parse().ok()?);
+    let (hh, mm): (i64, i64) = (hms[0].parse().ok()?, hms[1].parse().ok()?);
+    let sec: f64 = if hms[2].bytes().all(|b| b.is_ascii_digit() || b == b'.') {
+        hms[2].parse().ok()?
+    } else {
+        return None;
+    };
+    if !((1..=12).contains(&m) && (1..=31).contains(&day) && hh < 24 && mm < 60 && sec < 61.0) {
+        return None;
+    }
+    // Days from the civil date (proleptic Gregorian), then from 1980-01-06.
+    let (yy, mp) = if m <= 2 { (y - 1, m + 9) } else { (y, m - 3) };
+    let era = yy.div_euclid(400);
+    let yoe = yy - era * 400;
+    let doy = (153 * mp + 2) / 5 + day - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    let days = era * 146_097 + doe - 719_468 - 3_657;
+    Some(days as f64 * 86_400.0 + (hh * 3600 + mm * 60) as f64 + sec)
+}
+
 /// Times `t` (increasing, runs of equal stamps allowed) with each run spread evenly from its
 /// stamp to the next one; the last run at the median interval between distinct stamps per
 /// sample.
@@ -680,6 +746,35 @@ mod tests {
             "{e}"
         );
         assert!(e.contains("time_repeats"), "{e}");
+        // ISO date-times, told from the first row.
+        let iso = "t,gx,gy,gz,ax,ay,az\n2025-07-08T19:34:43.50Z,0,0,0,0,0,-9.8\n2025-07-08 19:34:43.51,0,0,0,0,0,-9.8\n";
+        let t = read_imu_csv(&write(&d, "i.csv", iso), &spec()).unwrap();
+        assert!(t.iso);
+        // 2025-07-08 is 16 620 days after 1980-01-06.
+        let want = 16_620.0 * 86_400.0 + 19.0 * 3600.0 + 34.0 * 60.0 + 43.5;
+        assert!(
+            (t.t[0] - want).abs() < 1e-6 && (t.t[1] - want - 0.01).abs() < 1e-6,
+            "{:?}",
+            t.t
+        );
+        let e = read_imu_csv(
+            &write(&d, "j.csv", &iso.replace("2025-07-08 19", "1436038")),
+            &spec(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("line 3") && e.contains("not an ISO date-time"),
+            "{e}"
+        );
+        assert_eq!(iso_seconds(b"1980-01-06T00:00:00"), Some(0.0));
+        assert_eq!(
+            iso_seconds(b"2024-02-29T12:00:00"),
+            Some((16_125.0 + 0.5) * 86_400.0)
+        );
+        assert!(
+            iso_seconds(b"1436038661.9").is_none() && iso_seconds(b"2025-13-01T00:00:00").is_none()
+        );
         // Stamped in batches of four at 0.04 s: spread to 0.01 s when asked.
         let mut batched = String::from("t,gx,gy,gz,ax,ay,az\n");
         for k in 0..12 {
