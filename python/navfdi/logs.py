@@ -228,26 +228,30 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     (``navfdi_core::logs::imu_csv``).
 
     ``columns``: ``week`` and ``seconds`` (GPS week and seconds of week) or ``time`` (GPS
-    seconds since the GPS epoch); ``gyro`` and ``accel``: three column names each, x, y, z;
-    ``gyro_unit`` ``"deg/s"`` or ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``;
-    ``gps_week`` (an integer: the week of a ``seconds`` column of seconds of week, with no
-    ``week`` column); ``time_scale`` ``"gpst"`` (default), ``"unix"`` (Unix time, UTC: turned into GPS time
-    with the leap seconds) or ``"boot"`` (the IMU's own clock: left as read here, placed on GPS
-    time by :func:`load_source` from the turns, :func:`navfdi.frames.imu_clock_offset`) and
-    ``time_unit`` ``"s"`` (default), ``"ms"``, ``"us"`` or ``"ns"``
-    for a ``time`` column; ``header`` (default true; false: every line is a sample and the
-    columns are numbered from 1) and ``delimiter`` (default ``","``; one character,
-    ``"tab"``, or ``"whitespace"``: runs of spaces and tabs, as column-aligned text); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample angle and velocity
-    increments, in rad and m/s or deg and g·s, divided by the sample interval);
-    ``time_repeats`` ``"refuse"`` (default) or ``"spread"`` (samples sharing a time stamp, as
-    loggers stamping in batches write them, spread evenly from the stamp to the next); ``max_gap``:
-    the largest interval between samples (s) accepted (default 1; the argument overrides
-    the table's; shorter gaps are bridged, :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted (line numbers stay the
-    file's). Raises :class:`~navfdi.ScenarioError` naming the file, line and column of bad
-    input: a missing column, a row with another number of fields, a value that is not a
-    finite number, time not increasing (a row repeating the one before it exactly is left out
-    instead, as is a row whose specific force is exactly zero on every axis — a placeholder —,
-    :class:`~navfdi.LeftOutSamplesWarning`), a gap, a sample beyond any IMU's range (100 rad/s,
+    seconds since the GPS epoch, or ISO 8601 date-times, told from the first row); ``gyro``
+    and ``accel``: three column names each, x, y, z; ``gyro_unit`` ``"deg/s"`` or
+    ``"rad/s"``; ``accel_unit`` ``"g"`` or ``"m/s^2"``; ``gps_week`` (an integer: the week of
+    a ``seconds`` column of seconds of week, with no ``week`` column; in ``time_unit``);
+    ``time_scale`` ``"gpst"`` (default), ``"unix"`` (Unix time, UTC: turned into GPS time
+    with the leap seconds), ``"utc"`` (ISO date-times in UTC, the same) or ``"boot"`` (the
+    IMU's own clock: left as read here, placed on GPS time by :func:`load_source` from the
+    turns, :func:`navfdi.frames.imu_clock_offset`) and ``time_unit`` ``"s"`` (default),
+    ``"ms"``, ``"us"`` or ``"ns"`` for a numeric ``time`` column; ``header`` (default true;
+    false: every line is a sample and the columns are numbered from 1) and ``delimiter``
+    (default ``","``; one character, ``"tab"``, or ``"whitespace"``: runs of spaces and tabs,
+    as column-aligned text); ``kind`` ``"rates"`` (default) or ``"increments"`` (per-sample
+    angle and velocity increments, in rad and m/s or deg and g·s, divided by the sample
+    interval); ``time_repeats`` ``"refuse"`` (default) or ``"spread"`` (samples sharing a
+    time stamp, as loggers stamping in batches write them, spread evenly from the stamp to the
+    next); ``max_gap``: the largest interval between samples (s) accepted (default 1; the
+    argument overrides the table's; shorter gaps are bridged by the filters, with an
+    :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted
+    (line numbers stay the file's). Rows repeating the one before them exactly, and rows
+    whose specific force is exactly zero on every axis (a placeholder), are left out with a
+    :class:`~navfdi.LeftOutSamplesWarning`. Raises :class:`~navfdi.ScenarioError` naming the
+    file, line and column of bad input: a missing column, a row with another number of
+    fields, a value that is not a finite number (or not an ISO date-time where the first
+    row's is), time not increasing, a gap, a sample beyond any IMU's range (100 rad/s,
     1000 m/s²), a median specific force far from gravity or a median rate over 1 rad/s
     (units), a header with no rows, a compressed file that inflates implausibly, a path that
     is not a regular file.
