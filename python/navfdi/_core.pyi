@@ -20,6 +20,7 @@ __all__ = [
     "__version__",
     "DETECTION_GRACE",
     "CN0_SLOPE_MAX",
+    "IMU_GAP_FACTOR",
     "Prefilter",
     "PrefilterStep",
     "dll_variance",
@@ -658,6 +659,9 @@ DETECTION_GRACE: float
 #: The largest C/N0 weighting slope ``GnssRun`` accepts (``cn0_slope``; variance decades per
 #: 10 dB-Hz; ``navfdi_core::gnss::spp::CN0_SLOPE_MAX``).
 CN0_SLOPE_MAX: float
+#: An interval between IMU samples is a gap (samples missing) where it exceeds this many times
+#: the log's median interval (the upper median; ``navfdi_core::arch::inertial::GAP_FACTOR``).
+IMU_GAP_FACTOR: float
 
 def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float, tested: list[bool] | None = None) -> tuple[bool, float]:
     """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,) and

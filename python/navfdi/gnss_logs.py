@@ -58,7 +58,7 @@ import numpy as np
 from navfdi._errors import ScenarioError
 from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, time_unit, unix_to_gps, utc_to_gps
-from navfdi.logs import PosLog, _gpst, read_pos, text_layout
+from navfdi.logs import PosLog, _gpst, read_pos, repeated_rows, text_layout
 
 __all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
 
@@ -262,8 +262,7 @@ def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndar
         raise ScenarioError(f"source.gnss: {path}: no epoch with a position")
     order = np.argsort(t[ok], kind="stable")
     sel = np.flatnonzero(ok)[order]
-    rows = np.column_stack([t, lat, lon, h, vel, sd, sd_vel] + [v for v in (q, ns) if v is not None])[sel]
-    again = np.concatenate([[False], ((rows[1:] == rows[:-1]) | (np.isnan(rows[1:]) & np.isnan(rows[:-1]))).all(axis=1)])
+    again = repeated_rows(np.column_stack([t, lat, lon, h, vel, sd, sd_vel] + [v for v in (q, ns) if v is not None])[sel])
     if again.any():
         _left_out(path, t[sel][again], "repeating the epoch before them exactly")
         sel = sel[~again]

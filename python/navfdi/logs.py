@@ -341,7 +341,7 @@ def read_pos(path: str | Path) -> PosLog:
         return np.full(len(a), default)
 
     times = form.gpst(a[:, 0])
-    again = np.concatenate([[False], (a[1:] == a[:-1]).all(axis=1)])
+    again = repeated_rows(a)
     if again.any():
         from .gnss_logs import _left_out
 
@@ -630,28 +630,33 @@ def _warn_partial(imu: ImuLog, t: np.ndarray, t0: float, what: str) -> None:
             PartialLogWarning, stacklevel=3)
 
 
-#: An interval between IMU samples is a gap where it exceeds this many times the median one
-#: (``GAP_FACTOR`` of the Rust core's mechanisation).
-GAP_FACTOR = 2.0
+def repeated_rows(rows: np.ndarray) -> np.ndarray:
+    """(N,) bool: the rows of ``rows`` (N, K) that repeat the row before them exactly (NaN
+    equal to NaN) — an epoch or sample a logger wrote twice."""
+    same = (rows[1:] == rows[:-1]) | (np.isnan(rows[1:]) & np.isnan(rows[:-1]))
+    return np.concatenate([[False], same.all(axis=1)])
 
 
 def _warn_gaps(imu: ImuLog) -> None:
     """An :class:`ImuGapWarning` where the IMU log has intervals longer than
-    :data:`GAP_FACTOR` times its median one (samples missing): how many, their total, the
-    longest and its GPS time. The mechanisation bridges them and raises the filter's noise."""
+    ``_core.IMU_GAP_FACTOR`` times its median one (samples missing; the gaps the Rust core's
+    mechanisation finds, the same upper median): how many, their total, the longest and its
+    GPS time. The mechanisation bridges them and raises the filter's noise."""
     import warnings
 
+    from . import _core
     from ._errors import ImuGapWarning
 
     dt = np.diff(imu.t)
     if len(dt) < 2:
         return
-    med = float(np.median(dt))
-    gap = np.flatnonzero(dt > GAP_FACTOR * med)
+    med = float(np.partition(dt, len(dt) // 2)[len(dt) // 2])
+    factor = _core.IMU_GAP_FACTOR
+    gap = np.flatnonzero(dt > factor * med)
     if len(gap):
         k = int(gap[np.argmax(dt[gap])])
         warnings.warn(
-            f"the IMU log {imu.path} has {len(gap)} gap(s) longer than {GAP_FACTOR:g}× its median sample interval "
+            f"the IMU log {imu.path} has {len(gap)} gap(s) longer than {factor:g}× its median sample interval "
             f"({med:.4g} s; samples missing), {float(dt[gap].sum()):.3g} s in all, the longest {float(dt[k]):.3g} s after "
             f"{_gpst(imu.t[k])} GPST: each is bridged by the samples either side, and the filter's noise over it "
             "raised by their own scatter acting for the whole gap",

@@ -158,6 +158,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scenario::window_alarm, m)?)?;
     m.add("DETECTION_GRACE", navfdi_core::metrics::GRACE)?;
     m.add("CN0_SLOPE_MAX", navfdi_core::gnss::spp::CN0_SLOPE_MAX)?;
+    m.add("IMU_GAP_FACTOR", navfdi_core::arch::inertial::GAP_FACTOR)?;
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
     m.add_class::<montecarlo::PyPreparedScenario>()?;

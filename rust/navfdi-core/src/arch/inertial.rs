@@ -43,8 +43,6 @@ pub struct BodyImu {
 pub struct ImuGap {
     /// Index of the sample that ends the gap.
     pub i: usize,
-    /// The gap's length (s).
-    pub span: f64,
     /// Specific-force variance per second of the gap, `Δ σ_f² / 2` ((m/s²)² s, body axes).
     pub acc_rate: Vector3<f64>,
     /// Angular-rate variance per second of the gap, `Δ σ_ω² / 2` ((rad/s)² s, body axes).
@@ -85,7 +83,6 @@ pub fn imu_gaps(t: &[f64], gyro: &[Vector3<f64>], acc: &[Vector3<f64>]) -> Vec<I
             let span = t[i] - t[i - 1];
             ImuGap {
                 i,
-                span,
                 acc_rate: scatter(&acc[lo..hi]) * (span / 2.0),
                 gyro_rate: scatter(&gyro[lo..hi]) * (span / 2.0),
             }
@@ -112,9 +109,6 @@ impl BodyImu {
 
     /// The gap that ends at sample `i`, if the interval from sample `i − 1` to `i` is one.
     pub fn gap_before(&self, i: usize) -> Option<&ImuGap> {
-        if self.gaps.is_empty() {
-            return None;
-        }
         self.gaps
             .binary_search_by_key(&i, |g| g.i)
             .ok()
@@ -629,7 +623,7 @@ impl Mechaniser {
                     dt,
                 };
                 mechanise(s, &self.prev, &inc);
-                match imu.gap_before(ip).filter(|_| ip > im) {
+                match imu.gap_before(ip) {
                     Some(g) => kf.propagate_gap(s, &f, &w, dt, &g.acc_rate, &g.gyro_rate),
                     None => kf.propagate(s, &f, &w, dt),
                 }

@@ -283,6 +283,7 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
     let width = header.len();
     let mut out = ImuTable::default();
     let mut last_raw = ([f64::NAN; 3], [f64::NAN; 3]);
+    let mut first_row = true;
     // Byte records: only the seven cells read are trimmed and decoded (the rest of a row is
     // neither validated as UTF-8 nor trimmed), which halves the time per row.
     let mut rec = csv::ByteRecord::new();
@@ -336,10 +337,11 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
                 )),
             }
         };
-        if out.t.is_empty() && out.zeroed == 0 {
+        if first_row {
+            // A single time column holds ISO date-times if the first data row's does.
+            first_row = false;
             if let (Some(&s), None) = (tcols.first(), tcols.get(1)) {
-                let raw = rec.get(s).unwrap_or(b"").trim_ascii();
-                out.iso = iso_seconds(raw).is_some();
+                out.iso = iso_seconds(rec.get(s).unwrap_or(b"").trim_ascii()).is_some();
             }
         }
         let t = match (tcols.first(), tcols.get(1)) {
