@@ -336,7 +336,7 @@ SECTIONS: dict[str, Section] = {
     ]),
     "source.gnss": _s("[source.gnss]", "A GNSS solution log (`gnss = \"file\"` is `{ file = \"file\" }`).", [
         ("file", "path", REQ, "the log (format told from the file when not given)"),
-        ("format", "pos, solution, nmea, csv, rinex, ubx", "from the file", "RTKLIB .pos, navfdi solution.csv, NMEA 0183, any CSV, RINEX files solved as read, or a u-blox binary log's NAV-PVT solutions"),
+        ("format", "pos, solution, nmea, csv, rinex, ubx, gnsslogger", "from the file", "RTKLIB .pos, navfdi solution.csv, NMEA 0183, any CSV, RINEX files solved as read, a u-blox binary log's NAV-PVT solutions, or an Android GnssLogger file's Fix records"),
         ("columns", "table", "— (csv: required)", "csv: time, lat, lon, height or height_msl (or ecef: x, y, z), sd, vel, sd_vel (or sd_ecef, vel_ecef, sd_vel_ecef), satellites column names"),
         ("time_scale", "gpst, utc, unix", "gpst", "csv: the ISO time column's scale, or unix: a numeric time column is Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds) instead of GPS seconds"),
         ("time_unit", "s, ms, us, ns", "s", "csv: a numeric time column's unit"),
@@ -344,6 +344,7 @@ SECTIONS: dict[str, Section] = {
         ("header", "true, false", "true", "csv: the first line names the columns; false: columns numbered from 1"),
         ("delimiter", "one character, tab or whitespace", ",", "csv: the field separator (\"whitespace\": runs of spaces and tabs)"),
         ("date", "YYYY-MM-DD", "from RMC", "nmea: the UTC date when no RMC sentence gives it"),
+        ("provider", "GPS, FLP, NLP", "GPS", "gnsslogger: the location provider whose fixes are read (GPS: the GNSS chipset's; FLP: Android's fused location, which already uses the phone's IMU)"),
         ("undulation", "number (m)", "—", "csv with height_msl: geoid height added"),
     ]),
     "source.gnss.rinex": _s("[source.gnss] format = \"rinex\"", "RINEX files solved by navfdi's SPP with FDE as the log is read.", [
@@ -356,8 +357,9 @@ SECTIONS: dict[str, Section] = {
         ("noise", "auto or a factor", "auto", "σ factor of the solve, estimated from the file by default (`navfdi gnss --noise`)"),
         ("test", "global, wtest, both, auto", "global", "snapshot FDE detection test"),
     ]),
-    "source.imu": _s("[source.imu]", "An IMU CSV log (plain or gzip) and its columns.", [
-        ("file", "path", REQ, "the CSV"),
+    "source.imu": _s("[source.imu]", "An IMU CSV log (plain or gzip) and its columns, or an Android GnssLogger file's sensor records.", [
+        ("file", "path", REQ, "the CSV (or GnssLogger file)"),
+        ("format", "csv, gnsslogger", "csv", "gnsslogger: an Android GnssLogger file's accelerometer and gyro records (uncalibrated where present), put on GPS time by the file's own clock pairs; only file and max_gap beside it"),
         ("week", "column", "—", "GPS week column (with seconds of week)"),
         ("seconds", "column", "— (or time)", "GPS seconds (of week with week)"),
         ("time", "column", "— (or seconds)", "GPS seconds since 1980-01-06 (or Unix time with time_scale = \"unix\")"),
@@ -366,8 +368,8 @@ SECTIONS: dict[str, Section] = {
         ("header", "true, false", "true", "the first line names the columns; false: columns are numbered from 1 (time = 1, gyro = [5, 6, 7])"),
         ("delimiter", "one character, tab or whitespace", ",", "the field separator (\";\", \"tab\", \" \", …; \"whitespace\": runs of spaces and tabs, as column-aligned text)"),
         ("gps_week", "integer", "—", "the GPS week of a seconds-of-week time column (seconds = …; as KF-GINS writes; or in time_unit, e.g. ms for u-blox's iTOW)"),
-        ("gyro", "three columns", REQ, "rates (or increments) in the IMU's x, y, z"),
-        ("accel", "three columns", REQ, "specific forces (or increments) in the IMU's x, y, z"),
+        ("gyro", "three columns", "— (csv: required)", "rates (or increments) in the IMU's x, y, z"),
+        ("accel", "three columns", "— (csv: required)", "specific forces (or increments) in the IMU's x, y, z"),
         ("gyro_unit", "rad/s, deg/s", "rad/s", "gyro column unit"),
         ("accel_unit", "m/s^2, m/s2, g", "m/s^2", "accelerometer column unit"),
         ("kind", "rates, increments", "rates", "increments are divided by the sample interval"),

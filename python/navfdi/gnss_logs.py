@@ -23,6 +23,9 @@
   refused with their line;
 * ``ubx`` — a u-blox binary log (``.ubx``, ``.ubx.gz``): the receiver's UBX-NAV-PVT solutions
   (:func:`read_ubx`; other messages skipped);
+* ``gnsslogger`` — an Android GnssLogger file's ``Fix`` records of one ``provider`` (default
+  ``"GPS"``; :func:`read_gnsslogger_fixes`): positions and their 68 %
+  accuracies as σ, no velocity;
 * ``csv`` — any CSV with a ``columns`` mapping: ``time`` (one column of GPS seconds, or
   ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
   ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
@@ -39,7 +42,8 @@ Every format: fixes from fewer than four satellites (where the log gives the cou
 
 Without a ``format`` it is told from the file: ``.pos`` / ``.pos.gz``, ``.ubx`` / ``.ubx.gz`` or
 UBX sync bytes at the start, a CSV whose header has
-``gps_seconds`` and ``lat`` (``solution``), lines that start with ``$`` (``nmea``).
+``gps_seconds`` and ``lat`` (``solution``), lines that start with ``$`` (``nmea``), GnssLogger's
+``#`` lines or records (``gnsslogger``).
 """
 
 from __future__ import annotations
@@ -60,10 +64,10 @@ from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, time_unit, unix_to_gps, utc_to_gps
 from navfdi.logs import PosLog, _gpst, read_pos, repeated_rows, text_layout
 
-__all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "FORMATS"]
+__all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "read_gnsslogger_fixes", "FORMATS"]
 
 #: The formats ``[source] gnss`` accepts.
-FORMATS = ("pos", "solution", "nmea", "csv", "rinex", "ubx")
+FORMATS = ("pos", "solution", "nmea", "csv", "rinex", "ubx", "gnsslogger")
 #: The keys of ``format = "rinex"`` beside ``format`` (:data:`navfdi._schema.SECTIONS`).
 RINEX_KEYS = tuple(k for k in SECTIONS["source.gnss.rinex"].keys if k != "format")
 
@@ -143,6 +147,10 @@ def _guess(path: Path, text: str) -> str:
         return "nmea"
     if "gps_seconds" in first and "lat" in first.split(","):
         return "solution"
+    from navfdi.gnsslogger import is_gnsslogger
+
+    if is_gnsslogger(text):
+        return "gnsslogger"
     if first.startswith("%"):
         return "pos"
     raise ScenarioError(f"source.gnss: {path}: format not recognised (an RTKLIB .pos, navfdi's solution.csv or NMEA); "
@@ -238,12 +246,14 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
         return _only(cfg, "solution", read_solution_csv(path, text))
     if fmt == "nmea":
         return _only(cfg, "nmea", read_nmea(path, text, cfg.get("date")))
+    if fmt == "gnsslogger":
+        return _only(cfg, "gnsslogger", read_gnsslogger_fixes(path, cfg.get("provider", "GPS")))
     return read_gnss_csv(path, text, cfg)
 
 
 #: ``[source.gnss]`` keys that only one format reads.
 _FORMAT_KEYS = {"columns": "csv", "time_scale": "csv", "time_unit": "csv", "gps_week": "csv", "header": "csv", "delimiter": "csv",
-                "undulation": "csv", "date": "nmea"}
+                "undulation": "csv", "date": "nmea", "provider": "gnsslogger"}
 
 
 def _only(cfg: Mapping[str, Any], fmt: str, log: PosLog) -> PosLog:
@@ -274,6 +284,26 @@ def _log(path: Path, t: np.ndarray, lat: np.ndarray, lon: np.ndarray, h: np.ndar
         raise ScenarioError(f"source.gnss: {path}: latitude, longitude or height out of range (degrees and metres expected)")
     qq = np.full(len(sel), 5.0) if q is None else q[sel]
     return PosLog(tt, lat[sel], lon[sel], h[sel], qq, vel[sel], sd[sel], sd_vel[sel], str(path), None if ns is None else ns[sel])
+
+
+def read_gnsslogger_fixes(path: str | Path, provider: str = "GPS") -> PosLog:
+    """The ``Fix`` records of ``provider`` (``"GPS"``, ``"FLP"`` or ``"NLP"``) of an Android
+    GnssLogger file (:func:`navfdi.gnsslogger.fix_records`) as a :class:`PosLog`: positions
+    with σ east and north from the 68 % horizontal accuracy and σ up from the vertical one; no
+    velocity (a fix gives its horizontal speed and bearing, no vertical speed: a log of
+    positions, for a ``gnss_position`` sensor). Fixes marked ``MockLocation`` are left out with
+    a :class:`~navfdi.LeftOutFixesWarning`."""
+    from navfdi.gnsslogger import fix_records
+
+    path = Path(path)
+    f = fix_records(path, provider)
+    mock = f["mock"]
+    if mock.any():
+        _left_out(path, f["t"][mock], "marked as mock locations (MockLocation = 1: set by an app, not measured)")
+    m = ~mock
+    sd = np.column_stack([f["sd_h"], f["sd_h"], f["sd_u"]])[m]
+    nan3 = np.full((int(m.sum()), 3), np.nan)
+    return _log(path, f["t"][m], f["lat"][m], f["lon"][m], f["height"][m], nan3, sd, nan3.copy())
 
 
 def read_solution_csv(path: Path, text: str | None = None) -> PosLog:

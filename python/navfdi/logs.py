@@ -210,6 +210,12 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
     kind = columns.get("kind", "rates")
     if kind not in ("rates", "increments"):
         raise ScenarioError(f"{where}.kind: {kind!r} is not 'rates' or 'increments'")
+    return max_gap_of(columns, where)
+
+
+def max_gap_of(columns: Mapping[str, Any], where: str = "source.imu") -> float:
+    """``[source.imu] max_gap`` (s; default 1): a positive number of seconds or a time string.
+    :class:`~navfdi.ScenarioError` naming the field otherwise."""
     gap = columns.get("max_gap", 1.0)
     if isinstance(gap, str):
         from .units import parse
@@ -245,7 +251,9 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     time stamp, as loggers stamping in batches write them, spread evenly from the stamp to the
     next); ``max_gap``: the largest interval between samples (s) accepted (default 1; the
     argument overrides the table's; shorter gaps are bridged by the filters, with an
-    :class:`~navfdi.ImuGapWarning`). A UTF-8 byte-order mark and blank lines are accepted
+    :class:`~navfdi.ImuGapWarning`); ``format`` ``"csv"`` (default) or ``"gnsslogger"`` (an
+    Android GnssLogger file, :func:`navfdi.gnsslogger.read_gnsslogger_imu`: no other key but
+    ``file`` and ``max_gap``). A UTF-8 byte-order mark and blank lines are accepted
     (line numbers stay the file's). Rows repeating the one before them exactly, and rows
     whose specific force is exactly zero on every axis (a placeholder), are left out with a
     :class:`~navfdi.LeftOutSamplesWarning`. Raises :class:`~navfdi.ScenarioError` naming the
@@ -258,6 +266,14 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     """
     from . import _core
 
+    fmt = columns.get("format", "csv")
+    if fmt == "gnsslogger":
+        from .gnsslogger import check_imu_keys, read_gnsslogger_imu
+
+        gap = check_imu_keys(columns)
+        return read_gnsslogger_imu(path, float(max_gap) if max_gap is not None else gap)
+    if fmt != "csv":
+        raise ScenarioError(f"source.imu.format = {fmt!r}: \"csv\" (default) or \"gnsslogger\" (an Android GnssLogger file)")
     gap = check_imu_columns(columns)
     if max_gap is not None:
         gap = float(max_gap)
