@@ -18,7 +18,7 @@ import pytest
 import navfdi
 from navfdi import LeftOutFixesWarning, ScenarioError
 from navfdi._errors import ScenarioWarning
-from navfdi.gnss_logs import read_gnss, read_gnsslogger_fixes
+from navfdi.gnss_logs import read_gnss, read_gnsslogger_fixes, read_reference
 from navfdi.gnsslogger import _resample, read_gnsslogger_imu
 from navfdi.logs import read_imu, read_pos
 from navfdi.scenario import from_dict, load_scenario
@@ -142,8 +142,10 @@ def test_fixes_of_one_provider_read_as_the_receivers(logfile: Path, tmp_path: Pa
     assert np.isnan(got.vel).all()  # a fix has no vertical speed: positions only
     flp = read_gnsslogger_fixes(logfile, "FLP")
     np.testing.assert_allclose(flp.lat - want.lat, 1e-4, atol=1e-12)
-    with pytest.raises(ScenarioError, match=r"provider = 'fused': one of GPS, FLP, NLP"):
+    with pytest.raises(ScenarioError, match=r"no Fix of provider 'fused'; the file has FLP, GPS"):
         read_gnsslogger_fixes(logfile, "fused")
+    with pytest.raises(ScenarioError, match=r"source.gnss.provider = 3: a provider's name"):
+        read_gnsslogger_fixes(logfile, 3)  # type: ignore[arg-type]
     with pytest.raises(ScenarioError, match=r"no Fix of provider 'NLP'; the file has FLP, GPS \(source.gnss.provider\)"):
         read_gnsslogger_fixes(logfile, "NLP")
 
@@ -208,9 +210,71 @@ def test_bad_files_and_settings_are_named(tmp_path: Path, logfile: Path):
         read_gnsslogger_imu(noacc)
     with pytest.raises(ScenarioError, match=r"source.imu: gyro: not read with format = \"gnsslogger\""):
         read_imu(logfile, {"file": str(logfile), "format": "gnsslogger", "gyro": ["a", "b", "c"]})
+    with pytest.raises(ScenarioError, match=r"source.imu.clock: read with format = \"gnsslogger\" only"):
+        read_imu(DRIVE / "imu_1934_gpst.csv.gz", {**load_scenario("drive_lc").raw["source"]["imu"], "clock": str(logfile)})
     with pytest.raises(ScenarioError, match=r"source.imu.format = 'phone'"):
         read_imu(logfile, {"file": str(logfile), "format": "phone"})
     with pytest.raises(ScenarioError, match=r"not a GnssLogger file"):
         read_gnsslogger_fixes(DRIVE / "gnss_1934_sf.pos.gz")
     with pytest.raises(ScenarioError, match=r"source.gnss.provider: read for format = \"gnsslogger\" only"):
         read_gnss({"file": str(DRIVE / "gnss_1934_sf.pos.gz"), "provider": "GPS"}, tmp_path)
+
+
+def write_gsdc(folder: Path, end: float = 60.0) -> Path:
+    """The drive's first ``end`` s in the Smartphone Decimeter Challenge's CSV layout: ``device_imu.csv``
+    (one header, a MessageType per row, Measurement X/Y/Z), ``device_gnss.csv`` (Raw rows with the
+    chipset's boot times) and ``ground_truth.csv`` (Fix rows of provider GT)."""
+    imu, pos = drive_imu(), read_pos(DRIVE / "gnss_1934_sf.pos.gz")
+    t0 = float(pos.t[0])
+
+    def boot(g: float) -> int:
+        return int(round((99.0 + (g - t0) * (1 - 35e-6)) * 1e9))
+
+    rows = ["MessageType,utcTimeMillis,elapsedRealtimeNanos,MeasurementX,MeasurementY,MeasurementZ,BiasX,BiasY,BiasZ"]
+    for k in np.flatnonzero((imu.t >= t0) & (imu.t <= t0 + end)):
+        g = float(imu.t[k])
+        utc = int(round((g - LEAP + UNIX_GPS) * 1e3))
+        for kind, v in (("UncalAccel", imu.accel[k]), ("UncalGyro", imu.gyro[k]), ("UncalMag", np.array([20.0, 5.0, -40.0]))):
+            rows.append(f"{kind},{utc},{boot(g)}," + ",".join(repr(float(x)) for x in v) + ",0.0,0.0,0.0")
+    (folder / "device_imu.csv").write_text("\n".join(rows) + "\n")
+    rows = ["MessageType,utcTimeMillis,TimeNanos,LeapSecond,FullBiasNanos,BiasNanos,Svid,Cn0DbHz,ChipsetElapsedRealtimeNanos,"
+            "WlsPositionXEcefMeters,WlsPositionYEcefMeters,WlsPositionZEcefMeters"]
+    truth = ["MessageType,Provider,LatitudeDegrees,LongitudeDegrees,AltitudeMeters,SpeedMps,AccuracyMeters,BearingDegrees,UnixTimeMillis"]
+    for j in np.flatnonzero(pos.t <= t0 + end):
+        g = float(pos.t[j])
+        um = int(round((g - LEAP + UNIX_GPS) * 1e3))
+        fb = -1_300_000_000_000_000_000
+        lat, lon, h = math.radians(float(pos.lat[j])), math.radians(float(pos.lon[j])), float(pos.height[j])
+        n = 6378137.0 / math.sqrt(1 - 6.69437999014e-3 * math.sin(lat) ** 2)  # WGS 84
+        xyz = ((n + h) * math.cos(lat) * math.cos(lon), (n + h) * math.cos(lat) * math.sin(lon), (n * (1 - 6.69437999014e-3) + h) * math.sin(lat))
+        # One row per satellite, each with the epoch's weighted-least-squares position.
+        rows += [f"Raw,{um},{int(round(g * 1e9)) + fb},18,{fb},0.0,{sv},30.0,{boot(g)}," + ",".join(repr(x) for x in xyz) for sv in (5, 9)]
+        truth.append(f"Fix,GT,{float(pos.lat[j])!r},{float(pos.lon[j])!r},{float(pos.height[j])!r},3.0,0.1,90.0,{um}")
+    (folder / "device_gnss.csv").write_text("\n".join(rows) + "\n")
+    (folder / "ground_truth.csv").write_text("\n".join(truth) + "\n")
+    return folder
+
+
+def test_the_decimeter_challenges_csv_layout_reads_with_its_clock_file(tmp_path: Path):
+    folder = write_gsdc(tmp_path)
+    want, pos = drive_imu(), read_pos(DRIVE / "gnss_1934_sf.pos.gz")
+    got = read_imu(folder / "device_imu.csv", {"file": "device_imu.csv", "format": "gnsslogger", "clock": str(folder / "device_gnss.csv")})
+    i = int(np.searchsorted(want.t, got.t[0] - 1e-3))
+    np.testing.assert_allclose(got.t, want.t[i:i + len(got.t)], rtol=0, atol=5e-6)  # a boot clock 35 ppm slow, fitted
+    np.testing.assert_array_equal(got.accel, want.accel[i:i + len(got.t)])
+    np.testing.assert_array_equal(got.gyro, want.gyro[i:i + len(got.t)])
+    ref, has_quality = read_reference({"file": "ground_truth.csv", "provider": "GT"}, folder)  # told from the file
+    assert not has_quality  # a phone log's reference has no solution quality: every epoch is the reference
+    np.testing.assert_array_equal(ref.lat, pos.lat[: len(ref.t)])
+    np.testing.assert_allclose(ref.t, pos.t[: len(ref.t)], rtol=0, atol=1e-6)
+    with pytest.raises(ScenarioError, match=r"no Fix of provider 'GPS'; the file has GT"):
+        read_gnsslogger_fixes(folder / "ground_truth.csv")
+    with pytest.warns(ScenarioWarning, match=r"wall clock"):  # without its clock file
+        read_imu(folder / "device_imu.csv", {"file": "device_imu.csv", "format": "gnsslogger"})
+    # Its baseline positions (Google's weighted least squares, ECEF, on every Raw row) read as a CSV.
+    with pytest.warns(LeftOutFixesWarning, match=r"repeating the epoch before them exactly"):
+        wls = read_gnss({"file": "device_gnss.csv", "format": "csv", "time_scale": "unix", "time_unit": "ms",
+                         "columns": {"time": "utcTimeMillis", "ecef": ["WlsPositionXEcefMeters", "WlsPositionYEcefMeters", "WlsPositionZEcefMeters"]}},
+                        folder)
+    np.testing.assert_allclose(wls.lat, ref.lat, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(wls.height, ref.height, rtol=0, atol=1e-4)

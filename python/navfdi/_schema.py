@@ -344,7 +344,7 @@ SECTIONS: dict[str, Section] = {
         ("header", "true, false", "true", "csv: the first line names the columns; false: columns numbered from 1"),
         ("delimiter", "one character, tab or whitespace", ",", "csv: the field separator (\"whitespace\": runs of spaces and tabs)"),
         ("date", "YYYY-MM-DD", "from RMC", "nmea: the UTC date when no RMC sentence gives it"),
-        ("provider", "GPS, FLP, NLP", "GPS", "gnsslogger: the location provider whose fixes are read (GPS: the GNSS chipset's; FLP: Android's fused location, which already uses the phone's IMU)"),
+        ("provider", "GPS, FLP, NLP, …", "GPS", "gnsslogger: the location provider whose fixes are read (GPS: the GNSS chipset's; FLP: Android's fused location, which already uses the phone's IMU; GT in the Decimeter Challenge's ground_truth.csv)"),
         ("undulation", "number (m)", "—", "csv with height_msl: geoid height added"),
     ]),
     "source.gnss.rinex": _s("[source.gnss] format = \"rinex\"", "RINEX files solved by navfdi's SPP with FDE as the log is read.", [
@@ -359,7 +359,8 @@ SECTIONS: dict[str, Section] = {
     ]),
     "source.imu": _s("[source.imu]", "An IMU CSV log (plain or gzip) and its columns, or an Android GnssLogger file's sensor records.", [
         ("file", "path", REQ, "the CSV (or GnssLogger file)"),
-        ("format", "csv, gnsslogger", "csv", "gnsslogger: an Android GnssLogger file's accelerometer and gyro records (uncalibrated where present), put on GPS time by the file's own clock pairs; only file and max_gap beside it"),
+        ("format", "csv, gnsslogger", "csv", "gnsslogger: an Android GnssLogger file's accelerometer and gyro records (uncalibrated where present; or the Smartphone Decimeter Challenge's device_imu.csv), put on GPS time by the file's own clock pairs; only file, max_gap and clock beside it"),
+        ("clock", "path", "the IMU file", "gnsslogger: the file whose Raw records pair the phone's boot clock with GPS time (the Decimeter Challenge's device_gnss.csv beside its device_imu.csv)"),
         ("week", "column", "—", "GPS week column (with seconds of week)"),
         ("seconds", "column", "— (or time)", "GPS seconds (of week with week)"),
         ("time", "column", "— (or seconds)", "GPS seconds since 1980-01-06 (or Unix time with time_scale = \"unix\")"),

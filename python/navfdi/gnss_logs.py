@@ -186,7 +186,7 @@ def read_reference(spec: Any, base: Path) -> tuple[PosLog, bool]:
             raise ScenarioError(str(e).replace("source.gnss", "source.reference")) from None
     for w in said:
         warnings.warn_explicit(str(w.message).replace("source.gnss", "source.reference"), w.category, w.filename, w.lineno)
-    return log, cfg.get("format") != "csv"
+    return log, _format_of(cfg, base) not in ("csv", "gnsslogger")
 
 
 #: Fewest satellites of a 3-D fix (three coordinates and the receiver clock).
@@ -249,6 +249,19 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
     if fmt == "gnsslogger":
         return _only(cfg, "gnsslogger", read_gnsslogger_fixes(path, cfg.get("provider", "GPS")))
     return read_gnss_csv(path, text, cfg)
+
+
+def _format_of(cfg: Mapping[str, Any], base: Path) -> str:
+    """The format a ``[source] gnss`` table names, or the one :func:`_read_gnss` tells from its
+    file (the file already read without error)."""
+    if isinstance(cfg.get("format"), str):
+        return str(cfg["format"])
+    path = Path(cfg["file"]) if Path(cfg["file"]).is_absolute() else base / cfg["file"]
+    if path.name.lower().endswith((".pos", ".pos.gz")):
+        return "pos"
+    if path.name.lower().endswith((".ubx", ".ubx.gz")) or _starts_with_ubx(path):
+        return "ubx"
+    return _guess(path, _text(path))
 
 
 #: ``[source.gnss]`` keys that only one format reads.

@@ -20,6 +20,12 @@ beside their ``elapsedRealtimeNanos``, else (older GnssLogger versions) the Raw 
 measurements' delivery), fitted as an offset and a rate (the phone's crystal drifts against
 GPS time by tens of ppm), else the sensor lines' own ``utcTimeMillis`` (the phone's wall
 clock, set over the network; said in a warning).
+
+The Smartphone Decimeter Challenge's CSV layout reads the same way: one header line
+``MessageType,…`` naming every row's fields, a record kind in each row's first field
+(``device_imu.csv``: ``UncalAccel`` / ``UncalGyro`` rows with ``MeasurementX/Y/Z``;
+``device_gnss.csv``: ``Raw`` rows; ``ground_truth.csv``: ``Fix`` rows of its own provider).
+Its IMU file's clock pairs are in another file: ``[source.imu] clock = "device_gnss.csv"``.
 """
 
 from __future__ import annotations
@@ -41,10 +47,13 @@ from navfdi.logs import ImuLog, _read_text
 
 __all__ = ["is_gnsslogger", "fix_records", "read_gnsslogger_imu", "PROVIDERS", "IMU_KEYS"]
 
-#: The location providers a ``Fix`` line names.
+#: The location providers a phone's ``Fix`` records name (GPS: the GNSS chipset's own fixes;
+#: FLP: Android's fused location; NLP: the network's). Others are read as the file names them
+#: (the Smartphone Decimeter Challenge's ``ground_truth.csv`` writes its reference as Fix
+#: records of its own provider).
 PROVIDERS = ("GPS", "FLP", "NLP")
 #: The keys ``[source.imu]`` takes with ``format = "gnsslogger"``.
-IMU_KEYS = ("file", "format", "max_gap")
+IMU_KEYS = ("file", "format", "max_gap", "clock")
 #: A horizontal accuracy of 68 % (Android's ``Location.getAccuracy``) is this many σ of each
 #: horizontal axis for a circular normal error: √(−2 ln 0.32).
 _H68 = math.sqrt(-2.0 * math.log(0.32))
@@ -90,7 +99,11 @@ _CACHE: dict[tuple[str, int, int], _Records] = {}
 def is_gnsslogger(text: str) -> bool:
     """Whether ``text`` reads as a GnssLogger file: a ``#`` line naming a ``Fix``, ``Raw`` or
     sensor record's fields, or a first record line of one of those kinds."""
-    for line in text[:20000].splitlines():
+    lines = [ln for ln in text[:20000].splitlines() if ln.strip()]
+    if lines and lines[0].startswith("MessageType,"):
+        # The Smartphone Decimeter Challenge's CSV layout: one header, a record kind per row.
+        return len(lines) > 1 and lines[1].split(",", 1)[0] in _KINDS + ("UncalMag", "Mag", "OrientationDeg", "Status")
+    for line in lines:
         s = line.lstrip("# ").split(",", 1)[0]
         if s in _KINDS or s in ("Status", "Nav", "UncalMag", "OrientationDeg"):
             return "," in line
@@ -111,6 +124,10 @@ def _records(path: Path) -> _Records:
         raise ScenarioError(f"{path}: not a GnssLogger file (no Fix, Raw or sensor records, nor '#' lines naming their fields)")
     fields = {k: v.split(",") for k, v in _DEFAULT_FIELDS.items()}
     lines: dict[str, list[str]] = {k: [] for k in _KINDS}
+    first = text[:text.find("\n")].strip() if "\n" in text else text.strip()
+    if first.startswith("MessageType,"):
+        shared = [_ALIASES.get(p.strip(), p.strip()) for p in first.split(",")[1:]]
+        fields = {k: shared for k in _KINDS}
     for line in text.splitlines():
         kind = line[:line.find(",")]
         if kind in lines:
@@ -173,8 +190,8 @@ def fix_records(path: str | Path, provider: str = "GPS") -> dict[str, np.ndarray
     provider with no fix (naming the ones the file has), a field that is not a number (with its
     line), a file that is not a GnssLogger log."""
     path = Path(path)
-    if provider not in PROVIDERS:
-        raise ScenarioError(f"source.gnss.provider = {provider!r}: one of {', '.join(PROVIDERS)} (GPS: the GNSS chipset's own fixes)")
+    if not isinstance(provider, str) or not provider:
+        raise ScenarioError(f"source.gnss.provider = {provider!r}: a provider's name as the Fix records write it ({', '.join(PROVIDERS)}, …)")
     rec = _records(path)
     if not rec.lines["Fix"]:
         raise ScenarioError(f"{path}: a GnssLogger file without Fix records (the phone's location fixes): nothing to read as GNSS positions")
@@ -249,13 +266,15 @@ def _boot_to_gps(rec: _Records, path: Path) -> tuple[float, float, str]:
     return a, float(b), how
 
 
-def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0) -> ImuLog:
+def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0, clock: str | Path | None = None) -> ImuLog:
     """The IMU of a GnssLogger file as an :class:`~navfdi.logs.ImuLog`: specific force (m/s²)
     and rate (rad/s) in the phone's axes (Android's: x to the right of the screen, y up it, z
     out of it), from ``UncalAccel`` / ``UncalGyro`` where the file has them (else ``Accel`` /
     ``Gyro``), at the slower sensor's sample times with the other interpolated to them (or
     averaged over each interval where it runs more than 1.5× as fast), on GPS time (module
-    docstring). Samples logged twice (the same time) are left out with a
+    docstring; ``clock``: another file whose records hold the pairs, e.g. the Decimeter
+    Challenge's ``device_gnss.csv`` beside its ``device_imu.csv``). Samples logged twice (the
+    same time) are left out with a
     :class:`~navfdi.LeftOutSamplesWarning`; a wall-clock placement is said in a
     :class:`~navfdi.ScenarioWarning`. Raises :class:`~navfdi.ScenarioError` for a file without
     accelerometer or gyro records, a value that is not a number (with its line), a gap longer
@@ -270,6 +289,8 @@ def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0) -> ImuLog:
                                 "turn the sensors on in GnssLogger's settings, or give the IMU in another file")
         unit = "Mps2" if what == "accelerometer" else "RadPerSec"
         names = tuple(f"{kind}{ax}{unit}" for ax in "XYZ")
+        if names[0] not in rec.fields[kind] and "MeasurementX" in rec.fields[kind]:
+            names = ("MeasurementX", "MeasurementY", "MeasurementZ")  # the CSV layout's names
         tab = _table(rec, kind, path, ("utcTimeMillis", "elapsedRealtimeNanos") + names)
         boot = tab["elapsedRealtimeNanos"] / 1e9
         v = np.column_stack([tab[n] for n in names])
@@ -302,7 +323,7 @@ def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0) -> ImuLog:
         acc, rate = _resample(ta, fa, tb), wg[(tg >= lo) & (tg <= hi)]
     else:
         acc, rate = fa[(ta >= lo) & (ta <= hi)], _resample(tg, wg, tb)
-    a, b, how = _boot_to_gps(rec, path)
+    a, b, how = _boot_to_gps(rec, path) if clock is None else _boot_to_gps(_records(Path(clock)), Path(clock))
     if not how:
         utc = (ug if base_is_gyro else ua)
         sel = (tg if base_is_gyro else ta)
@@ -349,8 +370,8 @@ def _resample(t: np.ndarray, v: np.ndarray, at: np.ndarray) -> np.ndarray:
 
 
 def check_imu_keys(cfg: Mapping[str, Any], where: str = "source.imu") -> float:
-    """``[source.imu]`` with ``format = "gnsslogger"``: only ``file``, ``format`` and ``max_gap``
-    (the file names its own fields, units and clocks); returns ``max_gap`` (s)."""
+    """``[source.imu]`` with ``format = "gnsslogger"``: only ``file``, ``format``, ``max_gap``
+    and ``clock`` (the file names its own fields, units and clocks); returns ``max_gap`` (s)."""
     other = sorted(set(cfg) - set(IMU_KEYS))
     if other:
         raise ScenarioError(f"{where}: {', '.join(other)}: not read with format = \"gnsslogger\" (the file names its fields, units "

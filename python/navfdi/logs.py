@@ -167,6 +167,8 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
 
         hints = [f"{u!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(u, IMU_KEYS, 1)) else repr(u) for u in unknown]
         raise ScenarioError(f"{where}: unknown key(s) {', '.join(hints)}; the keys are {', '.join(IMU_KEYS)}")
+    if "clock" in columns:
+        raise ScenarioError(f"{where}.clock: read with format = \"gnsslogger\" only (a phone log's clock file); a CSV's time column is its clock")
     header, _ = text_layout(columns, where)
 
     def is_col(c: Any) -> bool:
@@ -253,7 +255,7 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     argument overrides the table's; shorter gaps are bridged by the filters, with an
     :class:`~navfdi.ImuGapWarning`); ``format`` ``"csv"`` (default) or ``"gnsslogger"`` (an
     Android GnssLogger file, :func:`navfdi.gnsslogger.read_gnsslogger_imu`: no other key but
-    ``file`` and ``max_gap``). A UTF-8 byte-order mark and blank lines are accepted
+    ``file``, ``max_gap`` and ``clock``, the file holding its clock pairs). A UTF-8 byte-order mark and blank lines are accepted
     (line numbers stay the file's). Rows repeating the one before them exactly, and rows
     whose specific force is exactly zero on every axis (a placeholder), are left out with a
     :class:`~navfdi.LeftOutSamplesWarning`. Raises :class:`~navfdi.ScenarioError` naming the
@@ -271,7 +273,10 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         from .gnsslogger import check_imu_keys, read_gnsslogger_imu
 
         gap = check_imu_keys(columns)
-        return read_gnsslogger_imu(path, float(max_gap) if max_gap is not None else gap)
+        clock = columns.get("clock")
+        if clock is not None and not isinstance(clock, str):
+            raise ScenarioError(f"source.imu.clock = {clock!r}: the path of a file whose Raw records pair the phone's boot clock with GPS time")
+        return read_gnsslogger_imu(path, float(max_gap) if max_gap is not None else gap, clock)
     if fmt != "csv":
         raise ScenarioError(f"source.imu.format = {fmt!r}: \"csv\" (default) or \"gnsslogger\" (an Android GnssLogger file)")
     gap = check_imu_columns(columns)
@@ -448,6 +453,8 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
     imu_cfg = source.get("imu")
     if not isinstance(imu_cfg, Mapping):
         raise ScenarioError("source.imu: a table with file and columns is required")
+    if imu_cfg.get("format") == "gnsslogger" and isinstance(imu_cfg.get("clock"), str):
+        imu_cfg = {**imu_cfg, "clock": str(file_in(imu_cfg, base, "source.imu.clock", "clock"))}
     imu = read_imu(file_in(imu_cfg, base, "source.imu.file"), imu_cfg)
     ref = None
     if "reference" in source:
