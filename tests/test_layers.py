@@ -40,7 +40,7 @@ PY_LAYERS = [
     {"_terrain", "_fields", "_lc_schema", "_logtime", "_gnss_geometry", "_gnss_noise", "_gnss_plots", "_gnss_coverage", "_gnss_auto"},
     {"frames"},
     {"scenario"},
-    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs", "gnsslogger", "calibrate", "_pos_forms"},
+    {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs", "gnsslogger", "rosbag", "calibrate", "_pos_forms"},
     {"plots", "plots_logged"},
     {"runs", "montecarlo", "_dask"},
     {"federated", "cli", "__init__", "__main__"},

@@ -26,6 +26,9 @@
 * ``gnsslogger`` — an Android GnssLogger file's ``Fix`` records of one ``provider`` (default
   ``"GPS"``; :func:`read_gnsslogger_fixes`): positions and their 68 %
   accuracies as σ, no velocity;
+* ``rosbag`` — a ROS 1 ``.bag`` file or ROS 2 bag folder: a ``sensor_msgs/NavSatFix``
+  ``topic`` (the bag's only one by default), with ``velocity_topic`` (east, north, up twists)
+  and ``time_scale`` (``"unix"``, ROS time; or ``"gpst"``) (:func:`read_ros_fixes`);
 * ``csv`` — any CSV with a ``columns`` mapping: ``time`` (one column of GPS seconds, or
   ``[week, seconds]``, or an ISO date-time column with ``time_scale = "utc"`` or ``"gpst"``),
   ``lat``, ``lon`` (deg), ``height`` (m above the ellipsoid; or ``height_msl`` with
@@ -64,10 +67,10 @@ from navfdi._schema import SECTIONS, keys
 from navfdi._logtime import EPOCH_READERS, GPS_EPOCH, time_unit, unix_to_gps, utc_to_gps
 from navfdi.logs import PosLog, _gpst, read_pos, repeated_rows, text_layout
 
-__all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "read_gnsslogger_fixes", "FORMATS"]
+__all__ = ["read_gnss", "read_solution_csv", "read_nmea", "read_gnss_csv", "read_gnsslogger_fixes", "read_ros_fixes", "FORMATS"]
 
 #: The formats ``[source] gnss`` accepts.
-FORMATS = ("pos", "solution", "nmea", "csv", "rinex", "ubx", "gnsslogger")
+FORMATS = ("pos", "solution", "nmea", "csv", "rinex", "ubx", "gnsslogger", "rosbag")
 #: The keys of ``format = "rinex"`` beside ``format`` (:data:`navfdi._schema.SECTIONS`).
 RINEX_KEYS = tuple(k for k in SECTIONS["source.gnss.rinex"].keys if k != "format")
 
@@ -238,6 +241,10 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
         return _only(cfg, "pos", read_pos(path))
     if fmt == "ubx" or (fmt is None and (path.name.lower().endswith((".ubx", ".ubx.gz")) or _starts_with_ubx(path))):
         return _only(cfg, "ubx", read_ubx(path))
+    from navfdi.rosbag import is_rosbag
+
+    if fmt == "rosbag" or (fmt is None and is_rosbag(path)):
+        return _only(cfg, "rosbag", read_ros_fixes(path, cfg.get("topic"), cfg.get("velocity_topic"), cfg.get("time_scale", "unix")))
     text = _text(path)
     fmt = fmt or _guess(path, text)
     if fmt == "pos":
@@ -248,7 +255,7 @@ def _read_gnss(spec: Any, base: Path) -> PosLog:
         return _only(cfg, "nmea", read_nmea(path, text, cfg.get("date")))
     if fmt == "gnsslogger":
         return _only(cfg, "gnsslogger", read_gnsslogger_fixes(path, cfg.get("provider", "GPS")))
-    return read_gnss_csv(path, text, cfg)
+    return _only(cfg, "csv", read_gnss_csv(path, text, cfg))
 
 
 def _format_of(cfg: Mapping[str, Any], base: Path) -> str:
@@ -261,19 +268,25 @@ def _format_of(cfg: Mapping[str, Any], base: Path) -> str:
         return "pos"
     if path.name.lower().endswith((".ubx", ".ubx.gz")) or _starts_with_ubx(path):
         return "ubx"
+    from navfdi.rosbag import is_rosbag
+
+    if is_rosbag(path):
+        return "rosbag"
     return _guess(path, _text(path))
 
 
 #: ``[source.gnss]`` keys that only one format reads.
-_FORMAT_KEYS = {"columns": "csv", "time_scale": "csv", "time_unit": "csv", "gps_week": "csv", "header": "csv", "delimiter": "csv",
-                "undulation": "csv", "date": "nmea", "provider": "gnsslogger"}
+_FORMAT_KEYS = {"columns": ("csv",), "time_scale": ("csv", "rosbag"), "time_unit": ("csv",), "gps_week": ("csv",), "header": ("csv",),
+                "delimiter": ("csv",), "undulation": ("csv",), "date": ("nmea",), "provider": ("gnsslogger",), "topic": ("rosbag",),
+                "velocity_topic": ("rosbag",)}
 
 
 def _only(cfg: Mapping[str, Any], fmt: str, log: PosLog) -> PosLog:
     """``log``, or an error for a key of ``cfg`` that another format reads (it would be ignored)."""
-    for k, owner in _FORMAT_KEYS.items():
-        if k in cfg and owner != fmt:
-            raise ScenarioError(f"source.gnss.{k}: read for format = \"{owner}\" only; this log is read as {fmt} (give format = \"{owner}\" "
+    for k, owners in _FORMAT_KEYS.items():
+        if k in cfg and fmt not in owners:
+            owner = " or ".join(f"format = \"{o}\"" for o in owners)
+            raise ScenarioError(f"source.gnss.{k}: read for {owner} only; this log is read as {fmt} (give {owner} "
                                 f"if the file is one, or leave {k} out)")
     return log
 
@@ -317,6 +330,23 @@ def read_gnsslogger_fixes(path: str | Path, provider: str = "GPS") -> PosLog:
     sd = np.column_stack([f["sd_h"], f["sd_h"], f["sd_u"]])[m]
     nan3 = np.full((int(m.sum()), 3), np.nan)
     return _log(path, f["t"][m], f["lat"][m], f["lon"][m], f["height"][m], nan3, sd, nan3.copy())
+
+
+def read_ros_fixes(path: str | Path, topic: str | None = None, velocity_topic: str | None = None, time_scale: str = "unix") -> PosLog:
+    """The fixes of a ROS bag's ``sensor_msgs/NavSatFix`` topic (:func:`navfdi.rosbag.fix_messages`)
+    as a :class:`PosLog`, with the velocity of ``velocity_topic`` where given. Messages whose
+    status says no fix are left out with a :class:`~navfdi.LeftOutFixesWarning`."""
+    from navfdi.rosbag import fix_messages
+
+    path = Path(path)
+    f = fix_messages(path, topic, velocity_topic, time_scale)
+    bad = f["no_fix"] | ~np.isfinite(f["lat"])
+    if bad.all():
+        raise ScenarioError(f"source.gnss: {path}: every NavSatFix message says no fix (status −1)")
+    if bad.any():
+        _left_out(path, f["t"][bad], "whose status says no fix (NavSatFix status −1)")
+    m = ~bad
+    return _log(path, f["t"][m], f["lat"][m], f["lon"][m], f["height"][m], f["vel"][m], f["sd"][m], f["sd_vel"][m], f["q"][m])
 
 
 def read_solution_csv(path: Path, text: str | None = None) -> PosLog:

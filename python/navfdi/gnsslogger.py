@@ -45,7 +45,7 @@ from navfdi._errors import ScenarioError, ScenarioWarning
 from navfdi._logtime import unix_to_gps
 from navfdi.logs import ImuLog, _read_text
 
-__all__ = ["is_gnsslogger", "fix_records", "read_gnsslogger_imu", "PROVIDERS", "IMU_KEYS"]
+__all__ = ["is_gnsslogger", "fix_records", "read_gnsslogger_imu", "checked_imu", "PROVIDERS", "IMU_KEYS"]
 
 #: The location providers a phone's ``Fix`` records name (GPS: the GNSS chipset's own fixes;
 #: FLP: Android's fused location; NLP: the network's). Others are read as the file names them
@@ -336,16 +336,38 @@ def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0, clock: str | Pat
         warnings.warn(f"the IMU log {path}: placed on GPS time by the phone's wall clock (the sensor records' utcTimeMillis, set over "
                       "the network: its error against GPS time is not known here, tens of ms or more); the file has no Raw records "
                       "with chipset boot times and no GPS fixes with boot times", ScenarioWarning, stacklevel=2)
-    t = a + b * tb
-    if (np.abs(rate) > 100).any() or (np.abs(acc) > 1000).any():
-        j = int(np.argmax((np.abs(rate) > 100).any(axis=1) | (np.abs(acc) > 1000).any(axis=1)))
-        raise ScenarioError(f"{path}: an IMU sample at {t[j]:.3f} GPS s beyond any IMU's range (100 rad/s, 1000 m/s²)")
+    return checked_imu(a + b * tb, rate, acc, path, max_gap)
+
+
+def checked_imu(t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, path: Path, max_gap: float) -> ImuLog:
+    """An :class:`~navfdi.logs.ImuLog` of ``t`` (N,) GPS s, ``gyro`` (N, 3) rad/s and ``accel``
+    (N, 3) m/s² read from a log other than a CSV, with the CSV reader's checks: times
+    increasing, no gap longer than ``max_gap`` s, no sample beyond any IMU's range (100 rad/s,
+    1000 m/s²), a median specific force near gravity (2–50 m/s²: not a log with gravity
+    removed) and a median rate below 1 rad/s. :class:`~navfdi.ScenarioError` naming ``path``."""
+    gyro, accel = np.ascontiguousarray(gyro, float), np.ascontiguousarray(accel, float)
+    if len(t) < 2 or not (np.isfinite(t).all() and np.isfinite(gyro).all() and np.isfinite(accel).all()):
+        raise ScenarioError(f"{path}: {len(t)} IMU sample(s), or a sample that is not a finite number")
     dt = np.diff(t)
+    if not (dt > 0).all():
+        j = int(np.argmax(~(dt > 0)))
+        raise ScenarioError(f"{path}: the IMU's time does not increase at {t[j + 1]:.6f} GPS s (after {t[j]:.6f} s)")
+    if (np.abs(gyro) > 100).any() or (np.abs(accel) > 1000).any():
+        j = int(np.argmax((np.abs(gyro) > 100).any(axis=1) | (np.abs(accel) > 1000).any(axis=1)))
+        raise ScenarioError(f"{path}: an IMU sample at {t[j]:.3f} GPS s beyond any IMU's range (100 rad/s, 1000 m/s²)")
     if (dt > max_gap).any():
         j = int(np.argmax(dt > max_gap))
         raise ScenarioError(f"{path}: a gap of {dt[j]:.3f} s in the IMU log exceeds source.imu.max_gap = {max_gap:g} s "
                             f"(at {t[j]:.3f} GPS s); raise max_gap to bridge it")
-    return ImuLog(t, np.ascontiguousarray(rate, float), np.ascontiguousarray(acc, float), str(path))
+    f = float(np.median(np.linalg.norm(accel, axis=1)))
+    if not 2.0 <= f <= 50.0:
+        raise ScenarioError(f"{path}: the IMU's median specific force is {f:.3g} m/s²; at rest it is about 9.8 (a log with gravity "
+                            "removed — a 'free' or 'linear' acceleration — cannot be mechanised: give the accelerometer's own output)")
+    w = float(np.median(np.linalg.norm(gyro, axis=1)))
+    if w > 1.0:
+        raise ScenarioError(f"{path}: the IMU's median angular rate is {w:.3f} rad/s ({math.degrees(w):.0f} deg/s): no vehicle turns "
+                            "that fast most of the time (deg/s written as rad/s?)")
+    return ImuLog(np.asarray(t, float), gyro, accel, str(path))
 
 
 def _resample(t: np.ndarray, v: np.ndarray, at: np.ndarray) -> np.ndarray:

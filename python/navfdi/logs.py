@@ -167,8 +167,9 @@ def check_imu_columns(columns: Mapping[str, Any], where: str = "source.imu") -> 
 
         hints = [f"{u!r} (did you mean {m[0]!r}?)" if (m := difflib.get_close_matches(u, IMU_KEYS, 1)) else repr(u) for u in unknown]
         raise ScenarioError(f"{where}: unknown key(s) {', '.join(hints)}; the keys are {', '.join(IMU_KEYS)}")
-    if "clock" in columns:
-        raise ScenarioError(f"{where}.clock: read with format = \"gnsslogger\" only (a phone log's clock file); a CSV's time column is its clock")
+    if "clock" in columns or "topic" in columns:
+        k = "clock" if "clock" in columns else "topic"
+        raise ScenarioError(f"{where}.{k}: read with format = \"{'gnsslogger' if k == 'clock' else 'rosbag'}\" only; a CSV names its columns")
     header, _ = text_layout(columns, where)
 
     def is_col(c: Any) -> bool:
@@ -277,8 +278,17 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
         if clock is not None and not isinstance(clock, str):
             raise ScenarioError(f"source.imu.clock = {clock!r}: the path of a file whose Raw records pair the phone's boot clock with GPS time")
         return read_gnsslogger_imu(path, float(max_gap) if max_gap is not None else gap, clock)
+    if fmt == "rosbag":
+        from .rosbag import IMU_KEYS as ROS_KEYS, read_ros_imu
+
+        other = sorted(set(columns) - set(ROS_KEYS))
+        if other:
+            raise ScenarioError(f"source.imu: {', '.join(other)}: not read with format = \"rosbag\" (an Imu message names its fields "
+                                f"and units); the keys are {', '.join(ROS_KEYS)}")
+        return read_ros_imu(path, columns.get("topic"), columns.get("time_scale", "unix"),
+                            float(max_gap) if max_gap is not None else max_gap_of(columns))
     if fmt != "csv":
-        raise ScenarioError(f"source.imu.format = {fmt!r}: \"csv\" (default) or \"gnsslogger\" (an Android GnssLogger file)")
+        raise ScenarioError(f"source.imu.format = {fmt!r}: \"csv\" (default), \"gnsslogger\" (an Android GnssLogger file) or \"rosbag\"")
     gap = check_imu_columns(columns)
     if max_gap is not None:
         gap = float(max_gap)
