@@ -37,7 +37,7 @@ CORE_LAYERS = [
 
 PY_LAYERS = [
     {"_core", "units", "_intervals", "_filter", "_json", "_errors", "_text", "_bundled", "_schema"},
-    {"_terrain", "_fields", "_lc_schema", "_logtime", "_gnss_geometry", "_gnss_noise", "_gnss_plots", "_gnss_coverage", "_gnss_auto"},
+    {"_terrain", "_fields", "_lc_schema", "_logtime", "_imu_warnings", "_gnss_geometry", "_gnss_noise", "_gnss_plots", "_gnss_coverage", "_gnss_auto"},
     {"frames"},
     {"scenario"},
     {"record", "consistency", "demo", "gnss", "report", "integrity", "logs", "gnss_integrity", "simlog", "_timeseries", "gnss_logs", "gnsslogger", "rosbag", "calibrate", "_pos_forms"},

@@ -93,7 +93,7 @@ from navfdi._filter import FilterRun, run_filter
 from navfdi._intervals import AlarmInterval, alarm_intervals
 from navfdi.runs import FaultMatch, ScenarioRun, VariantRuns, run_scenario
 from navfdi.montecarlo import Campaign, montecarlo
-from navfdi.scenario import ImuGapWarning, LeftOutFixesWarning, LeftOutSamplesWarning, NeverAppliedWarning, PartialLogWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
+from navfdi.scenario import ImuClippingWarning, ImuGapWarning, LeftOutFixesWarning, LeftOutSamplesWarning, NeverAppliedWarning, PartialLogWarning, Scenario, ScenarioError, bundled_scenarios, load_scenario
 from navfdi.frames import FrameWarning
 from navfdi import gnss_logs as _gnss_logs  # noqa: F401  (registers the GNSS log readers)
 from navfdi.gnss import GnssFault, GnssSolution, gnss_solve, read_rinex
@@ -119,6 +119,7 @@ __all__ = [
     "lpv200",
     "NeverAppliedWarning",
     "ImuGapWarning",
+    "ImuClippingWarning",
     "LeftOutFixesWarning",
     "LeftOutSamplesWarning",
     "PartialLogWarning",

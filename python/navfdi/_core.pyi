@@ -21,6 +21,7 @@ __all__ = [
     "DETECTION_GRACE",
     "CN0_SLOPE_MAX",
     "IMU_GAP_FACTOR",
+    "imu_clipped",
     "Prefilter",
     "PrefilterStep",
     "dll_variance",
@@ -631,6 +632,15 @@ def read_imu_csv(
     value, time not increasing, a gap, a sample beyond any IMU's range, implausible units,
     no samples, a gzip that inflates over 200 times its size); ``OSError`` a path that is not a
     readable regular file; ``MemoryError`` a file beyond the memory limit."""
+
+def imu_clipped(gyro: ArrayLike, accel: ArrayLike) -> tuple[list[bool], list[tuple[str, int, float, int]]]:
+    """The IMU samples at a channel's full scale (clipped), GIL released: ``gyro`` (N, 3) rad/s
+    and ``accel`` (N, 3) m/s² in the IMU's axes. A channel is clipped where it holds its
+    largest or smallest value, exactly, on three or more consecutive samples, within 5 % of a
+    range such sensors are built with (±2, 4, … 50 g; ±125, 250, … 4000 deg/s). Returns
+    ``(mask, channels)``: a flag per sample, and per clipped channel ``(sensor, axis, value,
+    samples)`` — ``"accel"`` or ``"gyro"``, 0–2 for x, y, z, the full-scale reading (m/s² or
+    rad/s) and the samples on it. ``ValueError`` for other shapes."""
 
 def pos_rows(text: str, n_fields: int) -> tuple[NDArray[np.float64], NDArray[np.uint64]] | None:
     """The data rows of an RTKLIB ``.pos`` file's ``text`` in one pass, GIL released:

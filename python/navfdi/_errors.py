@@ -41,6 +41,15 @@ class ImuGapWarning(ScenarioWarning):
     ``source.imu.max_gap`` are refused."""
 
 
+class ImuClippingWarning(ScenarioWarning):
+    """IMU samples at the sensor's full scale (clipped): a channel holding its largest or
+    smallest value, exactly, on three or more consecutive samples, at a range such sensors are
+    built with (±2 g, ±250 deg/s, …). The motion beyond the range is not in the log; the
+    samples are kept and the error filter's noise over each run is raised as over a gap of
+    its length. The message gives the channels, their value and count, and the first one's GPS
+    time."""
+
+
 class LeftOutSamplesWarning(ScenarioWarning):
     """IMU log rows left out as the log is read: a row that repeats the one before it exactly
     (the same time and values — a logger writing a sample twice; nothing is lost), or whose

@@ -20,7 +20,7 @@ import numpy as np
 
 from navfdi._errors import ScenarioError
 
-__all__ = ["GPS_EPOCH", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps", "unix_to_gps", "utc_count_to_gps",
+__all__ = ["GPS_EPOCH", "gpst_text", "gps_seconds", "log_epochs", "resolve_log_times", "pos_time", "LEAP_SECONDS", "utc_to_gps", "unix_to_gps", "utc_count_to_gps",
            "TIME_UNITS", "time_unit"]
 
 GPS_EPOCH = _dt.datetime(1980, 1, 6)
@@ -59,6 +59,11 @@ def utc_count_to_gps(utc: np.ndarray) -> np.ndarray:
     for since, n in LEAP_SECONDS:
         leap[utc >= (since - GPS_EPOCH).total_seconds()] = n
     return utc + leap
+
+
+def gpst_text(t: float) -> str:
+    """GPS seconds ``t`` (since the GPS epoch) as ``YYYY-MM-DD HH:MM:SS.mmm`` (GPS time)."""
+    return (GPS_EPOCH + _dt.timedelta(seconds=float(t))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
 
 
 def time_unit(value: Any, field: str) -> float:

@@ -10,7 +10,6 @@ GNSS file. All times are GPS time (GPST); heights are whatever the GNSS file hol
 
 from __future__ import annotations
 
-import datetime as _dt
 import gzip
 import math
 from dataclasses import dataclass
@@ -25,6 +24,8 @@ if TYPE_CHECKING:
 from ._errors import ScenarioError
 from ._schema import SECTIONS as _SECTIONS
 from ._logtime import GPS_EPOCH, TIME_UNITS, pos_time, time_unit, unix_to_gps, utc_count_to_gps
+from ._logtime import gpst_text as _gpst
+from ._imu_warnings import warn_clipped, warn_gaps
 from .frames import check_gravity, check_turns
 
 __all__ = ["ImuLog", "PosLog", "read_imu", "read_pos", "load_source", "logged_source", "scenario_folder", "GPS_EPOCH", "integrated_autocorrelation", "range_error_overbound", "range_error_process", "resolve_range_errors", "solve_rinex_source"]
@@ -544,10 +545,6 @@ def file_in(cfg: Mapping[str, Any], base: Path, name: str, key: str = "file") ->
     return p if p.is_absolute() else base / p
 
 
-def _gpst(t: float) -> str:
-    return (GPS_EPOCH + _dt.timedelta(seconds=float(t))).strftime("%Y-%m-%d %H:%M:%S.%f")[:-3]
-
-
 def scenario_folder(sc: Any) -> Path:
     """The folder a scenario's relative ``[source]`` paths resolve against: its TOML file's
     (the package's ``scenarios`` folder for a bundled scenario, the working directory for one
@@ -607,7 +604,8 @@ def scored_source(sc: Any) -> tuple[Any, str, float]:
     span = float(t[-1] - t[0])
     dt = float(np.median(np.diff(t)))
     _warn_partial(data["imu_log"], t, float(src.time0) if src is not None else float(data["t0"]), what)
-    _warn_gaps(data["imu_log"])
+    warn_gaps(data["imu_log"])
+    warn_clipped(data["imu_log"])
     if abs(sc.core["duration"] - span) > max(sc.core["dt"], 1e-6) or abs(sc.core["dt"] - dt) > 1e-3:
         raise ScenarioError(
             f"duration = {sc.core['duration']:g} s, dt = {sc.core['dt']:g} s: {what} spans {span:g} s "
@@ -668,32 +666,6 @@ def repeated_rows(rows: np.ndarray) -> np.ndarray:
     equal to NaN) — an epoch or sample a logger wrote twice."""
     same = (rows[1:] == rows[:-1]) | (np.isnan(rows[1:]) & np.isnan(rows[:-1]))
     return np.concatenate([[False], same.all(axis=1)])
-
-
-def _warn_gaps(imu: ImuLog) -> None:
-    """An :class:`ImuGapWarning` where the IMU log has intervals longer than
-    ``_core.IMU_GAP_FACTOR`` times its median one (samples missing; the gaps the Rust core's
-    mechanisation finds, the same upper median): how many, their total, the longest and its
-    GPS time. The mechanisation bridges them and raises the filter's noise."""
-    import warnings
-
-    from . import _core
-    from ._errors import ImuGapWarning
-
-    dt = np.diff(imu.t)
-    if len(dt) < 2:
-        return
-    med = float(np.partition(dt, len(dt) // 2)[len(dt) // 2])
-    factor = _core.IMU_GAP_FACTOR
-    gap = np.flatnonzero(dt > factor * med)
-    if len(gap):
-        k = int(gap[np.argmax(dt[gap])])
-        warnings.warn(
-            f"the IMU log {imu.path} has {len(gap)} gap(s) longer than {factor:g}× its median sample interval "
-            f"({med:.4g} s; samples missing), {float(dt[gap].sum()):.3g} s in all, the longest {float(dt[k]):.3g} s after "
-            f"{_gpst(imu.t[k])} GPST: each is bridged by the samples either side, and the filter's noise over it "
-            "raised by their own scatter acting for the whole gap",
-            ImuGapWarning, stacklevel=3)
 
 
 def integrated_autocorrelation(arcs: Sequence[tuple[np.ndarray, np.ndarray]], max_lag: int = 2000) -> tuple[float, np.ndarray]:

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from navfdi import _core
-from navfdi._errors import ImuGapWarning, LeftOutFixesWarning, LeftOutSamplesWarning, NeverAppliedWarning, PartialLogWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
+from navfdi._errors import ImuClippingWarning, ImuGapWarning, LeftOutFixesWarning, LeftOutSamplesWarning, NeverAppliedWarning, PartialLogWarning, ScenarioError, ScenarioTooLarge, ScenarioWarning
 from navfdi._bundled import bundled_scenarios, bundled_toml
 from navfdi._logtime import resolve_log_times
 from navfdi._terrain import check_terrain

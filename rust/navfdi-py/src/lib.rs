@@ -171,6 +171,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(integrity::snapshot_pl, m)?)?;
     m.add_function(wrap_pyfunction!(rinex::read_rinex_obs, m)?)?;
     m.add_function(wrap_pyfunction!(logged::read_imu_csv, m)?)?;
+    m.add_function(wrap_pyfunction!(logged::imu_clipped, m)?)?;
     m.add_function(wrap_pyfunction!(logged::pos_rows, m)?)?;
     m.add_function(wrap_pyfunction!(logged::read_ubx, m)?)?;
     m.add_function(wrap_pyfunction!(logged::simulate_logs, m)?)?;

@@ -612,3 +612,46 @@ pub fn simulate_logs<'py>(
     )?;
     Ok(d)
 }
+
+/// The IMU samples at a channel's full scale (clipped; ``navfdi_core::ins::clip``):
+/// ``imu_clipped(gyro, accel)`` with ``gyro`` (N, 3) rad/s and ``accel`` (N, 3) m/s² in the
+/// IMU's axes. Returns ``(mask, channels)``: a bool list (N,) and per clipped channel
+/// ``(sensor, axis, value, samples)`` — ``"accel"`` or ``"gyro"``, 0–2 for x, y, z, the
+/// full-scale reading (m/s² or rad/s) and the samples on it. ValueError for other shapes.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn imu_clipped(
+    py: Python<'_>,
+    gyro: &Bound<'_, PyAny>,
+    accel: &Bound<'_, PyAny>,
+) -> PyResult<(Vec<bool>, Vec<(&'static str, usize, f64, usize)>)> {
+    let g = columns("gyro", gyro, &[3])?;
+    let a = columns("accel", accel, &[3])?;
+    if g.nrows() != a.nrows() {
+        return Err(PyValueError::new_err(format!(
+            "gyro and accel: {} and {} samples; one row each per sample",
+            g.nrows(),
+            a.nrows()
+        )));
+    }
+    let v3 = |m: &DMatrix<f64>| -> Vec<Vector3<f64>> {
+        (0..m.nrows())
+            .map(|r| Vector3::new(m[(r, 0)], m[(r, 1)], m[(r, 2)]))
+            .collect()
+    };
+    let (gv, av) = (v3(&g), v3(&a));
+    let (mask, ch) = py.detach(|| navfdi_core::ins::clip::clipped_samples(&gv, &av));
+    Ok((
+        mask,
+        ch.into_iter()
+            .map(|c| {
+                (
+                    if c.sensor == 0 { "accel" } else { "gyro" },
+                    c.axis,
+                    c.value,
+                    c.samples,
+                )
+            })
+            .collect(),
+    ))
+}

@@ -57,8 +57,17 @@ pub const GAP_SAMPLES: usize = 10;
 
 /// The gaps of an IMU log (times `t` in s, increasing; rates and forces per sample): every
 /// interval longer than [`GAP_FACTOR`] times the median one, with the scatter (variance
-/// about their mean, per axis) of up to [`GAP_SAMPLES`] samples either side of it.
-pub fn imu_gaps(t: &[f64], gyro: &[Vector3<f64>], acc: &[Vector3<f64>]) -> Vec<ImuGap> {
+/// about their mean, per axis) of up to [`GAP_SAMPLES`] samples either side of it; and every
+/// interval in or beside a run of `clipped` samples (at the sensor's full scale,
+/// [`crate::ins::clip`]; empty: none), which are kept as a bound on the motion but whose
+/// excess beyond the range is as unknown as a missing sample's: the run's span from the
+/// sample before it to the one after takes the gap's noise, spread over its intervals.
+pub fn imu_gaps(
+    t: &[f64],
+    gyro: &[Vector3<f64>],
+    acc: &[Vector3<f64>],
+    clipped: &[bool],
+) -> Vec<ImuGap> {
     let n = t.len();
     if n < 3 {
         return Vec::new();
@@ -75,19 +84,55 @@ pub fn imu_gaps(t: &[f64], gyro: &[Vector3<f64>], acc: &[Vector3<f64>]) -> Vec<I
             .sum::<Vector3<f64>>()
             / (x.len() as f64 - 1.0)
     };
-    (1..n)
-        .filter(|&i| t[i] - t[i - 1] > limit)
-        .map(|i| {
-            let lo = i.saturating_sub(GAP_SAMPLES);
-            let hi = (i + GAP_SAMPLES).min(n);
-            let span = t[i] - t[i - 1];
-            ImuGap {
-                i,
-                acc_rate: scatter(&acc[lo..hi]) * (span / 2.0),
-                gyro_rate: scatter(&gyro[lo..hi]) * (span / 2.0),
+    // The noise of the intervals (a, b] (interval i runs from sample i − 1 to i) whose
+    // samples' scatter is taken from around them: one gap of their whole span.
+    let gap = |a: usize, b: usize| {
+        let lo = (a + 1).saturating_sub(GAP_SAMPLES);
+        let hi = (b + GAP_SAMPLES).min(n);
+        let span = t[b] - t[a];
+        (
+            scatter(&acc[lo..hi]) * (span / 2.0),
+            scatter(&gyro[lo..hi]) * (span / 2.0),
+        )
+    };
+    let mut out: Vec<ImuGap> = Vec::new();
+    let mut put =
+        |i: usize, (acc_rate, gyro_rate): (Vector3<f64>, Vector3<f64>)| match out.last_mut() {
+            Some(g) if g.i == i => {
+                g.acc_rate = g.acc_rate.sup(&acc_rate);
+                g.gyro_rate = g.gyro_rate.sup(&gyro_rate);
             }
-        })
-        .collect()
+            _ => out.push(ImuGap {
+                i,
+                acc_rate,
+                gyro_rate,
+            }),
+        };
+    let mut i = 1;
+    while i < n {
+        if clipped.get(i).copied().unwrap_or(false) || clipped.get(i - 1).copied().unwrap_or(false)
+        {
+            // A run of clipped samples from the interval ending at i: to the first sample after it.
+            let mut j = i;
+            while j + 1 < n && clipped.get(j).copied().unwrap_or(false) {
+                j += 1;
+            }
+            let noise = gap(i - 1, j);
+            for k in i..=j {
+                if t[k] - t[k - 1] > limit {
+                    put(k, gap(k - 1, k));
+                }
+                put(k, noise);
+            }
+            i = j + 1;
+        } else {
+            if t[i] - t[i - 1] > limit {
+                put(i, gap(i - 1, i));
+            }
+            i += 1;
+        }
+    }
+    out
 }
 
 impl BodyImu {
@@ -103,7 +148,8 @@ impl BodyImu {
         let t: Vec<f64> = imu.t.iter().map(|t| t + time_offset).collect();
         let gyro: Vec<Vector3<f64>> = imu.gyro.iter().map(|w| m * w).collect();
         let acc: Vec<Vector3<f64>> = imu.accel.iter().map(|f| m * f).collect();
-        let gaps = imu_gaps(&t, &gyro, &acc);
+        let (clipped, _) = crate::ins::clip::clipped_samples(&imu.gyro, &imu.accel);
+        let gaps = imu_gaps(&t, &gyro, &acc, &clipped);
         Ok(BodyImu { t, gyro, acc, gaps })
     }
 

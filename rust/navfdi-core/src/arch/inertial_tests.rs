@@ -257,7 +257,7 @@ fn imu_gaps_are_missing_samples_with_their_scatter() {
     let gyro: Vec<Vector3<f64>> = (0..1000)
         .map(|i| Vector3::new(0.0, 0.02 * sgn(i), 0.0))
         .collect();
-    let gaps = imu_gaps(&t, &gyro, &acc);
+    let gaps = imu_gaps(&t, &gyro, &acc, &[]);
     assert_eq!(gaps.len(), 1, "{gaps:?}");
     let g = gaps[0];
     assert_eq!(g.i, 500);
@@ -274,5 +274,35 @@ fn imu_gaps_are_missing_samples_with_their_scatter() {
         "{g:?}"
     );
     // Too short a log has none.
-    assert!(imu_gaps(&t[..2], &gyro[..2], &acc[..2]).is_empty());
+    assert!(imu_gaps(&t[..2], &gyro[..2], &acc[..2], &[]).is_empty());
+}
+
+/// Samples at the sensor's full scale are kept, and every interval from the sample before the
+/// run to the one after it takes the noise of one gap spanning them, from the samples around.
+#[test]
+fn clipped_samples_take_the_noise_of_a_gap_over_their_run() {
+    let t: Vec<f64> = (0..200).map(|i| i as f64 * 0.01).collect();
+    let sgn = |i: usize| if i.is_multiple_of(2) { 1.0 } else { -1.0 };
+    let acc: Vec<Vector3<f64>> = (0..200)
+        .map(|i| Vector3::new(0.3 * sgn(i), 0.0, 9.8))
+        .collect();
+    let gyro = vec![Vector3::new(0.0, 0.0, 0.01); 200];
+    let mut clipped = vec![false; 200];
+    clipped[100..103].iter_mut().for_each(|c| *c = true);
+    let gaps = imu_gaps(&t, &gyro, &acc, &clipped);
+    assert_eq!(
+        gaps.iter().map(|g| g.i).collect::<Vec<_>>(),
+        vec![100, 101, 102, 103]
+    );
+    // The run's span, from sample 99 to 103; the scatter of samples 90 to 112 (23: twelve of
+    // one sign, eleven of the other).
+    let span = t[103] - t[99];
+    let mean: f64 = 0.3 / 23.0;
+    let var = (12.0 * (0.3_f64 - mean).powi(2) + 11.0 * (0.3_f64 + mean).powi(2)) / 22.0;
+    for g in &gaps {
+        assert!((g.acc_rate.x - var * span / 2.0).abs() < 1e-15, "{g:?}");
+        assert!(g.gyro_rate.norm() < 1e-30, "{g:?}"); // a steady rate: no scatter
+    }
+    // No clipping and no gap: nothing.
+    assert!(imu_gaps(&t, &gyro, &acc, &[false; 200]).is_empty());
 }
