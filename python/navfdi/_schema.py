@@ -367,7 +367,7 @@ SECTIONS: dict[str, Section] = {
         ("week", "column", "—", "GPS week column (with seconds of week)"),
         ("seconds", "column", "— (or time)", "GPS seconds (of week with week)"),
         ("time", "column", "— (or seconds)", "GPS seconds since 1980-01-06 (or Unix time with time_scale = \"unix\")"),
-        ("time_scale", "gpst, unix, utc, boot", "gpst (rosbag: unix)", "rosbag: the stamps' scale (unix or gpst); csv: the time column's count: GPS seconds (or ISO 8601 date-times in GPS time, told from the first row; utc: ISO date-times in UTC); Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds); or boot: the IMU's own clock (e.g. since power-up), placed on GPS time by matching its turn rate to the GNSS track's (said in a warning)"),
+        ("time_scale", "gpst, unix, utc, boot", "gpst (rosbag: unix)", "rosbag: the stamps' scale (unix or gpst); csv: the time column's count: GPS seconds (or ISO 8601 date-times in GPS time, told from the first row; utc: ISO date-times in UTC); Unix time (UTC since 1970-01-01, turned into GPS time with the leap seconds); or boot: the IMU's own clock (e.g. since power-up), placed on GPS time by matching its turn rate to the GNSS track's, offset and, where the log tells it, rate (said in a warning)"),
         ("time_unit", "s, ms, us, ns", "s", "the time column's unit"),
         ("header", "true, false", "true", "the first line names the columns; false: columns are numbered from 1 (time = 1, gyro = [5, 6, 7])"),
         ("delimiter", "one character, tab or whitespace", ",", "the field separator (\";\", \"tab\", \" \", …; \"whitespace\": runs of spaces and tabs, as column-aligned text)"),

@@ -367,6 +367,68 @@ def imu_clock_offset(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, field: str 
     return -lag, best, nxt
 
 
+#: The IMU clock's rate against GPS time is estimated from windows of at least this long (s)
+#: and at least this many of them (:func:`imu_clock_drift`).
+DRIFT_WINDOW = 120.0
+DRIFT_WINDOWS = 3
+
+
+def imu_clock_drift(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, offset: float) -> tuple[float, float, float, float, int]:
+    """The rate (s per s) at which an IMU's own clock runs against GPS time, where the log is
+    long and turns enough to tell: ``imu_t + offset`` (:func:`imu_clock_offset`) is lined up
+    with the GNSS course's rate again in windows of at least :data:`DRIFT_WINDOW` s (six over
+    the log, fewer for a short one), each to a fraction of the 0.1 s grid (a parabola through
+    the correlation's peak), searched within ±(0.5 s + 0.6 % of the window's distance from the
+    log's middle); the windows' lags fitted by a line in time, weighted by their correlation.
+    Returns ``(lag, rate, its standard error, t_mid, windows)``: with ``u = t + offset`` the
+    IMU's GPS time is ``u − lag − rate · (u − t_mid)`` (``t_mid`` the GNSS epochs' middle,
+    ``lag`` the placement's remainder there) — (0, 0, inf, t_mid, n) where fewer than
+    :data:`DRIFT_WINDOWS` windows line up (correlation 0.5 at least)."""
+    imu_t = np.asarray(imu_t, float) + offset
+    sig = _turn_signals(imu_t, gyro, gnss.t, gnss.vel, gnss.lat, gnss.lon)
+    if sig is None:
+        return 0.0, 0.0, math.inf, 0.0, 0
+    tg, rate, w = sig
+    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
+    wg = np.interp(grid, imu_t, w)
+    span = float(tg[-1] - tg[0])
+    n_win = int(min(6, span // DRIFT_WINDOW))
+    mid = 0.5 * (tg[0] + tg[-1])
+    if n_win < DRIFT_WINDOWS:
+        return 0.0, 0.0, math.inf, mid, 0
+    edges = np.linspace(tg[0], tg[-1], n_win + 1)
+    centres, lags, weights = [], [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (tg >= a) & (tg <= b)
+        if sel.sum() < 30 or not np.std(rate[sel]) >= math.radians(1.0):
+            continue
+        c = 0.5 * (a + b)
+        reach = 0.5 + 0.006 * abs(c - mid)
+        cand = np.arange(-reach, reach + 1e-9, 0.1)
+        r = _lag_correlation(tg[sel], rate[sel], float(grid[0]), wg, cand)[0]
+        if not np.isfinite(r).any():
+            continue
+        k = int(np.nanargmax(r))
+        if not r[k] >= 0.5 or k == 0 or k == len(cand) - 1 or not np.isfinite(r[k - 1]) or not np.isfinite(r[k + 1]):
+            continue
+        den = r[k - 1] - 2 * r[k] + r[k + 1]
+        frac = 0.5 * (r[k - 1] - r[k + 1]) / den if den < 0 else 0.0
+        centres.append(c - mid)
+        lags.append(float(cand[k]) + 0.1 * float(np.clip(frac, -0.5, 0.5)))
+        weights.append(float(r[k]))
+    if len(lags) < DRIFT_WINDOWS:
+        return 0.0, 0.0, math.inf, mid, len(lags)
+    x, y, wt = np.array(centres), np.array(lags), np.array(weights)
+    A = np.column_stack([np.ones_like(x), x]) * np.sqrt(wt)[:, None]
+    coef, *_ = np.linalg.lstsq(A, y * np.sqrt(wt), rcond=None)
+    res = y - (coef[0] + coef[1] * x)
+    dof = max(len(y) - 2, 1)
+    s2 = float((wt * res**2).sum() / dof)
+    cov = s2 * np.linalg.inv(A.T @ A)
+    se = float(math.sqrt(max(cov[1, 1], 0.0))) if len(y) > 2 else math.inf
+    return float(coef[0]), float(coef[1]), se, mid, len(y)
+
+
 #: The body axes an IMU axis may point along (forward-right-down body frame).
 _BODY = {"forward": (1, 0, 0), "back": (-1, 0, 0), "right": (0, 1, 0), "left": (0, -1, 0), "down": (0, 0, 1), "up": (0, 0, -1)}
 

@@ -500,7 +500,7 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
 
     pos = read_gnss(source.get("gnss"), base)
     if imu_cfg.get("time_scale") == "boot":
-        imu = ImuLog(imu.t + _boot_offset(imu, pos), imu.gyro, imu.accel, imu.path)
+        imu = ImuLog(_boot_times(imu, pos), imu.gyro, imu.accel, imu.path)
     t0 = float(pos.t[0])
     if imu.t[-1] <= pos.t[0] or pos.t[-1] <= imu.t[0]:
         raise ScenarioError(
@@ -514,26 +514,36 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
 
 #: Placements of IMU logs on their own clock already found in this process (a run reads its
 #: logs again after estimating its "auto" fields): said once, computed once.
-_BOOT_OFFSETS: dict[tuple[Any, ...], float] = {}
+_BOOT_OFFSETS: dict[tuple[Any, ...], tuple[float, float, float, float]] = {}
 
 
-def _boot_offset(imu: ImuLog, pos: PosLog) -> float:
-    """The offset (s) that puts ``imu``'s own clock on GPS time (:func:`navfdi.frames.imu_clock_offset`),
-    said in a :class:`~navfdi.ScenarioWarning` the first time."""
+def _boot_times(imu: ImuLog, pos: PosLog) -> np.ndarray:
+    """``imu``'s times put on GPS time from its own clock: the offset that lines its turns up
+    with the GNSS track's (:func:`navfdi.frames.imu_clock_offset`) and, where the log tells it
+    (three windows or more, the rate beyond three standard errors and 20 ms over the log), the
+    clock's rate against GPS time (:func:`navfdi.frames.imu_clock_drift`); said in a
+    :class:`~navfdi.ScenarioWarning` the first time."""
     import warnings
 
     from ._errors import ScenarioWarning
-    from .frames import imu_clock_offset
+    from .frames import imu_clock_drift, imu_clock_offset
 
     key = (imu.path, len(imu.t), float(imu.t[0]), float(imu.t[-1]), pos.path, len(pos.t), float(pos.t[0]))
     if key not in _BOOT_OFFSETS:
         off, r, nxt = imu_clock_offset(imu.t, imu.gyro, pos)
+        lag, rate, se, mid, windows = imu_clock_drift(imu.t, imu.gyro, pos, off)
+        span = float(pos.t[-1] - pos.t[0])
+        drifts = windows >= 3 and abs(rate) > 3 * se and abs(rate) * span > 0.02
+        said = (f"; its clock runs {1e6 * rate:+.0f} ± {1e6 * se:.0f} ppm against GPS time ({abs(rate) * span:.2f} s over the log, "
+                f"from {windows} windows of turns), taken out" if drifts else "")
         warnings.warn(f"source.imu: time_scale = \"boot\": the IMU's clock placed on GPS time by its turns, {off:+.1f} s added to its times "
-                      f"(correlation {r:.2f}; the best placement at least 10 s away {nxt:.2f})", ScenarioWarning, stacklevel=3)
+                      f"(correlation {r:.2f}; the best placement at least 10 s away {nxt:.2f}){said}", ScenarioWarning, stacklevel=3)
         if len(_BOOT_OFFSETS) > 64:
             _BOOT_OFFSETS.clear()
-        _BOOT_OFFSETS[key] = off
-    return _BOOT_OFFSETS[key]
+        _BOOT_OFFSETS[key] = (off, lag, rate, mid) if drifts else (off, 0.0, 0.0, mid)
+    off, lag, rate, mid = _BOOT_OFFSETS[key]
+    u = imu.t + off
+    return u - lag - rate * (u - mid) if rate else u
 
 
 def file_in(cfg: Mapping[str, Any], base: Path, name: str, key: str = "file") -> Path:
