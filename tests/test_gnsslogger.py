@@ -278,3 +278,13 @@ def test_the_decimeter_challenges_csv_layout_reads_with_its_clock_file(tmp_path:
                         folder)
     np.testing.assert_allclose(wls.lat, ref.lat, rtol=0, atol=1e-9)
     np.testing.assert_allclose(wls.height, ref.height, rtol=0, atol=1e-4)
+
+
+def test_a_file_without_its_field_lines_reads_with_gnsslogger_3s_layout(logfile: Path, tmp_path: Path):
+    bare = tmp_path / "bare.txt"
+    bare.write_text("\n".join(ln for ln in logfile.read_text().splitlines()[:6000] if not ln.startswith("#")) + "\n")
+    got = read_gnsslogger_imu(bare)  # its clock from the Raw records' chipset times, by position
+    want = drive_imu()
+    i = int(np.searchsorted(want.t, got.t[0] - 1e-3))
+    np.testing.assert_allclose(got.t, want.t[i:i + len(got.t)], rtol=0, atol=5e-6)
+    assert len(read_gnsslogger_fixes(bare).t) > 10

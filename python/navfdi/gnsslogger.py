@@ -70,6 +70,13 @@ _DEFAULT_FIELDS = {
     "UncalGyro": "utcTimeMillis,elapsedRealtimeNanos,UncalGyroXRadPerSec,UncalGyroYRadPerSec,UncalGyroZRadPerSec,"
                  "DriftXRadPerSec,DriftYRadPerSec,DriftZRadPerSec",
     "Gyro": "utcTimeMillis,elapsedRealtimeNanos,GyroXRadPerSec,GyroYRadPerSec,GyroZRadPerSec",
+    "Raw": "utcTimeMillis,TimeNanos,LeapSecond,TimeUncertaintyNanos,FullBiasNanos,BiasNanos,BiasUncertaintyNanos,DriftNanosPerSecond,"
+           "DriftUncertaintyNanosPerSecond,HardwareClockDiscontinuityCount,Svid,TimeOffsetNanos,State,ReceivedSvTimeNanos,"
+           "ReceivedSvTimeUncertaintyNanos,Cn0DbHz,PseudorangeRateMetersPerSecond,PseudorangeRateUncertaintyMetersPerSecond,"
+           "AccumulatedDeltaRangeState,AccumulatedDeltaRangeMeters,AccumulatedDeltaRangeUncertaintyMeters,CarrierFrequencyHz,"
+           "CarrierCycles,CarrierPhase,CarrierPhaseUncertainty,MultipathIndicator,SnrInDb,ConstellationType,AgcDb,BasebandCn0DbHz,"
+           "FullInterSignalBiasNanos,FullInterSignalBiasUncertaintyNanos,SatelliteInterSignalBiasNanos,"
+           "SatelliteInterSignalBiasUncertaintyNanos,CodeType,ChipsetElapsedRealtimeNanos",
 }
 #: Field names older GnssLogger versions wrote for the same quantities.
 _ALIASES = {"Latitude": "LatitudeDegrees", "Longitude": "LongitudeDegrees", "Altitude": "AltitudeMeters", "Accuracy": "AccuracyMeters",
@@ -79,17 +86,18 @@ _ALIASES = {"Latitude": "LatitudeDegrees", "Longitude": "LongitudeDegrees", "Alt
 @dataclass(frozen=True)
 class _Records:
     """The kinds read from one file: per kind its field names and its lines' text after the
-    kind (the file's text kept to name a bad line's number)."""
+    kind; the file's path, read again to name a bad line's number."""
 
     fields: dict[str, list[str]]
     lines: dict[str, list[str]]
-    text: str
+    path: Path
 
     def line_number(self, kind: str, j: int) -> int:
         """The file's line number (from 1) of ``kind``'s ``j``-th record."""
-        for i, m in enumerate(re.finditer(rf"^{kind},", self.text, re.M)):
+        text = _read_text(self.path)
+        for i, m in enumerate(re.finditer(rf"^{kind},", text, re.M)):
             if i == j:
-                return self.text.count("\n", 0, m.start()) + 1
+                return text.count("\n", 0, m.start()) + 1
         return 0
 
 
@@ -136,8 +144,8 @@ def _records(path: Path) -> _Records:
             parts = [p.strip() for p in line[1:].split(",")]
             if parts[0] in _KINDS and len(parts) > 1:
                 fields[parts[0]] = [_ALIASES.get(p, p) for p in parts[1:]]
-    rec = _Records(fields, lines, text)
-    if len(_CACHE) > 4:
+    rec = _Records(fields, lines, path)
+    if len(_CACHE) > 1:
         _CACHE.clear()
     _CACHE[key] = rec
     return rec

@@ -16,6 +16,7 @@ removed is refused by its median.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -81,8 +82,10 @@ def _topic(path: Path, topic: Any, types: tuple[str, ...], field: str) -> str:
     return topic
 
 
-def _messages(path: Path, topic: str) -> list[tuple[float, Any]]:
-    """(stamp in s of its own scale, message) of every message on ``topic``, in bag order."""
+def _messages(path: Path, topic: str, values: Callable[[Any], tuple[float, ...]]) -> np.ndarray:
+    """(K, 1 + m): per message on ``topic``, in bag order, its stamp (s of its own scale) and
+    the m numbers ``values`` takes from it (the messages themselves are not kept: an hour of
+    a 400 Hz IMU is 1.4 million of them)."""
     out = []
     reader = _open(path)
     try:
@@ -90,10 +93,10 @@ def _messages(path: Path, topic: str) -> list[tuple[float, Any]]:
             conns = [c for c in r.connections if c.topic == topic]
             for conn, _, raw in r.messages(connections=conns):
                 m = r.deserialize(raw, conn.msgtype)
-                out.append((m.header.stamp.sec + m.header.stamp.nanosec * 1e-9, m))
+                out.append((m.header.stamp.sec + m.header.stamp.nanosec * 1e-9, *values(m)))
     except Exception as e:  # the library's errors, and whatever a damaged bag raises in it
         raise ScenarioError(f"{path}: the ROS bag's topic {topic} cannot be read ({type(e).__name__}: {e})") from None
-    return out
+    return np.array(out, float).reshape(len(out), -1)
 
 
 def _gps(t: np.ndarray, scale: Any, field: str) -> np.ndarray:
@@ -112,12 +115,11 @@ def read_ros_imu(path: str | Path, topic: str | None = None, time_scale: str = "
     a gap longer than ``max_gap`` s, a sample beyond any IMU's range, gravity removed."""
     path = Path(path)
     topic = _topic(path, topic, _IMU, "source.imu.topic")
-    msgs = _messages(path, topic)
+    msgs = _messages(path, topic, lambda m: (m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z,
+                                             m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z))
     if len(msgs) < 2:
         raise ScenarioError(f"{path}: {len(msgs)} message(s) on {topic}: too few for an IMU log")
-    t = np.array([s for s, _ in msgs])
-    w = np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for _, m in msgs], float)
-    f = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z] for _, m in msgs], float)
+    t, w, f = msgs[:, 0], msgs[:, 1:4], msgs[:, 4:7]
     order = np.argsort(t, kind="stable")
     t, w, f = t[order], w[order], f[order]
     twice = np.r_[False, np.diff(t) == 0]
@@ -143,26 +145,32 @@ def fix_messages(path: str | Path, topic: str | None = None, velocity_topic: str
     same (within 5 ms; NaN elsewhere). Read by :func:`navfdi.gnss_logs.read_ros_fixes`."""
     path = Path(path)
     topic = _topic(path, topic, _FIX, "source.gnss.topic")
-    msgs = _messages(path, topic)
-    if not msgs:
+    def fix(m: Any) -> tuple[float, ...]:
+        c = np.asarray(m.position_covariance, float)[[0, 4, 8]] if m.position_covariance_type > 0 else (math.nan,) * 3
+        return (m.latitude, m.longitude, m.altitude, *c, float(m.status.status))
+
+    msgs = _messages(path, topic, fix)
+    if not len(msgs):
         raise ScenarioError(f"{path}: no message on {topic}")
-    t = _gps(np.array([s for s, _ in msgs]), time_scale, "source.gnss.time_scale")
-    cov = np.array([np.asarray(m.position_covariance, float)[[0, 4, 8]] if m.position_covariance_type > 0 else [np.nan] * 3 for _, m in msgs])
-    status = np.array([int(m.status.status) for _, m in msgs])
+    t = _gps(msgs[:, 0], time_scale, "source.gnss.time_scale")
+    cov, status = msgs[:, 4:7], msgs[:, 7]
     out = {
-        "t": t, "lat": np.array([m.latitude for _, m in msgs], float), "lon": np.array([m.longitude for _, m in msgs], float),
-        "height": np.array([m.altitude for _, m in msgs], float), "sd": np.sqrt(np.where(cov > 0, cov, np.nan)),
+        "t": t, "lat": msgs[:, 1], "lon": msgs[:, 2], "height": msgs[:, 3], "sd": np.sqrt(np.where(cov > 0, cov, np.nan)),
         "q": np.select([status == 0, status == 1, status == 2], [5.0, 3.0, 4.0], 0.0), "no_fix": status < 0,
         "vel": np.full((len(msgs), 3), np.nan), "sd_vel": np.full((len(msgs), 3), np.nan),
     }
     if velocity_topic is not None:
         vt = _topic(path, velocity_topic, _TWIST, "source.gnss.velocity_topic")
-        vm = _messages(path, vt)
-        if vm:
-            tv = _gps(np.array([s for s, _ in vm]), time_scale, "source.gnss.time_scale")
-            tw = [m.twist.twist if hasattr(m.twist, "twist") else m.twist for _, m in vm]
-            v = np.array([[x.linear.x, x.linear.y, x.linear.z] for x in tw], float)
-            var = np.array([np.asarray(m.twist.covariance, float)[[0, 7, 14]] if hasattr(m.twist, "covariance") else [np.nan] * 3 for _, m in vm])
+
+        def twist(m: Any) -> tuple[float, ...]:
+            x = m.twist.twist if hasattr(m.twist, "twist") else m.twist  # with covariance, or a plain TwistStamped
+            c = np.asarray(m.twist.covariance, float)[[0, 7, 14]] if hasattr(m.twist, "covariance") else (math.nan,) * 3
+            return (x.linear.x, x.linear.y, x.linear.z, *c)
+
+        vm = _messages(path, vt, twist)
+        if len(vm):
+            tv = _gps(vm[:, 0], time_scale, "source.gnss.time_scale")
+            v, var = vm[:, 1:4], vm[:, 4:7]
             order = np.argsort(tv)
             tv, v, var = tv[order], v[order], var[order]
             j = np.clip(np.searchsorted(tv, t), 1, len(tv)) - 1
