@@ -34,7 +34,11 @@ from navfdi._intervals import alarm_intervals
 from navfdi._lc_schema import _rot
 
 __all__ = ["FrameWarning", "check_gravity", "check_turns", "frame_warnings", "GRAVITY_TOLERANCE_DEG", "HEADING_TOLERANCE_DEG",
-           "VELOCITY_EXCLUSION_SHARE", "TIME_LAG_TOLERANCE_S", "TURN_RATE_RATIO"]
+           "VELOCITY_EXCLUSION_SHARE", "TIME_LAG_TOLERANCE_S", "TURN_RATE_RATIO", "REANCHOR_WARNINGS"]
+
+#: A run whose INS was moved back onto the fixes FDE held out this many times or more is
+#: said in a :class:`FrameWarning` (once can be a fault under way at the alignment).
+REANCHOR_WARNINGS = 2
 
 #: Largest angle (deg) between the body-frame median specific force and the body's up axis.
 GRAVITY_TOLERANCE_DEG = 30.0
@@ -568,6 +572,14 @@ def frame_warnings(run: Any, consistency: dict[str, Any]) -> list[str]:
                 f"fixes' displacement against the INS's, and here the two disagree (the IMU's noise, mounting or time offset, or an "
                 f"IMU these checks do not fit): compare with the run without FDE ({sec}.isolate = false), and give the receiver's "
                 f"velocities (a gnss or gnss_velocity sensor) if it writes them")
+    moved = consistency.get("reanchored", [])
+    if len(moved) >= REANCHOR_WARNINGS:
+        imu = f"{sec}.imu.gyro_noise and accel_noise = \"auto\" read them from the log's rest"
+        out.append(
+            f"the INS ran away from the GNSS fixes FDE held out and was moved back onto them {len(moved)} times (first at "
+            f"{moved[0]:g} s): FDE and the INS disagree about fixes the run without FDE takes in. The set-up is the first suspect: "
+            f"the IMU's noise set below what the log has ({imu}; a density measured at another sample rate does not carry over), "
+            f"its mounting or time offset, or the fixes' σ — compare with the run without FDE ({sec}.isolate = false)")
     for s in run.record["subfilters"]:
         if "noise_scale" not in s or s["sensor"] not in _velocity_sensors(run):
             continue
