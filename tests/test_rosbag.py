@@ -111,6 +111,10 @@ def test_the_imu_and_fixes_read_back_on_gps_time(bag: Path, tmp_path: Path):
     np.testing.assert_allclose(fixes.sd_pos, pos.sd_pos, rtol=1e-12)
     np.testing.assert_array_equal(fixes.vel, pos.vel)
     assert (fixes.q == 4).all()  # status 2: ground-based augmentation, RTKLIB's DGPS code
+    from navfdi.gnss_logs import read_reference
+
+    ref, has_quality = read_reference({"file": str(bag), "topic": "/ublox/fix"}, tmp_path)
+    assert not has_quality and len(ref.t) == len(pos.t)  # a bag's fixes as the reference: every epoch
 
 
 def run(source: dict) -> navfdi.VariantRuns:

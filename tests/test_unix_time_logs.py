@@ -126,7 +126,7 @@ def test_a_reference_in_another_format_scores_as_the_pos(unix_log, tmp_path):
     assert e["scored"] == base["scored"] > 150
     assert e["hor_rms"] == pytest.approx(base["hor_rms"], rel=1e-9)
     raw["source"]["reference_quality"] = [1]
-    with pytest.raises(ScenarioError, match="source.reference_quality: the reference is a CSV"):
+    with pytest.raises(ScenarioError, match="source.reference_quality: the reference has no solution quality \\(a CSV"):
         navfdi.run_scenario(from_dict(raw, source=str(unix_log.scenario)))
     raw["source"] = {**raw["source"], "reference": {"file": "nope.csv", "format": "csv", "columns": {}}}
     del raw["source"]["reference_quality"]

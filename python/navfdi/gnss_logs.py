@@ -156,7 +156,7 @@ def _guess(path: Path, text: str) -> str:
         return "gnsslogger"
     if first.startswith("%"):
         return "pos"
-    raise ScenarioError(f"source.gnss: {path}: format not recognised (an RTKLIB .pos, navfdi's solution.csv or NMEA); "
+    raise ScenarioError(f"source.gnss: {path}: format not recognised (an RTKLIB .pos, navfdi's solution.csv, NMEA or a GnssLogger file); "
                         "give source.gnss = { file = …, format = \"csv\", columns = { … } } for another CSV")
 
 
@@ -172,8 +172,9 @@ def read_reference(spec: Any, base: Path) -> tuple[PosLog, bool]:
     """Read ``[source] reference``: an RTKLIB ``.pos`` path as before, or any GNSS log format
     as ``[source] gnss`` takes it (a path told by its content, or a table with ``file``,
     ``format`` and its options; not ``rinex``: a reference is a solution). Returns the log and
-    whether its qualities mean anything (False for a ``csv``, which has no quality column: all
-    its epochs are the reference). Messages and warnings name ``source.reference``."""
+    whether its qualities mean anything (False for a ``csv``, which has no quality column, and
+    for a GnssLogger file or a ROS bag, whose fixes say no RTK-fixed quality: all their epochs
+    are the reference). Messages and warnings name ``source.reference``."""
     import warnings
 
     if isinstance(spec, str) and spec.lower().endswith((".pos", ".pos.gz")):
@@ -189,7 +190,7 @@ def read_reference(spec: Any, base: Path) -> tuple[PosLog, bool]:
             raise ScenarioError(str(e).replace("source.gnss", "source.reference")) from None
     for w in said:
         warnings.warn_explicit(str(w.message).replace("source.gnss", "source.reference"), w.category, w.filename, w.lineno)
-    return log, _format_of(cfg, base) not in ("csv", "gnsslogger")
+    return log, _format_of(cfg, base) not in ("csv", "gnsslogger", "rosbag")
 
 
 #: Fewest satellites of a 3-D fix (three coordinates and the receiver clock).

@@ -474,7 +474,7 @@ def load_source(source: Mapping[str, Any], base: Path) -> dict[str, Any]:
         ref, has_quality = read_reference(source["reference"], base)
         quality = source.get("reference_quality", [1])
         if not has_quality and "reference_quality" in source:
-            raise ScenarioError("source.reference_quality: the reference is a CSV, which has no solution quality; leave it out (every epoch is the reference)")
+            raise ScenarioError("source.reference_quality: the reference has no solution quality (a CSV, a GnssLogger file or a ROS bag); leave it out (every epoch is the reference)")
         keep = np.isin(ref.q, quality) if has_quality else np.ones(len(ref.t), bool)
         if not keep.any():
             have = ", ".join(str(int(q)) for q in np.unique(ref.q))
