@@ -21,6 +21,10 @@ __all__ = [
     "DETECTION_GRACE",
     "CN0_SLOPE_MAX",
     "IMU_GAP_FACTOR",
+    "IMU_MAX_RATE",
+    "IMU_MAX_SPECIFIC_FORCE",
+    "IMU_MAX_MEDIAN_RATE",
+    "IMU_MEDIAN_SPECIFIC_FORCE",
     "imu_clipped",
     "Prefilter",
     "PrefilterStep",
@@ -672,6 +676,13 @@ CN0_SLOPE_MAX: float
 #: An interval between IMU samples is a gap (samples missing) where it exceeds this many times
 #: the log's median interval (the upper median; ``navfdi_core::arch::inertial::GAP_FACTOR``).
 IMU_GAP_FACTOR: float
+#: The IMU log readers' limits (``navfdi_core::logs::imu_csv``): the largest angular rate
+#: (rad/s) and specific force (m/s²) of a sample, the largest median rate (rad/s) and the
+#: median specific force's range (m/s²) of a log.
+IMU_MAX_RATE: float
+IMU_MAX_SPECIFIC_FORCE: float
+IMU_MAX_MEDIAN_RATE: float
+IMU_MEDIAN_SPECIFIC_FORCE: tuple[float, float]
 
 def window_alarm(t: ArrayLike, alarm: list[bool], start: float, end: float, tested: list[bool] | None = None) -> tuple[bool, float]:
     """For a fault window ``[start, end)`` (s) and an alarm sequence over times ``t`` (T,) and

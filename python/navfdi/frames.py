@@ -243,13 +243,12 @@ def check_turns(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, time_offset: flo
         return
     # The IMU's rate on a 0.1 s grid once; each lag (a row) reads it at the GNSS epochs' times
     # plus the lag, inside the IMU log only (the mask), and is correlated with the course's.
-    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
-    if len(grid) < 2:
+    wg = _rate_grid(imu_t, w)
+    if len(wg) < 2:
         return
-    wg = np.interp(grid, imu_t, w)
 
     def corr_at(lags: np.ndarray) -> np.ndarray:
-        return _lag_correlation(tg, rate, float(grid[0]), wg, lags)[0]
+        return _lag_correlation(tg, rate, float(imu_t[0]), wg, lags)[0]
 
     # ±40 s in 0.5 s steps, then ±0.5 s about the best in 0.1 s steps.
     coarse = np.arange(-_MAX_LAG_S, _MAX_LAG_S + 1e-9, 0.5)
@@ -304,6 +303,12 @@ def _turn_count(imu_t: np.ndarray, w: np.ndarray, tg: np.ndarray) -> int:
     return sum(1 for iv in spells if (t[-1] if iv.end is None else iv.end) - iv.start >= 3.0)
 
 
+def _rate_grid(imu_t: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """The IMU's rotation-rate magnitude ``w`` (rad/s, at ``imu_t``) on a 0.1 s grid from
+    ``imu_t[0]``, read once for every lag :func:`_lag_correlation` tries."""
+    return np.interp(np.arange(imu_t[0], imu_t[-1], 0.1), imu_t, w)
+
+
 def _lag_correlation(tg: np.ndarray, rate: np.ndarray, grid0: float, wg: np.ndarray, lags: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Correlation of the course's ``rate`` at the GNSS epochs ``tg`` with the IMU's rotation
     rate ``wg`` (on a 0.1 s grid from ``grid0``) read at ``tg + lag``, for each of ``lags``
@@ -342,8 +347,7 @@ def imu_clock_offset(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, field: str 
     if sig is None or not np.std(sig[1]) >= math.radians(1.0):
         raise ScenarioError(f"{why}: the GNSS log has too few turns at speed (above 3 m/s); give the IMU's times in GPS time")
     tg, rate, w = sig
-    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
-    wg = np.interp(grid, imu_t, w)
+    wg = _rate_grid(imu_t, w)
     # Lags that put some IMU sample at some GNSS epoch, in chunks (lags × epochs floats).
     lags = np.arange(np.floor(imu_t[0] - tg[-1]), np.ceil(imu_t[-1] - tg[0]) + 0.5, 0.5)
     if len(lags) > 2_000_000:
@@ -351,13 +355,13 @@ def imu_clock_offset(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, field: str 
     r, n = np.empty(len(lags)), np.empty(len(lags))
     step = max(1, 4_000_000 // max(len(tg), 1))
     for k in range(0, len(lags), step):
-        r[k:k + step], n[k:k + step] = _lag_correlation(tg, rate, float(grid[0]), wg, lags[k:k + step])
+        r[k:k + step], n[k:k + step] = _lag_correlation(tg, rate, float(imu_t[0]), wg, lags[k:k + step])
     r[n < 0.5 * n.max()] = np.nan
     if not np.isfinite(r).any():
         raise ScenarioError(f"{why}: the logs never overlap by enough epochs")
     b = int(np.nanargmax(r))
     fine = lags[b] + np.arange(-0.5, 0.5 + 1e-9, 0.1)
-    rf = _lag_correlation(tg, rate, float(grid[0]), wg, fine)[0]
+    rf = _lag_correlation(tg, rate, float(imu_t[0]), wg, fine)[0]
     lag = float(fine[int(np.nanargmax(rf))]) if np.isfinite(rf).any() else float(lags[b])
     best = float(np.nanmax(rf)) if np.isfinite(rf).any() else float(r[b])
     far = np.abs(lags - lags[b]) >= 10.0
@@ -393,8 +397,7 @@ def imu_clock_drift(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, offset: floa
     if sig is None:
         return 0.0, 0.0, math.inf, 0.0, 0
     tg, rate, w = sig
-    grid = np.arange(imu_t[0], imu_t[-1], 0.1)
-    wg = np.interp(grid, imu_t, w)
+    wg = _rate_grid(imu_t, w)
     span = float(tg[-1] - tg[0])
     n_win = int(min(6, span // DRIFT_WINDOW))
     mid = 0.5 * (tg[0] + tg[-1])
@@ -409,7 +412,7 @@ def imu_clock_drift(imu_t: np.ndarray, gyro: np.ndarray, gnss: Any, offset: floa
         c = 0.5 * (a + b)
         reach = 0.5 + 0.006 * abs(c - mid)
         cand = np.arange(-reach, reach + 1e-9, 0.1)
-        r = _lag_correlation(tg[sel], rate[sel], float(grid[0]), wg, cand)[0]
+        r = _lag_correlation(tg[sel], rate[sel], float(imu_t[0]), wg, cand)[0]
         if not np.isfinite(r).any():
             continue
         k = int(np.nanargmax(r))

@@ -34,7 +34,6 @@ import io
 import math
 import re
 import warnings
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -232,26 +231,30 @@ def _raw_gps(r: dict[str, np.ndarray], ok: np.ndarray) -> np.ndarray:
 def _boot_to_gps(rec: _Records, path: Path) -> tuple[float, float, str]:
     """(a, b, how): GPS seconds = a + b · boot seconds, from the file's own pairs of the two
     clocks (module docstring), and which pairs were used."""
-    pairs: list[tuple[np.ndarray, np.ndarray, str]] = []
-    if rec.lines["Raw"] and "ChipsetElapsedRealtimeNanos" in rec.fields["Raw"]:
-        r = _table(rec, "Raw", path, ("TimeNanos", "FullBiasNanos", "BiasNanos", "ChipsetElapsedRealtimeNanos"))
-        ok = np.isfinite(r["TimeNanos"]) & np.isfinite(r["FullBiasNanos"]) & (r["ChipsetElapsedRealtimeNanos"] > 0)
-        if ok.sum() >= 2:
-            pairs.append((r["ChipsetElapsedRealtimeNanos"][ok] / 1e9, _raw_gps(r, ok), "the Raw records' chipset boot-clock times"))
-    if not pairs and rec.lines["Fix"] and "elapsedRealtimeNanos" in rec.fields["Fix"]:
+    Pairs = tuple[np.ndarray, np.ndarray, str]
+
+    def raw(field: str, per_second: float, how: str) -> Pairs | None:
+        if not (rec.lines["Raw"] and field in rec.fields["Raw"]):
+            return None
+        r = _table(rec, "Raw", path, ("TimeNanos", "FullBiasNanos", "BiasNanos", field))
+        ok = np.isfinite(r["TimeNanos"]) & np.isfinite(r["FullBiasNanos"]) & (r[field] > 0)
+        return (r[field][ok] / per_second, _raw_gps(r, ok), how) if ok.sum() >= 2 else None
+
+    def fixes() -> Pairs | None:
+        if not (rec.lines["Fix"] and "elapsedRealtimeNanos" in rec.fields["Fix"]):
+            return None
         f = _table(rec, "Fix", path, ("Provider", "UnixTimeMillis", "elapsedRealtimeNanos"))
         ok = (f["Provider"] == "GPS") & np.isfinite(f["UnixTimeMillis"]) & (f["elapsedRealtimeNanos"] > 0)
-        if ok.sum() >= 2:
-            pairs.append((f["elapsedRealtimeNanos"][ok] / 1e9, unix_to_gps(f["UnixTimeMillis"][ok] / 1e3), "the GPS fixes' boot-clock times"))
-    if not pairs and rec.lines["Raw"] and "ElapsedRealtimeMillis" in rec.fields["Raw"]:
-        # Older GnssLogger versions: the boot-clock time (ms) at which the measurements arrived.
-        r = _table(rec, "Raw", path, ("TimeNanos", "FullBiasNanos", "BiasNanos", "ElapsedRealtimeMillis"))
-        ok = np.isfinite(r["TimeNanos"]) & np.isfinite(r["FullBiasNanos"]) & (r["ElapsedRealtimeMillis"] > 0)
-        if ok.sum() >= 2:
-            pairs.append((r["ElapsedRealtimeMillis"][ok] / 1e3, _raw_gps(r, ok), "the Raw records' arrival times on the boot clock (ms)"))
-    if not pairs:
+        return (f["elapsedRealtimeNanos"][ok] / 1e9, unix_to_gps(f["UnixTimeMillis"][ok] / 1e3), "the GPS fixes' boot-clock times") \
+            if ok.sum() >= 2 else None
+
+    # In order of precision; older GnssLogger versions give the boot-clock time (ms) at which
+    # the measurements arrived.
+    pairs = (raw("ChipsetElapsedRealtimeNanos", 1e9, "the Raw records' chipset boot-clock times") or fixes()
+             or raw("ElapsedRealtimeMillis", 1e3, "the Raw records' arrival times on the boot clock (ms)"))
+    if pairs is None:
         return math.nan, 1.0, ""
-    boot, gps, how = pairs[0]
+    boot, gps, how = pairs
     order = np.argsort(boot)
     boot, gps = boot[order], gps[order]
     b0 = float(boot[0])
@@ -349,10 +352,14 @@ def read_gnsslogger_imu(path: str | Path, max_gap: float = 1.0, clock: str | Pat
 
 def checked_imu(t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, path: Path, max_gap: float) -> ImuLog:
     """An :class:`~navfdi.logs.ImuLog` of ``t`` (N,) GPS s, ``gyro`` (N, 3) rad/s and ``accel``
-    (N, 3) m/s² read from a log other than a CSV, with the CSV reader's checks: times
-    increasing, no gap longer than ``max_gap`` s, no sample beyond any IMU's range (100 rad/s,
-    1000 m/s²), a median specific force near gravity (2–50 m/s²: not a log with gravity
-    removed) and a median rate below 1 rad/s. :class:`~navfdi.ScenarioError` naming ``path``."""
+    (N, 3) m/s² read from a log other than a CSV, with the CSV reader's checks and limits
+    (``_core.IMU_MAX_RATE``, ``IMU_MAX_SPECIFIC_FORCE``, ``IMU_MEDIAN_SPECIFIC_FORCE``,
+    ``IMU_MAX_MEDIAN_RATE``): times increasing, no gap longer than ``max_gap`` s, no sample
+    beyond any IMU's range, a median specific force near gravity (not a log with gravity
+    removed) and a median rate a vehicle turns at. :class:`~navfdi.ScenarioError` naming
+    ``path``."""
+    from navfdi import _core
+
     gyro, accel = np.ascontiguousarray(gyro, float), np.ascontiguousarray(accel, float)
     if len(t) < 2 or not (np.isfinite(t).all() and np.isfinite(gyro).all() and np.isfinite(accel).all()):
         raise ScenarioError(f"{path}: {len(t)} IMU sample(s), or a sample that is not a finite number")
@@ -360,19 +367,22 @@ def checked_imu(t: np.ndarray, gyro: np.ndarray, accel: np.ndarray, path: Path, 
     if not (dt > 0).all():
         j = int(np.argmax(~(dt > 0)))
         raise ScenarioError(f"{path}: the IMU's time does not increase at {t[j + 1]:.6f} GPS s (after {t[j]:.6f} s)")
-    if (np.abs(gyro) > 100).any() or (np.abs(accel) > 1000).any():
-        j = int(np.argmax((np.abs(gyro) > 100).any(axis=1) | (np.abs(accel) > 1000).any(axis=1)))
-        raise ScenarioError(f"{path}: an IMU sample at {t[j]:.3f} GPS s beyond any IMU's range (100 rad/s, 1000 m/s²)")
+    big_w, big_f = _core.IMU_MAX_RATE, _core.IMU_MAX_SPECIFIC_FORCE
+    beyond = (np.abs(gyro) > big_w).any(axis=1) | (np.abs(accel) > big_f).any(axis=1)
+    if beyond.any():
+        j = int(np.argmax(beyond))
+        raise ScenarioError(f"{path}: an IMU sample at {t[j]:.3f} GPS s beyond any IMU's range ({big_w:g} rad/s, {big_f:g} m/s²)")
     if (dt > max_gap).any():
         j = int(np.argmax(dt > max_gap))
         raise ScenarioError(f"{path}: a gap of {dt[j]:.3f} s in the IMU log exceeds source.imu.max_gap = {max_gap:g} s "
                             f"(at {t[j]:.3f} GPS s); raise max_gap to bridge it")
+    lo, hi = _core.IMU_MEDIAN_SPECIFIC_FORCE
     f = float(np.median(np.linalg.norm(accel, axis=1)))
-    if not 2.0 <= f <= 50.0:
+    if not lo <= f <= hi:
         raise ScenarioError(f"{path}: the IMU's median specific force is {f:.3g} m/s²; at rest it is about 9.8 (a log with gravity "
                             "removed — a 'free' or 'linear' acceleration — cannot be mechanised: give the accelerometer's own output)")
     w = float(np.median(np.linalg.norm(gyro, axis=1)))
-    if w > 1.0:
+    if w > _core.IMU_MAX_MEDIAN_RATE:
         raise ScenarioError(f"{path}: the IMU's median angular rate is {w:.3f} rad/s ({math.degrees(w):.0f} deg/s): no vehicle turns "
                             "that fast most of the time (deg/s written as rad/s?)")
     return ImuLog(np.asarray(t, float), gyro, accel, str(path))
@@ -397,18 +407,6 @@ def _resample(t: np.ndarray, v: np.ndarray, at: np.ndarray) -> np.ndarray:
     if bad.any():
         out[bad] = np.column_stack([np.interp(at[bad], t, v[:, k]) for k in range(v.shape[1])])
     return out
-
-
-def check_imu_keys(cfg: Mapping[str, Any], where: str = "source.imu") -> float:
-    """``[source.imu]`` with ``format = "gnsslogger"``: only ``file``, ``format``, ``max_gap``
-    and ``clock`` (the file names its own fields, units and clocks); returns ``max_gap`` (s)."""
-    other = sorted(set(cfg) - set(IMU_KEYS))
-    if other:
-        raise ScenarioError(f"{where}: {', '.join(other)}: not read with format = \"gnsslogger\" (the file names its fields, units "
-                            f"and clocks itself); the keys are {', '.join(IMU_KEYS)}")
-    from navfdi.logs import max_gap_of
-
-    return max_gap_of(cfg, where)
 
 
 def clear_cache() -> None:

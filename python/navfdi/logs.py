@@ -271,23 +271,21 @@ def read_imu(path: str | Path, columns: Mapping[str, Any], max_gap: float | None
     from . import _core
 
     fmt = columns.get("format", "csv")
-    if fmt == "gnsslogger":
-        from .gnsslogger import check_imu_keys, read_gnsslogger_imu
+    if fmt in ("gnsslogger", "rosbag"):
+        from . import gnsslogger, rosbag
 
-        gap = check_imu_keys(columns)
+        allowed = gnsslogger.IMU_KEYS if fmt == "gnsslogger" else rosbag.IMU_KEYS
+        other = sorted(set(columns) - set(allowed))
+        if other:
+            raise ScenarioError(f"source.imu: {', '.join(other)}: not read with format = \"{fmt}\" (the log names its fields, units "
+                                f"and clocks itself); the keys are {', '.join(allowed)}")
+        gap = float(max_gap) if max_gap is not None else max_gap_of(columns)
+        if fmt == "rosbag":
+            return rosbag.read_ros_imu(path, columns.get("topic"), columns.get("time_scale", "unix"), gap)
         clock = columns.get("clock")
         if clock is not None and not isinstance(clock, str):
             raise ScenarioError(f"source.imu.clock = {clock!r}: the path of a file whose Raw records pair the phone's boot clock with GPS time")
-        return read_gnsslogger_imu(path, float(max_gap) if max_gap is not None else gap, clock)
-    if fmt == "rosbag":
-        from .rosbag import IMU_KEYS as ROS_KEYS, read_ros_imu
-
-        other = sorted(set(columns) - set(ROS_KEYS))
-        if other:
-            raise ScenarioError(f"source.imu: {', '.join(other)}: not read with format = \"rosbag\" (an Imu message names its fields "
-                                f"and units); the keys are {', '.join(ROS_KEYS)}")
-        return read_ros_imu(path, columns.get("topic"), columns.get("time_scale", "unix"),
-                            float(max_gap) if max_gap is not None else max_gap_of(columns))
+        return gnsslogger.read_gnsslogger_imu(path, gap, clock)
     if fmt != "csv":
         raise ScenarioError(f"source.imu.format = {fmt!r}: \"csv\" (default), \"gnsslogger\" (an Android GnssLogger file) or \"rosbag\"")
     gap = check_imu_columns(columns)

@@ -159,6 +159,13 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DETECTION_GRACE", navfdi_core::metrics::GRACE)?;
     m.add("CN0_SLOPE_MAX", navfdi_core::gnss::spp::CN0_SLOPE_MAX)?;
     m.add("IMU_GAP_FACTOR", navfdi_core::arch::inertial::GAP_FACTOR)?;
+    {
+        use navfdi_core::logs::imu_csv as limits;
+        m.add("IMU_MAX_RATE", limits::MAX_RATE)?;
+        m.add("IMU_MAX_SPECIFIC_FORCE", limits::MAX_SPECIFIC_FORCE)?;
+        m.add("IMU_MAX_MEDIAN_RATE", limits::MAX_MEDIAN_RATE)?;
+        m.add("IMU_MEDIAN_SPECIFIC_FORCE", limits::MEDIAN_SPECIFIC_FORCE)?;
+    }
     m.add_class::<federated::PyFederatedFilter>()?;
     m.add_class::<federated::PyFederatedStep>()?;
     m.add_class::<montecarlo::PyPreparedScenario>()?;

@@ -18,6 +18,9 @@ pub const MAX_SPECIFIC_FORCE: f64 = 1000.0;
 /// Largest median angular rate accepted (rad/s): a log whose median rate is above 57 deg/s
 /// holds deg/s read as rad/s.
 pub const MAX_MEDIAN_RATE: f64 = 1.0;
+/// The median specific force's range accepted (m/s²): at rest it is about 9.8; outside,
+/// the units are wrong (g read as m/s²) or gravity was removed.
+pub const MEDIAN_SPECIFIC_FORCE: (f64, f64) = (2.0, 50.0);
 
 /// Which columns hold the time.
 #[derive(Debug, Clone, PartialEq)]
@@ -482,7 +485,7 @@ pub fn read_imu_csv(path: &str, spec: &ImuCsvSpec) -> Result<ImuTable> {
         .collect();
     let mid = mags.len() / 2;
     let med = *mags.select_nth_unstable_by(mid, f64::total_cmp).1;
-    if !(2.0..=50.0).contains(&med) {
+    if !(MEDIAN_SPECIFIC_FORCE.0..=MEDIAN_SPECIFIC_FORCE.1).contains(&med) {
         return Err(format_err(
             path,
             None,
